@@ -1,0 +1,177 @@
+"""Task runner for Voxel Worlds (plain Python 3.11, no bpy import).
+
+    python build.py setup       install what is missing (apt when root, .venv, npm tools)
+    python build.py test [ARGS] setup, then pytest (ARGS go to pytest)
+    python build.py demo        setup, then generate a world, render a picture, bake a .glb
+    python build.py bench [DIR] setup, then `python -m voxel_addon bench --out DIR`
+    python build.py extension   setup, then build the Blender extension zip into dist/
+
+Every task is idempotent; a stamp in .venv records what was installed, so a second
+run starts in well under a second.
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent
+VENV = ROOT / ".venv"
+PY = VENV / "bin" / "python"
+STAMP = VENV / ".setup-stamp"
+TOOLS = ROOT / ".tools"          # npm tools (git-ignored)
+DEMO = ROOT / "demo_out"         # demo outputs (git-ignored)
+
+APT_PACKAGES = ["libgl1", "libegl1", "libegl-mesa0", "libgl1-mesa-dri", "libgbm1",
+                "binutils", "nodejs", "npm"]
+NPM_PACKAGES = ["gltf-validator@2.0.0-dev.3.10"]
+
+
+def log(msg: str) -> None:
+    print(f"[build] {msg}", flush=True)
+
+
+def run(cmd, **kw) -> None:
+    subprocess.run([str(c) for c in cmd], check=True, **kw)
+
+
+def env() -> dict:
+    """Environment for every child: caches inside the checkout, never in ~."""
+    e = dict(os.environ)
+    cache = ROOT / ".cache"
+    e.setdefault("XDG_CACHE_HOME", str(cache))
+    e.setdefault("BLENDER_USER_RESOURCES", str(cache / "blender"))
+    e.setdefault("POCL_CACHE_DIR", str(cache / "pocl"))
+    e.setdefault("PYOPENCL_CACHE_DIR", str(cache / "pyopencl"))
+    e.setdefault("MPLCONFIGDIR", str(cache / "matplotlib"))
+    e["PATH"] = f"{VENV / 'bin'}{os.pathsep}{TOOLS / 'node_modules' / '.bin'}{os.pathsep}{e.get('PATH', '')}"
+    e["PYTHONPATH"] = str(ROOT)
+    return e
+
+
+def _missing_debs() -> list[str]:
+    if not shutil.which("dpkg-query"):
+        return []
+    missing = []
+    for p in APT_PACKAGES:
+        r = subprocess.run(["dpkg-query", "-W", "-f=${Status}", p],
+                           capture_output=True, text=True)
+        if "install ok installed" not in r.stdout:
+            missing.append(p)
+    return missing
+
+
+def setup_apt() -> None:
+    missing = _missing_debs()
+    if not missing:
+        return
+    if os.geteuid() != 0:
+        log(f"not root: please install Debian packages {' '.join(missing)}")
+        return
+    log(f"apt-get install {' '.join(missing)}")
+    e = dict(os.environ, DEBIAN_FRONTEND="noninteractive")
+    run(["apt-get", "update", "-q"], env=e)
+    run(["apt-get", "install", "-y", "-q", "--no-install-recommends", *missing], env=e)
+
+
+def _wanted() -> str:
+    parts = [(ROOT / f).read_text() for f in ("requirements.txt",)]
+    parts.append(" ".join(NPM_PACKAGES))
+    return hashlib.sha256("\n".join(parts).encode()).hexdigest()
+
+
+def setup_venv() -> None:
+    want = _wanted()
+    if STAMP.exists() and STAMP.read_text() == want and PY.exists():
+        return
+    if not PY.exists():
+        log(f"creating {VENV}")
+        run([sys.executable, "-m", "venv", VENV])
+    log("pip install -r requirements.txt (first time ~1 min: bpy is 374 MB)")
+    run([PY, "-m", "pip", "install", "-q", "--disable-pip-version-check",
+         "-r", ROOT / "requirements.txt"], env=env())
+    if NPM_PACKAGES and shutil.which("npm"):
+        TOOLS.mkdir(exist_ok=True)
+        log(f"npm install {' '.join(NPM_PACKAGES)}")
+        run(["npm", "install", "--silent", "--no-audit", "--no-fund", "--prefix", TOOLS,
+             *NPM_PACKAGES], env=env())
+    STAMP.write_text(want)
+
+
+def setup() -> None:
+    if sys.version_info < (3, 11):
+        sys.exit("Python 3.11 or newer is needed to run build.py")
+    setup_apt()
+    setup_venv()
+
+
+def task_test(args) -> int:
+    setup()
+    return subprocess.run([PY, "-m", "pytest", *(args or ["tests"])], cwd=ROOT, env=env()).returncode
+
+
+def voxel(*args) -> None:
+    log("python -m voxel_addon " + " ".join(map(str, args)))
+    run([PY, "-m", "voxel_addon", *args], cwd=ROOT, env=env())
+
+
+def task_demo(args) -> int:
+    setup()
+    DEMO.mkdir(exist_ok=True)
+    world = DEMO / "demo.sqlite"
+    voxel("generate", "--world", world, "--seed", "2019", "--center", "0", "0", "--radius", "4")
+    voxel("info", "--world", world)
+    for extra in DEMO_STEPS:
+        extra(world)
+    log(f"demo outputs are in {DEMO}")
+    return 0
+
+
+def _demo_render(world):
+    voxel("render", "--world", world, "--camera", "-40", "-40", "110", "45", "-20",
+          "--time", "10:30", "--size", "960", "540", "--out", DEMO / "demo.png")
+
+
+def _demo_bake(world):
+    voxel("bake", "--world", world, "--region", "-16", "-16", "16", "16", "--out", DEMO / "demo.glb")
+
+
+def _cli_has(cmd: str) -> bool:
+    return (ROOT / "voxel_addon" / "cli" / f"{cmd}.py").exists()
+
+
+DEMO_STEPS = [step for cmd, step in (("render", _demo_render), ("bake", _demo_bake)) if _cli_has(cmd)]
+
+
+def task_bench(args) -> int:
+    setup()
+    out = args[0] if args else str(ROOT / "bench_out")
+    return subprocess.run([PY, "-m", "voxel_addon", "bench", "--out", out, *args[1:]],
+                          cwd=ROOT, env=env()).returncode
+
+
+def task_extension(args) -> int:
+    setup()
+    return subprocess.run([PY, ROOT / "tools" / "extension.py", *args], cwd=ROOT, env=env()).returncode
+
+
+TASKS = {"setup": lambda a: (setup(), 0)[1], "test": task_test, "demo": task_demo,
+         "bench": task_bench, "extension": task_extension}
+
+
+def main(argv) -> int:
+    if not argv or argv[0] not in TASKS:
+        print(__doc__)
+        return 2
+    try:
+        return TASKS[argv[0]](argv[1:])
+    except subprocess.CalledProcessError as e:
+        log(f"failed: {' '.join(map(str, e.cmd))} (exit {e.returncode})")
+        return e.returncode or 1
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

@@ -1,0 +1,22 @@
+// Shared helpers. SAMPLES > 1 means G-buffer textures are multisampled.
+#ifndef SAMPLES
+#define SAMPLES 1
+#endif
+#if SAMPLES > 1
+#define GSAMPLER sampler2DMS
+#define FETCH(t, p, s) texelFetch(t, p, s)
+#else
+#define GSAMPLER sampler2D
+#define FETCH(t, p, s) texelFetch(t, p, 0)
+#endif
+
+vec3 hash_color(uint h) {
+    h = (h ^ 61u) ^ (h >> 16); h *= 9u; h ^= h >> 4; h *= 0x27d4eb2du; h ^= h >> 15;
+    return vec3(float(h & 255u), float((h >> 8) & 255u), float((h >> 16) & 255u)) / 255.0;
+}
+
+// World position of a depth-buffer value at normalised screen coordinate uv.
+vec3 world_pos(mat4 inv_vp, vec2 uv, float depth) {
+    vec4 p = inv_vp * vec4(uv * 2.0 - 1.0, depth * 2.0 - 1.0, 1.0);
+    return p.xyz / p.w;
+}

@@ -1,0 +1,122 @@
+"""The command line as a user runs it: real subprocesses, real files."""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from voxel_addon.core.blocks import REGISTRY
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def cli(*args, cwd=None):
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    return subprocess.run([sys.executable, "-m", "voxel_addon", *map(str, args)],
+                          capture_output=True, text=True, env=env, cwd=cwd, timeout=600)
+
+
+def digest(p: Path) -> str:
+    return hashlib.sha256(p.read_bytes()).hexdigest()
+
+
+@pytest.fixture(scope="module")
+def flat_world(tmp_path_factory):
+    p = tmp_path_factory.mktemp("cli") / "flat.sqlite"
+    r = cli("generate", "--world", p, "--seed", 42, "--generator", "flat", "--center", 40, -5, "--radius", 1)
+    assert r.returncode == 0, r.stderr
+    return p
+
+
+def test_generate_info_and_extend(flat_world):
+    info = json.loads(cli("info", "--world", flat_world).stdout)
+    assert info["seed"] == 42 and info["generator"] == "flat" and info["chunks"] == 9
+    assert info["format_version"] == 1
+    names = {b["name"]: b for b in info["block_types"]}
+    for n in ("air stone dirt grass snow sand ore log leaves flowers tall_grass wheat mushroom "
+              "glowing_mushroom cactus glass water lamp_red lamp_green lamp_blue").split():
+        assert n in names
+    assert set(names["water"]) == {"id", "name", "shape", "render", "light_opaque", "emission", "attenuation"}
+    assert names["water"]["render"] == "blend" and names["water"]["attenuation"] > 0
+    assert names["lamp_red"]["emission"] == [15, 0, 0]
+    # --center is in blocks: (40, -5) is chunk (2, -1); radius 1 -> chunks 1..3 x -2..0
+    r = cli("generate", "--world", flat_world, "--center", 48, -16, "--radius", 1)
+    assert r.returncode == 0, r.stderr
+    assert json.loads(cli("info", "--world", flat_world).stdout)["chunks"] == 12
+
+
+def test_edit_and_dump(flat_world, tmp_path):
+    assert cli("edit", "--world", flat_world, "--set", 33, -10, 100, "lamp_blue").returncode == 0
+    assert cli("edit", "--world", flat_world, "--clear", 33, -10, 63).returncode == 0
+    out = tmp_path / "c.npz"
+    r = cli("dump", "--world", flat_world, "--chunk", 2, -1, "--out", out)
+    assert r.returncode == 0, r.stderr
+    z = np.load(out)
+    assert z["blocks"].shape == (16, 16, 256) and z["blocks"].dtype == np.uint16
+    assert z["blocks3x3"].shape == (48, 48, 256) and z["light"].shape == (16, 16, 256)
+    assert z["light"].dtype == np.uint16
+    assert z["blocks"][1, 6, 100] == REGISTRY.id("lamp_blue")   # (33, -10) is local (1, 6)
+    assert z["blocks"][1, 6, 63] == 0 and z["blocks"][1, 6, 62] == REGISTRY.id("dirt")
+    assert np.array_equal(z["blocks3x3"][16:32, 16:32], z["blocks"])
+
+
+def test_dump_generates_missing_neighbours_without_saving(flat_world, tmp_path):
+    before = digest(flat_world)
+    r = cli("dump", "--world", flat_world, "--chunk", 10, 10, "--out", tmp_path / "far.npz")
+    assert r.returncode == 0, r.stderr
+    assert (np.load(tmp_path / "far.npz")["blocks3x3"][:, :, 0] == REGISTRY.id("stone")).all()
+    assert digest(flat_world) == before
+
+
+@pytest.mark.parametrize("args, message", [
+    (("edit", "--set", 1, 1, 1, "unobtainium"), "unknown block name 'unobtainium'"),
+    (("edit", "--set", 1, 1, 300, "stone"), "outside the world"),
+    (("edit", "--clear", 1, 1, -1), "outside the world"),
+    (("edit", "--set", "a", 1, 1, "stone"), "whole numbers"),
+    (("edit", "--clear", 1, "b", 1), "invalid int value"),
+    (("generate", "--seed", 7), "keeps its seed"),
+    (("generate", "--generator", "overworld"), "uses generator"),
+    (("generate", "--radius", -1), "--radius"),
+    (("dump", "--chunk", 0, "x", "--out", "o.npz"), "invalid int value"),
+])
+def test_bad_input_is_one_line_and_changes_nothing(flat_world, args, message, tmp_path):
+    before = digest(flat_world)
+    r = cli(args[0], "--world", flat_world, *args[1:], cwd=tmp_path)
+    assert r.returncode == 2
+    assert message in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert "Traceback" not in r.stderr
+    assert digest(flat_world) == before
+
+
+@pytest.mark.parametrize("content", [None, b"", b"this is not sqlite at all" * 100])
+def test_missing_or_unreadable_file(tmp_path, content):
+    p = tmp_path / "w.sqlite"
+    if content is not None:
+        p.write_bytes(content)
+    for args in (("info",), ("edit", "--set", 0, 0, 0, "stone"), ("dump", "--chunk", 0, 0, "--out", tmp_path / "o.npz")):
+        r = cli(args[0], "--world", p, *args[1:])
+        assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+        assert ("no world file" if content is None else "not a readable world file") in r.stderr
+    assert (p.read_bytes() == content) if content is not None else not p.exists()
+    r = cli("generate", "--world", tmp_path / "new.sqlite", "--radius", 0)
+    assert r.returncode == 2 and "--seed is needed" in r.stderr
+
+
+def test_newer_world_is_refused(tmp_path):
+    import sqlite3
+    p = tmp_path / "w.sqlite"
+    assert cli("generate", "--world", p, "--seed", 1, "--generator", "flat", "--radius", 0).returncode == 0
+    db = sqlite3.connect(p)
+    db.execute("UPDATE meta SET value='2' WHERE key='format_version'")
+    db.commit()
+    db.close()
+    before = digest(p)
+    r = cli("edit", "--world", p, "--set", 0, 0, 100, "stone")
+    assert r.returncode == 2 and "newer" in r.stderr
+    assert digest(p) == before

@@ -1,0 +1,120 @@
+"""The file format round trip, read back independently of the writer (plain sqlite3 +
+zlib/zstandard + the SPEC §3 index formula), and the file's failure modes."""
+from __future__ import annotations
+
+import sqlite3
+import zlib
+
+import numpy as np
+import pytest
+import zstandard
+
+from voxel_addon.core import chunk
+from voxel_addon.core.blocks import REGISTRY
+from voxel_addon.core.errors import VoxelError
+from voxel_addon.core.world import World
+from voxel_addon.storage import FORMAT_VERSION, CorruptChunk, WorldFile
+
+
+def random_blocks(rng):
+    a = chunk.empty()
+    a[...] = rng.integers(0, len(REGISTRY), a.shape)
+    return a
+
+
+def decode_independently(codec, blob):
+    raw = zlib.decompress(blob) if codec == "zlib" else zstandard.ZstdDecompressor().decompress(blob)
+    return np.frombuffer(raw, "<u2")
+
+
+@pytest.mark.parametrize("codec", ["zlib", "zstd"])
+def test_round_trip_matches_spec_layout(world_path, codec):
+    rng = np.random.default_rng(1)
+    blocks, data = random_blocks(rng), random_blocks(rng)
+    wf = WorldFile.create(world_path, seed=7, generator="flat", generator_version=1)
+    wf.write_chunks([((-3, 5), blocks, data), ((0, 0), blocks, None)], codec=codec)
+    wf.close()
+
+    db = sqlite3.connect(world_path)
+    cols = {r[1]: r[2] for r in db.execute("PRAGMA table_info(chunks)")}
+    assert cols == {"cx": "INTEGER", "cy": "INTEGER", "codec": "TEXT", "blocks": "BLOB", "data": "BLOB"}
+    meta = dict(db.execute("SELECT key, value FROM meta"))
+    assert meta["format_version"] == str(FORMAT_VERSION) and meta["seed"] == "7"
+    assert meta["generator"] == "flat" and "generator_version" in meta
+    names = dict(db.execute("SELECT id, name FROM block_types"))
+    row_codec, blob, dblob = db.execute(
+        "SELECT codec, blocks, data FROM chunks WHERE cx=-3 AND cy=5").fetchone()
+    assert row_codec == codec
+    flat = decode_independently(codec, blob)
+    for lx, ly, z in [(0, 0, 0), (15, 0, 0), (3, 9, 200), (15, 15, 255)]:
+        i = lx + 16 * ly + 256 * z
+        assert names[int(flat[i])] == REGISTRY[int(blocks[lx, ly, z])].name
+    assert np.array_equal(decode_independently(codec, dblob).reshape(256, 16, 16).transpose(2, 1, 0), data)
+    assert db.execute("SELECT data FROM chunks WHERE cx=0 AND cy=0").fetchone()[0] is None
+
+    wf = WorldFile(world_path, readonly=True)
+    got_blocks, got_data = wf.read_chunk((-3, 5))
+    assert np.array_equal(got_blocks, blocks) and np.array_equal(got_data, data)
+    assert wf.read_chunk((0, 0))[1] is None and wf.read_chunk((1, 1)) is None
+
+
+def test_foreign_id_table_is_translated(world_path):
+    """A file whose ids differ from the registry's (e.g. written by another version)."""
+    wf = WorldFile.create(world_path, seed=1, generator="flat", generator_version=1)
+    wf.close()
+    db = sqlite3.connect(world_path)
+    db.execute("DELETE FROM block_types")
+    db.executemany("INSERT INTO block_types VALUES (?, ?)", [(0, "air"), (1, "water"), (7, "stone")])
+    ids = np.zeros(chunk.VOLUME, "<u2")
+    ids[:10] = 7
+    ids[10:20] = 1
+    db.execute("INSERT INTO chunks VALUES (0, 0, 'zlib', ?, NULL)", (zlib.compress(ids.tobytes()),))
+    db.commit()
+    db.close()
+    with World.open(world_path, loader=False) as w:
+        assert w.get_block(0, 0, 0) == REGISTRY.id("stone")
+        assert w.get_block(10, 0, 0) == REGISTRY.id("water")
+        w.set_block(0, 0, 1, "glass")
+    db = sqlite3.connect(world_path)
+    names = dict(db.execute("SELECT id, name FROM block_types"))
+    codec, blob = db.execute("SELECT codec, blocks FROM chunks").fetchone()
+    flat = decode_independently(codec, blob)
+    assert names[int(flat[256])] == "glass" and names[int(flat[0])] == "stone"
+
+
+def test_newer_format_is_refused_untouched(world_path):
+    WorldFile.create(world_path, seed=1, generator="flat", generator_version=1).close()
+    db = sqlite3.connect(world_path)
+    db.execute("UPDATE meta SET value='99' WHERE key='format_version'")
+    db.commit()
+    db.close()
+    before = world_path.read_bytes()
+    with pytest.raises(VoxelError, match="newer"):
+        WorldFile(world_path)
+    assert world_path.read_bytes() == before
+
+
+def test_corrupt_chunk_names_itself_and_is_never_overwritten(world_path):
+    with World.create(world_path, seed=1, generator="flat", loader=False) as w:
+        w.generate_area([(0, 0), (2, -1)])
+    db = sqlite3.connect(world_path)
+    db.execute("UPDATE chunks SET blocks=X'deadbeef' WHERE cx=2 AND cy=-1")
+    db.commit()
+    db.close()
+    with World.open(world_path, loader=False) as w:
+        with pytest.raises(CorruptChunk, match=r"\(2, -1\)"):
+            w.chunk_at(2, -1)
+        w.set_block(1, 1, 100, "stone")   # other chunks keep working
+        assert w.generate_area([(2, -1), (3, 3)]) == 1  # present (if damaged) is not regenerated
+    db = sqlite3.connect(world_path)
+    assert db.execute("SELECT blocks FROM chunks WHERE cx=2 AND cy=-1").fetchone()[0] == b"\xde\xad\xbe\xef"
+
+
+def test_not_a_world_file(tmp_path):
+    p = tmp_path / "x.sqlite"
+    p.write_bytes(b"")
+    with pytest.raises(VoxelError, match="not a readable world file"):
+        WorldFile(p)
+    assert p.read_bytes() == b""
+    with pytest.raises(VoxelError, match="no world file"):
+        WorldFile(tmp_path / "missing.sqlite")

@@ -1,0 +1,1 @@
+"""`python -m voxel_addon bench`: fixed, seeded measurements written to CSV and PNG plots. One module per area."""

@@ -1,0 +1,44 @@
+"""Blender side of the add-on: every module in ui/ exports CLASSES (registered in
+module order, PropertyGroups first within a module) and may export SCENE_PROPS, a
+dict attribute-name -> PropertyGroup class attached to bpy.types.Scene (so settings
+are saved with the .blend). New panels/tools only add a module to ui/."""
+from __future__ import annotations
+
+import importlib
+import pkgutil
+
+from . import ui
+
+_registered: list = []
+_scene_props: list[str] = []
+
+
+def modules():
+    names = sorted(m.name for m in pkgutil.iter_modules(ui.__path__))
+    return [importlib.import_module(f".{n}", ui.__name__) for n in names]
+
+
+def register():
+    import bpy
+    mods = modules()
+    for m in mods:
+        for cls in getattr(m, "CLASSES", ()):
+            bpy.utils.register_class(cls)
+            _registered.append(cls)
+    for m in mods:
+        for attr, group in getattr(m, "SCENE_PROPS", {}).items():
+            setattr(bpy.types.Scene, attr, bpy.props.PointerProperty(type=group))
+            _scene_props.append(attr)
+
+
+def unregister():
+    import bpy
+    from . import session
+    session.close_all()
+    for attr in reversed(_scene_props):
+        if hasattr(bpy.types.Scene, attr):
+            delattr(bpy.types.Scene, attr)
+    _scene_props.clear()
+    for cls in reversed(_registered):
+        bpy.utils.unregister_class(cls)
+    _registered.clear()

@@ -1,0 +1,125 @@
+"""World section: file path, new/open, seed, generator, recreate (SPEC F9)."""
+from __future__ import annotations
+
+import bpy
+from bpy.props import BoolProperty, EnumProperty, IntProperty, StringProperty
+
+
+def _generators(self, context):
+    from ...generation import GENERATORS
+    return [(n, n.capitalize(), f"{n} generator") for n in GENERATORS]
+
+
+class VoxelWorldSettings(bpy.types.PropertyGroup):
+    path: StringProperty(name="File", subtype="FILE_PATH", default="//world.sqlite",
+                         description="SQLite world file (// = next to the .blend)")
+    seed: IntProperty(name="Seed", default=2019, min=0)
+    generator: EnumProperty(name="Generator", items=_generators)
+    keep_edits: BoolProperty(name="Keep Edits", default=True,
+                             description="Recreate keeps the blocks you placed or removed")
+
+
+def _settings(context) -> VoxelWorldSettings:
+    return context.scene.voxel
+
+
+class VOXEL_OT_world_new(bpy.types.Operator):
+    bl_idname = "voxel.world_new"
+    bl_label = "New World"
+    bl_description = "Create a world file with the seed and generator above"
+
+    def execute(self, context):
+        import os
+        from .. import session
+        from ...core.errors import VoxelError
+        s = _settings(context)
+        path = bpy.path.abspath(s.path)
+        if os.path.exists(path):
+            self.report({"ERROR"}, f"{path} already exists (use Open, or pick a new name)")
+            return {"CANCELLED"}
+        try:
+            session.world(s.path, create_seed=s.seed, generator=s.generator)
+        except VoxelError as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        self.report({"INFO"}, f"created {path}")
+        return {"FINISHED"}
+
+
+class VOXEL_OT_world_open(bpy.types.Operator):
+    bl_idname = "voxel.world_open"
+    bl_label = "Open World"
+    bl_description = "Open an existing world file"
+    filepath: StringProperty(subtype="FILE_PATH")
+    filter_glob: StringProperty(default="*.sqlite;*.db", options={"HIDDEN"})
+
+    def invoke(self, context, event):
+        context.window_manager.fileselect_add(self)
+        return {"RUNNING_MODAL"}
+
+    def execute(self, context):
+        from .. import session
+        from ...core.errors import VoxelError
+        s = _settings(context)
+        path = self.filepath or s.path
+        try:
+            w = session.world(path)
+        except VoxelError as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        s.path = path
+        s.seed = int(w.seed)
+        gen = getattr(w.generator, "name", None)
+        if gen:
+            s.generator = gen
+        return {"FINISHED"}
+
+
+class VOXEL_OT_world_recreate(bpy.types.Operator):
+    bl_idname = "voxel.world_recreate"
+    bl_label = "Recreate"
+    bl_description = "Regenerate the world from its seed (optionally keeping your edits)"
+
+    def invoke(self, context, event):
+        return context.window_manager.invoke_confirm(self, event)
+
+    def execute(self, context):
+        from .. import session
+        from ...core.errors import VoxelError
+        s = _settings(context)
+        try:
+            session.world(s.path).recreate(keep_edits=s.keep_edits)
+        except VoxelError as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        return {"FINISHED"}
+
+
+class VOXEL_PT_world(bpy.types.Panel):
+    bl_idname = "VOXEL_PT_world"
+    bl_label = "World"
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "Voxel"
+    bl_order = 0
+
+    def draw(self, context):
+        from .. import session
+        s = _settings(context)
+        col = self.layout.column()
+        col.prop(s, "path")
+        row = col.row(align=True)
+        row.operator(VOXEL_OT_world_new.bl_idname, icon="ADD")
+        row.operator(VOXEL_OT_world_open.bl_idname, icon="FILE_FOLDER")
+        col.prop(s, "seed")
+        col.prop(s, "generator")
+        row = col.row(align=True)
+        row.operator(VOXEL_OT_world_recreate.bl_idname, icon="FILE_REFRESH")
+        row.prop(s, "keep_edits")
+        if session.is_open(s.path):
+            col.label(text="open", icon="CHECKMARK")
+
+
+CLASSES = [VoxelWorldSettings, VOXEL_OT_world_new, VOXEL_OT_world_open,
+           VOXEL_OT_world_recreate, VOXEL_PT_world]
+SCENE_PROPS = {"voxel": VoxelWorldSettings}

@@ -1,0 +1,44 @@
+"""The command line (SPEC §5): one module per command, each with add_parser(sub) and run(args)."""
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from ..core.errors import VoxelError
+
+# Order is the order of `--help`. A command's module may be missing until its issue lands.
+COMMANDS = ["generate", "info", "dump", "edit", "map", "render", "bake", "bench"]
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line, exit 2, like every other user mistake
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+def parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="python -m voxel_addon",
+                description="Voxel Worlds: generate, inspect, edit, render and bake voxel worlds.")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    for name in COMMANDS:
+        try:
+            mod = importlib.import_module(f".{name}", __name__)
+        except ModuleNotFoundError as e:
+            if e.name == f"{__name__}.{name}":
+                continue
+            raise
+        sp = mod.add_parser(sub)
+        sp.set_defaults(_run=mod.run)
+    return p
+
+
+def main(argv=None) -> int:
+    args = parser().parse_args(argv)
+    try:
+        return args._run(args) or 0
+    except VoxelError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130

@@ -1,0 +1,33 @@
+"""edit: set or clear one block and save it (SPEC §5)."""
+from __future__ import annotations
+
+from .common import add_world
+
+
+def add_parser(sub):
+    p = sub.add_parser("edit", help="set or clear one block")
+    add_world(p)
+    g = p.add_mutually_exclusive_group(required=True)
+    g.add_argument("--set", nargs=4, metavar=("X", "Y", "Z", "NAME"), help="place block NAME")
+    g.add_argument("--clear", nargs=3, type=int, metavar=("X", "Y", "Z"), help="make it air")
+    return p
+
+
+def run(args):
+    from ..core import chunk
+    from ..core.blocks import REGISTRY
+    from ..core.errors import VoxelError
+    from ..core.world import World
+    if args.set:
+        try:
+            x, y, z = (int(v) for v in args.set[:3])
+        except ValueError:
+            raise VoxelError(f"--set X Y Z NAME: X Y Z must be whole numbers (got {' '.join(args.set[:3])})") from None
+        name = args.set[3]
+    else:
+        (x, y, z), name = args.clear, "air"
+    bid = REGISTRY.id(name)        # check everything before the file is opened for writing
+    chunk.check_z(z)
+    with World.open(args.world, loader=False) as world:
+        old = world.set_block(x, y, z, bid)
+    print(f"({x}, {y}, {z}): {REGISTRY[old].name} -> {name} (saved)")

@@ -1,0 +1,89 @@
+"""Chunk geometry (SPEC §3) and the in-memory chunk.
+
+Arrays are (16, 16, 256) indexed [lx, ly, z] and Fortran-ordered, so their memory
+order is the file's linear index i = lx + 16*ly + 256*z. Wider regions follow the
+same rule: (W, H, 256) arrays, x fastest, and kernels index x + W*(y + H*z).
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from .errors import VoxelError
+
+SIZE = 16
+HEIGHT = 256
+VOLUME = SIZE * SIZE * HEIGHT
+SHAPE = (SIZE, SIZE, HEIGHT)
+
+
+def empty(dtype=np.uint16, width: int = SIZE, depth: int = SIZE) -> np.ndarray:
+    """A zeroed (width, depth, 256) array in the canonical (x fastest) order."""
+    return np.zeros((width, depth, HEIGHT), dtype=dtype, order="F")
+
+
+def from_linear(buf, dtype=np.uint16) -> np.ndarray:
+    """Bytes or a flat array in linear-index order -> (16, 16, 256) view."""
+    flat = np.frombuffer(buf, dtype=np.dtype(dtype).newbyteorder("<")) \
+        if isinstance(buf, (bytes, bytearray, memoryview)) else np.asarray(buf)
+    if flat.size != VOLUME:
+        raise ValueError(f"chunk array has {flat.size} values, expected {VOLUME}")
+    return flat.astype(dtype, copy=False).reshape(SHAPE, order="F")
+
+
+def to_linear(arr: np.ndarray) -> bytes:
+    """(16, 16, 256) array -> little-endian bytes in linear-index order."""
+    return np.asarray(arr, dtype="<u2").tobytes(order="F")
+
+
+def key_of(x: int, y: int) -> tuple[int, int]:
+    """Chunk key holding block column (x, y)."""
+    return (x >> 4, y >> 4)
+
+
+def check_z(z: int) -> None:
+    if not 0 <= z < HEIGHT:
+        raise VoxelError(f"z={z} is outside the world (0..{HEIGHT - 1})")
+
+
+class Chunk:
+    """Block ids plus lazily allocated small data and large data (thesis §4.1).
+
+    `data` stays None while all zero so an ordinary chunk costs 2 B per voxel.
+    `large` maps a small-data index to any Python object (e.g. a chest's contents).
+    """
+
+    __slots__ = ("key", "blocks", "data", "large", "light", "dirty", "last_use", "__weakref__")
+
+    def __init__(self, key, blocks=None, data=None):
+        self.key = tuple(key)
+        self.blocks = empty() if blocks is None else blocks
+        self.data = data
+        self.large: dict[int, object] = {}
+        self.light = None  # filled by the light module when asked
+        self.dirty = False
+        self.last_use = time.monotonic()
+
+    @property
+    def origin(self) -> tuple[int, int]:
+        return (self.key[0] * SIZE, self.key[1] * SIZE)
+
+    def get(self, lx: int, ly: int, z: int) -> int:
+        return int(self.blocks[lx, ly, z])
+
+    def set(self, lx: int, ly: int, z: int, block: int, data: int = 0) -> None:
+        self.blocks[lx, ly, z] = block
+        if data or self.data is not None:
+            if self.data is None:
+                self.data = empty()
+            self.data[lx, ly, z] = data
+        self.dirty = True
+        self.light = None
+
+    def nbytes(self) -> int:
+        n = self.blocks.nbytes
+        for a in (self.data, self.light):
+            if a is not None:
+                n += a.nbytes
+        return n

@@ -1,0 +1,300 @@
+"""The world: a hash map of active chunks, their lifecycle and the loader thread (§5.2).
+
+Three ways to ask for a chunk, as in the thesis:
+- `maybe_chunk_at`      returns it if active, else None; never blocks.
+- `maybe_load_chunk_at` the same, and queues it for the loader thread; keeps it alive.
+- `chunk_at`            returns it, loading or generating in the caller's thread if needed.
+Chunks not asked for during `idle_timeout` seconds are saved (if changed) and
+unloaded by the loader thread. Unloading never loses an edit: a chunk leaves the map
+and enters `_saving` (a snapshot) atomically under the lock, and loads look there
+first, so a chunk re-requested before its write lands comes back with every edit.
+"""
+from __future__ import annotations
+
+import threading
+import time
+from collections import OrderedDict
+
+import numpy as np
+
+from . import chunk as C
+from .blocks import REGISTRY
+from .chunk import Chunk
+from .errors import VoxelError
+
+BATCH = 32  # chunks generated per loader step: amortises kernel launches
+
+
+class World:
+    def __init__(self, file, generator, *, idle_timeout: float = 5.0, loader: bool = True):
+        self.file = file
+        self.generator = generator
+        self.idle_timeout = idle_timeout
+        self.readonly = file.readonly
+        self.chunks: dict[tuple[int, int], Chunk] = {}
+        self._lock = threading.RLock()
+        self._gen_lock = threading.Lock()   # generators (OpenCL queues) are not re-entrant
+        self._flush_lock = threading.Lock()  # one flush at a time: an older snapshot never lands last
+        self._wake = threading.Condition(self._lock)
+        self._queue: OrderedDict[tuple[int, int], None] = OrderedDict()
+        self._saving: dict[tuple[int, int], tuple] = {}
+        self._edits: dict[tuple[int, int, int], tuple[int, int]] = {}  # unsaved user edits
+        self._stop = False
+        self.loader_error: BaseException | None = None
+        self._thread = None
+        if loader:
+            self._thread = threading.Thread(target=self._loader, name="voxel-loader", daemon=True)
+            self._thread.start()
+
+    # ---- opening ----------------------------------------------------------
+    @classmethod
+    def create(cls, path, *, seed: int, generator: str = "overworld", params=None,
+               backend=None, **kw) -> "World":
+        from ..generation import make_generator
+        from ..storage import WorldFile
+        gen = make_generator(generator, seed, params, backend)
+        wf = WorldFile.create(path, seed=seed, generator=gen.name,
+                              generator_version=gen.version, params=gen.params)
+        return cls(wf, gen, **kw)
+
+    @classmethod
+    def open(cls, path, *, backend=None, readonly: bool = False, **kw) -> "World":
+        from ..generation import make_generator
+        from ..storage import WorldFile
+        wf = WorldFile(path, readonly=readonly)
+        try:
+            gen = make_generator(wf.generator, wf.seed, wf.generator_params, backend)
+        except BaseException:
+            wf.close()
+            raise
+        return cls(wf, gen, **kw)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    @property
+    def seed(self) -> int:
+        return self.file.seed
+
+    # ---- the three access functions ----------------------------------------
+    def maybe_chunk_at(self, cx: int, cy: int) -> Chunk | None:
+        return self.chunks.get((cx, cy))
+
+    def maybe_load_chunk_at(self, cx: int, cy: int) -> Chunk | None:
+        key = (cx, cy)
+        with self._lock:
+            c = self.chunks.get(key)
+            if c is not None:
+                c.last_use = time.monotonic()
+                return c
+            if key not in self._queue:
+                self._queue[key] = None
+                self._wake.notify()
+        return None
+
+    def chunk_at(self, cx: int, cy: int) -> Chunk:
+        key = (cx, cy)
+        c = self.chunks.get(key)
+        if c is None:
+            c = self._activate([key])[0]
+        c.last_use = time.monotonic()
+        return c
+
+    # ---- blocks -----------------------------------------------------------
+    def get_block(self, x: int, y: int, z: int) -> int:
+        C.check_z(z)
+        return self.chunk_at(x >> 4, y >> 4).get(x & 15, y & 15, z)
+
+    def set_block(self, x: int, y: int, z: int, block: int | str, data: int = 0) -> int:
+        """Place (or, with air, clear) a block; returns the id that was there."""
+        if self.readonly:
+            raise VoxelError(f"{self.file.path} is open read-only")
+        C.check_z(z)
+        bid = REGISTRY.id(block) if isinstance(block, str) else int(block)
+        if not 0 <= bid < len(REGISTRY):
+            raise VoxelError(f"unknown block id {bid}")
+        with self._lock:
+            c = self.chunk_at(x >> 4, y >> 4)
+            old = c.get(x & 15, y & 15, z)
+            c.set(x & 15, y & 15, z, bid, data)
+            self._edits[(x, y, z)] = (bid, data)
+        return old
+
+    def region_blocks(self, cx0: int, cy0: int, cx1: int, cy1: int) -> np.ndarray:
+        """Blocks of chunks [cx0, cx1) x [cy0, cy1) as one (W, H, 256) array."""
+        keys = [(cx, cy) for cy in range(cy0, cy1) for cx in range(cx0, cx1)]
+        out = C.empty(width=C.SIZE * (cx1 - cx0), depth=C.SIZE * (cy1 - cy0))
+        missing = [k for k in keys if k not in self.chunks]
+        if missing:
+            self._activate(missing)
+        for cx, cy in keys:
+            c = self.chunk_at(cx, cy)
+            x, y = (cx - cx0) * C.SIZE, (cy - cy0) * C.SIZE
+            out[x:x + C.SIZE, y:y + C.SIZE] = c.blocks
+        return out
+
+    # ---- loading, generating ------------------------------------------------
+    def _activate(self, keys) -> list[Chunk]:
+        """Make `keys` active (load, or generate + apply stored edits); returns them."""
+        found: dict = {}
+        to_make = []
+        for key in keys:
+            with self._lock:
+                c = self.chunks.get(key)
+                snap = self._saving.get(key)
+            if c is not None:
+                found[key] = c
+            elif snap is not None:
+                found[key] = Chunk(key, snap[0].copy(order="F"),
+                                   None if snap[1] is None else snap[1].copy(order="F"))
+            else:
+                got = self.file.read_chunk(key)
+                if got is None:
+                    to_make.append(key)
+                else:
+                    found[key] = Chunk(key, *got)
+        if to_make:
+            with self._gen_lock:
+                arrays = self.generator.generate(to_make)
+            for key, blocks in zip(to_make, arrays):
+                c = Chunk(key, blocks)
+                for x, y, z, b, d in self.file.edits_in(key):
+                    c.set(x & 15, y & 15, z, b, d)
+                c.dirty = not self.readonly
+                found[key] = c
+        out = []
+        with self._lock:
+            for key in keys:
+                c = self.chunks.setdefault(key, found[key])  # first one in wins
+                c.last_use = time.monotonic()
+                out.append(c)
+        return out
+
+    def _loader(self) -> None:
+        while True:
+            with self._lock:
+                if not self._queue and not self._stop:
+                    self._wake.wait(timeout=min(1.0, self.idle_timeout / 2))
+                if self._stop:
+                    return
+                keys = []
+                while self._queue and len(keys) < BATCH:
+                    keys.append(self._queue.popitem(last=False)[0])
+            try:
+                if keys:
+                    self._activate(keys)
+                self.unload_idle()
+            except BaseException as e:  # kept for the UI to show; the thread goes on
+                self.loader_error = e
+
+    # ---- saving, unloading ---------------------------------------------------
+    def unload_idle(self, now: float | None = None) -> int:
+        """Save and drop chunks idle longer than idle_timeout; returns how many."""
+        now = time.monotonic() if now is None else now
+        with self._lock:
+            idle = [k for k, c in self.chunks.items() if now - c.last_use > self.idle_timeout]
+        return self._evict(idle)
+
+    def _evict(self, keys) -> int:
+        if not keys:
+            return 0
+        with self._lock:
+            for k in keys:
+                c = self.chunks.pop(k)
+                if c.dirty and not self.readonly:
+                    self._saving[k] = (c.blocks, c.data)
+        self.flush()
+        return len(keys)
+
+    def flush(self) -> None:
+        """Write every changed chunk and pending edit in one transaction."""
+        if self.readonly:
+            return
+        with self._flush_lock:
+            self._flush()
+
+    def _flush(self) -> None:
+        with self._lock:
+            dirty = {k: (c.blocks.copy(order="F"), None if c.data is None else c.data.copy(order="F"))
+                     for k, c in self.chunks.items() if c.dirty}
+            for c in self.chunks.values():
+                c.dirty = False
+            saving = dict(self._saving)
+            edits = [(x, y, z, b, d) for (x, y, z), (b, d) in self._edits.items()]
+            self._edits.clear()
+        items = {**saving, **dirty}
+        try:
+            rows = [self.file.encode_chunk(k, b, d) for k, (b, d) in items.items()]
+            self.file.save(rows, edits)
+        except BaseException:
+            with self._lock:  # put everything back so nothing is lost
+                for k in dirty:
+                    if k in self.chunks:
+                        self.chunks[k].dirty = True
+                for x, y, z, b, d in edits:
+                    self._edits.setdefault((x, y, z), (b, d))
+            raise
+        with self._lock:
+            for k, snap in saving.items():
+                if self._saving.get(k) is snap:
+                    del self._saving[k]
+
+    def unload_all(self) -> None:
+        with self._lock:
+            keys = list(self.chunks)
+        self._evict(keys)
+
+    def close(self) -> None:
+        """Stop the loader, save everything, close the file. Safe to call twice."""
+        with self._lock:
+            self._stop = True
+            self._wake.notify_all()
+        if self._thread is not None:
+            self._thread.join()
+            self._thread = None
+        if self.file.db is not None:
+            try:
+                self.flush()
+            finally:
+                self.file.close()
+
+    # ---- whole areas ------------------------------------------------------
+    def generate_area(self, keys, progress=None) -> int:
+        """Generate and store every key not yet in the file; returns how many were new.
+
+        Streams in batches straight to the file (nothing stays resident), each batch
+        one transaction, so an interrupted run keeps what it finished.
+        """
+        if self.readonly:
+            raise VoxelError(f"{self.file.path} is open read-only")
+        have = set(self.file.chunk_keys())
+        todo = [k for k in keys if k not in have and k not in self.chunks]
+        done = 0
+        for i in range(0, len(todo), BATCH):
+            batch = todo[i:i + BATCH]
+            with self._gen_lock:
+                arrays = self.generator.generate(batch)
+            rows = []
+            for key, blocks in zip(batch, arrays):
+                for x, y, z, b, d in self.file.edits_in(key):
+                    blocks[x & 15, y & 15, z] = b
+                rows.append(self.file.encode_chunk(key, blocks))
+            self.file.save(rows)
+            done += len(batch)
+            if progress:
+                progress(done, len(todo))
+        return len(todo)
+
+    def recreate(self, keep_edits: bool = True) -> None:
+        """Forget every generated chunk (they regenerate on demand from the seed)."""
+        with self._lock:
+            self.chunks.clear()
+            self._saving.clear()
+            self._queue.clear()
+        self.flush()
+        self.file.delete_chunks()
+        if not keep_edits:
+            self.file.clear_edits()

@@ -1,0 +1,126 @@
+"""The cellular light model (SPEC F6, thesis §4.3), pinned exactly as issue 4 states it.
+
+Per voxel four 4-bit components R, G, B, D (daylight), packed as SPEC §3
+(bits 0-3 R, 4-7 G, 8-11 B, 12-15 D).
+1. Every voxel starts at 0; an emitting block starts at its emission (r, g, b).
+2. Daylight column pass: above z=255 a column carries 15. Going down, a voxel that is
+   not light_opaque gets carry - attenuation (floored at 0) and passes it down;
+   a light_opaque voxel gets 0 and passes 0.
+3. Relaxation to the fixpoint: every non-opaque voxel takes, per component,
+   max(v, n - 1 - attenuation(self)) over its 6 face neighbours n. Opaque voxels keep
+   their emission (a lamp shines into its neighbours but receives nothing).
+
+The fixpoint is unique: a voxel's value is the max over sources of the source's start
+value minus the cost of a 6-connected path through non-opaque voxels (each step costs
+1 + attenuation of the voxel entered). Every step costs >= 1 and values are <= 15, so
+only paths of <= 14 steps matter; any algorithm reaching the fixpoint (NumPy Jacobi,
+OpenCL in-place sweeps) gives identical results.
+
+Outside the solved array: dark air. Neighbours outside the array contribute 0 and no
+daylight enters sideways from outside; columns are always complete (z 0..255), so the
+column pass is exact. Hence a voxel >= 15 columns away from the array's side edges is
+exact, i.e. the centre chunk of a 3x3 window (and every interior chunk of a wider
+region, the 1-chunk ring being context) has the true world light.
+
+Internal working form ("lanes"): uint8 per component, arrays indexed [z, y, x, c]
+(the C-order transpose of the (W, H, 256) Fortran block arrays, so x stays fastest).
+"""
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+
+from ..core.blocks import REGISTRY
+
+MAX = 15
+STEPS = MAX - 1  # Jacobi iterations that reach the fixpoint for sure
+OPAQUE_COST = 255  # cost of entering an opaque voxel: nothing gets through
+SKY = MAX << 12  # packed value of open sky: D=15, RGB=0
+
+
+@lru_cache(maxsize=1)
+def tables():
+    """Per block id: cost (1+att, OPAQUE_COST if opaque), att, opaque, emission (n,3),
+    packed emission (what an opaque voxel's light is)."""
+    r = REGISTRY
+    opaque = r.light_opaque.astype(np.uint8)
+    att = r.attenuation.astype(np.uint8)
+    cost = np.where(r.light_opaque, OPAQUE_COST, 1 + r.attenuation.astype(np.int32)).astype(np.uint8)
+    emis = np.minimum(r.emission, MAX).astype(np.uint8)
+    packed = (emis[:, 0].astype(np.uint16) | (emis[:, 1].astype(np.uint16) << 4)
+              | (emis[:, 2].astype(np.uint16) << 8))
+    air = ~r.light_opaque & (r.shape == 0) & (emis.max(axis=1) == 0) & (r.attenuation == 0)
+    return cost, att, opaque, emis, packed, air
+
+
+def pack(lanes: np.ndarray) -> np.ndarray:
+    """[..., 4] uint8 R,G,B,D -> packed uint16."""
+    l16 = lanes.astype(np.uint16)
+    return l16[..., 0] | (l16[..., 1] << 4) | (l16[..., 2] << 8) | (l16[..., 3] << 12)
+
+
+def unpack(light: np.ndarray) -> np.ndarray:
+    """Packed uint16 -> [..., 4] uint8 R,G,B,D."""
+    light = np.asarray(light, np.uint16)
+    return np.stack([(light >> s) & 0xF for s in (0, 4, 8, 12)], axis=-1).astype(np.uint8)
+
+
+def slab(blocks: np.ndarray) -> tuple[int, int]:
+    """z range [z0, z1) that needs relaxing; outside it the light is known.
+
+    Above z1 everything is air far from any emitter: D=15, RGB=0 (z1 >= top solid + 2,
+    >= top emitter + 15). Below z0 every layer is fully opaque, so those voxels hold
+    their emission (layer z0 is still opaque and acts as the fixed floor of the slab).
+    """
+    cost, _, _, emis, _, air = tables()
+    zs = blocks.shape[2]
+    notair = ~air[blocks]
+    layers = np.flatnonzero(notair.any(axis=(0, 1)))
+    top = int(layers[-1]) if layers.size else -1
+    em = np.flatnonzero((emis.max(axis=1) > 0)[blocks].any(axis=(0, 1)))
+    z1 = min(zs, max(top + 2, (int(em[-1]) + MAX) if em.size else 0, 1))
+    clear = np.flatnonzero((cost[blocks[:, :, :z1]] != OPAQUE_COST).any(axis=(0, 1)))
+    z0 = max(0, int(clear[0]) - 1) if clear.size else max(0, z1 - 1)
+    return z0, z1
+
+
+def start(blocks_t: np.ndarray) -> np.ndarray:
+    """Steps 1-2 for a [z, y, x] block slab whose top has open sky above (carry 15).
+
+    Returns lanes [z, y, x, 4] uint8."""
+    _, att, opaque, emis, _, _ = tables()
+    a = att[blocks_t].astype(np.int16)[::-1]
+    blocked = np.maximum.accumulate(opaque[blocks_t][::-1], axis=0).astype(bool)
+    d = np.where(blocked, 0, np.clip(MAX - np.cumsum(a, axis=0), 0, MAX))[::-1]
+    lanes = np.empty(blocks_t.shape + (4,), np.uint8)
+    lanes[..., :3] = emis[blocks_t]
+    lanes[..., 3] = d
+    return lanes
+
+
+def relax(lanes: np.ndarray, cost_t: np.ndarray, steps: int = STEPS) -> int:
+    """Step 3 by Jacobi iteration, in place on lanes [z, y, x, 4]; neighbours outside
+    are 0. Returns the number of iterations that changed something."""
+    zs, ys, xs, _ = lanes.shape
+    p = np.zeros((zs + 2, ys + 2, xs + 2, 4), np.uint8)
+    inner = p[1:-1, 1:-1, 1:-1]
+    inner[...] = lanes
+    c = cost_t[..., None]
+    m = np.empty_like(lanes)
+    done = 0
+    for _ in range(steps):
+        np.maximum(p[:-2, 1:-1, 1:-1], p[2:, 1:-1, 1:-1], out=m)
+        np.maximum(m, p[1:-1, :-2, 1:-1], out=m)
+        np.maximum(m, p[1:-1, 2:, 1:-1], out=m)
+        np.maximum(m, p[1:-1, 1:-1, :-2], out=m)
+        np.maximum(m, p[1:-1, 1:-1, 2:], out=m)
+        np.maximum(m, c, out=m)
+        m -= c  # saturating m - cost (opaque cost 255 -> 0)
+        np.maximum(m, inner, out=m)
+        if np.array_equal(m, inner):
+            break
+        inner[...] = m
+        done += 1
+    lanes[...] = inner
+    return done

@@ -1,0 +1,93 @@
+"""Full light solves: a block array, a 3x3 chunk window, a wide region (issue 4 §1).
+
+`solve` lights a whole (W, H, 256) block array (outside = dark air, see model.py);
+`chunk_light` returns the exact light of the centre chunk of a (48, 48, 256) window;
+`region_light` solves a wide array once and returns its interior (the 1-chunk ring is
+context), tiling very wide arrays so memory stays bounded.
+Backends: "opencl", "numpy" (the reference), None = OpenCL when available.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..core import chunk
+from ..core.errors import VoxelError
+from . import model
+
+BACKENDS = ("opencl", "numpy")
+TILE = 8  # interior chunks per tile side in region_light (10x10 solved per 8x8 kept)
+
+
+def pick(backend: str | None) -> str:
+    if backend is None:
+        from .. import opencl
+        return "opencl" if opencl.available() else "numpy"
+    if backend not in BACKENDS:
+        raise VoxelError(f"unknown light backend {backend!r} (known: {', '.join(BACKENDS)})")
+    return backend
+
+
+def _check(blocks: np.ndarray) -> np.ndarray:
+    blocks = np.asarray(blocks)
+    if blocks.ndim != 3 or blocks.shape[2] != chunk.HEIGHT:
+        raise VoxelError(f"block array must be (W, H, {chunk.HEIGHT}), got {blocks.shape}")
+    return np.asfortranarray(blocks, dtype=np.uint16)
+
+
+def solve(blocks: np.ndarray, backend: str | None = None) -> np.ndarray:
+    """Light of every voxel of `blocks` ((W, H, 256) uint16) -> same-shape uint16
+    packed per SPEC §3, Fortran order. Exact >= 15 columns inside the side edges."""
+    blocks = _check(blocks)
+    z0, z1 = model.slab(blocks)
+    _, _, _, _, packed, _ = model.tables()
+    out = chunk.empty(np.uint16, blocks.shape[0], blocks.shape[1])
+    out[:, :, z1:] = model.SKY
+    out[:, :, :z0] = packed[blocks[:, :, :z0]]
+    if z1 > z0:
+        if pick(backend) == "opencl":
+            from . import cl
+            out[:, :, z0:z1] = cl.solve_slab(blocks[:, :, z0:z1])
+        else:
+            out[:, :, z0:z1] = solve_slab_numpy(blocks[:, :, z0:z1])
+    return out
+
+
+def solve_slab_numpy(blocks: np.ndarray) -> np.ndarray:
+    """Light of a (W, H, Z) slab with open sky right above it and dark air around."""
+    bt = blocks.T  # [z, y, x] C-order view
+    lanes = model.start(bt)
+    model.relax(lanes, model.tables()[0][bt])
+    return model.pack(lanes).T
+
+
+def chunk_light(blocks3x3: np.ndarray, backend: str | None = None) -> np.ndarray:
+    """Exact (16, 16, 256) light of the centre chunk of a (48, 48, 256) window."""
+    b = _check(blocks3x3)
+    if b.shape[:2] != (3 * chunk.SIZE, 3 * chunk.SIZE):
+        raise VoxelError(f"blocks3x3 must be (48, 48, 256), got {b.shape}")
+    s = chunk.SIZE
+    return np.asfortranarray(solve(b, backend)[s:2 * s, s:2 * s])
+
+
+def region_light(blocks: np.ndarray, backend: str | None = None, tile: int = TILE) -> np.ndarray:
+    """Exact light of the interior of a chunk-aligned (16*(n+2), 16*(m+2), 256) array:
+    returns (16*n, 16*m, 256). Solves overlapping tiles of (tile+2)^2 chunks."""
+    b = _check(blocks)
+    s = chunk.SIZE
+    if b.shape[0] % s or b.shape[1] % s or b.shape[0] < 3 * s or b.shape[1] < 3 * s:
+        raise VoxelError(f"region must be whole chunks, at least 3x3, got {b.shape}")
+    n, m = b.shape[0] // s - 2, b.shape[1] // s - 2
+    out = chunk.empty(np.uint16, n * s, m * s)
+    for i in range(0, n, tile):
+        for j in range(0, m, tile):
+            ti, tj = min(tile, n - i), min(tile, m - j)
+            sub = b[i * s:(i + ti + 2) * s, j * s:(j + tj + 2) * s]
+            out[i * s:(i + ti) * s, j * s:(j + tj) * s] = solve(sub, backend)[s:-s, s:-s]
+    return out
+
+
+def world_region(world, cx0: int, cy0: int, cx1: int, cy1: int,
+                 backend: str | None = None) -> np.ndarray:
+    """Light of chunks [cx0, cx1) x [cy0, cy1) of a core.world.World, solved at once
+    (reads the 1-chunk ring around it through world.region_blocks)."""
+    return region_light(world.region_blocks(cx0 - 1, cy0 - 1, cx1 + 1, cy1 + 1), backend)

@@ -1,0 +1,75 @@
+"""The one place that opens OpenCL: platform choice, queue, cached program builds.
+
+pyopencl is imported lazily so the add-on registers where it is missing. The pip
+"pocl-binary-distribution" platform vectorizes our kernels far better than Debian's
+pocl ICD, and `create_some_context()` would pick whichever comes first, so the
+platform is chosen explicitly: VOXEL_CL_PLATFORM (substring) if set, else a pocl
+platform that is not the distro one, else the first with a device.
+"""
+from __future__ import annotations
+
+import os
+import threading
+from functools import lru_cache
+
+from . import resources
+
+_lock = threading.Lock()
+
+
+class NoOpenCL(RuntimeError):
+    """No usable OpenCL device (pyopencl missing, no platform, no device)."""
+
+
+def _platform_rank(p) -> int:
+    want = os.environ.get("VOXEL_CL_PLATFORM")
+    text = f"{p.name} {p.version}".lower()
+    if want:
+        return 0 if want.lower() in text else 9
+    if "pocl" in text or "portable computing" in text:
+        return 2 if "distro" in text and "reloc" not in text else 1
+    return 3
+
+
+@lru_cache(maxsize=1)
+def context():
+    """(context, queue, device) of the chosen platform; raises NoOpenCL."""
+    try:
+        import pyopencl as cl
+    except ImportError as e:  # pragma: no cover - depends on the machine
+        raise NoOpenCL(f"pyopencl is not installed ({e})") from None
+    try:
+        platforms = sorted(cl.get_platforms(), key=_platform_rank)
+    except cl.Error as e:
+        raise NoOpenCL(f"no OpenCL platform ({e})") from None
+    for p in platforms:
+        try:
+            devices = p.get_devices()
+        except cl.Error:
+            continue
+        if devices:
+            ctx = cl.Context(devices[:1])
+            return ctx, cl.CommandQueue(ctx), devices[0]
+    raise NoOpenCL("no OpenCL device found")
+
+
+def available() -> bool:
+    try:
+        context()
+        return True
+    except NoOpenCL:
+        return False
+
+
+def describe() -> str:
+    ctx, _, dev = context()
+    return f"{dev.platform.name.strip()} / {dev.name.strip()}"
+
+
+@lru_cache(maxsize=None)
+def program(name: str, options: tuple[str, ...] = ()):
+    """Build gpu/<name> (with #includes resolved) once per process and options."""
+    import pyopencl as cl
+    ctx, _, _ = context()
+    with _lock:
+        return cl.Program(ctx, resources.kernel(name)).build(options=list(options))

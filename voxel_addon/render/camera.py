@@ -1,0 +1,100 @@
+"""Camera matrices and region frustum culling (thesis §5.3.4), all NumPy.
+
+World axes as SPEC §3: x, y horizontal, z up. Yaw is degrees counter-clockwise from
++x about +z, pitch degrees up. Matrices are row-major NumPy (M @ v); upload `.T`
+(column-major) to GL.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass
+class Camera:
+    x: float = 0.0
+    y: float = 0.0
+    z: float = 80.0
+    yaw: float = 0.0
+    pitch: float = 0.0
+    fov: float = 70.0  # vertical, degrees
+    aspect: float = 16 / 9
+    near: float = 0.1
+    far: float = 600.0
+
+    @property
+    def pos(self) -> np.ndarray:
+        return np.array([self.x, self.y, self.z], np.float64)
+
+    @property
+    def forward(self) -> np.ndarray:
+        y, p = math.radians(self.yaw), math.radians(self.pitch)
+        return np.array([math.cos(p) * math.cos(y), math.cos(p) * math.sin(y), math.sin(p)])
+
+    def view(self) -> np.ndarray:
+        return look_at(self.pos, self.forward)
+
+    def proj(self) -> np.ndarray:
+        return perspective(self.fov, self.aspect, self.near, self.far)
+
+    def view_proj(self) -> np.ndarray:
+        return self.proj() @ self.view()
+
+
+def look_at(eye, fwd, up=(0.0, 0.0, 1.0)) -> np.ndarray:
+    f = np.asarray(fwd, float) / np.linalg.norm(fwd)
+    up = np.asarray(up, float)
+    if abs(f @ up) > 0.999:  # looking straight up/down: any horizontal "up" will do
+        up = np.array([0.0, 1.0, 0.0]) if abs(f[1]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    s = np.cross(f, up)
+    s /= np.linalg.norm(s)
+    u = np.cross(s, f)
+    m = np.eye(4)
+    m[0, :3], m[1, :3], m[2, :3] = s, u, -f
+    m[:3, 3] = -m[:3, :3] @ np.asarray(eye, float)
+    return m
+
+
+def perspective(fov_deg, aspect, near, far) -> np.ndarray:
+    t = 1.0 / math.tan(math.radians(fov_deg) / 2)
+    m = np.zeros((4, 4))
+    m[0, 0], m[1, 1] = t / aspect, t
+    m[2, 2] = (far + near) / (near - far)
+    m[2, 3] = 2 * far * near / (near - far)
+    m[3, 2] = -1.0
+    return m
+
+
+def ortho(l, r, b, t, n, f) -> np.ndarray:
+    m = np.eye(4)
+    m[0, 0], m[1, 1], m[2, 2] = 2 / (r - l), 2 / (t - b), -2 / (f - n)
+    m[0, 3], m[1, 3], m[2, 3] = -(r + l) / (r - l), -(t + b) / (t - b), -(f + n) / (f - n)
+    return m
+
+
+_CORNERS = np.array([[i & 1, (i >> 1) & 1, (i >> 2) & 1] for i in range(8)], float)
+
+
+def visible(mvp: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Boolean mask of boxes [lo, hi] (n, 3) that may intersect the clip volume.
+
+    A box is culled only when all 8 corners lie outside one clip plane (the thesis's
+    test, done on homogeneous coordinates so boxes behind the camera need no
+    special case).
+    """
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    pts = lo[:, None, :] + (hi - lo)[:, None, :] * _CORNERS[None]       # (n, 8, 3)
+    clip = pts @ mvp[:3, :3].T + mvp[:3, 3]                              # (n, 8, 4)… below
+    clip = np.concatenate([clip, (pts @ mvp[3, :3] + mvp[3, 3])[..., None]], -1)
+    x, y, z, w = clip[..., 0], clip[..., 1], clip[..., 2], clip[..., 3]
+    out = ((x < -w).all(1) | (x > w).all(1) | (y < -w).all(1) | (y > w).all(1)
+           | (z < -w).all(1) | (z > w).all(1))
+    return ~out
+
+
+def frustum_corners(inv_vp: np.ndarray) -> np.ndarray:
+    """The 8 world-space corners of the clip cube under inv_vp."""
+    c = np.c_[_CORNERS * 2 - 1, np.ones(8)] @ inv_vp.T
+    return c[:, :3] / c[:, 3:]

@@ -1,0 +1,51 @@
+"""GLSL programs from shaders/: #include via resources, #define injection, one cache per context.
+
+A program is named by its files plus a defines dict; the same source compiles into
+several variants (the thesis's face contexts: opaque / alpha test / peel / shadow).
+"""
+from __future__ import annotations
+
+from .. import resources
+
+
+def source(name: str, defines: dict | None = None, version: int = 410) -> str:
+    """Shader text with `#version` first and the defines right after it."""
+    lines = [f"#version {version} core"]
+    for k, v in sorted((defines or {}).items()):
+        if v is False or v is None:
+            continue
+        lines.append(f"#define {k} {int(v) if v is True else v}")
+    body = resources.shader(name)
+    # A file may carry its own #version (editor tooling); ours wins.
+    body = "\n".join(ln for ln in body.splitlines() if not ln.lstrip().startswith("#version"))
+    return "\n".join(lines) + "\n#line 1\n" + body
+
+
+class Programs:
+    """Compiles and caches (vertex, fragment, defines) -> moderngl.Program."""
+
+    def __init__(self, ctx):
+        self.ctx = ctx
+        self.version = 430 if ctx.version_code >= 430 else 410
+        self._cache: dict = {}
+
+    def get(self, vert: str, frag: str | None, defines: dict | None = None):
+        key = (vert, frag, tuple(sorted((defines or {}).items())))
+        prog = self._cache.get(key)
+        if prog is None:
+            d = dict(defines or {})
+            d.setdefault("GLSL_VERSION", self.version)
+            kw = {"vertex_shader": source(vert, d, self.version)}
+            if frag:
+                kw["fragment_shader"] = source(frag, d, self.version)
+            try:
+                prog = self.ctx.program(**kw)
+            except Exception as e:  # name the file: moderngl's message only has line numbers
+                raise RuntimeError(f"shader {vert}/{frag} {d}: {e}") from None
+            self._cache[key] = prog
+        return prog
+
+    def release(self):
+        for p in self._cache.values():
+            p.release()
+        self._cache.clear()

@@ -25,8 +25,9 @@ STAMP = VENV / ".setup-stamp"
 TOOLS = ROOT / ".tools"          # npm tools (git-ignored)
 DEMO = ROOT / "demo_out"         # demo outputs (git-ignored)
 
-APT_PACKAGES = ["libgl1", "libegl1", "libegl-mesa0", "libgl1-mesa-dri", "libgbm1",
-                "binutils", "nodejs", "npm"]
+APT_PACKAGES = ["libgl1", "libegl1", "libegl-mesa0", "libgl1-mesa-dri", "libgbm1", "binutils"]
+# Wanted only when the command is missing (a machine may have Node.js from elsewhere).
+APT_FOR_COMMAND = {"node": "nodejs", "npm": "npm"}
 NPM_PACKAGES = ["gltf-validator@2.0.0-dev.3.10"]
 
 
@@ -61,6 +62,7 @@ def _missing_debs() -> list[str]:
                            capture_output=True, text=True)
         if "install ok installed" not in r.stdout:
             missing.append(p)
+    missing += [p for cmd, p in APT_FOR_COMMAND.items() if not shutil.which(cmd)]
     return missing
 
 

@@ -38,6 +38,7 @@ class World:
         self._wake = threading.Condition(self._lock)
         self._queue: OrderedDict[tuple[int, int], None] = OrderedDict()
         self._saving: dict[tuple[int, int], tuple] = {}
+        self._evictions: dict[tuple[int, int], int] = {}
         self._edits: dict[tuple[int, int, int], tuple[int, int]] = {}  # unsaved user edits
         self._stop = False
         self.loader_error: BaseException | None = None
@@ -138,24 +139,49 @@ class World:
 
     # ---- loading, generating ------------------------------------------------
     def _activate(self, keys) -> list[Chunk]:
-        """Make `keys` active (load, or generate + apply stored edits); returns them."""
+        """Make `keys` active (load, or generate + apply stored edits); returns them.
+
+        Reading happens outside the lock, so another thread may load, edit and evict
+        the same chunk meanwhile; the eviction counter catches that and the stale
+        read is thrown away and redone.
+        """
+        out: dict = {}
+        pending = list(keys)
+        while pending:
+            with self._lock:
+                epochs = {k: self._evictions.get(k, 0) for k in pending}
+            found = self._fetch([k for k in pending if k not in self.chunks])
+            retry = []
+            with self._lock:
+                now = time.monotonic()
+                for k in pending:
+                    c = self.chunks.get(k)
+                    if c is None:
+                        if k not in found or self._evictions.get(k, 0) != epochs[k]:
+                            retry.append(k)
+                            continue
+                        c = self.chunks[k] = found[k]
+                    c.last_use = now
+                    out[k] = c
+            pending = retry
+        return [out[k] for k in keys]
+
+    def _fetch(self, keys) -> dict:
+        """New Chunk objects for keys: from an unsaved snapshot, the file, or the generator."""
         found: dict = {}
         to_make = []
         for key in keys:
             with self._lock:
-                c = self.chunks.get(key)
                 snap = self._saving.get(key)
-            if c is not None:
-                found[key] = c
-            elif snap is not None:
+            if snap is not None:
                 found[key] = Chunk(key, snap[0].copy(order="F"),
                                    None if snap[1] is None else snap[1].copy(order="F"))
+                continue
+            got = self.file.read_chunk(key)
+            if got is None:
+                to_make.append(key)
             else:
-                got = self.file.read_chunk(key)
-                if got is None:
-                    to_make.append(key)
-                else:
-                    found[key] = Chunk(key, *got)
+                found[key] = Chunk(key, *got)
         if to_make:
             with self._gen_lock:
                 arrays = self.generator.generate(to_make)
@@ -165,13 +191,7 @@ class World:
                     c.set(x & 15, y & 15, z, b, d)
                 c.dirty = not self.readonly
                 found[key] = c
-        out = []
-        with self._lock:
-            for key in keys:
-                c = self.chunks.setdefault(key, found[key])  # first one in wins
-                c.last_use = time.monotonic()
-                out.append(c)
-        return out
+        return found
 
     def _loader(self) -> None:
         while True:
@@ -203,7 +223,10 @@ class World:
             return 0
         with self._lock:
             for k in keys:
-                c = self.chunks.pop(k)
+                c = self.chunks.pop(k, None)
+                if c is None:
+                    continue
+                self._evictions[k] = self._evictions.get(k, 0) + 1
                 if c.dirty and not self.readonly:
                     self._saving[k] = (c.blocks, c.data)
         self.flush()
@@ -217,23 +240,22 @@ class World:
             self._flush()
 
     def _flush(self) -> None:
+        # Snapshots go into _saving before the write so a chunk evicted and reloaded
+        # while this write is in flight is rebuilt from them, not from the stale file.
         with self._lock:
-            dirty = {k: (c.blocks.copy(order="F"), None if c.data is None else c.data.copy(order="F"))
-                     for k, c in self.chunks.items() if c.dirty}
-            for c in self.chunks.values():
-                c.dirty = False
+            for k, c in self.chunks.items():
+                if c.dirty:
+                    self._saving[k] = (c.blocks.copy(order="F"),
+                                       None if c.data is None else c.data.copy(order="F"))
+                    c.dirty = False
             saving = dict(self._saving)
             edits = [(x, y, z, b, d) for (x, y, z), (b, d) in self._edits.items()]
             self._edits.clear()
-        items = {**saving, **dirty}
         try:
-            rows = [self.file.encode_chunk(k, b, d) for k, (b, d) in items.items()]
+            rows = [self.file.encode_chunk(k, b, d) for k, (b, d) in saving.items()]
             self.file.save(rows, edits)
         except BaseException:
-            with self._lock:  # put everything back so nothing is lost
-                for k in dirty:
-                    if k in self.chunks:
-                        self.chunks[k].dirty = True
+            with self._lock:  # keep the edits for the next try; snapshots stay in _saving
                 for x, y, z, b, d in edits:
                     self._edits.setdefault((x, y, z), (b, d))
             raise

@@ -7,6 +7,7 @@ uniform sampler2DArray tex;
 uniform sampler2DArray glow_tex;
 uniform float glow_scale[64];
 #ifdef PEEL
+uniform GSAMPLER opaque_depth;
 uniform GSAMPLER prev_depth;
 #endif
 
@@ -41,8 +42,12 @@ vec4 texel(vec2 uv) {
 
 void main() {
 #ifdef PEEL
-    float prev = FETCH(prev_depth, ivec2(gl_FragCoord.xy), gl_SampleID).r;
-    if (gl_FragCoord.z <= prev + 1e-7) discard;
+    // behind the opaque scene, or not behind the previous layer: not this layer's
+    ivec2 pc = ivec2(gl_FragCoord.xy);
+    if (gl_FragCoord.z >= FETCH(opaque_depth, pc, gl_SampleID).r) discard;
+#if PEEL > 1
+    if (gl_FragCoord.z <= FETCH(prev_depth, pc, gl_SampleID).r + 1e-7) discard;
+#endif
 #endif
     vec4 c = texel(g_uv);
 #ifdef ALPHA_TEST
@@ -50,12 +55,10 @@ void main() {
     c.a = 1.0;
 #endif
 #ifndef SHADOW
-    vec3 n = gl_FrontFacing ? g_normal : -g_normal;
-    // plants use an up normal on both sides: flipping it would darken their backs
-    if (g_normal.z > 0.99) n = g_normal;
+    vec3 n = gl_FrontFacing ? g_normal : -g_normal;  // double-sided passes
     float glow = texture(glow_tex, vec3(g_uv, g_layer)).r * glow_scale[int(g_layer)];
 #ifdef DEBUG_AGG
-    c.rgb = hash_color(g_quad * 7919u + uint(g_layer));
+    c.rgb = hash_color(g_quad * 7919u + uint(g_layer));  // one colour per merged quad
     glow = 0.0;
 #endif
     out_albedo = c;

@@ -1,34 +1,41 @@
 // Block faces for the G-buffer, depth peeling and the shadow map (thesis §5.3.1).
-#include "include/standin_vertex.glsl"
+#include "include/vertex.glsl"
 
+in uint in_v;
+in vec3 in_origin;              // per region, through baseInstance (GL 4.3+)
+uniform vec3 region_origin;     // the same, one draw per region (GL 4.1)
+uniform bool use_uniform_origin;
 uniform mat4 mvp;
 uniform float time;
 uniform bool waving;
 
 out vec3 g_world;
+#if defined(MSAA_ALPHA) && defined(SAMPLES) && SAMPLES > 1
+sample out vec2 g_uv;  // alpha test per sample (alpha-to-sample, fig. 6.4)
+#else
 out vec2 g_uv;
+#endif
 flat out float g_layer;
 flat out vec3 g_normal;
 flat out uint g_quad;
 
 // Vertex animation (§5.3.1): 1 = wave the top (plants), 2 = all (leaves), 3 = water surface.
-vec3 wave(vec3 p, int anim) {
-    if (!waving || anim == 0) return p;
+vec3 wave(vec3 p, uint anim, vec3 n) {
     float ph = time * 1.7 + p.x * 0.7 + p.y * 0.5;
-    if (anim == 3) return p + vec3(0.0, 0.0, 0.06 * sin(ph) - 0.1);
+    if (anim == 3u) return n.z > 0.5 ? p + vec3(0.0, 0.0, 0.05 * sin(ph) - 0.05) : p;
+    // X/# planes list the top corners 2 and 3 (meshing's corner order)
+    if (anim == 1u && (gl_VertexID & 3) < 2) return p;
     return p + vec3(0.06 * sin(ph), 0.05 * cos(ph * 1.3), 0.0);
 }
 
 void main() {
-    vec3 p = v_position();
-    int anim = v_anim();
-    // the top edge of a plant quad is where the texture's v is 1
-    if (anim == 1) p = v_uv().y > 0.5 ? wave(p, 2) : p;
-    else p = wave(p, anim);
+    Vertex v = decode(in_v);
+    vec3 p = v.position + (use_uniform_origin ? region_origin : in_origin);
+    if (waving && v.anim != 0u) p = wave(p, v.anim, v.normal);
     g_world = p;
-    g_uv = v_uv();
-    g_layer = v_layer();
-    g_normal = v_normal();
-    g_quad = v_quad();
+    g_uv = v.uv;
+    g_layer = float(v.layer);
+    g_normal = v.normal;
+    g_quad = uint(gl_VertexID) >> 2;
     gl_Position = mvp * vec4(p, 1.0);
 }

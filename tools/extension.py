@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import glob
+import os
 import shutil
 import subprocess
 import sys
@@ -26,7 +27,9 @@ IGNORE = shutil.ignore_patterns("__pycache__", "*.pyc", "*.pyo", ".pytest_cache"
 
 
 def blender_ext() -> Path:
-    """Blender's extension CLI, shipped inside the bpy wheel."""
+    """Blender's extension CLI, shipped inside the bpy wheel (or VOXEL_BLENDER_EXT)."""
+    if os.environ.get("VOXEL_BLENDER_EXT"):
+        return Path(os.environ["VOXEL_BLENDER_EXT"])
     pats = [ROOT / ".venv" / "lib" / "python*" / "site-packages" / "bpy" / "*" / "scripts"
             / "addons_core" / "bl_pkg" / "cli" / "blender_ext.py"]
     try:  # also look next to whatever bpy this interpreter would import, without importing it

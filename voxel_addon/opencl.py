@@ -73,3 +73,12 @@ def program(name: str, options: tuple[str, ...] = ()):
     ctx, _, _ = context()
     with _lock:
         return cl.Program(ctx, resources.kernel(name)).build(options=list(options))
+
+
+@lru_cache(maxsize=16)
+def build(source: str, options: tuple[str, ...] = ()):
+    """Build generated source (e.g. a compiled generator program) once per process."""
+    import pyopencl as cl
+    ctx, _, _ = context()
+    with _lock:
+        return cl.Program(ctx, source).build(options=list(options))

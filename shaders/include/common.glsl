@@ -5,9 +5,11 @@
 #if SAMPLES > 1
 #define GSAMPLER sampler2DMS
 #define FETCH(t, p, s) texelFetch(t, p, s)
+#define MS_ARG
 #else
 #define GSAMPLER sampler2D
 #define FETCH(t, p, s) texelFetch(t, p, 0)
+#define MS_ARG , 0
 #endif
 
 vec3 hash_color(uint h) {

@@ -29,6 +29,8 @@ from __future__ import annotations
 
 from functools import lru_cache
 
+import sys
+
 import numpy as np
 
 from ..core.blocks import REGISTRY
@@ -37,6 +39,7 @@ MAX = 15
 STEPS = MAX - 1  # Jacobi iterations that reach the fixpoint for sure
 OPAQUE_COST = 255  # cost of entering an opaque voxel: nothing gets through
 SKY = MAX << 12  # packed value of open sky: D=15, RGB=0
+assert sys.byteorder == "little"  # lanes are uint32 viewed as 4 bytes R, G, B, D
 
 
 @lru_cache(maxsize=1)
@@ -72,31 +75,50 @@ def slab(blocks: np.ndarray) -> tuple[int, int]:
     Above z1 everything is air far from any emitter: D=15, RGB=0 (z1 >= top solid + 2,
     >= top emitter + 15). Below z0 every layer is fully opaque, so those voxels hold
     their emission (layer z0 is still opaque and acts as the fixed floor of the slab).
+    Scans layers in bands from the top and the bottom (F order: a band is contiguous).
     """
     cost, _, _, emis, _, air = tables()
     zs = blocks.shape[2]
-    notair = ~air[blocks]
-    layers = np.flatnonzero(notair.any(axis=(0, 1)))
-    top = int(layers[-1]) if layers.size else -1
-    em = np.flatnonzero((emis.max(axis=1) > 0)[blocks].any(axis=(0, 1)))
-    z1 = min(zs, max(top + 2, (int(em[-1]) + MAX) if em.size else 0, 1))
-    clear = np.flatnonzero((cost[blocks[:, :, :z1]] != OPAQUE_COST).any(axis=(0, 1)))
-    z0 = max(0, int(clear[0]) - 1) if clear.size else max(0, z1 - 1)
+    only0 = bool(air[0]) and int(air.sum()) == 1  # a compare is ~10x cheaper than a lookup
+    top = _scan(blocks, range(zs - 1, -1, -1), (lambda b: b != 0) if only0 else (lambda b: ~air[b]))
+    top = -1 if top is None else top
+    lit = emis.max(axis=1) > 0
+    em = _scan(blocks, range(top, max(top - MAX + 2, 0) - 1, -1), lambda b: lit[b])
+    z1 = min(zs, max(top + 2, em + MAX if em is not None else 0, 1))
+    clear = _scan(blocks, range(z1), lambda b: cost[b] != OPAQUE_COST)
+    z0 = max(0, clear - 1) if clear is not None else max(0, z1 - 1)
     return z0, z1
+
+
+def _scan(blocks: np.ndarray, zs: range, hit, band: int = 16):
+    """First z of `zs` (a step +-1 range) whose layer has any voxel with hit(ids)."""
+    zs = list(zs)
+    for i in range(0, len(zs), band):
+        part = zs[i:i + band]
+        lo, hi = min(part), max(part) + 1
+        layers = np.flatnonzero(hit(blocks[:, :, lo:hi]).any(axis=(0, 1))) + lo
+        layers = [z for z in part if z in set(layers.tolist())]
+        if layers:
+            return layers[0]
+    return None
 
 
 def start(blocks_t: np.ndarray) -> np.ndarray:
     """Steps 1-2 for a [z, y, x] block slab whose top has open sky above (carry 15).
 
-    Returns lanes [z, y, x, 4] uint8."""
+    Returns lanes [z, y, x, 4] uint8 (R, G, B, D)."""
     _, att, opaque, emis, _, _ = tables()
     a = att[blocks_t].astype(np.int16)[::-1]
     blocked = np.maximum.accumulate(opaque[blocks_t][::-1], axis=0).astype(bool)
     d = np.where(blocked, 0, np.clip(MAX - np.cumsum(a, axis=0), 0, MAX))[::-1]
-    lanes = np.empty(blocks_t.shape + (4,), np.uint8)
-    lanes[..., :3] = emis[blocks_t]
-    lanes[..., 3] = d
-    return lanes
+    lanes = _emis32()[blocks_t] | (d.astype(np.uint32) << 24)
+    return np.ascontiguousarray(lanes).view(np.uint8).reshape(blocks_t.shape + (4,))
+
+
+@lru_cache(maxsize=1)
+def _emis32():
+    e = tables()[3].astype(np.uint32)
+    return e[:, 0] | (e[:, 1] << 8) | (e[:, 2] << 16)  # little-endian lanes R, G, B, D
 
 
 def relax(lanes: np.ndarray, cost_t: np.ndarray, steps: int = STEPS) -> int:
@@ -104,23 +126,40 @@ def relax(lanes: np.ndarray, cost_t: np.ndarray, steps: int = STEPS) -> int:
     are 0. Returns the number of iterations that changed something."""
     zs, ys, xs, _ = lanes.shape
     p = np.zeros((zs + 2, ys + 2, xs + 2, 4), np.uint8)
-    inner = p[1:-1, 1:-1, 1:-1]
-    inner[...] = lanes
-    c = cost_t[..., None]
-    m = np.empty_like(lanes)
+    p[1:-1, 1:-1, 1:-1] = lanes
+    done = relax_padded(p, cost_t, steps)
+    lanes[...] = p[1:-1, 1:-1, 1:-1]
+    return done
+
+
+def relax_padded(p: np.ndarray, cost_t: np.ndarray, steps: int = STEPS) -> int:
+    """Jacobi relaxation, in place, of the inside of a C-contiguous padded lanes array
+    [z+2, y+2, x+2, 4] whose 1-voxel rim holds fixed values; cost_t is [z, y, x].
+
+    Works on the flat array so every neighbour is a contiguous shifted slice; rim
+    voxels inside the flat range get cost 255 and so never change."""
+    c = np.full(p.shape[:3], OPAQUE_COST, np.uint8)
+    c[1:-1, 1:-1, 1:-1] = cost_t
+    f = p.reshape(-1)
+    sx, sy, sz = 4, 4 * p.shape[2], 4 * p.shape[2] * p.shape[1]
+    lo = sz + sy + sx
+    hi = f.size - lo
+    if hi <= lo:
+        return 0
+    cc = np.repeat(c.reshape(-1), 4)[lo:hi]
+    cur = f[lo:hi]
+    m = np.empty_like(cur)
     done = 0
     for _ in range(steps):
-        np.maximum(p[:-2, 1:-1, 1:-1], p[2:, 1:-1, 1:-1], out=m)
-        np.maximum(m, p[1:-1, :-2, 1:-1], out=m)
-        np.maximum(m, p[1:-1, 2:, 1:-1], out=m)
-        np.maximum(m, p[1:-1, 1:-1, :-2], out=m)
-        np.maximum(m, p[1:-1, 1:-1, 2:], out=m)
-        np.maximum(m, c, out=m)
-        m -= c  # saturating m - cost (opaque cost 255 -> 0)
-        np.maximum(m, inner, out=m)
-        if np.array_equal(m, inner):
+        np.maximum(f[lo - sx:hi - sx], f[lo + sx:hi + sx], out=m)
+        for o in (sy, sz):
+            np.maximum(m, f[lo - o:hi - o], out=m)
+            np.maximum(m, f[lo + o:hi + o], out=m)
+        np.maximum(m, cc, out=m)
+        m -= cc  # saturating m - cost (opaque cost 255 -> 0)
+        np.maximum(m, cur, out=m)
+        if np.array_equal(m, cur):
             break
-        inner[...] = m
+        cur[...] = m
         done += 1
-    lanes[...] = inner
     return done

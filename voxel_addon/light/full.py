@@ -12,7 +12,7 @@ import numpy as np
 
 from ..core import chunk
 from ..core.errors import VoxelError
-from . import model
+from . import flood, model
 
 BACKENDS = ("opencl", "numpy")
 TILE = 8  # interior chunks per tile side in region_light (10x10 solved per 8x8 kept)
@@ -53,11 +53,53 @@ def solve(blocks: np.ndarray, backend: str | None = None) -> np.ndarray:
 
 
 def solve_slab_numpy(blocks: np.ndarray) -> np.ndarray:
-    """Light of a (W, H, Z) slab with open sky right above it and dark air around."""
-    bt = blocks.T  # [z, y, x] C-order view
-    lanes = model.start(bt)
-    model.relax(lanes, model.tables()[0][bt])
-    return model.pack(lanes).T
+    """Light of a (W, H, Z) slab with open sky right above it and dark air around:
+    start values, then flood.py from every voxel that can raise a neighbour."""
+    w, h, zs = blocks.shape
+    shape, (sy, sz) = flood.grid((zs, h, w))
+    cost_t, _, _, _, packed, _ = model.tables()
+    bt = blocks.T  # [z, y, x]
+    cost = np.full(shape, model.OPAQUE_COST, np.uint8)
+    inner = (slice(2, -2), slice(1, -1), slice(1, -1))
+    cost[inner] = cost_t[bt]
+    f = np.zeros(shape, np.uint16)
+    emit = packed[bt]
+    f[inner] = emit
+    # Daylight column pass, layer by layer from the top (carry 15 above the slab).
+    carry = np.full((h, w), model.MAX, np.int16)
+    dlo, dhi = zs, 0  # layers with a non-opaque voxel below 15 and a voxel >= 2
+    for z in range(zs - 1, -1, -1):
+        c = cost[z + 2, 1:-1, 1:-1]
+        op = c == model.OPAQUE_COST
+        carry -= c
+        carry += 1
+        np.maximum(carry, 0, out=carry)
+        carry[op] = 0
+        f[z + 2, 1:-1, 1:-1] |= carry.astype(np.uint16) << 12
+        top = carry.max()
+        if top >= 2 and (carry[~op] < model.MAX).any():
+            dlo, dhi = z, max(dhi, z + 1)
+        if top == 0:
+            break
+    f = f.reshape(-1)
+    cost = cost.reshape(-1)
+    em = np.flatnonzero(emit) if emit.any() else np.zeros(0, np.int64)
+    em = _padded(em, h, w, sy, sz)
+    for k, shift in enumerate(flood.SHIFTS[:3]):
+        s = em[((f[em] >> shift) & 15) > 1]
+        if s.size:
+            flood.flood(f, cost, s, shift, sy, sz)
+    if dhi > dlo:  # daylight only moves sideways from its column pass
+        s = flood.seeds(f, cost, 12, (1, sy), (dlo + 2) * sz, (dhi + 2) * sz)
+        flood.flood(f, cost, s, 12, sy, sz)
+    return f.reshape(shape)[inner].T
+
+
+def _padded(i: np.ndarray, h: int, w: int, sy: int, sz: int) -> np.ndarray:
+    """Flat [z, y, x] indices of the inside -> flat indices of the padded grid."""
+    z, r = np.divmod(i, h * w)
+    y, x = np.divmod(r, w)
+    return (z + 2) * sz + (y + 1) * sy + (x + 1)
 
 
 def chunk_light(blocks3x3: np.ndarray, backend: str | None = None) -> np.ndarray:

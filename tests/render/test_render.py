@@ -1,0 +1,166 @@
+"""Real frames on the real GL (Mesa llvmpipe through EGL): properties that must hold."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from voxel_addon import light
+from voxel_addon.core import chunk
+from voxel_addon.core.blocks import REGISTRY as R
+from voxel_addon.render import Camera, Settings
+
+SIZE = (96, 64)
+
+
+@pytest.fixture(scope="module")
+def gl():
+    moderngl = pytest.importorskip("moderngl")
+    try:
+        ctx = moderngl.create_standalone_context(backend="egl")
+    except Exception as e:
+        pytest.skip(f"no EGL OpenGL: {e}")
+    yield ctx
+    ctx.release()
+
+
+def renderer(gl, blocks, **kw):
+    from voxel_addon.render.pipeline import Renderer
+    r = Renderer(gl, Settings(**{"msaa": 1, "dof": False, "godrays": False, **kw}))
+    r.set_area(blocks, light.solve(blocks), 0, 0)
+    return r
+
+
+def floor(top="stone", n=2):
+    b = chunk.empty(width=16 * n, depth=16 * n)
+    b[:, :, :60] = R.id("stone")
+    b[:, :, 60] = R.id(top)
+    return b
+
+
+def lum(img):
+    return img.astype(float).mean(-1)
+
+
+def test_sky_colour_follows_time_of_day(gl):
+    r = renderer(gl, floor())
+    up = Camera(16, 16, 70, 0, 60)
+    noon, night, dawn = (r.render(up, h, SIZE) for h in (12.0, 0.0, 6.5))
+    assert lum(noon).mean() > 3 * lum(night).mean() + 20
+    b, g, rr = (noon[..., i].mean() for i in (2, 1, 0))
+    assert b > rr + 20, "noon sky is blue"
+    assert lum(night).mean() < 40
+    assert dawn[..., 0].mean() > noon[..., 0].mean() * 0.8 and lum(dawn).mean() < lum(noon).mean()
+    r.release()
+
+
+def test_lamp_lights_its_surroundings_at_night(gl):
+    b = floor()
+    b[16, 16, 61] = R.id("lamp_red")
+    r = renderer(gl, b, shadows=False)
+    img = r.render(Camera(16.5, 4, 66, 90, -25), 0.0, SIZE).astype(float)
+    # ground near the lamp (image centre, a bit below) vs ground far to the side
+    near = img[30:40, 34:62]   # the ground around the lamp (lamp at the centre)
+    far = img[56:64, 0:12]     # ground far to the side
+    assert near[..., 0].mean() > far[..., 0].mean() + 15
+    assert near[..., 0].mean() > near[..., 2].mean() + 10, "the lamp is red"
+    r.release()
+
+
+def at(img, cam, p, r=1):
+    """Mean luminance of the pixels around world point p (after cam was rendered)."""
+    h, w = img.shape[:2]
+    c = cam.view_proj() @ np.r_[p, 1.0]
+    col, row = int((c[0] / c[3] * .5 + .5) * w), int((.5 - c[1] / c[3] * .5) * h)
+    assert r <= row < h - r and r <= col < w - r, (p, row, col)
+    return lum(img[row - r:row + r + 1, col - r:col + r + 1]).mean()
+
+
+def _wall():
+    b = floor()
+    b[8:24, 16, 61:70] = R.id("stone")  # an east-west wall, 9 high, on ground z = 61
+    return b
+
+
+def test_wall_casts_a_shadow_at_noon(gl):
+    # noon sun: elevation 70 deg toward -y, so the shadow reaches 9 * tan(20 deg) = 3.3 to +y
+    cam = Camera(16, 16.5, 80, 90, -89)     # straight down onto the wall
+    r = renderer(gl, _wall(), shadows=True, fog=False)
+    on = r.render(cam, 12.0, SIZE)
+    r.s.shadows = False
+    off = r.render(cam, 12.0, SIZE)
+    r.release()
+    shade, beyond, sunny = (at(on, cam, (x, y, 61)) for x, y in ((16, 18.5), (16, 22.5), (16, 13)))
+    top = at(on, cam, (16, 16.5, 70), 0)
+    assert shade < beyond - 30 and shade < sunny - 30, (shade, beyond, sunny)
+    assert top > shade + 30, "the wall's own top is in the sun"
+    assert abs(at(off, cam, (16, 18.5, 61)) - at(off, cam, (16, 22.5, 61))) < 8
+
+
+def test_morning_shadow_falls_west(gl):
+    # 09:00: the sun stands to +x (and a little -y); the shadow falls to -x, +y
+    cam = Camera(16, 16.5, 80, 90, -89)
+    r = renderer(gl, _wall(), shadows=True, fog=False)
+    img = r.render(cam, 9.0, SIZE)
+    r.release()
+    west, east, south = (at(img, cam, (x, y, 61)) for x, y in ((5, 18.5), (27, 18.5), (5, 13)))
+    assert west < east - 30 and west < south - 30, (west, east, south)
+
+
+def _pool(under):
+    b = floor()
+    b[8:24, 8:24, 60] = R.id(under)
+    b[8:24, 8:24, 61:63] = R.id("water")
+    b[:, :, 61:63][b[:, :, 61:63] == 0] = R.id("stone")  # pool walls
+    return b
+
+
+def test_water_shows_what_is_behind_it(gl):
+    cam = Camera(16, 16, 72, 0, -89)
+    imgs = {}
+    for under in ("sand", "stone"):
+        for layers in (0, 2):
+            r = renderer(gl, _pool(under), peel_layers=layers, shadows=False)
+            imgs[under, layers] = r.render(cam, 12.0, SIZE).astype(float)[24:40, 40:56]
+            r.release()
+    # the bottom shows through water: sand and stone bottoms differ under water
+    assert abs(imgs["sand", 2] - imgs["stone", 2]).mean() > 10
+    # and the water tints it: with layers the pool is bluer than without
+    for u in ("sand", "stone"):
+        tint = lambda x: x[..., 2].mean() - x[..., 0].mean()  # noqa: E731
+        assert tint(imgs[u, 2]) > tint(imgs[u, 0]) + 5
+
+
+def test_debug_views_differ(gl):
+    b = floor(top="grass")
+    b[12:20, 20:24, 61:66] = R.id("stone")
+    b[5, 5, 61] = R.id("lamp_blue")
+    cam = Camera(16, 2, 68, 90, -25)
+    out = {}
+    for view in ("none", "albedo", "normal", "depth", "light", "aggregation", "culling"):
+        r = renderer(gl, b, debug=view)
+        out[view] = r.render(cam, 12.0, SIZE).astype(float)
+        r.release()
+    names = list(out)
+    for i, a in enumerate(names):
+        for bname in names[i + 1:]:
+            assert abs(out[a] - out[bname]).mean() > 3, (a, bname)
+    # the ground is a +z face: normal view encodes it as (0.5, 0.5, 1)
+    ground = out["normal"][56:64, 40:56] / 255
+    assert np.allclose(ground.mean((0, 1)), [0.5, 0.5, 1.0], atol=0.06)
+    # depth view: nearer is brighter
+    assert out["depth"][60:64].mean() > out["depth"][34:38].mean()
+    # light view has no texture detail: flat ground is nearly uniform
+    assert out["light"][56:64, 30:66].std() < out["none"][56:64, 30:66].std()
+
+
+def test_msaa_smooths_edges(gl):
+    b = floor()
+    b[14:18, 14:18, 61:70] = R.id("stone")
+    cam = Camera(16, 2, 66, 90, 0)
+    vals = {}
+    for ms in (1, 4):
+        r = renderer(gl, b, msaa=ms, fog=False, shadows=False)
+        img = lum(r.render(cam, 12.0, SIZE))
+        r.release()
+        vals[ms] = len(np.unique(np.round(img[:, 30:66]).astype(int)))
+    assert vals[4] > vals[1], "multisampling adds intermediate edge shades"

@@ -1,0 +1,208 @@
+"""Bake a block region into Blender-independent mesh arrays + a materials spec (SPEC F10).
+
+    bake_world(world, x0, y0, x1, y1, per="region"|"chunk", method="greedy",
+               instances=False, progress=None) -> Bake
+    bake_blocks(blocks, origin=(x0, y0, 0), ...) -> Bake      # any (W, H, 256) array
+
+The region is half-open in block coordinates, full height; voxels outside it count
+as air, so the baked solid is closed. Light is solved for exactly that island (a ring
+of open air around it), so the bake depends only on the region's blocks.
+
+Each `Part` (one per chunk, or one for the whole region) holds quads: 4 vertices
+each, counter-clockwise from the front; `uvs` are in voxel units (tile with REPEAT);
+`light` (4N, 3) block RGB light and `daylight` (4N,) in 0..1, sampled per vertex
+(bake.light). Merged quads whose light is not constant are split into unit quads so
+vertex light is exact per unit face. `Bake.materials` lists one `MaterialSpec` per
+(texture, render mode, glow, sidedness); quads index it through `Part.material`.
+With instances=True, X/# plants are left out of the parts and listed in
+`Bake.plants` (block name -> (n, 3) voxel positions) for instancing.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core import chunk as C
+from ..core.blocks import REGISTRY
+from ..core.errors import VoxelError
+from . import light as L
+
+PAD = 16  # air ring around the region for the light solve (any >= 1 keeps it closed)
+
+
+@dataclass(frozen=True)
+class MaterialSpec:
+    name: str           # unique, e.g. "grass_top" or "leaves"
+    texture: str        # REGISTRY.texture_names entry (textures.image(texture))
+    layer: int
+    render: str         # "opaque" | "alpha_test" | "blend"
+    glow: float         # emission strength (block's glow); texture glow mask says where
+    double_sided: bool
+
+
+@dataclass
+class Part:
+    name: str
+    positions: np.ndarray   # (4N, 3) float32 world coordinates
+    normals: np.ndarray     # (4N, 3) float32
+    uvs: np.ndarray         # (4N, 2) float32, voxel units
+    light: np.ndarray       # (4N, 3) float32 0..1 block RGB light
+    daylight: np.ndarray    # (4N,) float32 0..1
+    material: np.ndarray    # (N,) int32 index into Bake.materials
+    block: np.ndarray       # (N,) uint16
+    face: np.ndarray        # (N,) uint8 meshing face code
+
+    @property
+    def quads(self) -> int:
+        return len(self.material)
+
+    def triangles(self) -> np.ndarray:
+        k = 4 * np.arange(self.quads, dtype=np.int32)[:, None]
+        return (k + np.array([[0, 1, 2], [0, 2, 3]], np.int32).reshape(1, 6)).reshape(-1, 3)
+
+
+@dataclass
+class Bake:
+    region: tuple[int, int, int, int]
+    parts: list[Part]
+    materials: list[MaterialSpec]
+    plants: dict[str, np.ndarray] = field(default_factory=dict)
+
+    @property
+    def triangles(self) -> int:
+        return sum(2 * p.quads for p in self.parts)
+
+
+def check_region(x0, y0, x1, y1, limit: int = 4096) -> tuple[int, int, int, int]:
+    x0, y0, x1, y1 = map(int, (x0, y0, x1, y1))
+    if x1 <= x0 or y1 <= y0:
+        raise VoxelError(f"empty region [{x0},{x1})x[{y0},{y1}): need X0 < X1 and Y0 < Y1")
+    if (x1 - x0) * (y1 - y0) > limit * limit:
+        raise VoxelError(f"region {x1 - x0}x{y1 - y0} is too large to bake at once")
+    return x0, y0, x1, y1
+
+
+def region_of(world, x0, y0, x1, y1) -> np.ndarray:
+    """(X1-X0, Y1-Y0, 256) blocks of the region from a core.world.World."""
+    cx0, cy0, cx1, cy1 = x0 >> 4, y0 >> 4, ((x1 - 1) >> 4) + 1, ((y1 - 1) >> 4) + 1
+    b = world.region_blocks(cx0, cy0, cx1, cy1)
+    ox, oy = x0 - cx0 * C.SIZE, y0 - cy0 * C.SIZE
+    return np.asfortranarray(b[ox:ox + x1 - x0, oy:oy + y1 - y0])
+
+
+def bake_world(world, x0, y0, x1, y1, **kw) -> Bake:
+    x0, y0, x1, y1 = check_region(x0, y0, x1, y1)
+    return bake_blocks(region_of(world, x0, y0, x1, y1), origin=(x0, y0, 0), **kw)
+
+
+def _materials():
+    """Material index per (block, face code) and the spec list."""
+    specs: list[MaterialSpec] = []
+    index: dict[tuple, int] = {}
+    table = np.full((len(REGISTRY), 12), -1, np.int32)
+    side = [0, 1, 2, 3, 4, 5, 0, 0, 0, 1, 2, 3]  # X planes use the side texture
+    codes = {"cube": range(6), "x": (6, 7), "hash": (4, 5, 8, 9, 10, 11)}
+    for bid, b in enumerate(REGISTRY.blocks):
+        if b.shape == "none":
+            continue
+        for code in codes[b.shape]:
+            layer = int(REGISTRY.face_texture[bid, side[code]])
+            tex = REGISTRY.texture_names[layer]
+            key = (tex, b.render, float(b.glow), b.double_sided)
+            if key not in index:
+                name = tex if not any(s.texture == tex for s in specs) else \
+                    f"{tex}_{b.render}{'_2s' if b.double_sided else ''}{'_glow' if b.glow else ''}"
+                index[key] = len(specs)
+                specs.append(MaterialSpec(name, tex, layer, b.render, float(b.glow), b.double_sided))
+            table[bid, code] = index[key]
+    return table, specs
+
+
+def bake_blocks(blocks: np.ndarray, origin=(0, 0, 0), *, per: str = "region",
+                method: str = "greedy", instances: bool = False, backend: str | None = None,
+                progress=None) -> Bake:
+    from .. import meshing
+    from ..light import solve as light_solve
+    if per not in ("region", "chunk"):
+        raise VoxelError(f"per must be 'region' or 'chunk', not {per!r}")
+    if method not in meshing.METHODS:
+        raise VoxelError(f"unknown meshing method {method!r} (known: {', '.join(meshing.METHODS)})")
+    blocks = np.asarray(blocks, np.uint16)
+    if blocks.ndim != 3 or blocks.shape[2] != C.HEIGHT:
+        raise VoxelError(f"blocks must be (W, H, {C.HEIGHT}), got {blocks.shape}")
+    W, H = blocks.shape[:2]
+    ox, oy, oz = map(int, origin)
+    say = progress or (lambda *_: None)
+
+    padded = C.empty(np.uint16, W + 2 * PAD, H + 2 * PAD)
+    padded[PAD:PAD + W, PAD:PAD + H] = blocks
+    say("light", 0.0)
+    light = light_solve(padded, backend)
+    mat_table, specs = _materials()
+    shape_ids = np.flatnonzero(REGISTRY.shape >= 2)  # x and hash
+
+    # windows: (name, x, y, w, h) in region coordinates
+    if per == "region":
+        wins = [(f"voxels_{ox}_{oy}", 0, 0, W, H)]
+    else:
+        wins = []
+        for cy in range(oy >> 4, ((oy + H - 1) >> 4) + 1):
+            for cx in range(ox >> 4, ((ox + W - 1) >> 4) + 1):
+                x, y = max(cx * 16 - ox, 0), max(cy * 16 - oy, 0)
+                wins.append((f"chunk_{cx}_{cy}", x, y, min((cx + 1) * 16 - ox, W) - x,
+                             min((cy + 1) * 16 - oy, H) - y))
+    ring = padded[PAD - 1:PAD + W + 1, PAD - 1:PAD + H + 1]  # region + 1-voxel air ring
+    parts = []
+    for i, (name, x, y, w, h) in enumerate(wins):
+        say("mesh", i / len(wins))
+        q = meshing.quads(np.asfortranarray(ring[x:x + w + 2, y:y + h + 2]), border="context",
+                          method=method, backend=backend or "numpy")
+        if instances:
+            q = q[~np.isin(q["block"], shape_ids)]
+        if not len(q):
+            continue
+        q = L.split_uneven(q, light, (PAD + x, PAD + y, 0))
+        parts.append(_part(name, q, (ox + x, oy + y, oz), light, (PAD + x, PAD + y, 0),
+                           mat_table))
+    plants = {}
+    if instances:
+        for bid in shape_ids:
+            xyz = np.argwhere(blocks == bid)
+            if len(xyz):
+                plants[REGISTRY.blocks[bid].name] = (xyz + (ox, oy, oz)).astype(np.int32)
+    say("done", 1.0)
+    return Bake((ox, oy, ox + W, oy + H), parts, specs, plants)
+
+
+def _part(name, q, origin, light, offset, mat_table) -> Part:
+    from .. import meshing
+    to_mesh = getattr(meshing, "to_mesh", None)
+    if to_mesh is None:  # until meshing/__init__ re-exports it (README API)
+        from ..meshing.mesh import to_mesh
+    m = to_mesh(q, origin=origin)
+    local = m.positions - np.asarray(origin, np.float32)
+    face = np.repeat(np.asarray(m.face), 4)
+    pts = local.copy()
+    nrm = m.normals.copy()
+    shape = face >= 6  # plants: their own voxel's light (their planes cross the cell)
+    if shape.any():
+        cell = np.repeat(np.stack([q["x"], q["y"], q["z"]], 1).astype(np.float32), 4, 0)
+        pts[shape] = cell[shape] + 0.5
+        nrm[shape] = 0
+    from ..light import sample
+    s = sample(light, pts + np.asarray(offset, np.float32), nrm)
+    return Part(name, m.positions.astype(np.float32), m.normals.astype(np.float32),
+                m.uvs.astype(np.float32), np.ascontiguousarray(s[:, :3]),
+                np.ascontiguousarray(s[:, 3]),
+                mat_table[np.asarray(m.block), np.asarray(m.face)].astype(np.int32),
+                np.asarray(m.block, np.uint16), np.asarray(m.face, np.uint8))
+
+
+def shade(part: Part, hours: float = 12.0) -> np.ndarray:
+    """(4N, 3) linear RGB light factor of eq. 4.1 at `hours` (light.shade with white
+    albedo, no glow), clipped to 0..1 for a glTF COLOR_0."""
+    from ..light import daytime, shade as eq41
+    s = eq41(np.ones((len(part.daylight), 3), np.float32), part.light, np.zeros(len(part.daylight)),
+             part.daylight, part.normals, daytime.at(hours))
+    return np.clip(s, 0.0, 1.0).astype(np.float32)

@@ -1,0 +1,83 @@
+"""Light bench: full relight (chunks/s per backend), edit relight (ms), stored vs
+recomputed light per chunk (decompress a zstd light column vs relight)."""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+
+def _terrain(n, ctx):
+    """(16n, 16n, 256) freshly generated terrain: the Overworld if present, else the
+    light package's synthetic terrain."""
+    try:
+        from ..generation import make_generator
+        gen = make_generator("overworld", 1, backend=None)
+        keys = [(cx, cy) for cy in range(n) for cx in range(n)]
+        b = np.zeros((16 * n, 16 * n, 256), np.uint16, order="F")
+        for (cx, cy), a in zip(keys, gen.generate(keys)):
+            b[cx * 16:(cx + 1) * 16, cy * 16:(cy + 1) * 16] = a
+        return b, "overworld"
+    except Exception as e:  # generator not there yet
+        ctx.say(f"overworld unavailable ({e}); synthetic terrain")
+        from ..light import scenes
+        return scenes.terrain(16 * n, 16 * n, 1), "synthetic"
+
+
+def run(ctx):
+    from .. import opencl
+    from ..core.blocks import REGISTRY as R
+    from ..light import full, incremental
+    n = 6 if ctx.quick else 10
+    b, kind = _terrain(n, ctx)
+    inner = (n - 2) ** 2
+    backends = ["numpy"] + (["opencl"] if opencl.available() else [])
+    rates = {}
+    for be in backends:
+        full.region_light(b, be)  # warm-up (kernel build)
+        ts = []
+        for _ in range(2 if ctx.quick else 3):
+            t = time.perf_counter()
+            full.region_light(b, be)
+            ts.append(time.perf_counter() - t)
+        rates[be] = inner / min(ts)
+        yield (f"light_full_{be}", rates[be], "chunks/s",
+               f"{kind} {n}x{n} chunks, {inner} interior, tiles of 8x8 (+1 ring)")
+    # Edit relight: random places/removals near the surface, lamps included.
+    L = full.solve(b)
+    rng = np.random.default_rng(0)
+    ids = [0, 0, R.id("stone"), R.id("lamp_red"), R.id("lamp_white"), R.id("glass"), R.id("water")]
+    ts = []
+    for _ in range(40 if ctx.quick else 150):
+        x, y = (int(v) for v in rng.integers(16, b.shape[0] - 16, 2))
+        top = int(np.flatnonzero(b[x, y])[-1])
+        z = int(rng.integers(max(top - 12, 0), min(top + 3, 255)))
+        t = time.perf_counter()
+        incremental.edit(b, L, x, y, z, int(rng.choice(ids)))
+        ts.append(time.perf_counter() - t)
+    ts = np.array(ts) * 1e3
+    yield ("light_edit_median", float(np.median(ts)), "ms", "numpy incremental, near surface")
+    yield ("light_edit_p90", float(np.percentile(ts, 90)), "ms", "")
+    # Stored vs recomputed: per chunk cost of reading a stored zstd light column.
+    import zstandard
+    from ..core import chunk
+    chunks = [np.asfortranarray(L[i * 16:(i + 1) * 16, j * 16:(j + 1) * 16])
+              for i in range(1, n - 1) for j in range(1, n - 1)]
+    blobs = [zstandard.ZstdCompressor(level=3).compress(chunk.to_linear(c)) for c in chunks]
+    d = zstandard.ZstdDecompressor()
+    t = time.perf_counter()
+    for blob in blobs:
+        chunk.from_linear(d.decompress(blob))
+    load = (time.perf_counter() - t) / len(blobs)
+    yield ("light_stored_load", load * 1e3, "ms/chunk", "zstd-3 decompress of a light column")
+    yield ("light_stored_size", float(np.mean([len(x) for x in blobs])), "B/chunk", "zstd-3")
+    best = max(rates.values())
+    yield ("light_recompute", 1e3 / best, "ms/chunk", "region relight, best backend")
+
+    def draw(ax):
+        ax.bar(list(rates), list(rates.values()))
+        ax.axhline(200, color="r", ls="--", label="goal 200 chunks/s")
+        ax.set_ylabel("chunks/s")
+        ax.set_title("full relight")
+        ax.legend()
+    ctx.plot("light_full", draw)

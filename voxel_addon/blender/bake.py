@@ -1,0 +1,326 @@
+"""Bake results (voxel_addon.bake) -> Blender objects, materials and packed textures.
+
+    objects = build(bake, style="blender"|"gltf", collection=None, hours=12.0)
+    export_glb(path, objects)
+
+Materials (one per bake.MaterialSpec): Principled BSDF, Base Color from the block
+texture (Closest, REPEAT), alpha clip (Round) for alpha_test, blended alpha for
+blend, the texture's glow mask as an emission texture for glowing blocks.
+- style "blender": baked light stays live data. Emission = texture × the shared
+  "Voxel Shade" node group, which mixes the `light` (block RGB) and `daylight`
+  colour attributes by the time of day: the group's "Hours" value node (one for all
+  materials; set it with set_hours() or keyframe it) goes from day to night without
+  re-baking. Use a dark world for the thesis's look.
+- style "gltf": what the glTF exporter understands: Base Color = texture × the
+  `shade` colour attribute (light at `hours`, exported as COLOR_0), emissive texture.
+"""
+from __future__ import annotations
+
+import math
+
+import bpy
+import numpy as np
+
+GROUP = "Voxel Shade"
+
+
+# ---------------------------------------------------------------- images
+
+def image(name: str, kind: str = "color") -> bpy.types.Image:
+    """The packed 16×16 image of texture `name` (kind "color" or "glow": rgb × mask)."""
+    from .. import textures
+    key = f"voxel_{name}" if kind == "color" else f"voxel_{name}_glow"
+    img = bpy.data.images.get(key)
+    if img is not None:
+        return img
+    rgba, glow = textures.image(name)
+    px = rgba.astype(np.float32) / 255.0
+    if kind == "glow":
+        px[..., :3] *= (glow.astype(np.float32) / 255.0)[..., None]
+        px[..., 3] = 1.0
+    img = bpy.data.images.new(key, textures.SIZE, textures.SIZE, alpha=True)
+    img.pixels.foreach_set(px[::-1].ravel())  # Blender rows start at the bottom
+    img.file_format = "PNG"
+    img.pack()
+    return img
+
+
+# ---------------------------------------------------------------- node helpers
+
+def _node(tree, kind, x, y, **props):
+    n = tree.nodes.new(kind)
+    n.location = (x, y)
+    for k, v in props.items():
+        setattr(n, k, v)
+    return n
+
+
+def _math(tree, op, a, b=None, x=0, y=0):
+    n = _node(tree, "ShaderNodeMath", x, y, operation=op)
+    for i, v in enumerate((a, b)):
+        if v is None:
+            continue
+        if isinstance(v, (int, float)):
+            n.inputs[i].default_value = v
+        else:
+            tree.links.new(v, n.inputs[i])
+    return n.outputs[0]
+
+
+def _ramp(tree, fac, keys, x, y):
+    """A Color Ramp over hours/24 through (hours, rgb) keys, eased like daytime.at."""
+    n = _node(tree, "ShaderNodeValToRGB", x, y)
+    cr = n.color_ramp
+    cr.interpolation = "EASE"
+    keys = list(keys) + [(24.0, keys[0][1])]
+    while len(cr.elements) < len(keys):
+        cr.elements.new(0.5)
+    for e, (h, rgb) in zip(cr.elements, keys):
+        e.position = h / 24.0
+        e.color = (*rgb, 1.0)
+    tree.links.new(fac, n.inputs[0])
+    return n.outputs[0]
+
+
+def shade_group() -> bpy.types.ShaderNodeTree:
+    """The shared node group: light factor (eq. 4.1) from the colour attributes and
+    its internal "Hours" value (0..24)."""
+    from ..light import daytime
+    g = bpy.data.node_groups.get(GROUP)
+    if g is not None:
+        return g
+    g = bpy.data.node_groups.new(GROUP, "ShaderNodeTree")
+    g.interface.new_socket("Shade", in_out="OUTPUT", socket_type="NodeSocketColor")
+    out = _node(g, "NodeGroupOutput", 1400, 0)
+    hours = _node(g, "ShaderNodeValue", -1000, 0, name="Hours", label="Hours")
+    hours.outputs[0].default_value = 12.0
+    h = hours.outputs[0]
+    fac = _math(g, "DIVIDE", h, 24.0, -800, 200)
+    amb = _ramp(g, fac, [(k[0], k[1]) for k in daytime.KEYS], -600, 400)
+    direct = _ramp(g, fac, [(k[0], k[2]) for k in daytime.KEYS], -600, 150)
+    u = _ramp(g, fac, [(k[0], (k[3],) * 3) for k in daytime.KEYS], -600, -100)
+    # light direction: the sun (daytime.sun_direction), or the moon below the horizon
+    a = _math(g, "MULTIPLY", _math(g, "SUBTRACT", h, 6.0, -800, -300), math.pi / 12, -650, -300)
+    t = math.radians(daytime.TILT)
+    sz = _math(g, "MULTIPLY", _math(g, "SINE", a, None, -500, -420), math.cos(t), -350, -420)
+    sy = _math(g, "MULTIPLY", _math(g, "SINE", a, None, -500, -520), -math.sin(t), -350, -520)
+    sx = _math(g, "COSINE", a, None, -350, -320)
+    sun = _node(g, "ShaderNodeCombineXYZ", -200, -400)
+    for i, s in enumerate((sx, sy, sz)):
+        g.links.new(s, sun.inputs[i])
+    sign = _math(g, "SIGN", sz, None, -200, -560)
+    ldir = _node(g, "ShaderNodeVectorMath", -50, -400, operation="SCALE")
+    g.links.new(sun.outputs[0], ldir.inputs[0])
+    g.links.new(sign, ldir.inputs["Scale"])
+    geo = _node(g, "ShaderNodeNewGeometry", -200, -150)
+    dot = _node(g, "ShaderNodeVectorMath", 100, -300, operation="DOT_PRODUCT")
+    g.links.new(geo.outputs["Normal"], dot.inputs[0])
+    g.links.new(ldir.outputs[0], dot.inputs[1])
+    ndl = _math(g, "MAXIMUM", dot.outputs["Value"], 0.0, 250, -300)
+    # light.shade (eq. 4.1) with white albedo: light*(1 - u*day) + day*(ambient + ndl*direct)
+    lit = _node(g, "ShaderNodeVertexColor", 250, 300, layer_name="light")
+    day = _node(g, "ShaderNodeVertexColor", 250, 500, layer_name="daylight")
+
+    def mix(op, a, b, x, y, fac=1.0):
+        n = _node(g, "ShaderNodeMix", x, y, data_type="RGBA", blend_type=op)
+        n.inputs["Factor"].default_value = fac
+        for sock, v in ((n.inputs[6], a), (n.inputs[7], b)):
+            if isinstance(v, tuple):
+                sock.default_value = v
+            else:
+                g.links.new(v, sock)
+        return n.outputs[2]
+
+    ndl_rgb = _node(g, "ShaderNodeCombineColor", 400, -300)
+    for i in range(3):
+        g.links.new(ndl, ndl_rgb.inputs[i])
+    sky = mix("ADD", amb, mix("MULTIPLY", direct, ndl_rgb.outputs[0], 550, 0), 700, 300)
+    dayterm = mix("MULTIPLY", day.outputs["Color"], sky, 1000, 400)
+    keep = mix("SUBTRACT", (1, 1, 1, 1), mix("MULTIPLY", u, day.outputs["Color"], 550, -150),
+               700, -100)
+    art = mix("MULTIPLY", lit.outputs["Color"], keep, 1000, 100)
+    total = mix("ADD", dayterm, art, 1200, 200)
+    g.links.new(total, out.inputs[0])
+    return g
+
+
+def set_hours(hours: float) -> None:
+    """Time of day for every baked material (style "blender")."""
+    shade_group().nodes["Hours"].outputs[0].default_value = float(hours) % 24.0
+
+
+# ---------------------------------------------------------------- materials
+
+def material(spec, style: str) -> bpy.types.Material:
+    key = f"voxel_{spec.name}" + ("" if style == "blender" else f"_{style}")
+    m = bpy.data.materials.get(key)
+    if m is not None:
+        return m
+    m = bpy.data.materials.new(key)
+    if m.node_tree is None:  # before Blender 5 new materials had no tree yet
+        m.use_nodes = True
+    t = m.node_tree
+    t.nodes.clear()
+    out = _node(t, "ShaderNodeOutputMaterial", 900, 0)
+    bsdf = _node(t, "ShaderNodeBsdfPrincipled", 500, 0)
+    t.links.new(bsdf.outputs[0], out.inputs["Surface"])
+    bsdf.inputs["Roughness"].default_value = 0.9
+    uv = _node(t, "ShaderNodeUVMap", -700, 0, uv_map="UVMap")
+    tex = _node(t, "ShaderNodeTexImage", -450, 100, image=image(spec.texture),
+                interpolation="Closest", extension="REPEAT")
+    t.links.new(uv.outputs[0], tex.inputs[0])
+    if style == "gltf":
+        attr = _node(t, "ShaderNodeVertexColor", -450, -200, layer_name="shade")
+        mul = _node(t, "ShaderNodeMix", 100, 200, data_type="RGBA", blend_type="MULTIPLY")
+        mul.inputs["Factor"].default_value = 1.0
+        t.links.new(tex.outputs["Color"], mul.inputs[6])
+        t.links.new(attr.outputs["Color"], mul.inputs[7])
+        t.links.new(mul.outputs[2], bsdf.inputs["Base Color"])
+    else:
+        t.links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
+        grp = _node(t, "ShaderNodeGroup", -450, -250, node_tree=shade_group())
+        emi = _node(t, "ShaderNodeMix", 100, -200, data_type="RGBA", blend_type="MULTIPLY")
+        emi.inputs["Factor"].default_value = 1.0
+        t.links.new(tex.outputs["Color"], emi.inputs[6])
+        t.links.new(grp.outputs[0], emi.inputs[7])
+        glow_sock = emi.outputs[2]
+    if spec.glow > 0:
+        gtex = _node(t, "ShaderNodeTexImage", -450, -500, image=image(spec.texture, "glow"),
+                     interpolation="Closest", extension="REPEAT")
+        t.links.new(uv.outputs[0], gtex.inputs[0])
+        if style == "gltf":
+            t.links.new(gtex.outputs["Color"], bsdf.inputs["Emission Color"])
+            bsdf.inputs["Emission Strength"].default_value = spec.glow
+        else:
+            add = _node(t, "ShaderNodeMix", 300, -350, data_type="RGBA", blend_type="ADD")
+            add.inputs["Factor"].default_value = spec.glow
+            t.links.new(glow_sock, add.inputs[6])
+            t.links.new(gtex.outputs["Color"], add.inputs[7])
+            glow_sock = add.outputs[2]
+    if style != "gltf":
+        t.links.new(glow_sock, bsdf.inputs["Emission Color"])
+        bsdf.inputs["Emission Strength"].default_value = 1.0
+    if spec.render == "alpha_test":
+        rnd = _math(t, "ROUND", tex.outputs["Alpha"], None, 200, -600)
+        t.links.new(rnd, bsdf.inputs["Alpha"])
+    elif spec.render == "blend":
+        t.links.new(tex.outputs["Alpha"], bsdf.inputs["Alpha"])
+    if spec.render == "blend":
+        m.surface_render_method = "BLENDED"
+    m.use_backface_culling = not spec.double_sided
+    return m
+
+
+# ---------------------------------------------------------------- meshes
+
+def mesh(part, materials: list, style: str, hours: float = 12.0) -> bpy.types.Mesh:
+    from .. import bake as B
+    n = part.quads
+    me = bpy.data.meshes.new(part.name)
+    me.vertices.add(4 * n)
+    me.vertices.foreach_set("co", part.positions.ravel())
+    me.loops.add(4 * n)
+    me.loops.foreach_set("vertex_index", np.arange(4 * n, dtype=np.int32))
+    me.polygons.add(n)
+    me.polygons.foreach_set("loop_start", np.arange(0, 4 * n, 4, dtype=np.int32))
+    used = np.unique(part.material)
+    for i in used:
+        me.materials.append(materials[i])
+    local = np.searchsorted(used, part.material).astype(np.int32)
+    me.polygons.foreach_set("material_index", local)
+    me.update(calc_edges=True)
+    uv = me.uv_layers.new(name="UVMap")
+    uv.data.foreach_set("uv", part.uvs.ravel())
+    one = np.ones((4 * n, 1), np.float32)
+    cols = {"light": part.light, "daylight": np.repeat(part.daylight[:, None], 3, 1)}
+    if style == "gltf":
+        cols = {"shade": B.shade(part, hours), **cols}
+    for name, rgb in cols.items():
+        a = me.color_attributes.new(name, "FLOAT_COLOR", "POINT")
+        a.data.foreach_set("color", np.hstack([rgb, one]).ravel())
+    me.color_attributes.active_color_index = 0
+    me.color_attributes.render_color_index = 0
+    return me
+
+
+def build(bk, *, style: str = "blender", collection=None, hours: float = 12.0,
+          progress=None) -> list:
+    """Objects for every part of `bk` (a bake.Bake), linked into `collection`
+    (default: a new "Voxel Bake" collection in the current scene)."""
+    if style not in ("blender", "gltf"):
+        raise ValueError("style must be 'blender' or 'gltf'")
+    if collection is None:
+        collection = bpy.data.collections.new("Voxel Bake")
+        bpy.context.scene.collection.children.link(collection)
+    mats = [material(s, style) for s in bk.materials]
+    objs = []
+    for i, part in enumerate(bk.parts):
+        if progress:
+            progress("objects", i / max(len(bk.parts), 1))
+        ob = bpy.data.objects.new(part.name, mesh(part, mats, style, hours))
+        collection.objects.link(ob)
+        objs.append(ob)
+    if bk.plants:
+        objs += plants(bk, mats, style, collection, hours)
+    if style == "blender":
+        set_hours(hours)
+    return objs
+
+
+def plants(bk, mats, style, collection, hours) -> list:
+    """Plants as instances: one prototype mesh per plant type (hidden collection) and
+    one point object per type whose Geometry Nodes instance the prototype on every
+    point (the glTF exporter can write them as EXT_mesh_gpu_instancing)."""
+    from .. import bake as B
+    from ..core.blocks import REGISTRY
+    protos = bpy.data.collections.new("Voxel Plant Prototypes")
+    collection.children.link(protos)
+    out = []
+    for name, xyz in bk.plants.items():
+        one = np.zeros((1, 1, 256), np.uint16)
+        one[0, 0, 0] = REGISTRY.id(name)
+        pb = B.bake_blocks(one, per="region")
+        pr = pb.parts[0]
+        pr.daylight[:] = 1.0  # instances share one mesh: lit as in open sky
+        pr.name = f"plant_{name}"
+        proto = bpy.data.objects.new(pr.name, mesh(pr, [material(s, style) for s in pb.materials],
+                                                   style, hours))
+        protos.objects.link(proto)
+        pts = bpy.data.meshes.new(f"plants_{name}")
+        pts.vertices.add(len(xyz))
+        pts.vertices.foreach_set("co", xyz.astype(np.float32).ravel())
+        ob = bpy.data.objects.new(f"plants_{name}", pts)
+        mod = ob.modifiers.new("Instances", "NODES")
+        mod.node_group = _instancer(proto)
+        collection.objects.link(ob)
+        out.append(ob)
+    protos.hide_render = True
+    protos.hide_viewport = True
+    return out
+
+
+def _instancer(proto) -> bpy.types.GeometryNodeTree:
+    g = bpy.data.node_groups.new(f"Voxel Instances {proto.name}", "GeometryNodeTree")
+    g.interface.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
+    g.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
+    gi = _node(g, "NodeGroupInput", -400, 0)
+    go = _node(g, "NodeGroupOutput", 400, 0)
+    info = _node(g, "GeometryNodeObjectInfo", -400, -200)
+    info.inputs["Object"].default_value = proto
+    inst = _node(g, "GeometryNodeInstanceOnPoints", 100, 0)
+    g.links.new(gi.outputs[0], inst.inputs["Points"])
+    g.links.new(info.outputs["Geometry"], inst.inputs["Instance"])
+    g.links.new(inst.outputs[0], go.inputs[0])
+    return g
+
+
+def export_glb(path, objects, *, instances: bool = False) -> None:
+    """Write `objects` (and nothing else) through Blender's glTF exporter."""
+    for ob in bpy.context.view_layer.objects:
+        ob.select_set(False)
+    for ob in objects:
+        ob.select_set(True)
+    bpy.ops.export_scene.gltf(filepath=str(path), export_format="GLB", use_selection=True,
+                              export_vertex_color="MATERIAL", export_gpu_instances=instances,
+                              export_gn_mesh=instances,
+                              export_apply=True, export_yup=True)

@@ -1,0 +1,61 @@
+"""bake: a block region -> .glb through Blender's own glTF exporter (bpy in-process)."""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from ..core.errors import VoxelError
+from .common import add_world, note
+
+
+def add_parser(sub):
+    p = sub.add_parser("bake", help="bake a block region into a glTF binary (.glb) with bpy")
+    add_world(p)
+    p.add_argument("--region", type=int, nargs=4, required=True, metavar=("X0", "Y0", "X1", "Y1"),
+                   help="half-open block columns [X0,X1) x [Y0,Y1), full height")
+    p.add_argument("--out", type=Path, required=True, metavar="F.glb", help="output .glb")
+    p.add_argument("--per", choices=("region", "chunk"), default="region",
+                   help="one object for the region (default) or one per chunk")
+    p.add_argument("--method", default="greedy",
+                   help="face aggregation: none, lines, squares, squares_ext, greedy (default)")
+    p.add_argument("--instances", action="store_true", help="plants as GPU instances")
+    p.add_argument("--time", default="12:00", help="time of day of the exported light (HH:MM)")
+    p.add_argument("--blend", type=Path, help="also save the baked scene as this .blend")
+    return p
+
+
+def run(args):
+    from .. import bake
+    from ..core.world import World
+    from ..light import daytime
+    if args.out.suffix.lower() != ".glb":
+        raise VoxelError(f"--out must end in .glb (got {args.out.name})")
+    if not args.world.exists():
+        raise VoxelError(f"world file {args.world} does not exist")
+    hours = daytime.parse_time(args.time)
+    x0, y0, x1, y1 = bake.check_region(*args.region)
+    big = (x1 - x0) * (y1 - y0) >= 64 * 64
+    t0 = time.perf_counter()
+
+    def progress(stage, frac):
+        if big:
+            note(f"bake: {stage} {100 * frac:3.0f}%  ({time.perf_counter() - t0:.1f} s)")
+
+    with World.open(args.world, readonly=True, loader=False) as world:
+        bk = bake.bake_world(world, x0, y0, x1, y1, per=args.per, method=args.method,
+                             instances=args.instances, progress=progress)
+    try:
+        import bpy
+    except ImportError as e:
+        raise VoxelError(f"bake needs the bpy module (pip install bpy): {e}") from None
+    from ..blender import bake as BB
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    objs = BB.build(bk, style="gltf", hours=hours, progress=progress)
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    progress("export", 0.0)
+    BB.export_glb(args.out.resolve(), objs, instances=args.instances)
+    if args.blend:
+        bpy.ops.wm.save_as_mainfile(filepath=str(args.blend.resolve()))
+    note(f"bake: {len(objs)} objects, {bk.triangles} triangles, "
+         f"{len(bk.materials)} materials in {time.perf_counter() - t0:.1f} s")
+    print(args.out)

@@ -1,0 +1,76 @@
+"""render: one frame of a world (or a reference scene) through the viewport pipeline to PNG."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..core.errors import VoxelError
+
+
+def add_parser(sub):
+    p = sub.add_parser("render", help="render a world view to a PNG (headless OpenGL)")
+    p.add_argument("--world", type=Path, metavar="W.sqlite", help="world file (.sqlite)")
+    p.add_argument("--camera", nargs=5, type=float, metavar=("X", "Y", "Z", "YAW", "PITCH"),
+                   help="position in blocks; yaw deg CCW from +x; pitch deg, up positive")
+    p.add_argument("--time", default=None, metavar="HH:MM", help="time of day (default 12:00)")
+    p.add_argument("--size", nargs=2, type=int, default=(640, 360), metavar=("W", "H"))
+    p.add_argument("--out", required=True, type=Path, metavar="F.png")
+    p.add_argument("--distance", type=int, default=None, help="view distance in chunks")
+    p.add_argument("--effects", default=None,
+                   help="comma list: all, none, [+-]shadows, ssao, fog, dof, godrays, waving, "
+                        "smooth_mag, fill_holes, msaa_alpha, per_sample, peel0..3, msaa1/2/4/8")
+    p.add_argument("--debug-view", default="none",
+                   choices=("none", "albedo", "normal", "depth", "light", "aggregation", "culling"))
+    p.add_argument("--scene", choices=("ocean", "desert", "landscape", "cave"),
+                   help="a reference scene (its terrain, camera and time; --camera/--time override)")
+    p.add_argument("--aggregation", default="greedy",
+                   help="meshing method: none, lines, squares, squares_ext, greedy")
+    return p
+
+
+def run(args):
+    from ..render import Camera, Settings
+    from ..render import sky, source
+    from ..render.pipeline import Renderer
+    from ..textures import png_bytes
+    import numpy as np
+
+    w, h = args.size
+    if not (8 <= w <= 8192 and 8 <= h <= 8192):
+        raise VoxelError("--size must be between 8 and 8192 pixels per side")
+    s = Settings(debug=args.debug_view).with_effects(args.effects)
+    if args.distance is not None:
+        s.distance = args.distance
+    s.check()
+    cam_args, hhmm = args.camera, args.time
+    if args.scene:
+        from ..meshing import scenes
+        sc = scenes.SCENES[args.scene]
+        cam_args = cam_args or sc.camera
+        hhmm = hhmm or sc.time
+        data = source.scene_area(args.scene)
+    else:
+        if args.world is None or cam_args is None:
+            raise VoxelError("render needs --world and --camera (or --scene)")
+        if not args.world.exists():
+            raise VoxelError(f"no world file at {args.world}")
+        from ..core.world import World
+        world = World.open(args.world, readonly=True, loader=False)
+        try:
+            data = source.world_area(world, cam_args[0], cam_args[1], s.distance)
+        finally:
+            world.close()
+    if not 0 <= cam_args[2] <= 400:
+        raise VoxelError("camera z must be between 0 and 400")
+    hours = sky.parse_time(hhmm or "12:00")
+    ctx = source.context()
+    r = Renderer(ctx, s)
+    blocks, light, cx0, cy0 = data
+    r.set_area(blocks, light, cx0, cy0, ring=True, method=args.aggregation)
+    img = r.render(Camera(*cam_args), hours, (w, h))
+    rgba = np.dstack([img, np.full(img.shape[:2], 255, np.uint8)])
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_bytes(png_bytes(rgba))
+    st = r.stats
+    print(f"{args.out}: {w}x{h}, {st['triangles']} triangles, {st['draw_calls']} draw calls")
+    r.release()
+    ctx.release()

@@ -1,0 +1,214 @@
+"""Noise in NumPy (SPEC F4, thesis §2.1): the reference twin of gpu/noise.h.
+
+Every function does the same float32 operations in the same order as the C code,
+so the two agree bit for bit (tests check it): generators threshold these values
+into block ids. Inputs broadcast; outputs are float32. `perm` is a seeded
+permutation table (see `perm_table`), `s` a noise instance seed (`inst`).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+M32 = 0xFFFFFFFF
+F = np.float32
+U = np.uint32
+
+
+def mix(h):
+    """lowbias32 on a uint32 array."""
+    h = h ^ (h >> U(16))
+    h = h * U(0x7feb352d)
+    h = h ^ (h >> U(15))
+    h = h * U(0x846ca68b)
+    return h ^ (h >> U(16))
+
+
+def mix_int(h: int) -> int:
+    """lowbias32 on a Python int (host-side seeds)."""
+    h &= M32
+    h ^= h >> 16
+    h = (h * 0x7feb352d) & M32
+    h ^= h >> 15
+    h = (h * 0x846ca68b) & M32
+    return h ^ (h >> 16)
+
+
+def seed32(seed: int) -> int:
+    """Any integer seed -> the uint32 the kernels use."""
+    seed = int(seed)
+    h = 0x2545F491
+    while True:  # fold 32 bits at a time so big (and negative) seeds stay distinct
+        h = mix_int(h ^ (seed & M32))
+        seed >>= 32
+        if seed in (0, -1):
+            return mix_int(h ^ (seed & M32))
+
+
+def inst(seed: int, salt: int) -> int:
+    """Seed of noise instance `salt` (vx_inst in noise.h)."""
+    return mix_int(seed ^ ((salt * 0x9E3779B9) & M32))
+
+
+def perm_table(seed: int) -> np.ndarray:
+    """Perlin's permutation of 0..255, shuffled from the seed, repeated twice (512 int32)."""
+    p = list(range(256))
+    h = mix_int(seed ^ 0x5bd1e995)
+    for i in range(255, 0, -1):  # Fisher-Yates with a deterministic integer stream
+        h = mix_int(h + 0x68e31da4)
+        j = h % (i + 1)
+        p[i], p[j] = p[j], p[i]
+    return np.array(p + p, np.int32)
+
+
+def _u(a):
+    """int32 -> uint32 with two's complement wrap (as C's (uint) cast)."""
+    return np.asarray(a, np.int32).view(np.uint32) if np.ndim(a) else U(np.int64(a) & M32)
+
+
+def hash2(x, y, s: int):
+    return mix(_u(x) * U(0x8da6b343) + _u(y) * U(0xd8163841) + U(s))
+
+
+def hash3(x, y, z, s: int):
+    return mix(_u(x) * U(0x8da6b343) + _u(y) * U(0xd8163841) + _u(z) * U(0xcb1ab31f) + U(s))
+
+
+def unit(h):
+    """Top 24 bits as float32 in [0, 1)."""
+    return (h >> U(8)).astype(F) * F(2.0 ** -24)
+
+
+def nxt(h):
+    return mix(h + U(0x68e31da4))
+
+
+def fade(t):
+    return t * t * t * (t * (t * F(6) - F(15)) + F(10))
+
+
+def lerp(t, a, b):
+    return a + t * (b - a)
+
+
+def grad3(h, x, y, z):
+    h = h & 15
+    u = np.where(h < 8, x, y)
+    v = np.where(h < 4, y, np.where((h == 12) | (h == 14), x, z))
+    return np.where(h & 1, -u, u) + np.where(h & 2, -v, v)
+
+
+def grad2(h, x, y):
+    a = np.where(h & 1, -x, x)
+    b = np.where(h & 1, -y, y)
+    c = np.where(h & 2, -y, y)
+    return np.where(h & 4, (a + c) * F(float.fromhex("0x1.6a09e6p-1")), np.where(h & 2, b, a))
+
+
+def _lattice(v, shift: int):
+    v = np.asarray(v, F)
+    fv = np.floor(v)
+    return (fv.astype(np.int32) + np.int32(shift)) & 255, v - fv
+
+
+def perlin2(x, y, perm, s: int):
+    X, x = _lattice(x, s & 255)
+    Y, y = _lattice(y, (s >> 8) & 255)
+    u, v = fade(x), fade(y)
+    A = perm[X] + Y
+    B = perm[X + 1] + Y
+    x1, y1 = x - F(1), y - F(1)
+    return lerp(v, lerp(u, grad2(perm[A], x, y), grad2(perm[B], x1, y)),
+                lerp(u, grad2(perm[A + 1], x, y1), grad2(perm[B + 1], x1, y1)))
+
+
+def perlin3(x, y, z, perm, s: int):
+    X, x = _lattice(x, s & 255)
+    Y, y = _lattice(y, (s >> 8) & 255)
+    Z, z = _lattice(z, (s >> 16) & 255)
+    u, v, w = fade(x), fade(y), fade(z)
+    A = perm[X] + Y
+    AA, AB = perm[A] + Z, perm[A + 1] + Z
+    B = perm[X + 1] + Y
+    BA, BB = perm[B] + Z, perm[B + 1] + Z
+    x1, y1, z1 = x - F(1), y - F(1), z - F(1)
+    return lerp(w,
+                lerp(v, lerp(u, grad3(perm[AA], x, y, z), grad3(perm[BA], x1, y, z)),
+                     lerp(u, grad3(perm[AB], x, y1, z), grad3(perm[BB], x1, y1, z))),
+                lerp(v, lerp(u, grad3(perm[AA + 1], x, y, z1), grad3(perm[BA + 1], x1, y, z1)),
+                     lerp(u, grad3(perm[AB + 1], x, y1, z1), grad3(perm[BB + 1], x1, y1, z1))))
+
+
+def octaves(fn, coords, perm, seed: int, salt: int, n: int = 4, lacunarity: float = 2.0,
+            gain: float = 0.5):
+    """Thesis eq. 2.10: sum over octaves o of fn(pos * lacunarity^o) * gain^o.
+
+    Octave o uses instance inst(seed, salt + o). Same order as the pass language's
+    `octaves`, so a generator can mix the two.
+    """
+    total = None
+    for o in range(n):
+        f, a = F(lacunarity ** o), F(gain ** o)
+        v = fn(*[np.asarray(c, F) * f for c in coords], perm, inst(seed, salt + o)) * a
+        total = v if total is None else total + v
+    return total
+
+
+def _metric_root(d, metric: int):
+    return np.sqrt(np.sqrt(d)) if metric else np.sqrt(d)
+
+
+def voronoi2(x, y, s: int, metric: int = 0):
+    """(F1, F2, value) of a 2D Voronoi diagram with one feature point per unit cell."""
+    x, y = np.asarray(x, F), np.asarray(y, F)
+    fx, fy = np.floor(x), np.floor(y)
+    ix, iy = fx.astype(np.int32), fy.astype(np.int32)
+    x, y = x - fx, y - fy
+    shape = np.broadcast(x, y).shape
+    f1 = np.full(shape, F(1e9))
+    f2 = f1.copy()
+    val = np.zeros(shape, F)
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            h = hash2(ix + np.int32(dx), iy + np.int32(dy), s)
+            px = unit(h)
+            h = nxt(h)
+            py = unit(h)
+            h = nxt(h)
+            ex, ey = (F(dx) + px) - x, (F(dy) + py) - y
+            a, b = ex * ex, ey * ey
+            d = a * a + b * b if metric else a + b
+            lt = d < f1
+            f2 = np.where(lt, f1, np.minimum(f2, d))
+            val = np.where(lt, unit(h), val)
+            f1 = np.where(lt, d, f1)
+    return _metric_root(f1, metric), _metric_root(f2, metric), val
+
+
+def voronoi3(x, y, z, s: int, metric: int = 0):
+    """(F1, F2, value) of a 3D Voronoi diagram with one feature point per unit cell."""
+    x, y, z = np.asarray(x, F), np.asarray(y, F), np.asarray(z, F)
+    fx, fy, fz = np.floor(x), np.floor(y), np.floor(z)
+    ix, iy, iz = fx.astype(np.int32), fy.astype(np.int32), fz.astype(np.int32)
+    x, y, z = x - fx, y - fy, z - fz
+    shape = np.broadcast(x, y, z).shape
+    f1 = np.full(shape, F(1e9))
+    f2 = f1.copy()
+    val = np.zeros(shape, F)
+    for dz in (-1, 0, 1):
+        for dy in (-1, 0, 1):
+            for dx in (-1, 0, 1):
+                h = hash3(ix + np.int32(dx), iy + np.int32(dy), iz + np.int32(dz), s)
+                px = unit(h)
+                h = nxt(h)
+                py = unit(h)
+                h = nxt(h)
+                pz = unit(h)
+                h = nxt(h)
+                ex, ey, ez = (F(dx) + px) - x, (F(dy) + py) - y, (F(dz) + pz) - z
+                a, b, c = ex * ex, ey * ey, ez * ez
+                d = (a * a + b * b) + c * c if metric else (a + b) + c
+                lt = d < f1
+                f2 = np.where(lt, f1, np.minimum(f2, d))
+                val = np.where(lt, unit(h), val)
+                f1 = np.where(lt, d, f1)
+    return _metric_root(f1, metric), _metric_root(f2, metric), val

@@ -1,0 +1,107 @@
+"""Quads -> float triangle meshes (for the bake) and the one definition of quad corners,
+normals and UVs that the packed viewport format (vertex.py, shaders/include/vertex.glsl)
+reproduces."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..core.blocks import REGISTRY
+
+# Unit corner offsets (4, 3) per face code, counter-clockwise seen from the front.
+# Cube faces: corners in (t1, t2) units (scaled by w, h); shapes are 1×1.
+_T = {0: (1, 2), 1: (0, 2), 2: (0, 1)}          # tangent axes per face axis
+_CCW = ((0, 0), (1, 0), (1, 1), (0, 1))
+
+
+def _corners():
+    c = np.zeros((12, 4, 3), np.float32)         # unit offsets, already oriented
+    for f in range(6):
+        a, sign = divmod(f, 2)
+        t1, t2 = _T[a]
+        # (t1 x t2) points along +a for x and z, along -a for y
+        front = (sign == 1) == (a != 1)
+        order = _CCW if front else _CCW[::-1]
+        for k, (i, j) in enumerate(order):
+            c[f, k, t1], c[f, k, t2] = i, j
+            c[f, k, a] = sign
+    c[6] = [(0, 0, 0), (1, 1, 0), (1, 1, 1), (0, 0, 1)]
+    c[7] = [(1, 0, 0), (0, 1, 0), (0, 1, 1), (1, 0, 1)]
+    c[8:12] = c[0:4]
+    return c
+
+
+CORNERS = _corners()
+NORMALS = np.zeros((12, 3), np.float32)
+for _f in range(6):
+    NORMALS[_f, _f // 2] = 1 if _f % 2 else -1
+NORMALS[6] = np.array([1, -1, 0]) / np.sqrt(2)
+NORMALS[7] = np.array([1, 1, 0]) / np.sqrt(2)
+NORMALS[8:12] = NORMALS[0:4]
+# UV = (p · U[face], p · V[face]) on the local position p.
+UV_U = np.array([(0, -1, 0), (0, 1, 0), (1, 0, 0), (-1, 0, 0), (1, 0, 0), (1, 0, 0),
+                 (1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 1, 0), (1, 0, 0), (-1, 0, 0)], np.float32)
+UV_V = np.array([(0, 0, 1)] * 4 + [(0, -1, 0), (0, 1, 0)] + [(0, 0, 1)] * 6, np.float32)
+INSET = np.array([b.inset for b in REGISTRY.blocks], np.float32) / 16
+
+
+@dataclass
+class Mesh:
+    positions: np.ndarray   # (4N, 3) float32
+    normals: np.ndarray     # (4N, 3) float32
+    uvs: np.ndarray         # (4N, 2) float32
+    face: np.ndarray        # (N,) uint8
+    block: np.ndarray       # (N,) uint16
+    layer: np.ndarray       # (N,) uint16
+
+    def triangles(self) -> np.ndarray:
+        k = 4 * np.arange(len(self.face), dtype=np.int32)[:, None]
+        return (k + np.array([0, 1, 2, 0, 2, 3], np.int32)).reshape(-1, 3)
+
+
+def corner_positions(q, inset=True) -> np.ndarray:
+    """(N, 4, 3) float32 local corner positions of quads (before any origin shift);
+    inset=False leaves # planes on the cell side (the packed format adds it in GLSL)."""
+    f = q["face"].astype(np.intp)
+    c = CORNERS[f].copy()
+    cube = f < 6
+    a = np.where(cube, f // 2, 0)
+    t1 = np.array([1, 0, 0])[a]
+    t2 = np.array([2, 2, 1])[a]
+    n = np.arange(len(q))
+    c[n, :, t1] *= np.where(cube, q["w"], 1).astype(np.float32)[:, None]
+    c[n, :, t2] *= np.where(cube, q["h"], 1).astype(np.float32)[:, None]
+    c += np.stack([q["x"], q["y"], q["z"]], -1).astype(np.float32)[:, None, :]
+    hs = f >= 8
+    if inset and hs.any():  # # planes sit inset from the cell side, toward the centre
+        side = f[hs] - 8
+        shift = INSET[q["block"][hs]] * np.where(side % 2, -1, 1)
+        c[np.nonzero(hs)[0], :, side // 2] += shift[:, None]
+    return c
+
+
+def uv_of(face, p):
+    """UVs (…, 2) for local positions p (…, 3) on faces with codes `face` (…)."""
+    return np.stack([(p * UV_U[face]).sum(-1), (p * UV_V[face]).sum(-1)], -1)
+
+
+def to_mesh(q, origin=(0, 0, 0), two_sided=False) -> Mesh:
+    q = np.asarray(q)
+    if two_sided:
+        ds = np.array([b.double_sided for b in REGISTRY.blocks])[q["block"]]
+        back = q[ds]
+    p = corner_positions(q)
+    f = q["face"].astype(np.intp)
+    uv = uv_of(f[:, None], p)
+    nrm = np.repeat(NORMALS[f][:, None, :], 4, axis=1)
+    face, block, layer = q["face"], q["block"], q["layer"]
+    if two_sided and len(back):
+        m = np.nonzero(ds)[0]
+        p = np.concatenate([p, p[m, ::-1]])
+        uv = np.concatenate([uv, uv[m, ::-1]])
+        nrm = np.concatenate([nrm, -nrm[m]])
+        face, block, layer = (np.concatenate([a, a[m]]) for a in (face, block, layer))
+    p = p + np.asarray(origin, np.float32)
+    return Mesh(p.reshape(-1, 3).astype(np.float32), nrm.reshape(-1, 3).astype(np.float32),
+                uv.reshape(-1, 2).astype(np.float32), face.copy(), block.copy(), layer.copy())

@@ -1,0 +1,64 @@
+"""The light of the whole view in one camera-centred toroidal 3D texture.
+
+Chunk (cx, cy) lives at texels ((16cx) mod S, (16cy) mod S, 0..255), S = 16(2r+1),
+so every chunk within r of the centre chunk has its own slot and moving the camera
+only re-uploads the chunks that came into range (no bindless textures, GL 3.3+).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..core import chunk
+
+
+class LightVolume:
+    def __init__(self, ctx, n: int):
+        """n chunk slots per side: 2r+1 for a view radius r."""
+        self.ctx = ctx
+        self.n = n
+        self.size = chunk.SIZE * self.n
+        self.tex = ctx.texture3d((self.size, self.size, chunk.HEIGHT), 1, dtype="u2")
+        self.tex.filter = (0x2600, 0x2600)  # GL_NEAREST: integers, interpolated by hand
+        self.slots: dict[tuple[int, int], tuple[int, int]] = {}  # slot -> resident key
+        self.lo = (0, 0)
+        self.hi = (0, 0)
+
+    def upload(self, key, light: np.ndarray) -> None:
+        """Put one chunk's (16, 16, 256) light into its slot."""
+        slot = (key[0] % self.n, key[1] % self.n)
+        arr = np.asarray(light, dtype=np.uint16)
+        self.tex.write(np.asfortranarray(arr).tobytes(order="F"),
+                       viewport=(slot[0] * 16, slot[1] * 16, 0, 16, 16, chunk.HEIGHT))
+        self.slots[slot] = tuple(key)
+
+    def upload_area(self, light: np.ndarray, cx0: int, cy0: int) -> None:
+        """A (16w, 16h, 256) light array whose first chunk is (cx0, cy0)."""
+        w, h = light.shape[0] // 16, light.shape[1] // 16
+        for i in range(w):
+            for j in range(h):
+                self.upload((cx0 + i, cy0 + j), light[16 * i:16 * i + 16, 16 * j:16 * j + 16])
+
+    def set_window(self, cx0: int, cy0: int, cx1: int, cy1: int) -> None:
+        """The chunk box whose light is resident (outside it: open daylight)."""
+        if cx1 - cx0 > self.n or cy1 - cy0 > self.n:
+            raise ValueError("light window is larger than the volume")
+        for cx in range(cx0, cx1):
+            for cy in range(cy0, cy1):
+                if self.slots.get((cx % self.n, cy % self.n)) != (cx, cy):
+                    raise ValueError(f"chunk {(cx, cy)} is not resident")
+        self.lo, self.hi = (cx0 * 16, cy0 * 16), (cx1 * 16, cy1 * 16)
+
+    def bind(self, prog, unit: int) -> None:
+        self.tex.use(unit)
+        _set(prog, "light_vol", unit)
+        _set(prog, "vol_size", self.size)
+        _set(prog, "vol_lo", self.lo)
+        _set(prog, "vol_hi", self.hi)
+
+    def release(self):
+        self.tex.release()
+
+
+def _set(prog, name, value):
+    if name in prog:
+        prog[name].value = value

@@ -1,0 +1,73 @@
+"""Every switch and knob of the pipeline; defaults follow the thesis's §6.2 setup."""
+from __future__ import annotations
+
+from dataclasses import dataclass, fields, replace
+
+from ..core.errors import VoxelError
+
+DEBUG_VIEWS = ("none", "albedo", "normal", "depth", "light", "aggregation", "culling")
+# effect name -> (field, value when switched on by --effects)
+EFFECTS = ("shadows", "ssao", "fog", "dof", "godrays", "waving", "smooth_mag",
+           "fill_holes", "msaa_alpha", "per_sample")
+
+
+@dataclass
+class Settings:
+    distance: int = 8             # view distance in chunks
+    msaa: int = 2                 # 1, 2, 4, 8 (clamped to the context's maximum)
+    per_sample: bool = True       # MSAA shading per sample (else per pixel)
+    msaa_alpha: bool = True       # alpha test per sample for plants and leaves
+    shadows: bool = True
+    shadow_size: int = 2048
+    shadow_fade: float = 50.0     # shadows are gone by this distance (§5.4.1)
+    peel_layers: int = 3          # transparency layers, 0..3
+    ssao: bool = False            # off by default, as in the thesis
+    fog: bool = True              # atmosphere
+    dof: bool = True              # distance blur
+    godrays: bool = True
+    godray_strength: float = 1.0
+    waving: bool = True
+    smooth_mag: bool = True       # edge-aware texture magnification
+    fill_holes: bool = True       # T-junction hiding
+    debug: str = "none"
+    fov: float = 70.0
+    time: float = 0.0             # seconds, drives waving
+
+    def with_effects(self, spec: str | None) -> "Settings":
+        """Apply '--effects' text: 'all', 'none', or comma-separated [+-]name items."""
+        if not spec:
+            return self
+        s = replace(self)
+        for item in (t.strip() for t in spec.split(",") if t.strip()):
+            if item in ("all", "none"):
+                for e in EFFECTS:
+                    setattr(s, e, item == "all")
+                s.peel_layers = 3 if item == "all" else 0
+                continue
+            on = not item.startswith("-")
+            name = item.lstrip("+-")
+            if name.startswith("peel") and name[4:].isdigit():
+                s.peel_layers = int(name[4:])
+            elif name.startswith("msaa") and name[4:].isdigit():
+                s.msaa = int(name[4:])
+            elif name in EFFECTS:
+                setattr(s, name, on)
+            else:
+                raise VoxelError(f"unknown effect {name!r} (known: {', '.join(EFFECTS)}, "
+                                 "peel0..peel3, msaa1/2/4/8, all, none)")
+        s.check()
+        return s
+
+    def check(self) -> None:
+        if self.debug not in DEBUG_VIEWS:
+            raise VoxelError(f"unknown debug view {self.debug!r} (known: {', '.join(DEBUG_VIEWS)})")
+        if not 0 <= self.peel_layers <= 3:
+            raise VoxelError("peel layers must be 0..3")
+        if self.msaa not in (1, 2, 4, 8):
+            raise VoxelError("msaa must be 1, 2, 4 or 8")
+        if self.distance < 1:
+            raise VoxelError("view distance must be at least 1 chunk")
+
+
+def names() -> list[str]:
+    return [f.name for f in fields(Settings)]

@@ -5,6 +5,8 @@
     python build.py demo        setup, then generate a world, render a picture, bake a .glb
     python build.py bench [DIR] setup, then `python -m voxel_addon bench --out DIR`
     python build.py extension   setup, then build the Blender extension zip into dist/
+    python build.py dev         editor stubs (fake-bpy-module) in their own .venv-dev,
+                                so they can never shadow the real bpy the tests use
 
 Every task is idempotent; a stamp in .venv records what was installed, so a second
 run starts in well under a second.
@@ -160,8 +162,17 @@ def task_extension(args) -> int:
     return subprocess.run([PY, ROOT / "tools" / "extension.py", *args], cwd=ROOT, env=env()).returncode
 
 
+def task_dev(args) -> int:
+    dev = ROOT / ".venv-dev"
+    if not (dev / "bin" / "python").exists():
+        run([sys.executable, "-m", "venv", dev])
+    run([dev / "bin" / "python", "-m", "pip", "install", "-q", "-r", ROOT / "requirements-dev.txt"])
+    log(f"point your editor's interpreter or stub path at {dev}")
+    return 0
+
+
 TASKS = {"setup": lambda a: (setup(), 0)[1], "test": task_test, "demo": task_demo,
-         "bench": task_bench, "extension": task_extension}
+         "bench": task_bench, "extension": task_extension, "dev": task_dev}
 
 
 def main(argv) -> int:

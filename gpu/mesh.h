@@ -14,7 +14,20 @@
 
 // Key of the face of cell c toward c + step: its block id when the face is emitted,
 // else 0. `want` is F_CUBE for side faces, F_CUBE | F_CAP for -z/+z; `edge`: the
-// neighbour is outside the world (air).
+// neighbour is outside the world (air). With FLAG_MASKS (all ids < 64, set by
+// meshing/cl.py) the flag tests are bit tests on constants instead of table loads.
+#ifdef FLAG_MASKS
+#define HAS(m, id) ((((ulong)(m)) >> (id)) & 1UL)
+inline bool is_opaque(__constant uchar *F, ushort a) { return HAS(M_OPAQUE, a); }
+inline ushort face_key(__global const ushort *P, __constant uchar *F, long c, long step,
+                       bool edge, uint want) {
+    ushort a = P[c];
+    if (!HAS(want == F_CUBE ? M_CUBE : M_CUBE_CAP, a)) return 0;
+    ushort b = edge ? (ushort)0 : P[c + step];
+    return (HAS(M_OPAQUE, b) || (HAS(M_SAME, a) && a == b)) ? (ushort)0 : a;
+}
+#else
+inline bool is_opaque(__constant uchar *F, ushort a) { return (F[a] & F_OPAQUE) != 0; }
 inline ushort face_key(__global const ushort *P, __constant uchar *F, long c, long step,
                        bool edge, uint want) {
     ushort a = P[c];
@@ -24,5 +37,6 @@ inline ushort face_key(__global const ushort *P, __constant uchar *F, long c, lo
     uint fb = F[b];
     return ((fb & F_OPAQUE) || ((fa & F_SAME_HIDES) && a == b)) ? (ushort)0 : a;
 }
+#endif
 
 #endif

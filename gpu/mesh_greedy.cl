@@ -1,7 +1,7 @@
 // Batched meshing of many tiles (chunks) in three launches, output compacted with an
-// atomic counter: `layers` flags each (tile, z) layer, `band` turns them into the z
-// range that can have faces, `greedy` aggregates (or, merge == 0, lists unit faces)
-// one (tile, direction, slice, region) per work item and appends the quads.
+// atomic counter: `layers` flags each (tile, z) layer, `band` turns them into bits of
+// the layers that can have faces, `greedy` aggregates (or, merge == 0, lists unit
+// faces) one (tile, direction, slice) per work item and appends the quads.
 //
 // Slice views as meshing/faces.py: axis x -> (s, v, u) = (x, y, z); axis y -> (y, x, z);
 // axis z -> (z, y, x). Greedy is Mikola's scan order run row by row: open rectangles
@@ -12,37 +12,42 @@
 #define UMAX 256
 #define NONE 0xFFFF
 
-// bit 0: some meshed cell of the layer is not air; bit 1: the whole layer with its
-// ring is opaque cubes (a layer sandwiched by such layers has no faces).
+// Per (tile, z): bit 0 = some meshed cell of the layer is not air, bit 1 = the layer
+// with its ring is all opaque cubes. Rows are read with early exits: air layers only
+// need the air test, ground layers stop at the first non-opaque cell.
 __kernel void layers(__global const ushort *P, __constant uchar *flags, int PW, int PH,
                      int nx, int TW, int TH, int ntiles, __global uchar *lay) {
     int t = get_global_id(0) / 256, z = get_global_id(0) % 256;
     if (t >= ntiles) return;
     int ox = (t % nx) * TW, oy = (t / nx) * TH;
+    __global const ushort *L = P + ox + (long)PW * (oy + (long)PH * z);
     bool any = false, opaque = true;
-    for (int y = 0; y < TH + 2; y++) {
-        long c = ox + (long)PW * (oy + y + (long)PH * z);
-        for (int x = 0; x < TW + 2; x++) {
-            ushort a = P[c + x];
-            opaque &= (flags[a] & F_OPAQUE) != 0;
-            any |= a != 0 && x > 0 && x <= TW && y > 0 && y <= TH;
-        }
-    }
-    lay[t * 256 + z] = (any ? 1 : 0) | (opaque ? 2 : 0);
+    for (int y = 1; y <= TH && !any; y++)
+        for (int x = 1; x <= TW; x++) any |= L[x + PW * y] != 0;
+    for (int y = 0; y < TH + 2 && any && opaque; y++)
+        for (int x = 0; x < TW + 2; x++) opaque &= is_opaque(flags, L[x + PW * y]);
+    lay[t * 256 + z] = (any ? 1 : 0) | (any && opaque ? 2 : 0);
 }
 
+// Per tile, 256 bits: layer z (z0 <= z < z1) may have faces: not all air, and not
+// sealed (it and the layers above and below all opaque; outside the world is air).
 __kernel void band(__global const uchar *lay, int z0, int z1, int ntiles,
-                   __global int2 *out) {
+                   __global uint *busy) {
     int t = get_global_id(0);
     if (t >= ntiles) return;
     __global const uchar *L = lay + t * 256;
-    int lo = 256, hi = 0;
-    for (int z = z0; z < z1; z++) {
-        bool sealed = z > 0 && z < 255 && (L[z - 1] & L[z] & L[z + 1] & 2);
-        if ((L[z] & 1) && !sealed) { lo = min(lo, z); hi = z + 1; }
+    for (int w = 0; w < 8; w++) {
+        uint bits = 0;
+        for (int k = 0; k < 32; k++) {
+            int z = 32 * w + k;
+            bool sealed = z > 0 && z < 255 && (L[z - 1] & L[z] & L[z + 1] & 2);
+            if (z >= z0 && z < z1 && (L[z] & 1) && !sealed) bits |= 1u << k;
+        }
+        busy[t * 8 + w] = bits;
     }
-    out[t] = (int2)(lo, hi);
 }
+
+inline bool is_busy(__global const uint *B, int z) { return (B[z >> 5] >> (z & 31)) & 1u; }
 
 // Record: (tile, x | y << 16, z | face << 8 | block << 16, w | h << 16), tile-local.
 inline void put(__global uint4 *out, __global uint *count, uint cap, int t, int x, int y,
@@ -53,7 +58,7 @@ inline void put(__global uint4 *out, __global uint *count, uint cap, int t, int 
                             (uint)z | ((uint)face << 8) | (block << 16), (uint)w | ((uint)h << 16));
 }
 
-// Rect in slice view (rows v.., columns u..) -> quad fields (faces.py _VIEW, rects_to_quads).
+// Rect in slice view (rows v.., columns u..) -> quad fields (as faces.aggregate_pieces).
 inline void put_rect(__global uint4 *out, __global uint *count, uint cap, int t, int d,
                      int s, int v, int u, int rows, int cols, uint block) {
     int a = d >> 1;
@@ -62,55 +67,10 @@ inline void put_rect(__global uint4 *out, __global uint *count, uint cap, int t,
     else put(out, count, cap, t, u, v, s, d, cols, rows, block);
 }
 
-__kernel void greedy(__global const ushort *P, __constant uchar *flags, int PW, int PH,
-                     int nx, int TW, int TH, int ntiles, int z0, int z1, int split, int nreg,
-                     int merge, __global const int2 *bands, __global uint4 *out,
-                     __global uint *count, uint cap) {
-    int ni = 2 * (TW + TH) * nreg + 2 * (z1 - z0);
-    int t = get_global_id(0) / ni, i = get_global_id(0) % ni;
-    if (t >= ntiles) return;
-    int2 bd = bands[t];
-    if (bd.x >= bd.y) return;
-    int ox = (t % nx) * TW, oy = (t / nx) * TH;
-    long PL = (long)PW * PH;
-    int d, s, r = 0;
-    if (i < 2 * TW * nreg) { d = i / (TW * nreg); s = i % (TW * nreg); }
-    else if ((i -= 2 * TW * nreg) < 2 * TH * nreg) { d = 2 + i / (TH * nreg); s = i % (TH * nreg); }
-    else { i -= 2 * TH * nreg; d = 4 + i / (z1 - z0); s = z0 + i % (z1 - z0); }
-    int a = d >> 1;
-    int V, ulo, uhi;
-    long c0, sv, su;
-    if (a < 2) {
-        r = s % nreg; s /= nreg;
-        int rs = r == 0 ? z0 : (z0 / split + r) * split;
-        int re = split ? min((z0 / split + r + 1) * split, z1) : z1;
-        ulo = max(rs, bd.x); uhi = min(re, bd.y);
-        if (ulo >= uhi) return;
-        V = a == 0 ? TH : TW;
-        su = PL;
-        if (a == 0) { c0 = (ox + s + 1) + (long)PW * (oy + 1); sv = PW; }
-        else { c0 = (ox + 1) + (long)PW * (oy + s + 1); sv = 1; }
-    } else {
-        if (s < bd.x || s >= bd.y) return;
-        ulo = 0; uhi = TW; V = TH;
-        c0 = (ox + 1) + (long)PW * (oy + 1) + PL * s; sv = PW; su = 1;
-    }
-    long step = a == 0 ? 1 : (a == 1 ? PW : PL);
-    if (!(d & 1)) step = -step;
-    bool edge = (d == 4 && s == 0) || (d == 5 && s == 255);
-    uint want = a == 2 ? (F_CUBE | F_CAP) : F_CUBE;
-
-    if (d == 4) {  // X and # planes of this layer, once per cell
-        for (int v = 0; v < V; v++)
-            for (int u = 0; u < TW; u++) {
-                ushort b = P[c0 + v * sv + u];
-                uint f = flags[b];
-                if (f & F_X) { put(out, count, cap, t, u, v, s, 6, 1, 1, b);
-                               put(out, count, cap, t, u, v, s, 7, 1, 1, b); }
-                if (f & F_HASH)
-                    for (int k = 8; k < 12; k++) put(out, count, cap, t, u, v, s, k, 1, 1, b);
-            }
-    }
+// Greedy (merge) or unit faces over columns [ulo, uhi) of one slice.
+inline void span(__global const ushort *P, __constant uchar *flags, long c0, long sv, long su,
+                 long step, bool edge, uint want, int V, int ulo, int uhi, int merge,
+                 int t, int d, int s, __global uint4 *out, __global uint *count, uint cap) {
     if (!merge) {
         for (int v = 0; v < V; v++)
             for (int u = ulo; u < uhi; u++) {
@@ -119,35 +79,104 @@ __kernel void greedy(__global const ushort *P, __constant uchar *flags, int PW, 
             }
         return;
     }
-    ushort ost[UMAX], okey[UMAX], ow[UMAX], orow[UMAX];
+    // ost: start column of the open rectangle covering a column (NONE: free); the
+    // start column holds its key, width and first row. rk: the keys of the current row.
+    ushort ost[UMAX], okey[UMAX], ow[UMAX], orow[UMAX], rk[UMAX];
+    int nopen = 0;
     for (int u = ulo; u < uhi; u++) ost[u] = NONE;
     for (int v = 0; v < V; v++) {
         long cv = c0 + v * sv;
+        bool any = false;
+        for (int u = ulo; u < uhi; u++) {
+            rk[u] = face_key(P, flags, cv + u * su, step, edge, want);
+            any |= rk[u] != 0;
+        }
+        if (!any && !nopen) continue;
         for (int u = ulo; u < uhi;) {       // open rectangles: continue or close
             if (ost[u] != u) { u++; continue; }
             int w = ow[u];
             ushort k = okey[u];
             bool ok = true;
-            for (int j = 0; j < w && ok; j++)
-                ok = face_key(P, flags, cv + (u + j) * su, step, edge, want) == k;
+            for (int j = 0; j < w && ok; j++) ok = rk[u + j] == k;
             if (!ok) {
                 put_rect(out, count, cap, t, d, s, orow[u], u, v - orow[u], w, k);
                 for (int j = 0; j < w; j++) ost[u + j] = NONE;
+                nopen--;
             }
             u += w;
         }
         for (int u = ulo; u < uhi;) {       // free cells: new maximal runs
-            if (ost[u] != NONE) { u++; continue; }
-            ushort k = face_key(P, flags, cv + u * su, step, edge, want);
-            if (!k) { u++; continue; }
+            ushort k = rk[u];
+            if (ost[u] != NONE || !k) { u++; continue; }
             int w = 1;
-            while (u + w < uhi && ost[u + w] == NONE
-                   && face_key(P, flags, cv + (u + w) * su, step, edge, want) == k) w++;
+            while (u + w < uhi && ost[u + w] == NONE && rk[u + w] == k) w++;
             for (int j = 0; j < w; j++) ost[u + j] = u;
             okey[u] = k; ow[u] = w; orow[u] = v;
+            nopen++;
             u += w;
         }
     }
     for (int u = ulo; u < uhi; u++)
         if (ost[u] == u) put_rect(out, count, cap, t, d, s, orow[u], u, V - orow[u], ow[u], okey[u]);
+}
+
+// Work items per tile: 2*TW x-slices and 2*TH y-slices (each walks its render regions
+// and, in them, the runs of busy layers: quiet layers have no faces, so cutting there
+// changes nothing), then 2*ZK z items (each takes every ZK-th busy layer). Few idle
+// items: pocl runs a work group's items as one loop, so idle or divergent ones cost.
+#define ZK 8
+
+__kernel void greedy(__global const ushort *P, __constant uchar *flags, int PW, int PH,
+                     int nx, int TW, int TH, int ntiles, int z0, int z1, int split, int nreg,
+                     int merge, __global const uint *busy, __global uint4 *out,
+                     __global uint *count, uint cap) {
+    int ni = 2 * (TW + TH) + 2 * ZK;
+    int t = get_global_id(0) / ni, i = get_global_id(0) % ni;
+    if (t >= ntiles) return;
+    __global const uint *B = busy + 8 * t;
+    int ox = (t % nx) * TW, oy = (t / nx) * TH;
+    long PL = (long)PW * PH;
+    int d, s;
+    if (i < 2 * TW) { d = i / TW; s = i % TW; }
+    else if ((i -= 2 * TW) < 2 * TH) { d = 2 + i / TH; s = i % TH; }
+    else { i -= 2 * TH; d = 4 + i / ZK; s = i % ZK; }
+    int a = d >> 1;
+    long step = a == 0 ? 1 : (a == 1 ? PW : PL);
+    if (!(d & 1)) step = -step;
+    uint want = a == 2 ? (F_CUBE | F_CAP) : F_CUBE;
+    if (a < 2) {
+        int V = a == 0 ? TH : TW;
+        long c0 = a == 0 ? (ox + s + 1) + (long)PW * (oy + 1) : (ox + 1) + (long)PW * (oy + s + 1);
+        long sv = a == 0 ? PW : 1;
+        for (int r = 0; r < nreg; r++) {
+            int rs = r == 0 ? z0 : (z0 / split + r) * split;
+            int re = split ? min((z0 / split + r + 1) * split, z1) : z1;
+            for (int u = rs; u < re;) {
+                if (!is_busy(B, u)) { u++; continue; }
+                int u1 = u + 1;
+                while (u1 < re && is_busy(B, u1)) u1++;
+                span(P, flags, c0, sv, PL, step, false, want, V, u, u1, merge, t, d, s,
+                     out, count, cap);
+                u = u1;
+            }
+        }
+        return;
+    }
+    for (int z = z0 + s; z < z1; z += ZK) {
+        if (!is_busy(B, z)) continue;
+        long c0 = (ox + 1) + (long)PW * (oy + 1) + PL * z;
+        if (d == 4) {  // X and # planes of this layer, once per cell
+            for (int v = 0; v < TH; v++)
+                for (int u = 0; u < TW; u++) {
+                    ushort b = P[c0 + v * PW + u];
+                    uint f = flags[b];
+                    if (f & F_X) { put(out, count, cap, t, u, v, z, 6, 1, 1, b);
+                                   put(out, count, cap, t, u, v, z, 7, 1, 1, b); }
+                    if (f & F_HASH)
+                        for (int k = 8; k < 12; k++) put(out, count, cap, t, u, v, z, k, 1, 1, b);
+                }
+        }
+        bool edge = (d == 4 && z == 0) || (d == 5 && z == 255);
+        span(P, flags, c0, PW, 1, step, edge, want, TH, 0, TW, merge, t, d, z, out, count, cap);
+    }
 }

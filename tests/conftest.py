@@ -39,3 +39,13 @@ def cl_device():
         return opencl.context()
     except opencl.NoOpenCL as e:
         pytest.skip(f"no OpenCL: {e}")
+
+
+@pytest.fixture(scope="session")
+def bpy():
+    """The real bpy module (PyPI bpy, or Blender's own under tests/run.py)."""
+    try:
+        import bpy as b
+    except ImportError as e:
+        pytest.skip(f"no bpy: {e}")
+    return b

@@ -13,7 +13,8 @@ vec4 light_torus(usampler3D vol, ivec3 v) {
     if (v.z > 255) l = 0xF000u;
     else if (v.z < 0) l = 0u;
     else if (any(lessThan(v.xy, vol_lo)) || any(greaterThanEqual(v.xy, vol_hi))) l = 0xF000u;
-    else l = texelFetch(vol, ivec3(((v.xy % vol_size) + vol_size) % vol_size, v.z), 0).r;
+    // GLSL leaves % of negative ints undefined; float mod floors (exact below 2^24)
+    else l = texelFetch(vol, ivec3(ivec2(mod(vec2(v.xy), float(vol_size))), v.z), 0).r;
     return vec4(float(l & 15u), float((l >> 4) & 15u), float((l >> 8) & 15u), float(l >> 12)) / 15.0;
 }
 

@@ -30,15 +30,6 @@ def small_world(tmp_path_factory):
 
 
 @pytest.fixture(scope="session")
-def bpy():
-    try:
-        import bpy as b
-    except ImportError as e:
-        pytest.skip(f"no bpy: {e}")
-    return b
-
-
-@pytest.fixture(scope="session")
 def validate():
     """validate(path) -> the Khronos validator's report (dict)."""
     import json

@@ -104,12 +104,13 @@ def test_cli_bake(small_world, validate, tmp_path):
                         "--region", "0", "0", "16", "16", "--out", str(out), "--time", "22:00"],
                        cwd=ROOT, env=env, capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr[-2000:]
-    assert r.stdout.strip().endswith("cli.glb")
+    assert r.stdout.strip().splitlines() == [str(out)]   # the exporter's log stays off stdout
     assert validate(out)["issues"]["numErrors"] == 0
     for bad, msg in ((["--region", "5", "0", "5", "9"], "empty region"),
                      (["--region", "0", "0", "4", "4", "--time", "25:99"], ""),
                      (["--region", "0", "0", "4", "4", "--world", str(tmp_path / "no.sqlite")],
-                      "does not exist")):
+                      "does not exist"),
+                     (["--region", "0", "0", "4", "4", "--out", "/proc/no/b.glb"], "cannot create folder")):
         args = ["--world", str(small_world), "--out", str(tmp_path / "b.glb")] + bad
         r = subprocess.run([sys.executable, "-m", "voxel_addon", "bake", *args], cwd=ROOT,
                            env=env, capture_output=True, text=True, timeout=120)

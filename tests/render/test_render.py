@@ -164,3 +164,54 @@ def test_msaa_smooths_edges(gl):
         r.release()
         vals[ms] = len(np.unique(np.round(img[:, 30:66]).astype(int)))
     assert vals[4] > vals[1], "multisampling adds intermediate edge shades"
+
+
+def test_ssao_darkens_an_inner_corner(gl):
+    b = floor()
+    b[:, 20:, 61:72] = R.id("stone")  # a wall along x: floor and wall meet at y = 20
+    cam = Camera(16, 2, 70, 90, -25)
+    imgs = {}
+    for on in (False, True):
+        r = renderer(gl, b, ssao=on, shadows=False, fog=False)
+        imgs[on] = r.render(cam, 12.0, SIZE)
+        r.release()
+    corner = [at(imgs[on], cam, (16, 19.8, 61.2), 0) for on in (False, True)]
+    open_floor = [at(imgs[on], cam, (16, 12, 61)) for on in (False, True)]
+    assert corner[1] < corner[0] - 4, corner
+    assert abs(open_floor[1] - open_floor[0]) < 1.5, open_floor
+
+
+def test_god_rays_brighten_around_the_sun(gl):
+    from voxel_addon.light import daytime
+    hours = 7.5
+    sx, sy, sz = daytime.at(hours).sun_dir
+    yaw, pitch = np.degrees(np.arctan2(sy, sx)), np.degrees(np.arcsin(sz))
+    b = floor()
+    cam = Camera(16, 16, 66, yaw, pitch)
+    away = Camera(16, 16, 66, yaw + 180, pitch)
+    out = {}
+    for on in (False, True):
+        r = renderer(gl, b, godrays=on, fog=False)
+        out[on] = lum(r.render(cam, hours, SIZE)), lum(r.render(away, hours, SIZE))
+        r.release()
+    ring = np.zeros(out[True][0].shape, bool)  # around the sun's disc at the image centre
+    yy, xx = np.mgrid[:SIZE[1], :SIZE[0]]
+    d = np.hypot(yy - SIZE[1] / 2, xx - SIZE[0] / 2)
+    ring[(d > 6) & (d < 20)] = True
+    assert out[True][0][ring].mean() > out[False][0][ring].mean() + 5
+    assert np.abs(out[True][1] - out[False][1]).max() < 1, "no sun in view: no rays"
+
+
+def test_waving_moves_plants_only_when_on(gl):
+    b = floor(top="grass")
+    b[4:28, 4:28, 61] = R.id("tall_grass")
+    cam = Camera(16, 2, 66, 90, -30)
+    for on in (True, False):
+        r = renderer(gl, b, waving=on, shadows=False)
+        r.s.time = 0.0
+        a = lum(r.render(cam, 12.0, SIZE))
+        r.s.time = 1.3
+        c = lum(r.render(cam, 12.0, SIZE))
+        r.release()
+        moved = np.abs(a - c).mean()
+        assert (moved > 1.0) if on else (moved == 0.0), (on, moved)

@@ -1,6 +1,8 @@
 """bake: a block region -> .glb through Blender's own glTF exporter (bpy in-process)."""
 from __future__ import annotations
 
+import contextlib
+import io
 import time
 from pathlib import Path
 
@@ -33,6 +35,10 @@ def run(args):
     if not args.world.exists():
         raise VoxelError(f"world file {args.world} does not exist")
     hours = daytime.parse_time(args.time)
+    try:  # fail before the long work, not after it
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise VoxelError(f"cannot create folder {args.out.parent}: {e.strerror}") from None
     x0, y0, x1, y1 = bake.check_region(*args.region)
     big = (x1 - x0) * (y1 - y0) >= 64 * 64
     t0 = time.perf_counter()
@@ -51,9 +57,12 @@ def run(args):
     from ..blender import bake as BB
     bpy.ops.wm.read_factory_settings(use_empty=True)
     objs = BB.build(bk, style="gltf", hours=hours, progress=progress)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
     progress("export", 0.0)
-    BB.export_glb(args.out.resolve(), objs, instances=args.instances)
+    # The exporter logs INFO lines to stdout; keep stdout for our own result.
+    with contextlib.redirect_stdout(io.StringIO()):
+        BB.export_glb(args.out.resolve(), objs, instances=args.instances)
+    if not args.out.is_file():
+        raise VoxelError(f"Blender's glTF exporter did not write {args.out}")
     if args.blend:
         bpy.ops.wm.save_as_mainfile(filepath=str(args.blend.resolve()))
     note(f"bake: {len(objs)} objects, {bk.triangles} triangles, "

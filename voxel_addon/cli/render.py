@@ -23,7 +23,8 @@ def add_parser(sub):
     p.add_argument("--scene", choices=("ocean", "desert", "landscape", "cave"),
                    help="a reference scene (its terrain, camera and time; --camera/--time override)")
     p.add_argument("--aggregation", default="greedy",
-                   help="meshing method: none, lines, squares, squares_ext, greedy")
+                   choices=("none", "lines", "squares", "squares_ext", "greedy"),
+                   help="meshing method (face aggregation)")
     return p
 
 
@@ -47,25 +48,28 @@ def run(args):
         sc = scenes.SCENES[args.scene]
         cam_args = cam_args or sc.camera
         hhmm = hhmm or sc.time
+    elif args.world is None or cam_args is None:
+        raise VoxelError("render needs --world and --camera (or --scene)")
+    elif not args.world.is_file():
+        raise VoxelError(f"no world file at {args.world}")
+    # every cheap check before the slow part (loading, lighting, meshing)
+    hours = sky.parse_time(hhmm or "12:00")
+    if not 0 <= cam_args[2] <= 400:
+        raise VoxelError("camera z must be between 0 and 400")
+    if args.scene:
         data = source.scene_area(args.scene)
     else:
-        if args.world is None or cam_args is None:
-            raise VoxelError("render needs --world and --camera (or --scene)")
-        if not args.world.exists():
-            raise VoxelError(f"no world file at {args.world}")
         from ..core.world import World
         world = World.open(args.world, readonly=True, loader=False)
         try:
-            data = source.world_area(world, cam_args[0], cam_args[1], s.distance)
+            data = source.world_area(world, cam_args[0], cam_args[1], s.distance,
+                                     s.light_radius)
         finally:
             world.close()
-    if not 0 <= cam_args[2] <= 400:
-        raise VoxelError("camera z must be between 0 and 400")
-    hours = sky.parse_time(hhmm or "12:00")
     ctx = source.context()
     r = Renderer(ctx, s)
-    blocks, light, cx0, cy0 = data
-    r.set_area(blocks, light, cx0, cy0, ring=True, method=args.aggregation)
+    r.set_area(data.blocks, data.light, data.cx0, data.cy0, ring=True, method=args.aggregation,
+               light_at=data.light_at)
     img = r.render(Camera(*cam_args), hours, (w, h))
     rgba = np.dstack([img, np.full(img.shape[:2], 255, np.uint8)])
     args.out.parent.mkdir(parents=True, exist_ok=True)

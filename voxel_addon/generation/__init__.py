@@ -23,3 +23,9 @@ def generator_class(name: str):
 
 def make_generator(name: str, seed: int, params: dict | None = None, backend: str | None = None):
     return generator_class(name)(seed, params, backend)
+
+
+def default_backend() -> str:
+    """"opencl" when an OpenCL device is present, else "numpy"."""
+    from .passgen import default_backend as d
+    return d()

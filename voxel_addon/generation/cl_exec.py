@@ -3,19 +3,27 @@ and runs it on batches of chunks.
 
 Every node becomes one C statement doing exactly the float32 operation NumPy does
 (np_exec); constants are written as hex floats so no decimal rounding sneaks in.
+
+Speed on pocl comes from its work-group vectorizer (see gpu/noise.h), so kernels
+have no control flow: no early returns (2D domains are padded, 3D kernels run on a
+list of (chunk, z) layers below the pass's `top`), no && || (they branch), and
+loads that might be out of range are clamped and then masked.
 """
 from __future__ import annotations
+
+import time
 
 import numpy as np
 
 from .. import opencl, resources
 from ..core import chunk as C
-from .lang import Unit, nodes
+from .lang import _COST, Unit, nodes
 
 # No fast-math, no mad: IEEE results identical to NumPy's (see gpu/noise.h).
 OPTIONS = ("-cl-fp32-correctly-rounded-divide-sqrt",)
 CT = {"f": "float", "i": "int", "b": "int", "f3": "float3"}
-LOCAL2D, LOCAL3D = 64, 256
+LOCAL2D = 64
+LAYER = C.SIZE * C.SIZE  # a 3D work-group: one z layer of one chunk, x fastest
 
 
 def _lit(e):
@@ -29,8 +37,13 @@ def _lit(e):
     return f"({int(e.k)})"
 
 
+# bools are ints 0/1, so & and | are exact and, unlike && ||, do not branch
 _BIN = {"add": "+", "sub": "-", "mul": "*", "div": "/", "lt": "<", "le": "<=", "gt": ">",
-        "ge": ">=", "eq": "==", "ne": "!=", "and": "&&", "or": "||"}
+        "ge": ">=", "eq": "==", "ne": "!=", "and": "&", "or": "|"}
+
+
+def _pad(size, local):
+    return -(-size // local) * local
 
 
 class _Gen:
@@ -54,12 +67,14 @@ class _Gen:
             return f"(-{a[0]})"
         if op == "not":
             return f"(!{a[0]})"
+        # helpers from gen.cl/noise.h rather than OpenCL builtins: pocl's builtins
+        # are calls, which keep the work-group loop from vectorizing
         if op in ("min", "max"):
-            return f"{'f' if e.t == 'f' else ''}{op}({a[0]}, {a[1]})"
+            return f"vx_{'f' if e.t == 'f' else 'i'}{op}({a[0]}, {a[1]})"
         if op == "abs":
-            return f"fabs({a[0]})" if e.t == "f" else f"vx_iabs({a[0]})"
+            return f"vx_fabs({a[0]})" if e.t == "f" else f"vx_iabs({a[0]})"
         if op in ("floor", "sqrt"):
-            return f"{op}({a[0]})"
+            return f"vx_{op}({a[0]})"
         if op == "int":
             return f"((int){a[0]})"
         if op == "float":
@@ -88,30 +103,63 @@ class _Gen:
             return f"((int)((vx_hash2({a[0]}, {a[1]}, s{k[0]}) >> 8) % {k[1]}u))"
         if op == "read":
             name, dx, dy, reach = k
-            _, hf = self.fields[name]
-            wf = C.SIZE + 2 * hf
-            if dx is None:
-                dx = f"min(max({a[0]}, {-reach}), {reach})"
-                dy = f"min(max({a[1]}, {-reach}), {reach})"
-            return f"f_{name}[c * {wf * wf} + (ly + {hf} + ({dy})) * {wf} + (lx + {hf} + ({dx}))]"
+            return self.read(name, dx, dy, a, reach)
         if op == "prev":
-            return (f"((z + {k}) >= 0 && (z + {k}) < {C.HEIGHT} ? "
-                    f"(int)prev[gid + {k * C.SIZE * C.SIZE}] : 0)")
+            return f"vx_prev(prev, c, z + ({k}), lid)"
         raise ValueError(f"unknown op {op}")
 
+    def read(self, name, dx, dy, a=(), reach=0):
+        _, hf = self.fields[name]
+        wf = C.SIZE + 2 * hf
+        if dx is None:
+            dx = f"vx_imin(vx_imax({a[0]}, {-reach}), {reach})"
+            dy = f"vx_imin(vx_imax({a[1]}, {-reach}), {reach})"
+        return f"f_{name}[c * {wf * wf} + (ly + {hf} + ({dy})) * {wf} + (lx + {hf} + ({dx}))]"
+
     def body(self, roots, unit, done):
-        lines = []
-        for e in nodes(roots):
+        """C statements for roots. An expensive operand that nothing else needs (of &,
+        | or select) is computed inside an `if` only when it decides the result: the
+        big kernels run scalar on pocl anyway (see README), so a branch costs little
+        and e.g. cave noise is skipped outside cave regions. Same values, fewer ops."""
+        order = nodes(roots)
+        lazy, owner = _lazy_blocks(order, roots)
+        out = []
+        self._emit([e for e in order if e.id not in owner], lazy, owner, unit, done, out, 1)
+        return out
+
+    def _emit(self, seq, lazy, owner, unit, done, out, depth):
+        pad = "    " * depth
+        for e in seq:
             if e.id in done:
                 continue
-            done[e.id] = f"v{e.id}"
-            a = [done[x.id] for x in e.a]
-            lines.append(f"    {CT[e.t]} v{e.id} = {self.expr(e, a, unit)};")
-        return lines
+            slots = lazy.get(e.id)
+            if not slots:
+                a = [done[x.id] for x in e.a]
+                done[e.id] = f"v{e.id}"
+                out.append(f"{pad}{CT[e.t]} v{e.id} = {self.expr(e, a, unit)};")
+                continue
+            v = done[e.id] = f"v{e.id}"
 
-    def reads(self, roots):
-        names = []
-        for e in nodes(roots):
+            def block(i):  # statements computing operand i, then v = operand i
+                inner = [n for n in slots.get(i, ()) if owner.get(n.id) == (e.id, i)]
+                self._emit(inner, lazy, owner, unit, done, out, depth + 1)
+                out.append(f"{pad}    {v} = {done[e.a[i].id]};")
+            if e.op in ("and", "or"):
+                out.append(f"{pad}int {v} = {done[e.a[0].id]};")
+                out.append(f"{pad}if ({'' if e.op == 'and' else '!'}{v}) {{")
+                block(1)
+                out.append(f"{pad}}}")
+            else:  # select
+                out.append(f"{pad}{CT[e.t]} {v};")
+                out.append(f"{pad}if ({done[e.a[0].id]}) {{")
+                block(1)
+                out.append(f"{pad}}} else {{")
+                block(2)
+                out.append(f"{pad}}}")
+
+    def reads(self, u: Unit):
+        names = [u.top] if u.top is not None else []
+        for e in nodes(u.roots()):
             if e.op == "read" and e.k[0] not in names:
                 names.append(e.k[0])
         return names
@@ -131,32 +179,77 @@ class _Gen:
         if u.kind == "2d":
             args += [f"__global {CT[e.t]}* o_{n}" for n, e in u.outs.items()]
         else:
-            args += ["__global ushort* blocks", "__global const ushort* prev"]
-        ins = self.reads(roots)
-        args += [f"__global const {CT[self.fields[n][0]]}* f_{n}" for n in ins]
-        out = [f"__kernel void unit{i}({', '.join(args)}) {{", "    int gid = get_global_id(0);"]
+            args += ["__global const int* layers", "__global ushort* blocks",
+                     "__global const ushort* prev"]
+        args += [f"__global const {CT[self.fields[n][0]]}* f_{n}" for n in self.reads(u)]
+        out = [f"__kernel void unit{i}({', '.join(args)}) {{"]
         if u.kind == "2d":
+            # the global size is padded to the work-group size: the tail recomputes
+            # the last column into the buffer's padding instead of branching
             w = C.SIZE + 2 * u.halo
-            out += [f"    if (gid >= n * {w * w}) return;",
-                    f"    int c = gid / {w * w}, r = gid - c * {w * w};",
+            out += ["    int gid = get_global_id(0);",
+                    f"    int g = vx_imin(gid, n * {w * w} - 1);",
+                    f"    int c = g / {w * w}, r = g - c * {w * w};",
                     f"    int lx = r % {w} - {u.halo}, ly = r / {w} - {u.halo};"]
         else:
-            out += [f"    if (gid >= n * {C.VOLUME}) return;",
-                    "    int c = gid >> 16, r = gid & 65535;",
-                    "    int lx = r & 15, ly = (r >> 4) & 15, z = r >> 8;"]
+            out += ["    int grp = get_group_id(0), lid = get_local_id(0);",
+                    "    int c = layers[2 * grp], z = layers[2 * grp + 1];",
+                    f"    int lx = lid & {C.SIZE - 1}, ly = lid >> 4;",
+                    f"    int gid = c * {C.VOLUME} + z * {LAYER} + lid;"]
         out += ["    int x = org[2 * c] + lx, y = org[2 * c + 1] + ly;"]
         out += self.salts(roots)
         done = {}
+        out += self.body(roots, u, done)
         if u.kind == "2d":
-            out += self.body(roots, u, done)
             out += [f"    o_{n}[gid] = {done[e.id]};" for n, e in u.outs.items()]
         else:
-            if u.top is not None:
-                out += self.body([u.top], u, done)
-                out += [f"    if (z > {done[u.top.id]}) {{ blocks[gid] = 0; return; }}"]
-            out += self.body([u.blk], u, done)
-            out += [f"    blocks[gid] = (ushort){done[u.blk.id]};"]
+            top = "255" if u.top is None else self.read(u.top, 0, 0)
+            out += [f"    blocks[gid] = (ushort)(z <= {top} ? {done[u.blk.id]} : 0);"]
         return "\n".join(out + ["}", ""])
+
+
+LAZY_COST = 12  # cheaper operands are computed unconditionally
+
+
+def _lazy_blocks(order, roots):
+    """Operands worth computing lazily: {node id: {slot: [exclusive nodes in order]}}
+    and owner {node id: (lazy node id, slot)} of the innermost block holding it. A
+    node is exclusive to an operand when every path from it to the roots goes
+    through that operand's edge, so skipping it cannot starve another user."""
+    users = {}
+    for e in order:
+        for a in e.a:
+            users.setdefault(a.id, []).append(e.id)
+    rootids = {r.id for r in roots}
+    pos = {e.id: i for i, e in enumerate(order)}
+    sub = {}  # node id -> ids of its subtree (itself included)
+    for e in order:
+        t = {e.id}
+        for a in e.a:
+            t |= sub[a.id]
+        sub[e.id] = t
+    byid = {e.id: e for e in order}
+    lazy, owner, size = {}, {}, {}
+    for e in order:
+        slots = {"and": (1,), "or": (1,), "select": (1, 2)}.get(e.op, ())
+        for i in slots:
+            o = e.a[i]
+            if o.id in rootids or users.get(o.id) != [e.id] or o.op == "const":
+                continue
+            excl = {o.id}
+            for nid in sorted(sub[o.id] - {o.id}, key=pos.get, reverse=True):
+                if nid not in rootids and all(u in excl for u in users[nid]):
+                    excl.add(nid)
+            members = sorted(excl, key=pos.get)
+            cost = sum(_COST.get(byid[n].op, 1) for n in members)
+            if cost < LAZY_COST:
+                continue
+            lazy.setdefault(e.id, {})[i] = [byid[n] for n in members]
+            for n in members:  # innermost block wins: smaller blocks come later
+                if n not in owner or len(members) < size[owner[n]]:
+                    owner[n] = (e.id, i)
+            size[(e.id, i)] = len(members)
+    return lazy, owner
 
 
 def source(units) -> str:
@@ -176,6 +269,8 @@ class Runner:
         self.kernels = [cl.Kernel(prog, f"unit{i}") for i in range(len(units))]
         self.gen = _Gen(units)
         self._perm = {}
+        self._bufs = {}
+        self.timings = None  # set to a dict to collect seconds per unit (serialises the queue)
 
     def _perm_buf(self, seed32, perm):
         import pyopencl as cl
@@ -187,42 +282,77 @@ class Runner:
                                                cl.mem_flags.COPY_HOST_PTR, hostbuf=perm)
         return b
 
+    def _buf(self, key, nbytes):
+        """A device buffer reused across batches (grown when a batch needs more)."""
+        import pyopencl as cl
+        b = self._bufs.get(key)
+        if b is None or b.size < nbytes:
+            b = self._bufs[key] = cl.Buffer(self.ctx, cl.mem_flags.READ_WRITE, max(nbytes, 4))
+        return b
+
+    def _layers(self, u, fields, n):
+        """(chunk, z) pairs to compute for a 3D unit: z up to the chunk's highest top."""
+        if u.top is None:
+            zmax = np.full(n, C.HEIGHT - 1)
+        else:
+            top = self._read_field(u.top, fields, n)
+            zmax = np.clip(top.reshape(n, -1).max(axis=1), -1, C.HEIGHT - 1)
+        cs = np.repeat(np.arange(n), zmax + 1)
+        zs = np.concatenate([np.arange(m + 1) for m in zmax]) if n else cs
+        return np.stack([cs, zs], 1).astype(np.int32)
+
+    def _read_field(self, name, fields, n):
+        import pyopencl as cl
+        buf, h = fields[name]
+        w = C.SIZE + 2 * h
+        t = np.float32 if self.gen.fields[name][0] == "f" else np.int32
+        a = np.empty((n, w, w), t)
+        cl.enqueue_copy(self.queue, a, buf)  # blocking
+        return a.transpose(0, 2, 1)[:, h:h + C.SIZE, h:h + C.SIZE]
+
     def run(self, keys, seed32, perm, want=()):
         import pyopencl as cl
-        mf = cl.mem_flags
         q, n = self.queue, len(keys)
         org = (np.array(keys, np.int64).reshape(-1, 2) * C.SIZE).astype(np.int32)
-        borg = cl.Buffer(self.ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=org)
+        borg = self._buf("org", org.nbytes)
+        cl.enqueue_copy(q, borg, org)
         bperm = self._perm_buf(seed32, perm)
         fields, blocks, prev = {}, None, None
-        dummy = cl.Buffer(self.ctx, mf.READ_WRITE, 2)
+        nb = 0  # which of the two block buffers is next
         for i, u in enumerate(self.units):
             k = self.kernels[i]
             args = [borg, bperm, np.uint32(seed32), np.int32(n)]
             if u.kind == "2d":
                 w = C.SIZE + 2 * u.halo
+                size = _pad(n * w * w, LOCAL2D)
                 for name in u.outs:
-                    fields[name] = (cl.Buffer(self.ctx, mf.READ_WRITE, 4 * n * w * w), u.halo)
+                    fields[name] = (self._buf(f"f_{name}", 4 * size), u.halo)
                     args.append(fields[name][0])
-                size, local = n * w * w, LOCAL2D
+                local = LOCAL2D
             else:
+                lay = self._layers(u, fields, n)
                 prev = blocks
-                blocks = cl.Buffer(self.ctx, mf.READ_WRITE, 2 * n * C.VOLUME)
-                args += [blocks, prev if prev is not None else dummy]
-                size, local = n * C.VOLUME, LOCAL3D
-            args += [fields[name][0] for name in self.gen.reads(u.roots())]
+                blocks = self._buf(f"blocks{nb}", 2 * n * C.VOLUME)
+                nb ^= 1
+                cl.enqueue_fill_buffer(q, blocks, np.uint16(0), 0, 2 * n * C.VOLUME)
+                blay = self._buf(f"layers{i}", lay.nbytes)
+                if len(lay):
+                    cl.enqueue_copy(q, blay, lay)
+                args += [blay, blocks, prev if prev is not None else self._buf("dummy", 2)]
+                size, local = len(lay) * LAYER, LAYER
+            args += [fields[name][0] for name in self.gen.reads(u)]
+            if size == 0:
+                continue
             k.set_args(*args)
-            cl.enqueue_nd_range_kernel(q, k, (-(-size // local) * local,), (local,))
+            t0 = time.perf_counter()
+            cl.enqueue_nd_range_kernel(q, k, (size,), (local,))
+            if self.timings is not None:
+                q.finish()
+                key = f"unit{i} {u.kind} {'+'.join(u.outs) or 'blocks'}"
+                self.timings[key] = self.timings.get(key, 0.0) + time.perf_counter() - t0
         out = np.zeros((n, C.VOLUME), np.uint16)
         if blocks is not None:
             cl.enqueue_copy(q, out, blocks)
-        got = {}
-        for name in want:
-            buf, h = fields[name]
-            w = C.SIZE + 2 * h
-            t = np.float32 if self.gen.fields[name][0] == "f" else np.int32
-            a = np.empty((n, w, w), t)
-            cl.enqueue_copy(q, a, buf)
-            got[name] = a.transpose(0, 2, 1)[:, h:h + C.SIZE, h:h + C.SIZE]
+        got = {name: self._read_field(name, fields, n) for name in want}
         q.finish()
         return out, got

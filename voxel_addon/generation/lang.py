@@ -330,7 +330,9 @@ class Pass:
         self.blk = v
 
     def top(self, v):
-        """Voxels above this height (per column) are air and are not computed."""
+        """Voxels above this height are air and are not computed. Must depend on the
+        column only (x, y, reads); the OpenCL backend launches only the z layers up
+        to each chunk's highest top, so a tight top is the biggest speed lever."""
         self.top_e = const(v)
         if self.top_e.t != "i":
             raise TypeError("top() takes an int expression")
@@ -386,15 +388,16 @@ class Program:
 
 # ---- lowering: passes -> evaluation units with halos ------------------------------
 class Unit:
-    """One kernel: a 2D domain (chunk + halo columns) or the 3D chunk volume."""
+    """One kernel: a 2D domain (chunk + halo columns) or the 3D chunk volume.
+
+    A 3D unit's `top` is the name of a 2D field (z above it is air, not computed)
+    or None (all 256 layers)."""
 
     def __init__(self, kind, outs, halo=0, blk=None, top=None):
         self.kind, self.outs, self.halo, self.blk, self.top = kind, outs, halo, blk, top
 
     def roots(self):
         r = list(self.outs.values())
-        if self.top is not None:
-            r.append(self.top)
         if self.blk is not None:
             r.append(self.blk)
         return r
@@ -417,29 +420,100 @@ def nodes(roots):
     return order
 
 
-def _subst_z(roots, at):
-    """Rewrite expressions with z := at (a column output evaluated as a 2D value)."""
+def _rebuild(roots, fn):
+    """Rewrite bottom-up: fn(e, new_args) -> replacement node or None (keep/copy e)."""
     memo = {}
     for e in nodes(roots):
+        a = tuple(memo[x.id] for x in e.a)
+        n = fn(e, a)
+        if n is None:
+            n = e if all(x is y for x, y in zip(a, e.a)) else E(e.op, a, e.t, e.k)
+        memo[e.id] = n
+    return [memo[r.id] for r in roots]
+
+
+def _subst_z(roots, at):
+    """Rewrite expressions with z := at (a column output evaluated as a 2D value)."""
+    def fn(e, a):
         if e.op == "z":
-            memo[e.id] = at
-        elif e.op == "prev":
+            return at
+        if e.op == "prev":
             raise ValueError("a column output cannot depend on prev()")
-        elif any(a.id in memo for a in e.a):
-            n = E(e.op, [memo.get(a.id, a) for a in e.a], e.t, e.k)
-            memo[e.id] = n
-    return [memo.get(r.id, r) for r in roots]
+    return _rebuild(roots, fn)
+
+
+def cse(roots):
+    """Merge identical subexpressions (same op, payload and arguments): e.g. the same
+    rand3 written in a loop is computed once. Exact: the same ops on the same values."""
+    seen = {}
+
+    def fn(e, a):
+        key = (e.op, e.t, repr(e.k), tuple(x.id for x in a))  # repr keeps -0.0 apart
+        n = seen.get(key)
+        if n is None:
+            n = seen[key] = e if all(x is y for x, y in zip(a, e.a)) else E(e.op, a, e.t, e.k)
+        return n
+    return _rebuild(roots, fn)
+
+
+# Rough cost of a node when evaluated per voxel; hoisting pays above HOIST_COST.
+_COST = {"perlin2": 20, "perlin3": 30, "voronoi2": 60, "voronoi3": 150, "rand2": 6,
+         "rand3": 7, "irand2": 6, "div": 2, "sqrt": 2, "const": 0, "x": 0, "y": 0}
+HOIST_COST = 3
+
+
+def _hoist(index, roots):
+    """Move the column-invariant work of a 3D pass (parts depending on neither z nor
+    prev) into hidden 2D fields `_<pass>_<n>` computed once per column: NumPy already
+    broadcasts such values, the OpenCL kernel would redo them per voxel. Exact: the
+    same operations, only evaluated elsewhere. Returns (fields, new roots)."""
+    order = nodes(roots)
+    dep, cost = {}, {}
+    for e in order:
+        dep[e.id] = e.op in ("z", "prev") or any(dep[a.id] for a in e.a)
+        if not dep[e.id]:
+            cost[e.id] = _COST.get(e.op, 1) + sum(cost[a.id] for a in e.a)
+    # frontier: invariant nodes used by a z-dependent node (or roots themselves)
+    want = {r.id for r in roots if not dep[r.id] and r.t != "f3"}
+    for e in order:
+        if dep[e.id]:
+            want.update(a.id for a in e.a if not dep[a.id] and a.t != "f3")
+    fields, repl = {}, {}
+    for e in order:
+        if e.id in want and cost[e.id] >= HOIST_COST and e.op != "read":
+            name = f"_{index}_{len(fields)}"
+            if e.t == "b":  # fields hold numbers; bools travel as 0/1
+                fields[name] = E("select", (e, const(1), const(0)), "i")
+                repl[e.id] = E("ne", (E("read", (), "i", (name, 0, 0, 0)), const(0)), "b")
+            else:
+                fields[name] = e
+                repl[e.id] = E("read", (), e.t, (name, 0, 0, 0))
+    return fields, _rebuild(roots, lambda e, a: repl.get(e.id))
 
 
 def lower(prog: Program) -> list[Unit]:
     units = []
     for p in prog.passes:
         if p.kind == "2d":
-            units.append(Unit("2d", dict(p.outs)))
-        else:
-            units.append(Unit("3d", {}, 0, p.blk, p.top_e))
-            for name, v in p.outs.items():
-                units.append(Unit("2d", {name: _subst_z([v], p.at[name])[0]}))
+            outs = dict(zip(p.outs, cse(list(p.outs.values()))))
+            units.append(Unit("2d", outs))
+            continue
+        top = None
+        roots = [p.blk]
+        if p.top_e is not None:
+            if any(e.op in ("z", "prev") for e in nodes([p.top_e])):
+                raise ValueError("top() must depend on the column only (not z or prev)")
+            if p.top_e.op == "read" and p.top_e.k[1:3] == (0, 0):
+                top = p.top_e.k[0]
+            else:
+                top = f"_{p.index}_top"
+                units.append(Unit("2d", {top: cse([p.top_e])[0]}))
+        fields, (blk,) = _hoist(p.index, cse(roots))
+        if fields:
+            units.append(Unit("2d", fields))
+        units.append(Unit("3d", {}, 0, blk, top))
+        for name, v in p.outs.items():
+            units.append(Unit("2d", {name: cse(_subst_z([v], p.at[name]))[0]}))
     # Halos, last unit first: a field must cover every reader's domain plus reach.
     need: dict[str, int] = {}
     for u in reversed(units):
@@ -448,4 +522,6 @@ def lower(prog: Program) -> list[Unit]:
         for e in nodes(u.roots()):
             if e.op == "read":
                 need[e.k[0]] = max(need.get(e.k[0], 0), u.halo + e.k[3])
+        if u.top is not None:
+            need[u.top] = max(need.get(u.top, 0), 0)
     return units

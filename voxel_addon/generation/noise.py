@@ -178,7 +178,7 @@ def voronoi2(x, y, s: int, metric: int = 0):
             a, b = ex * ex, ey * ey
             d = a * a + b * b if metric else a + b
             lt = d < f1
-            f2 = np.where(lt, f1, np.minimum(f2, d))
+            f2 = np.where(lt, f1, np.where(d < f2, d, f2))  # vx_fmin
             val = np.where(lt, unit(h), val)
             f1 = np.where(lt, d, f1)
     return _metric_root(f1, metric), _metric_root(f2, metric), val
@@ -208,7 +208,7 @@ def voronoi3(x, y, z, s: int, metric: int = 0):
                 a, b, c = ex * ex, ey * ey, ez * ez
                 d = (a * a + b * b) + c * c if metric else (a + b) + c
                 lt = d < f1
-                f2 = np.where(lt, f1, np.minimum(f2, d))
+                f2 = np.where(lt, f1, np.where(d < f2, d, f2))  # vx_fmin
                 val = np.where(lt, unit(h), val)
                 f1 = np.where(lt, d, f1)
     return _metric_root(f1, metric), _metric_root(f2, metric), val

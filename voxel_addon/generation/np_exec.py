@@ -72,7 +72,7 @@ class Run:
         self.dom = base
         self.prev = prev
         if u.top is not None:
-            top = np.broadcast_to(self._eval([u.top])[u.top.id], (n, s, s, 1))
+            top = self.field(u.top)[..., None]
             zn = int(np.clip(top.max(), -1, C.HEIGHT - 1)) + 1
         else:
             top, zn = None, C.HEIGHT
@@ -121,10 +121,10 @@ class Run:
             return a[0] % I(k)
         if op == "get":
             return a[0][k]
-        if op == "min":
-            return np.fmin(*a) if e.t == "f" else np.minimum(*a)
+        if op == "min":  # as vx_fmin / vx_imin: b < a ? b : a (NaN and -0 included)
+            return np.where(a[1] < a[0], a[1], a[0]) if e.t == "f" else np.minimum(*a)
         if op == "max":
-            return np.fmax(*a) if e.t == "f" else np.maximum(*a)
+            return np.where(a[1] > a[0], a[1], a[0]) if e.t == "f" else np.maximum(*a)
         if op == "perlin2":
             return N.perlin2(a[0], a[1], self.perm, N.inst(self.seed, k))
         if op == "perlin3":

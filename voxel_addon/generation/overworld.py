@@ -91,6 +91,7 @@ class OverworldGenerator(PassGenerator):
             jitter = perlin2(p.x / 12, p.y / 12)
             snow = gz > (int(P["snow_line"]) + jitter * 10.0)
             rocky = ((slope > 4) & (p.read("mountain") > 0.25)) | ((slope > 8) & (p.read("desert") < 0.3))
+            rocky = rocky | ((gz > sea + 58 + jitter * 10.0) & (p.read("mountain") > 0.2))
             sandy = (p.read("desert") + jitter * 0.25 > 0.5) | (gz <= sea + 1)
             under = gz < sea - 1
             deep = gz < sea - 7
@@ -103,28 +104,31 @@ class OverworldGenerator(PassGenerator):
             # cave entrances only where this large 2D noise allows them
             p.out("open", select((perlin2(p.x / 160, p.y / 160) > 0.2) & (gz > sea + 2), 1, 0))
 
-        with g.pass3d() as p:  # (3) rock, caves, ore, water
+        with g.pass3d() as p:  # (3) rock, caves, ore (water: pass 5)
             x, y, z = p.x, p.y, p.z
             gz = p.read("groundZ")
-            p.top(max_(gz, sea))
+            p.top(gz)
             depth = gz - z
-            region = perlin3(x / 140, y / 140, z / 90)
-            cavern = octaves(perlin3, (x / 42, y / 42, z / 26), n=2)
-            cave = (region > 0.18 - 0.1 * float(P["caves"])) & (cavern > 0.26) & (z > 4) \
-                & ((depth > 7) | (p.read("open") == 1))
+            # cheap tests first: the OpenCL backend then skips the noise on the right
+            # of & wherever the left is false (see cl_exec), e.g. cavern outside regions
+            cave = (z > 4) & ((depth > 7) | (p.read("open") == 1))
+            cave = cave & (perlin3(x / 140, y / 140, z / 90) > 0.18 - 0.1 * float(P["caves"]))
+            cave = cave & (octaves(perlin3, (x / 42, y / 42, z / 26), n=2) > 0.26)
             if float(P["caves"]) <= 0:
                 cave = cave & (z < 0)
-            ore = (perlin3(x / 5, y / 5, z / 5) > 0.58) & (depth > 5)
+            # ore: clumps in a 3-voxel grid, hashed (cheaper than a third 3D noise)
+            ore = (depth > 5) & (rand3(x // 3, y // 3, z // 3, salt=50) < 0.03) \
+                & (rand3(x, y, z, salt=51) < 0.6)
             ground = select(depth == 0, p.read("top"),
                             select(depth < p.read("fill"), p.read("filler"), B["stone"]))
-            solid = select(cave, B["air"], select(ore, B["ore"], ground))
-            p.block(select(z <= gz, solid, select(z <= sea, B["water"], B["air"])))
+            p.block(select(cave, B["air"], select(ore, B["ore"], ground)))
             p.column("ent", select(cave, 1, 0), at=gz)
 
         with g.pass2d() as p:  # (4) trees whose crown may reach this column
             x, y = p.x, p.y
             gz = p.read("groundZ")
             found = [0] * KEEP
+            trunk = 0     # kept apart: a crowded column may drop a crown, never a trunk
             count = 0
             tops = max_(gz + 4, sea)
             cx0 = (x - TREE_REACH) // TREE_CELL
@@ -133,7 +137,9 @@ class OverworldGenerator(PassGenerator):
                 cx, cy = cx0 + ci % 2, cy0 + ci // 2
                 for j in range(TREE_SLOTS):
                     kx = cx * TREE_SLOTS + j
-                    rx = cx * TREE_CELL + irand2(kx, cy, TREE_CELL, salt=101)
+                    # slot j roots in its own strip of the cell: two trees never share a trunk
+                    rx = cx * TREE_CELL + j * (TREE_CELL // TREE_SLOTS) \
+                        + irand2(kx, cy, TREE_CELL // TREE_SLOTS, salt=101)
                     ry = cy * TREE_CELL + irand2(kx, cy, TREE_CELL, salt=102)
                     h = 4 + irand2(kx, cy, 4, salt=103)
                     dx, dy = rx - x, ry - y
@@ -147,16 +153,20 @@ class OverworldGenerator(PassGenerator):
                     for s in range(KEEP):
                         found[s] = select(ok & (count == s), code, found[s])
                     count = count + select(ok, 1, 0)
+                    trunk = select(ok & (dx == 0) & (dy == 0), code, trunk)
                     tops = select(ok, max_(tops, rz + h + 2), tops)
             for s in range(KEEP):
                 p.out(f"tree{s}", found[s])
+            p.out("trunk", trunk)
             p.out("vtop", tops)
 
         with g.pass3d() as p:  # (5) trees and plants
             x, y, z = p.x, p.y, p.z
             gz = p.read("groundZ")
             p.top(p.read("vtop"))
-            here, below = p.prev(), p.prev(-1)
+            # water fills oceans and rivers here, so pass 3 stops at the ground
+            here = select((z > gz) & (z <= sea), B["water"], p.prev())
+            below = p.prev(-1)
             air = here == B["air"]
             out = here
             # vegetation on the ground
@@ -169,31 +179,31 @@ class OverworldGenerator(PassGenerator):
                                   select((r > 0.97) & (tr > 0.4), B["mushroom"], B["air"])))
             out = select(on_grass, select(wheat, B["wheat"], plant), out)
             cactus_h = 1 + irand2(x, y, 3, salt=202)
-            cactus = ((p.read("top") == B["sand"]) & (p.read("desert") > 0.6) & (gz > sea + 1)
-                      & (p.read("ent") == 0) & (rand2(x, y, salt=203) < 0.006)
-                      & (z > gz) & (z <= gz + cactus_h) & air)
+            cactus = (air & (z > gz) & (z <= gz + cactus_h) & (p.read("top") == B["sand"])
+                      & (p.read("desert") > 0.5) & (gz > sea + 1) & (p.read("ent") == 0)
+                      & (rand2(x, y, salt=203) < 0.012))
             out = select(cactus, B["cactus"], out)
-            glow = air & (below == B["stone"]) & (z < gz - 6) & (rand3(x, y, z, salt=204) < 0.04)
+            glow = air & (z < gz - 6) & (below == B["stone"]) & (rand3(x, y, z, salt=204) < 0.04)
             out = select(glow, B["glowing_mushroom"], out)
             # trees: trunk, then a crown by Manhattan distance with falling probability
             leaves = None
             log = None
-            for s in range(KEEP):
-                code = p.read(f"tree{s}")
+            for s in range(KEEP + 1):
+                code = p.read(f"tree{s}" if s < KEEP else "trunk")
                 dx, dy = code % 8 - 4, (code // 8) % 8 - 4
                 h, rz = (code // 64) % 16, code // 1024
                 has = code > 0
-                is_log = has & (dx == 0) & (dy == 0) & (z > rz) & (z <= rz + h)
+                if s == KEEP:
+                    log = has & (z > rz) & (z <= rz + h)   # the trunk field is this column's
                 cz = rz + h
                 dist = absolute(dx) + absolute(dy) + absolute(z - cz) * 2
                 rad = 3 + select(h > 5, 1, 0)
                 prob = clamp01((rad + 0.5 - dist) * 0.45)
                 is_leaf = has & (z >= cz - 2) & (z <= cz + 1) & (dist <= rad) \
                     & (rand3(x, y, z, salt=210) < prob + select(dist <= 1, 1.0, 0.0))
-                log = is_log if log is None else log | is_log
                 leaves = is_leaf if leaves is None else leaves | is_leaf
-            out = select(leaves & air, B["leaves"], out)
-            out = select(log & air, B["log"], out)
+            out = select(air & leaves, B["leaves"], out)
+            out = select(air & log, B["log"], out)
             p.block(out)
         return g
 

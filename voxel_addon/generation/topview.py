@@ -33,21 +33,57 @@ def surface(blocks: np.ndarray):
     return top, z
 
 
+# Not terrain: ignored for the relief, so forests and lakes do not hide the hills.
+NOT_GROUND = ("water", "leaves", "log", "flowers", "tall_grass", "wheat", "mushroom",
+              "glowing_mushroom", "cactus")
+
+
+def summary(blocks: np.ndarray):
+    """(top id, top z, ground z) per column of a (W, H, 256) array; ground is the
+    highest terrain block (under water, trees and plants)."""
+    top, z = surface(blocks)
+    skip = np.zeros(len(REGISTRY), bool)
+    skip[[REGISTRY.id(n) for n in NOT_GROUND if n in REGISTRY.names()]] = True
+    ground = np.where(skip[blocks], 0, blocks)
+    return top, z, surface(ground)[1]
+
+
 def terrain_rgb(blocks: np.ndarray, sea: int = 62) -> np.ndarray:
     """Colour of the top block, hill-shaded, water tinted by depth."""
-    top, z = surface(blocks)
+    return shade(*summary(blocks), sea=sea)
+
+
+def hillshade(h: np.ndarray, exaggerate: float = 1.5) -> np.ndarray:
+    """Lambert shading of a height field [x, y] lit from the north-west, 1 on flat
+    ground, brighter on slopes facing the light, darker on the others."""
+    dx, dy = np.gradient(h.astype(np.float32) * exaggerate)
+    light = np.array([-1.0, 1.0, 1.4], np.float32)
+    light /= np.linalg.norm(light)
+    lam = (-dx * light[0] - dy * light[1] + light[2]) / np.sqrt(dx * dx + dy * dy + 1)
+    return lam / light[2]
+
+
+def shade(top, z, gz, sea: int = 62, known=None) -> np.ndarray:
+    """RGB image from `summary` arrays; columns where known is False are black.
+    Relief: hillshading of the ground (not the tree tops), brighter with height, and
+    faint contour lines every 16 blocks on land, so mountains and valleys read."""
     water = top == REGISTRY.id("water")
-    # ground under water, for the depth tint
-    ground = blocks.copy()
-    ground[ground == REGISTRY.id("water")] = 0
-    _, gz = surface(ground)
     rgb = palette()[top]
-    zf = z.astype(np.float32)
-    shade = np.clip(1.0 + (np.roll(zf, 1, 0) - zf + np.roll(zf, -1, 1) - zf) * 0.08, 0.55, 1.35)
-    shade *= 0.8 + 0.2 * np.clip((zf - sea) / 80.0, -1, 1)
-    rgb = rgb * shade[:, :, None]
+    g = gz.astype(np.float32)
+    s = np.clip(hillshade(g), 0.35, 1.6)
+    s *= 0.85 + 0.15 * np.clip((g - sea) / 80.0, -1, 1)
+    zf = z.astype(np.float32)  # a little canopy texture from the tree tops
+    s *= np.clip(1.0 + (zf - np.roll(zf, 1, 0)) * 0.02, 0.9, 1.1)
+    band = np.floor(g / 16.0)
+    edge = (band != np.roll(band, 1, 0)) | (band != np.roll(band, 1, 1))
+    gx, gy = np.gradient(g)
+    gentle = gx * gx + gy * gy < 2.0  # on cliffs the lines would merge into black
+    s = np.where(edge & gentle & ~water & (g > sea + 2), s * 0.85, s)
+    rgb = rgb * np.where(water, 1.0, s)[:, :, None]
     depth = np.clip((sea - gz) / 30.0, 0, 1)[:, :, None]
     rgb = np.where(water[:, :, None], rgb * (1.1 - 0.6 * depth), rgb)
+    if known is not None:
+        rgb = rgb * known[:, :, None]
     return _image(rgb)
 
 

@@ -83,4 +83,49 @@ def seeds(f: np.ndarray, cost: np.ndarray, shift: int, offs, lo: int, hi: int) -
     return np.flatnonzero(out) + (lo + a0)
 
 
+def flood_lanes(f: np.ndarray, cost: np.ndarray, seeds: np.ndarray, sy: int, sz: int) -> None:
+    """`flood` for all four components at once on flat uint8 lanes (4 per voxel, R, G,
+    B, D; lane i belongs to voxel i >> 2): fewer, larger NumPy steps for small boxes.
+    `seeds` are lane indices."""
+    offs = 4 * np.array([-1, 1, -sy, sy, -sz, sz], np.int64)
+    idx = np.asarray(seeds, np.int64)
+    while idx.size:
+        val = f[idx].astype(np.int16)
+        live = val > 1
+        if not live.all():
+            idx, val = idx[live], val[live]
+            if not idx.size:
+                break
+        n = (idx[:, None] + offs).ravel()
+        cand = np.repeat(val, 6) - cost[n >> 2]
+        m = cand > f[n]
+        n, cand = n[m], cand[m]
+        if not n.size:
+            break
+        key = (n << 4) | cand.astype(np.int64)
+        key.sort()
+        n = key >> 4
+        last = np.empty(n.size, bool)
+        last[-1] = True
+        np.not_equal(n[1:], n[:-1], out=last[:-1])
+        key = key[last]
+        idx = key >> 4
+        f[idx] = (key & 15).astype(np.uint8)
+
+
+def seeds_lanes(f: np.ndarray, cost: np.ndarray, offs, lo: int, hi: int) -> np.ndarray:
+    """`seeds` for flat lanes: lane indices of voxels [lo, hi) that can raise a
+    neighbour at +-offs (voxel strides) in that component."""
+    m = max(offs)
+    assert lo >= m and hi + m <= cost.size
+    v = f.reshape(-1, 4)[lo - m:hi + m].astype(np.int16)
+    c = cost[lo - m:hi + m, None].astype(np.int16)
+    a, b = m, m + hi - lo
+    out = np.zeros((hi - lo, 4), bool)
+    for o in offs:
+        out |= v[a:b] - c[a + o:b + o] > v[a + o:b + o]
+        out |= v[a:b] - c[a - o:b - o] > v[a - o:b - o]
+    return np.flatnonzero(out) + 4 * lo
+
+
 assert model.OPAQUE_COST > model.MAX  # v - OPAQUE_COST < 0: such voxels never rise

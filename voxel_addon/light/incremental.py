@@ -6,13 +6,18 @@ change within horizontal distance 14 of column (x, y) and between 14 below the l
 changed start value and 14 above p. Everything outside that box is the old (exact)
 light, so the box is re-solved from scratch with its 1-voxel rim held fixed: a path
 from outside enters the box through the rim, whose values already account for it.
+
+When the edit can only add light (p's cost does not rise and no emission falls, e.g.
+placing a lamp or digging out a block), the new light is >= the old everywhere and is
+the fixpoint reached from max(old light, new start values): the box keeps the old
+light and floods only from the voxels whose start value rose (flood.py).
 """
 from __future__ import annotations
 
 import numpy as np
 
 from ..core import chunk
-from . import model
+from . import flood, model
 
 R = model.MAX - 1  # reach of a change
 
@@ -31,33 +36,57 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
     Returns the modified box as slices (sx, sy, sz) of the array."""
     new = int(blocks[x, y, z])
     w, h, zs = blocks.shape
-    col = np.array(blocks[x, y, :z + 1])
-    now = _column_day(np.append(col, blocks[x, y, z + 1:]))[:z + 1]
-    col[z] = old
-    before = _column_day(np.append(col, blocks[x, y, z + 1:]))[:z + 1]
-    diff = np.flatnonzero(now != before)
-    zc = int(diff[0]) if diff.size else z
     if old == new:
         return (slice(x, x), slice(y, y), slice(z, z))
+    cost_t, _, _, emis, _, _ = model.tables()
+    above = blocks[x, y, z + 1:]
+    col = np.array(blocks[x, y, :z + 1])
+    now = _column_day(np.append(col, above))[:z + 1]
+    col[z] = old
+    before = _column_day(np.append(col, above))[:z + 1]
+    diff = np.flatnonzero(now != before)
+    zc = int(diff[0]) if diff.size else z
+    brighter = (cost_t[new] <= cost_t[old] and (emis[new] >= emis[old]).all()
+                and (now >= before).all())
     sx = slice(max(x - R, 0), min(x + R + 1, w))
     sy = slice(max(y - R, 0), min(y + R + 1, h))
     sz = slice(max(zc - R, 0), min(z + R + 1, zs))
-    # Start values of the box: emission and the column pass (carry from the top).
-    above = np.flatnonzero(blocks[sx, sy, sz.stop:].any(axis=(0, 1)))
-    top = sz.stop + (int(above[-1]) + 1 if above.size else 0)
-    lanes = model.start(blocks[sx, sy, sz.start:top].T)[:sz.stop - sz.start]
-    # Padded with the fixed rim from the current light (0 outside the array).
+    # Padded box (flood.grid): the rim is the current light (0 outside the array).
     ex = slice(max(sx.start - 1, 0), min(sx.stop + 1, w))
     ey = slice(max(sy.start - 1, 0), min(sy.stop + 1, h))
     ez = slice(max(sz.start - 1, 0), min(sz.stop + 1, zs))
-    p = np.zeros((sz.stop - sz.start + 2, sy.stop - sy.start + 2, sx.stop - sx.start + 2, 4),
-                 np.uint8)
-    ox, oy, oz = 1 - (sx.start - ex.start), 1 - (sy.start - ey.start), 1 - (sz.start - ez.start)
-    p[oz:oz + ez.stop - ez.start, oy:oy + ey.stop - ey.start, ox:ox + ex.stop - ex.start] = \
+    nx, ny, nz = sx.stop - sx.start, sy.stop - sy.start, sz.stop - sz.start
+    shape, (gy, gz) = flood.grid((nz, ny, nx))
+    f = np.zeros(shape + (4,), np.uint8)  # lanes: all components flood at once
+    ox, oy, oz = 1 - (sx.start - ex.start), 1 - (sy.start - ey.start), 2 - (sz.start - ez.start)
+    f[oz:oz + ez.stop - ez.start, oy:oy + ey.stop - ey.start, ox:ox + ex.stop - ex.start] = \
         model.unpack(light[ex, ey, ez].T)
-    p[1:-1, 1:-1, 1:-1] = lanes
-    model.relax_padded(p, model.tables()[0][blocks[sx, sy, sz].T])
-    light[sx, sy, sz] = model.pack(p[1:-1, 1:-1, 1:-1]).T
+    cost = np.full(shape, model.OPAQUE_COST, np.uint8)
+    inner = (slice(2, -2), slice(1, -1), slice(1, -1))
+    cost[inner] = cost_t[blocks[sx, sy, sz].T]
+    px, py = x - sx.start + 1, y - sy.start + 1
+    if brighter:
+        # Old light stays; raise p and the column below it to their new start values.
+        pz = np.arange(zc, z + 1) - sz.start + 2
+        new_start = np.zeros((pz.size, 4), np.uint8)
+        new_start[:, 3] = now[zc:z + 1]
+        new_start[-1, :3] = emis[new]
+        f[pz, py, px] = np.maximum(f[pz, py, px], new_start)
+        if cost_t[new] == model.OPAQUE_COST:  # an opaque voxel holds exactly its emission
+            f[pz[-1], py, px] = new_start[-1]
+        vox = pz * gz + py * gy + px
+        # ... and p's neighbours, which may now shine into it (its cost may have dropped).
+        vox = np.concatenate([vox, vox[-1] + np.array([-1, 1, -gy, gy, -gz, gz])])
+        seeds = (4 * vox.astype(np.int64)[:, None] + np.arange(4)).ravel()
+    else:
+        # Start values of the box: emission and the column pass (carry from the top).
+        top_ = np.flatnonzero(blocks[sx, sy, sz.stop:].any(axis=(0, 1)))
+        top = sz.stop + (int(top_[-1]) + 1 if top_.size else 0)
+        f[inner] = model.start(blocks[sx, sy, sz.start:top].T)[:nz]
+        # inside + rim, not the guard layers
+        seeds = flood.seeds_lanes(f, cost.reshape(-1), (1, gy, gz), gz, cost.size - gz)
+    flood.flood_lanes(f.reshape(-1), cost.reshape(-1), seeds, gy, gz)
+    light[sx, sy, sz] = model.pack(f[inner]).T
     return sx, sy, sz
 
 

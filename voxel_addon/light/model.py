@@ -13,8 +13,10 @@ Per voxel four 4-bit components R, G, B, D (daylight), packed as SPEC §3
 The fixpoint is unique: a voxel's value is the max over sources of the source's start
 value minus the cost of a 6-connected path through non-opaque voxels (each step costs
 1 + attenuation of the voxel entered). Every step costs >= 1 and values are <= 15, so
-only paths of <= 14 steps matter; any algorithm reaching the fixpoint (NumPy Jacobi,
-OpenCL in-place sweeps) gives identical results.
+only paths of <= 14 steps matter; any algorithm reaching the fixpoint gives identical
+results: `relax` here (Jacobi, the brute-force reference the tests compare against),
+flood.py (sparse NumPy, used by full.py and incremental.py) and the OpenCL line
+sweeps (cl.py, gpu/light.cl).
 
 Outside the solved array: dark air. Neighbours outside the array contribute 0 and no
 daylight enters sideways from outside; columns are always complete (z 0..255), so the
@@ -122,7 +124,7 @@ def _emis32():
 
 
 def relax(lanes: np.ndarray, cost_t: np.ndarray, steps: int = STEPS) -> int:
-    """Step 3 by Jacobi iteration, in place on lanes [z, y, x, 4]; neighbours outside
+    """Step 3 by Jacobi iteration (the reference; slow: every step touches every voxel), in place on lanes [z, y, x, 4]; neighbours outside
     are 0. Returns the number of iterations that changed something."""
     zs, ys, xs, _ = lanes.shape
     p = np.zeros((zs + 2, ys + 2, xs + 2, 4), np.uint8)

@@ -3,5 +3,5 @@ from __future__ import annotations
 
 from .faces import BACKENDS, METHODS, QUAD, quads  # noqa: F401
 from .mesh import Mesh, to_mesh  # noqa: F401
-from .vertex import (BYTES_PER_VERTEX, PASSES, REGION_H, ChunkMesh, build_chunk,  # noqa: F401
+from .vertex import (BYTES_PER_VERTEX, PASSES, REGION_H, ChunkMesh, build_chunk, build_chunks,  # noqa: F401,E501
                      pack, quad_indices, unpack)

@@ -4,9 +4,10 @@ Input is a key array K of shape (S, V, U): S independent slices, V rows, U colum
 K == 0 means "no face", equal non-zero keys may merge. Output is rectangles as int
 arrays (s, v, u, h, w) (h rows × w columns). The thesis's methods work inside aligned
 8×8 tiles (its compute-shader work group); tiles are turned into extra slices so one
-code path serves all. `greedy` is unbounded: row-by-row, a rectangle keeps growing
-down while every cell under it has its key; free cells start new maximal runs (this is
-exactly Mikola's scan-order greedy, which the OpenCL kernel runs sequentially).
+code path serves all (empty tiles are dropped first). `greedy` is unbounded: row by
+row, a rectangle keeps growing down while every cell under it has its key; free cells
+start new maximal runs (exactly Mikola's scan-order greedy; gpu/mesh_greedy.cl runs the
+same per slice, this runs it on the compact list of non-empty cells of all slices).
 """
 from __future__ import annotations
 
@@ -27,15 +28,17 @@ def none(K):
 
 
 def _tiles(K):
-    """(S,V,U) -> (S*TV*TU, 8, 8) tiles, plus a function mapping tile rects back."""
+    """(S,V,U) -> (n, 8, 8) non-empty tiles, plus a function mapping tile rects back."""
     S, V, U = K.shape
     TV, TU = -(-V // TILE), -(-U // TILE)
     P = np.zeros((S, TV * TILE, TU * TILE), K.dtype)
     P[:, :V, :U] = K
     T = P.reshape(S, TV, TILE, TU, TILE).transpose(0, 1, 3, 2, 4).reshape(-1, TILE, TILE)
+    live = np.flatnonzero(T.reshape(len(T), -1).any(1))    # most tiles have no face
+    T = T[live]
 
     def back(s, v, u, h, w):
-        ss, rest = np.divmod(s, TV * TU)
+        ss, rest = np.divmod(live[s], TV * TU)
         tv, tu = np.divmod(rest, TU)
         return ss, tv * TILE + v, tu * TILE + u, h, w
     return T, back
@@ -44,43 +47,40 @@ def _tiles(K):
 def _label_unit(K):
     """Per-cell rectangle description for the all-1×1 partition."""
     S, V, U = K.shape
-    u0 = np.broadcast_to(np.arange(U), K.shape).copy()
-    v0 = np.broadcast_to(np.arange(V)[:, None], K.shape).copy()
-    one = np.ones(K.shape, np.int64)
+    u0 = np.broadcast_to(np.arange(U, dtype=np.int16), K.shape).copy()
+    v0 = np.broadcast_to(np.arange(V, dtype=np.int16)[:, None], K.shape).copy()
+    one = np.ones(K.shape, np.int16)
     return v0, u0, one, one.copy()
 
 
 def _merge(K, v0, u0, h, w, axis):
     """Merge chains of neighbouring rectangles that share the full edge across `axis`
     (2 = along u: same v0 and h; 1 = along v: same u0 and w) and the same key."""
-    pos = np.arange(K.shape[axis]).reshape((-1, 1) if axis == 1 else (1, -1))
+    n = K.shape[axis]
+    pos = np.arange(n, dtype=np.int16).reshape((-1, 1) if axis == 1 else (1, -1))
     start, ext = (u0, w) if axis == 2 else (v0, h)
     o0, oext = (v0, h) if axis == 2 else (u0, w)
 
-    def prev(a):
-        return np.take(a, range(0, a.shape[axis] - 1), axis=axis)
+    def sl(a, lo, hi):
+        return a[:, :, lo:hi] if axis == 2 else a[:, lo:hi, :]
 
-    def cur(a):
-        return np.take(a, range(1, a.shape[axis]), axis=axis)
     idx = np.broadcast_to(pos, K.shape)
     # Only a cell that starts its rectangle can join the one before it.
-    join = ((cur(start) == cur(idx)) & (cur(K) != 0) & (cur(K) == prev(K))
-            & (cur(o0) == prev(o0)) & (cur(oext) == prev(oext)))
+    join = ((sl(start, 1, None) == sl(idx, 1, None)) & (sl(K, 1, None) != 0)
+            & (sl(K, 1, None) == sl(K, 0, -1)) & (sl(o0, 1, None) == sl(o0, 0, -1))
+            & (sl(oext, 1, None) == sl(oext, 0, -1)))
     first = start == idx
-    if axis == 2:
-        first[:, :, 1:] &= ~join
-    else:
-        first[:, 1:, :] &= ~join
-    nstart = np.maximum.accumulate(np.where(first, idx, 0), axis=axis)
+    sl(first, 1, None)[...] &= ~join
+    nstart = np.maximum.accumulate(np.where(first, idx, np.int16(0)), axis=axis)
     # End of the merged chain: the last cell before the next chain start.
-    n = K.shape[axis]
-    nxt = np.flip(np.minimum.accumulate(np.flip(np.where(first, idx, n), axis=axis), axis=axis),
-                  axis=axis)
-    nxt = np.concatenate([np.take(nxt, range(1, n), axis=axis),
-                          np.full(np.take(nxt, [0], axis=axis).shape, n)], axis=axis)
+    flip = (slice(None), slice(None), slice(None, None, -1)) if axis == 2 else \
+        (slice(None), slice(None, None, -1), slice(None))
+    nxt = np.minimum.accumulate(np.where(first, idx, np.int16(n))[flip], axis=axis)[flip]
+    end = np.full(K.shape, n, np.int16)
+    sl(end, 0, -1)[...] = sl(nxt, 1, None)
     if axis == 2:
-        return v0, nstart, h, nxt - nstart
-    return nstart, u0, nxt - nstart, w
+        return v0, nstart, h, end - nstart
+    return nstart, u0, end - nstart, w
 
 
 def _emit(K, v0, u0, h, w):
@@ -144,47 +144,61 @@ def squares_ext(K):
 
 
 def greedy(K):
+    """Row by row on the compact list of non-empty cells (sorted by row, slice, column):
+    an open rectangle continues while the cells under it are one same-key run segment;
+    the cells no continuing rectangle covers start maximal new runs."""
     S, V, U = K.shape
     if K.size == 0:
         return _empty()
-    K = K.astype(np.int64)
-    iu = np.arange(U)
-    ostart = np.full((S, U), -1)       # open rectangle covering the cell: start column
-    olen = np.zeros((S, U), np.int64)
-    orow = np.zeros((S, U), np.int64)
-    okey = np.zeros((S, U), np.int64)
+    v_all, s_all, u_all = np.nonzero(K.transpose(1, 0, 2))      # C order: by v, s, u
+    key_all = K[s_all, v_all, u_all]
+    pos_all = s_all * (U + 1) + u_all        # +1: no run crosses into the next slice
+    bounds = np.searchsorted(v_all, np.arange(V + 1))
+    o_pos = o_w = o_key = o_row = np.zeros(0, np.int64)   # open rectangles, by o_pos
     out = []
-
-    def emit(mask, r):
-        s, u = np.nonzero(mask & (ostart == iu))
-        out.append((s, orow[s, u], u, r - orow[s, u], olen[s, u]))
-
-    for r in range(V):
-        k = K[:, r, :]
-        isopen = ostart >= 0
-        bad = isopen & (k != okey)
-        c = np.zeros((S, U + 1), np.int64)
-        np.cumsum(bad, axis=1, out=c[:, 1:])
-        st = np.where(isopen, ostart, 0)
-        rows = np.arange(S)[:, None]
-        cont = isopen & (c[rows, st + olen] == c[rows, st])
-        emit(isopen & ~cont, r)
-        ostart[~cont] = -1
-        free = ~cont & (k != 0)
-        pf = np.zeros((S, U), bool)
-        pf[:, 1:] = free[:, :-1] & free[:, 1:] & (k[:, :-1] == k[:, 1:])
-        first = free & ~pf
-        start = np.maximum.accumulate(np.where(first, iu, 0), axis=1)
-        nf = np.zeros((S, U), bool)
-        nf[:, :-1] = pf[:, 1:]
-        last = free & ~nf
-        end = np.flip(np.minimum.accumulate(np.flip(np.where(last, iu, U), axis=1), axis=1), axis=1)
-        ostart = np.where(free, start, ostart)
-        olen = np.where(free, end - start + 1, olen)
-        orow = np.where(free, r, orow)
-        okey = np.where(free, k, okey)
-    emit(ostart >= 0, V)
-    return tuple(np.concatenate(a) for a in zip(*out))
+    for v in range(V + 1):
+        if v < V:
+            a, b = bounds[v], bounds[v + 1]
+            p, k = pos_all[a:b], key_all[a:b]
+        else:
+            p = k = np.zeros(0, np.int64)
+        n = len(p)
+        # segments: maximal runs of consecutive cells with one key
+        brk = np.ones(n, bool)
+        brk[1:] = (p[1:] != p[:-1] + 1) | (k[1:] != k[:-1])
+        seg = np.cumsum(brk)
+        i0 = np.searchsorted(p, o_pos)
+        i1 = i0 + o_w - 1
+        ok = i1 < n
+        j0, j1 = np.minimum(i0, n - 1), np.minimum(i1, n - 1)
+        if n:
+            ok &= (p[j0] == o_pos) & (k[j0] == o_key) & (seg[j0] == seg[j1]) & (p[j1] == o_pos + o_w - 1)
+        else:
+            ok[:] = False
+        done = ~ok
+        out.append((o_pos[done], o_row[done], v - o_row[done], o_w[done]))
+        o_pos, o_w, o_key, o_row, i0 = o_pos[ok], o_w[ok], o_key[ok], o_row[ok], i0[ok]
+        if v == V:
+            break
+        cov = np.zeros(n + 1, np.int64)
+        np.add.at(cov, i0, 1)
+        np.add.at(cov, i0 + o_w, -1)
+        free = np.cumsum(cov[:-1]) == 0
+        prev_free = np.zeros(n, bool)
+        prev_free[1:] = free[:-1]
+        start = free & (brk | ~prev_free)
+        lab = np.cumsum(start) - 1
+        ns = np.flatnonzero(start)
+        w = np.bincount(lab[free], minlength=len(ns))
+        o_pos = np.concatenate([o_pos, p[ns]])
+        o_w = np.concatenate([o_w, w])
+        o_key = np.concatenate([o_key, k[ns]])
+        o_row = np.concatenate([o_row, np.full(len(ns), v)])
+        order = np.argsort(o_pos, kind="stable")
+        o_pos, o_w, o_key, o_row = o_pos[order], o_w[order], o_key[order], o_row[order]
+    pos, row, h, w = (np.concatenate(c) for c in zip(*out))
+    s, u = np.divmod(pos, U + 1)
+    return s, row, u, h, w
 
 
 METHODS = {"none": none, "lines": lines, "squares": squares, "squares_ext": squares_ext,

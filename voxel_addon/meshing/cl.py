@@ -1,6 +1,7 @@
-"""OpenCL twin of faces.py: face visibility (gpu/mesh_faces.cl) and greedy aggregation
-(gpu/mesh_greedy.cl). Other methods aggregate the OpenCL face keys with NumPy; X/#
-shape quads are cheap and always come from NumPy. Output equals the NumPy path exactly.
+"""OpenCL twin of faces.rects: many tiles (chunks) per launch. `greedy` and `none` run
+wholly on the device (gpu/mesh_greedy.cl: layer flags, z band, aggregation, X/# planes),
+and only the compacted quad records are read back; the tiled thesis methods take the
+face keys from gpu/mesh_faces.cl and aggregate them with NumPy. Output equals NumPy.
 """
 from __future__ import annotations
 
@@ -12,86 +13,131 @@ import numpy as np
 from .. import opencl
 from . import faces as Q
 
+UMAX = 256          # columns per slice the greedy kernel keeps state for (mesh_greedy.cl)
+ZK = 8              # z items per direction and tile (mesh_greedy.cl)
+MASKS = True        # block flags as compiled-in bit masks (False: table loads; tests)
+START_CAP = 1 << 16  # quad records the output buffer holds at first; grows on overflow
 _lock = threading.Lock()
 _bufs: dict = {}
 
 
-@lru_cache(maxsize=None)
+def _options():
+    """Flag tables as 64-bit masks compiled into the kernels (mesh.h FLAG_MASKS): faster
+    than table loads; the table path stays for registries of more than 64 blocks."""
+    F = Q.FLAGS.astype(np.uint64)
+    if len(F) > 64 or not MASKS:
+        return ()
+
+    def mask(bits):
+        return int(sum(1 << int(i) for i in np.flatnonzero(F & np.uint64(bits))))
+    return ("-DFLAG_MASKS", f"-DM_CUBE={mask(1)}UL", f"-DM_CUBE_CAP={mask(9)}UL",
+            f"-DM_OPAQUE={mask(2)}UL", f"-DM_SAME={mask(4)}UL")
+
+
 def _kernel(file, name):
+    return _kernel_built(file, name, _options())
+
+
+@lru_cache(maxsize=None)
+def _kernel_built(file, name, options):
     import pyopencl as cl
-    return cl.Kernel(opencl.program(file), name)
+    return cl.Kernel(opencl.program(file, options), name)
 
 
 def _up(n, k):
     return -(-n // k) * k
 
 
-def _buffers(shape):
-    """Device buffers reused per window shape (W, H, Z rounded up to 64): allocation and
-    pocl's per-launch-shape JIT would otherwise dominate chunk-sized calls."""
+def _buf(name, nbytes):
+    """Device buffer reused across calls, grown by doubling (allocation and transfers of
+    fresh buffers would otherwise dominate small batches)."""
     import pyopencl as cl
-    shape = (shape[0], shape[1], _up(shape[2], 64))
-    if shape not in _bufs:
+    b = _bufs.get(name)
+    if b is None or b.size < nbytes:
         ctx, _, _ = opencl.context()
-        W, H, Z = shape
-        n = W * H * Z
-        mf = cl.mem_flags
-        cap = 6 * n
-        _bufs[shape] = dict(
-            P=cl.Buffer(ctx, mf.READ_ONLY, (W + 2) * (H + 2) * (Z + 2) * 2),
-            keys=cl.Buffer(ctx, mf.READ_WRITE, 6 * n * 2),
-            seen=cl.Buffer(ctx, mf.READ_WRITE, 6 * n),
-            out=cl.Buffer(ctx, mf.READ_WRITE, cap * 16),
-            count=cl.Buffer(ctx, mf.READ_WRITE, 4),
-            flags=cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=Q.tables()),
-            cap=cap)
-        if len(_bufs) > 8:
-            _bufs.pop(next(iter(_bufs)))
-    return _bufs[shape]
+        size = max(nbytes, 2 * b.size if b is not None else 0, 4096)
+        b = _bufs[name] = cl.Buffer(ctx, cl.mem_flags.READ_WRITE, size)
+    return b
 
 
-def keys_and_rects(P, greedy: bool):
-    """P: padded window. Returns six (W,H,Z) key arrays (garbage when greedy: they stay on
-    the device) and, if greedy, the raw rects."""
+def _flags():
+    import pyopencl as cl
+    if "flags" not in _bufs:
+        ctx, _, _ = opencl.context()
+        _bufs["flags"] = cl.Buffer(ctx, cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR,
+                                   hostbuf=Q.FLAGS)
+    return _bufs["flags"]
+
+
+def rects(P, tile, nxy, method, z0, z1, split):
+    """Rect columns like faces.rects, or None when the window does not fit the kernel."""
+    TW, TH = tile
+    if TW > UMAX or max(TW, TH) >= 1 << 16:
+        return None
+    if method not in ("greedy", "none"):
+        return _tiled(P, tile, nxy, method, z0, z1, split)
     import pyopencl as cl
     _, queue, _ = opencl.context()
-    W, H, Z = (s - 2 for s in P.shape)
+    PW, PH = P.shape[:2]
+    nx, ny = nxy
+    nt = nx * ny
+    nreg = len(Q.regions(z0, z1, split))
+    ni = 2 * (TW + TH) + 2 * ZK
+    i32 = np.int32
     with _lock:
-        b = _buffers((W, H, Z))
-        cl.enqueue_copy(queue, b["P"], np.asfortranarray(P, np.uint16).ravel(order="F"))
-        k = _kernel("mesh_faces.cl", "faces")
-        k(queue, (_up(W, 8), _up(H, 8), Z), (8, 8, 1), b["P"], b["flags"], np.int32(W), np.int32(H), np.int32(Z),
-          b["keys"])
-        keys = np.empty(6 * W * H * Z, np.uint16)
-        rect = None
-        if greedy:
-            cl.enqueue_copy(queue, b["count"], np.zeros(1, np.uint32))
-            g = _kernel("mesh_greedy.cl", "greedy")
-            g(queue, (_up(2 * (W + H + Z), 16),), (16,), b["keys"], b["seen"], np.int32(W), np.int32(H),
-              np.int32(Z), b["out"], b["count"], np.uint32(b["cap"]))
+        bp = _buf("P", P.nbytes)
+        lay, busy, count = _buf("lay", nt * 256), _buf("busy", nt * 32), _buf("count", 4)
+        flags = _flags()
+        cl.enqueue_copy(queue, bp, np.asfortranarray(P, np.uint16).ravel(order="K"),
+                        is_blocking=False)
+        _kernel("mesh_greedy.cl", "layers")(
+            queue, (nt * 256,), (16,), bp, flags, i32(PW), i32(PH), i32(nx), i32(TW), i32(TH),
+            i32(nt), lay)
+        _kernel("mesh_greedy.cl", "band")(queue, (nt,), (1,), lay, i32(z0), i32(z1), i32(nt), busy)
+        cap = _bufs.get("cap", START_CAP)
+        while True:
+            out = _buf("out", cap * 16)
+            cap = out.size // 16
+            cl.enqueue_fill_buffer(queue, count, np.uint32(0), 0, 4)
+            _kernel("mesh_greedy.cl", "greedy")(
+                queue, (nt * ni,), (1,), bp, flags, i32(PW), i32(PH), i32(nx),
+                i32(TW), i32(TH), i32(nt), i32(z0), i32(z1), i32(split), i32(nreg),
+                i32(method == "greedy"), busy, out, count, np.uint32(cap))
             n = np.empty(1, np.uint32)
-            cl.enqueue_copy(queue, n, b["count"])
-            rect = np.empty((int(n[0]), 4), np.uint32)
-            if len(rect):
-                cl.enqueue_copy(queue, rect, b["out"])
-        else:
-            cl.enqueue_copy(queue, keys, b["keys"])
-    keys = [a.reshape((W, H, Z), order="F") for a in keys.reshape(6, -1)]
-    return keys, rect
+            cl.enqueue_copy(queue, n, count)
+            n = int(n[0])
+            if n <= cap:
+                break
+            cap = n          # overflow: grow to the exact need and run again
+        _bufs["cap"] = cap
+        rec = np.empty((n, 4), np.uint32)
+        if n:
+            cl.enqueue_copy(queue, rec, out)
+    r1, r2, r3 = rec[:, 1], rec[:, 2], rec[:, 3]
+    cols = (rec[:, 0], r1 & 0xFFFF, r1 >> 16, r2 & 0xFF, (r2 >> 8) & 0xFF, r3 & 0xFFFF,
+            r3 >> 16, r2 >> 16)
+    return {c: v.astype(np.int32) for c, v in zip(Q.COLS, cols)}
 
 
-def quads(blocks, *, border, method, z0, z1):
-    P = Q.padded(blocks, border, z0, z1)
-    keys, rect = keys_and_rects(P, method == "greedy")
-    if method != "greedy":
-        return Q.finish(Q.aggregate_keys(keys, method, z0) + Q.shape_quads(P, z0))
-    d = (rect[:, 0] & 0xFF).astype(np.int64)
-    cols = (rect[:, 0] >> 8, rect[:, 1] & 0xFFFF, rect[:, 1] >> 16,
-            rect[:, 2] & 0xFFFF, rect[:, 2] >> 16)
-    parts = []
-    for f in range(6):
-        m = d == f
-        q = Q.rects_to_quads(f, tuple(c[m].astype(np.int64) for c in cols), z0)
-        q["block"] = rect[m, 3]
-        parts.append(q)
-    return Q.finish(parts + Q.shape_quads(P, z0))
+def face_keys(P, za, zb):
+    """faces.face_keys(faces.slab(P, za, zb)) computed on the device."""
+    import pyopencl as cl
+    _, queue, _ = opencl.context()
+    W, H = P.shape[0] - 2, P.shape[1] - 2
+    Z = zb - za
+    keys = np.empty(6 * W * H * Z, np.uint16)
+    with _lock:
+        bp = _buf("P", P.nbytes)
+        bk = _buf("keys", keys.nbytes)
+        cl.enqueue_copy(queue, bp, np.asfortranarray(P, np.uint16).ravel(order="K"),
+                        is_blocking=False)
+        _kernel("mesh_faces.cl", "faces")(
+            queue, (_up(W, 8), _up(H, 8), Z), (8, 8, 1), bp, _flags(), np.int32(W),
+            np.int32(H), np.int32(za), np.int32(Z), bk)
+        cl.enqueue_copy(queue, keys, bk)
+    return [a.reshape((W, H, Z), order="F") for a in keys.reshape(6, -1)]
+
+
+def _tiled(P, tile, nxy, method, z0, z1, split):
+    return Q.mesh_pieces(P, Q.plan(P, z0, z1, split, Q.STEP[method]), tile, method,
+                         lambda za, zb: face_keys(P, za, zb))

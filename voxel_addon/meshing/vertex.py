@@ -8,8 +8,8 @@ import numpy as np
 
 from ..core.blocks import ANIMATIONS, REGISTRY, RENDERS
 from ..core.errors import VoxelError
-from .faces import quads
-from .mesh import corner_positions
+from .faces import area, check, rects, sort_key, to_quads
+from .mesh import CORNERS
 
 # Bench (region-height trade-off, cf. table 6.5): 64 builds fastest (one meshing call per
 # region) with the fewest draw ranges and no extra triangles vs 16/32; the thesis chose 64 too.
@@ -17,8 +17,8 @@ REGION_H = 64
 MAX_REGION_H = 64
 PASSES = ("opaque", "cutout", "cutout2", "blend")
 BYTES_PER_VERTEX = 4
-_ANIM = np.array([ANIMATIONS.index(b.animation) for b in REGISTRY.blocks], np.uint32)
-_INSET = np.array([min(b.inset, 7) for b in REGISTRY.blocks], np.uint32)
+_ANIM = np.array([ANIMATIONS.index(b.animation) for b in REGISTRY.blocks], np.int64)
+_INSET = np.array([min(b.inset, 7) for b in REGISTRY.blocks], np.int64)
 
 
 def _pass_table():
@@ -40,22 +40,57 @@ def quad_indices(n: int) -> np.ndarray:
     return (k + np.array([0, 1, 2, 0, 2, 3], np.uint32)).ravel()
 
 
+def _corner_tables():
+    """Integer corner p = (x, y, z) + A*w + B*h + C per face code and corner (the same
+    corners as mesh.corner_positions, without the # inset)."""
+    A = np.zeros((12, 4, 3), np.int32)
+    B = np.zeros((12, 4, 3), np.int32)
+    C = np.rint(CORNERS).astype(np.int32)
+    for f in range(6):
+        a = f // 2
+        t1, t2 = (1, 2) if a == 0 else ((0, 2) if a == 1 else (0, 1))
+        A[f, :, t1], B[f, :, t2] = C[f, :, t1], C[f, :, t2]
+        C[f, :, t1] = C[f, :, t2] = 0
+    return A, B, C
+
+
+_CA, _CB, _CC = _corner_tables()
+_XYZ = np.array([1, 32, 1024], np.int64)       # the position bits are a sum (no carries)
+_PA, _PB, _PC = ((t @ _XYZ).astype(np.uint32) for t in (_CA, _CB, _CC))  # (12, 4) packed
+_PAk, _PBk, _PCk = ([np.ascontiguousarray(t[:, k]) for k in range(4)] for t in (_PA, _PB, _PC))
+_HI = np.stack([t.max(1) for t in (_CA, _CB, _CC)])         # (3, 12, 3) per-axis maxima
+_BLOCK_BITS = (_ANIM << 27).astype(np.uint32)
+_INSET_BITS = (_INSET << 29).astype(np.uint32)
+
+
 def pack(q, origin=(0, 0, 0)) -> np.ndarray:
-    """Quads -> (4N,) uint32 packed vertices; `origin` (voxel units) is subtracted from the
-    quad positions so they must land in 0..16 × 0..16 × 0..64."""
+    """Quads -> (4N,) uint32 packed vertices; `origin` ((3,) or per quad (N, 3), voxel
+    units) is subtracted from the quad positions so they must land in 0..16² × 0..64."""
     q = np.asarray(q)
-    p = corner_positions(q, inset=False).astype(np.int64) - np.asarray(origin, np.int64)
-    if len(q) and (p.min() < 0 or p[..., :2].max() > 16 or p[..., 2].max() > MAX_REGION_H):
-        raise ValueError("quads do not fit one render region (x, y 0..16, z 0..64)")
-    if len(q) and q["layer"].max() > 63:
-        raise ValueError("texture layer above 63 does not fit the packed vertex")
-    f = q["face"].astype(np.uint32)
-    b = q["block"]
-    per_quad = ((f << 17) | (q["layer"].astype(np.uint32) << 21) | (_ANIM[b] << 27)
-                | (np.where(f >= 8, _INSET[b], 0).astype(np.uint32) << 29))
-    p = p.astype(np.uint32)
-    v = p[..., 0] | (p[..., 1] << 5) | (p[..., 2] << 10) | per_quad[:, None]
-    return v.ravel().astype(np.uint32)
+    f = q["face"].astype(np.intp)
+    base = np.stack([q["x"], q["y"], q["z"]], -1).astype(np.int64) - np.asarray(origin, np.int64)
+    w, h = q["w"].astype(np.int64), q["h"].astype(np.int64)
+    if len(q):
+        hi = base + _HI[0][f] * w[:, None] + _HI[1][f] * h[:, None] + _HI[2][f]
+        if base.min() < 0 or hi[:, :2].max() > 16 or hi[:, 2].max() > MAX_REGION_H:
+            raise ValueError("quads do not fit one render region (x, y 0..16, z 0..64)")
+        if q["layer"].max() > 63:
+            raise ValueError("texture layer above 63 does not fit the packed vertex")
+    return _pack(f, *base.T, w, h, q["block"], q["layer"])
+
+
+def _pack(f, x, y, z, w, h, block, layer):
+    """Packed vertices from quad columns already inside their region (no checks)."""
+    u = np.uint32
+    f, block = f.astype(np.intp), block.astype(np.intp)   # intp: fast table lookups
+    w, h = w.astype(u), h.astype(u)
+    per_quad = (x.astype(u) | (y.astype(u) << 5) | (z.astype(u) << 10) | (f.astype(u) << 17)
+                | (layer.astype(u) << 21) | _BLOCK_BITS[block]
+                | np.where(f >= 8, _INSET_BITS[block], u(0)))
+    v = np.empty((len(f), 4), u)
+    for k in range(4):   # per corner: 1D table lookups are much faster than (N, 4) ones
+        v[:, k] = per_quad + _PAk[k][f] * w + _PBk[k][f] * h + _PCk[k][f]
+    return v.ravel()
 
 
 def unpack(v) -> dict:
@@ -73,26 +108,59 @@ class ChunkMesh:
     quads: np.ndarray      # the QUAD list, in vertex order (debug views, counts)
 
 
+def _check_region(region_h):
+    if not (0 < region_h <= MAX_REGION_H and 256 % region_h == 0):
+        raise VoxelError(f"region height must divide 256 and be at most {MAX_REGION_H}")
+
+
+def build_chunks(blocks, origin=(0, 0), *, method="greedy", backend="numpy",
+                 region_h=REGION_H, keys=None) -> dict:
+    """Viewport data of every chunk of an area in one batch: `blocks` is
+    (16*nx + 2, 16*ny + 2, 256), the chunks plus a one-voxel ring of neighbours;
+    `origin` = (cx, cy) of its first chunk. Returns {(cx, cy): ChunkMesh}; `keys`
+    optionally limits the result to those chunks (the whole area is still meshed)."""
+    blocks = np.asarray(blocks)
+    W, H = blocks.shape[0] - 2, blocks.shape[1] - 2
+    if blocks.ndim != 3 or blocks.shape[2] != 256 or W <= 0 or H <= 0 or W % 16 or H % 16:
+        raise VoxelError(f"build_chunks wants chunks plus a one-voxel ring (16*nx + 2, "
+                         f"16*ny + 2, 256), got {blocks.shape}")
+    _check_region(region_h)
+    check(blocks, "context", method, backend, 0, 256)
+    nx, ny = W // 16, H // 16
+    r = rects(area(blocks, "context"), (16, 16), method=method, backend=backend, split=region_h)
+    region = r["z"] // region_h
+    ps = PASS_OF[r["block"]]
+    order = np.argsort(sort_key(r, (region, 8), (ps, 2), xy_bits=5))
+    r = {c: v[order] for c, v in r.items()}
+    t, region, ps = r["t"], region[order], ps[order]
+    q = to_quads(r)
+    # the mesher keeps quads inside their region: pack without the checks
+    verts = _pack(r["face"], r["x"], r["y"], r["z"] - region * region_h, r["w"], r["h"],
+                  r["block"], q["layer"])
+    nreg, npass, nt = 256 // region_h, len(PASSES), nx * ny
+    counts = 4 * np.bincount((t * nreg + region) * npass + ps,
+                             minlength=nt * nreg * npass).reshape(nt, nreg, npass)
+    per_tile = counts.reshape(nt, -1).sum(1)
+    qstart = np.concatenate([[0], np.cumsum(per_tile // 4)])
+    first = (np.cumsum(counts.reshape(nt, -1), 1) - counts.reshape(nt, -1)).reshape(counts.shape)
+    ranges = np.stack([first, counts], -1).astype(np.int32)
+    cx0, cy0 = origin
+    want = None if keys is None else {tuple(k) for k in keys}
+    out = {}
+    for i in range(nt):
+        key = (cx0 + i % nx, cy0 + i // nx)
+        if want is not None and key not in want:
+            continue
+        a, b = qstart[i], qstart[i + 1]
+        out[key] = ChunkMesh(verts[4 * a:4 * b], ranges[i], region_h, q[a:b])
+    return out
+
+
 def build_chunk(blocks, method="greedy", backend="numpy", region_h=REGION_H) -> ChunkMesh:
     """Viewport data of one chunk from its (18, 18, 256) window (chunk + one-voxel ring)."""
     blocks = np.asarray(blocks)
     if blocks.shape != (18, 18, 256):
         raise VoxelError(f"build_chunk wants the chunk plus a one-voxel ring (18, 18, 256), "
                          f"got {blocks.shape}")
-    if not (0 < region_h <= MAX_REGION_H and 256 % region_h == 0):
-        raise VoxelError(f"region height must divide 256 and be at most {MAX_REGION_H}")
-    q = quads(blocks, method=method, backend=backend, split=region_h)
-    region = q["z"] // region_h
-    ps = PASS_OF[q["block"]]
-    nreg = 256 // region_h
-    order = np.lexsort((ps, region))
-    q = q[order]
-    region, ps = region[order], ps[order]
-    verts = np.empty(4 * len(q), np.uint32)
-    counts = np.zeros((nreg, len(PASSES)), np.int64)
-    np.add.at(counts, (region, ps), 4)
-    first = np.concatenate([[0], np.cumsum(counts.ravel())[:-1]]).reshape(counts.shape)
-    for r in np.unique(region):
-        m = region == r
-        verts[np.repeat(m, 4)] = pack(q[m], (0, 0, int(r) * region_h))
-    return ChunkMesh(verts, np.stack([first, counts], -1).astype(np.int32), region_h, q)
+    _check_region(region_h)
+    return build_chunks(blocks, method=method, backend=backend, region_h=region_h)[(0, 0)]

@@ -11,6 +11,15 @@ import numpy as np
 from ..core import chunk
 
 
+def window(area, radius: int):
+    """The chunk box with exact light: `radius` chunks around the centre chunk of the
+    area (cx0, cy0, cx1, cy1), clipped to it; bounds the volume at any view distance."""
+    cx0, cy0, cx1, cy1 = area
+    mx, my = (cx0 + cx1 - 1) // 2, (cy0 + cy1 - 1) // 2
+    return (max(cx0, mx - radius), max(cy0, my - radius),
+            min(cx1, mx + radius + 1), min(cy1, my + radius + 1))
+
+
 class LightVolume:
     def __init__(self, ctx, n: int):
         """n chunk slots per side: 2r+1 for a view radius r."""

@@ -13,6 +13,7 @@ from ..core.blocks import REGISTRY
 from . import camera as cam
 from . import sky
 from .geometry import Geometry
+from . import lightvol
 from .lightvol import LightVolume
 from .programs import Programs
 from .settings import DEBUG_VIEWS, Settings
@@ -70,11 +71,13 @@ class Renderer:
         self.glow_scale = scale
 
     def set_area(self, blocks: np.ndarray, light: np.ndarray, cx0: int, cy0: int,
-                 ring: bool = False, method: str = "greedy", backend: str | None = None):
+                 ring: bool = False, method: str = "greedy", backend: str | None = None,
+                 light_at: tuple[int, int] | None = None):
         """Show the chunks [cx0, cx0+w) x [cy0, cy0+h) from a block array and their light.
 
         blocks is (16w, 16h, 256), or with ring=True (16w+2, 16h+2, 256) including a
-        one-voxel ring of neighbours (else outside counts as air); light is (16w, 16h, 256).
+        one-voxel ring of neighbours (else outside counts as air); light is the packed
+        light of whole chunks from light_at (default (cx0, cy0)), e.g. (16w, 16h, 256).
         """
         from .. import meshing, opencl
         if backend is None:  # the OpenCL twin builds the same meshes, much faster
@@ -83,29 +86,35 @@ class Renderer:
             pad = np.zeros((blocks.shape[0] + 2, blocks.shape[1] + 2, 256), np.uint16, order="F")
             pad[1:-1, 1:-1] = blocks
             blocks = pad
-        w, h = (blocks.shape[0] - 2) // 16, (blocks.shape[1] - 2) // 16
-        meshes = {(cx0 + i, cy0 + j): meshing.build_chunk(
-                      blocks[16 * i:16 * i + 18, 16 * j:16 * j + 18], method=method,
-                      backend=backend)
-                  for i in range(w) for j in range(h)}
+        # one batched call for the whole area (meshing README: build_chunks)
+        meshes = meshing.build_chunks(blocks, (cx0, cy0), method=method, backend=backend)
         self.set_meshes(meshes)
-        self.set_light(light, cx0, cy0)
+        self.set_light(light, *(light_at or (cx0, cy0)))
 
     def set_meshes(self, meshes: dict) -> None:
         """{(cx, cy): meshing.ChunkMesh} to draw."""
         self.geo.set_chunks(meshes)
+        ks = np.array(list(meshes), int).reshape(-1, 2)
+        if len(ks):
+            self.area = tuple(int(v) for v in (*ks.min(0), *(ks.max(0) + 1)))
 
     def set_light(self, light: np.ndarray, cx0: int, cy0: int) -> None:
-        """Upload (16w, 16h, 256) light for chunks from (cx0, cy0); outside is open daylight."""
+        """Upload packed light of whole chunks from (cx0, cy0): the part inside
+        lightvol.window (outside it surfaces get open daylight, the fog hides them)."""
         w, h = light.shape[0] // 16, light.shape[1] // 16
-        n = max(w, h)
+        if self.area is None:
+            self.area = (cx0, cy0, cx0 + w, cy0 + h)
+        x0, y0, x1, y1 = lightvol.window(self.area, self.s.light_radius)
+        x0, y0 = max(x0, cx0), max(y0, cy0)
+        x1, y1 = max(x0, min(x1, cx0 + w)), max(y0, min(y1, cy0 + h))  # may be empty
+        n = max(x1 - x0, y1 - y0, 1)
         if self.vol is None or self.vol.n < n:
             if self.vol:
                 self.vol.release()
             self.vol = LightVolume(self.ctx, n)
-        self.vol.upload_area(light, cx0, cy0)
-        self.vol.set_window(cx0, cy0, cx0 + w, cy0 + h)
-        self.area = (cx0, cy0, cx0 + w, cy0 + h)
+        i, j = 16 * (x0 - cx0), 16 * (y0 - cy0)
+        self.vol.upload_area(light[i:i + 16 * (x1 - x0), j:j + 16 * (y1 - y0)], x0, y0)
+        self.vol.set_window(x0, y0, x1, y1)
 
     # ------------------------------------------------------------------ targets
     def _targets(self, w, h):
@@ -182,7 +191,7 @@ class Renderer:
         c = self.ctx
         camera.aspect = w / h
         camera.fov = s.fov
-        camera.far = max(64.0, s.distance * 16 * 1.5)
+        camera.far = s.distance * 16 * 1.5 + 256.0  # the whole height of the area stays in view
         sp = sky.params(hours)
         stats = {"triangles": 0, "draw_calls": 0}
         debug = DEBUG_VIEWS.index(s.debug)
@@ -300,7 +309,7 @@ class Renderer:
         _set(prog, sharp=0)
         if dof:
             T["blur2"].use(1)
-            _set(prog, blurred=1, dof_start=camera.far * 0.35, dof_end=camera.far * 0.9)
+            _set(prog, blurred=1, dof_start=fog_end * 0.7, dof_end=fog_end * 1.1)
         self._fullscreen(prog)
         stats["cpu_ms"] = (time.perf_counter() - t0) * 1e3
         self.stats = stats

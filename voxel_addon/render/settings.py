@@ -14,12 +14,13 @@ EFFECTS = ("shadows", "ssao", "fog", "dof", "godrays", "waving", "smooth_mag",
 @dataclass
 class Settings:
     distance: int = 8             # view distance in chunks
+    light_radius: int = 8         # chunks around the centre with exact light (bounded volume)
     msaa: int = 2                 # 1, 2, 4, 8 (clamped to the context's maximum)
     per_sample: bool = True       # MSAA shading per sample (else per pixel)
     msaa_alpha: bool = True       # alpha test per sample for plants and leaves
     shadows: bool = True
     shadow_size: int = 2048
-    shadow_fade: float = 50.0     # shadows are gone by this distance (§5.4.1)
+    shadow_fade: float = 96.0     # shadows are gone by this distance (§5.4.1)
     peel_layers: int = 3          # transparency layers, 0..3
     ssao: bool = False            # off by default, as in the thesis
     fog: bool = True              # atmosphere
@@ -65,8 +66,8 @@ class Settings:
             raise VoxelError("peel layers must be 0..3")
         if self.msaa not in (1, 2, 4, 8):
             raise VoxelError("msaa must be 1, 2, 4 or 8")
-        if self.distance < 1:
-            raise VoxelError("view distance must be at least 1 chunk")
+        if not 1 <= self.distance <= 32:
+            raise VoxelError("view distance must be 1..32 chunks")
 
 
 def names() -> list[str]:

@@ -1,8 +1,9 @@
 """Where the pixels' data comes from: an area of a world file or a reference scene,
-as (blocks with a one-voxel ring, light, cx0, cy0) for Renderer.set_area(ring=True)."""
+as an `Area` for Renderer.set_area(ring=True)."""
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -18,14 +19,27 @@ def context():
         raise VoxelError(f"cannot open an OpenGL context (EGL): {e}") from None
 
 
-def world_area(world, x: float, y: float, distance: int):
-    """The (2d+1)² chunks around the chunk holding (x, y), plus ring and light."""
+class Area(NamedTuple):
+    """What Renderer.set_area(blocks, light, cx0, cy0, ring=True, light_at=...) takes."""
+    blocks: np.ndarray      # (16w + 2, 16h + 2, 256): the chunks plus a one-voxel ring
+    light: np.ndarray       # packed light of the chunks from light_at
+    cx0: int
+    cy0: int
+    light_at: tuple[int, int]
+
+
+def world_area(world, x: float, y: float, distance: int, light_radius: int = 8) -> Area:
+    """The (2d+1)² chunks around the chunk holding (x, y), plus ring, and the light of
+    the light window (lightvol.window) only: memory stays bounded at distance 32."""
     from .. import light as lightmod
+    from .lightvol import window
     cx, cy = math.floor(x) >> 4, math.floor(y) >> 4
     cx0, cy0, cx1, cy1 = cx - distance, cy - distance, cx + distance + 1, cy + distance + 1
     wide = world.region_blocks(cx0 - 1, cy0 - 1, cx1 + 1, cy1 + 1)
-    light = lightmod.region_light(wide)
-    return np.asfortranarray(wide[15:-15, 15:-15]), light, cx0, cy0
+    lx0, ly0, lx1, ly1 = window((cx0, cy0, cx1, cy1), light_radius)
+    i, j = 16 * (lx0 - cx0), 16 * (ly0 - cy0)  # wide starts one chunk before cx0
+    light = lightmod.region_light(wide[i:i + 16 * (lx1 - lx0 + 2), j:j + 16 * (ly1 - ly0 + 2)])
+    return Area(np.asfortranarray(wide[15:-15, 15:-15]), light, cx0, cy0, (lx0, ly0))
 
 
 def scene_area(name: str):
@@ -37,4 +51,4 @@ def scene_area(name: str):
     sc = scenes.SCENES[name]
     b = scenes.blocks(name)  # area + one-voxel ring
     light = lightmod.solve(b)[1:-1, 1:-1]
-    return b, np.asfortranarray(light), sc.chunks[0], sc.chunks[1]
+    return Area(b, np.asfortranarray(light), sc.chunks[0], sc.chunks[1], sc.chunks[:2])

@@ -1,0 +1,124 @@
+"""The batched paths: build_chunks over a whole area equals chunk-by-chunk meshing, the
+OpenCL batch (many tiles per launch, compacted output) equals NumPy, overflow regrows."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from voxel_addon import meshing
+from voxel_addon.core.errors import VoxelError
+from voxel_addon.meshing import cl as mcl
+from voxel_addon.meshing import scenes
+
+from .helpers import covered_by_quads, exposed
+
+
+@pytest.fixture(scope="module")
+def cave():
+    return np.asfortranarray(scenes.blocks("cave")[:50, :34])     # 3x2 chunks + ring
+
+
+def _same(a, b):
+    assert a.keys() == b.keys()
+    for k in a:
+        assert np.array_equal(a[k].vertices, b[k].vertices), k
+        assert np.array_equal(a[k].ranges, b[k].ranges), k
+        assert np.array_equal(a[k].quads, b[k].quads), k
+
+
+def test_build_chunks_equals_one_by_one(cave):
+    got = meshing.build_chunks(cave, (5, -2), region_h=32)
+    assert set(got) == {(5 + i, -2 + j) for i in range(3) for j in range(2)}
+    for (i, j), w in scenes.chunk_windows(cave):
+        one = meshing.build_chunk(np.asfortranarray(w), region_h=32)
+        _same({0: got[5 + i, -2 + j]}, {0: one})
+        q = meshing.quads(np.asfortranarray(w), split=32)
+        assert np.array_equal(np.sort(one.quads, order=["face", "z", "y", "x"]), q)
+    sub = meshing.build_chunks(cave, (5, -2), region_h=32, keys=[(6, -1)])
+    _same(sub, {(6, -1): got[6, -1]})
+
+
+@pytest.mark.parametrize("method", meshing.METHODS)
+def test_build_chunks_opencl_equals_numpy(method, cl_device, cave):
+    _same(meshing.build_chunks(cave, method=method),
+          meshing.build_chunks(cave, method=method, backend="opencl"))
+
+
+def test_opencl_z_range_and_split(cl_device, cave):
+    w = np.asfortranarray(cave[16:34, 0:18])
+    for kw in (dict(z0=5, z1=200, split=16), dict(z0=33, z1=40), dict(z0=0, z1=1),
+               dict(split=1, z0=60, z1=75)):
+        for m in ("greedy", "none", "squares_ext"):
+            a = meshing.quads(w, method=m, **kw)
+            assert np.array_equal(a, meshing.quads(w, method=m, backend="opencl", **kw)), kw
+            if m == "greedy":
+                want = {k: n for k, n in exposed(w, "context").items()
+                        if kw["z0"] <= k[3] < kw["z1"]}
+                assert covered_by_quads(a) == want
+
+
+def test_opencl_output_overflow_regrows(cl_device, cave):
+    ref = meshing.build_chunks(cave, method="none")
+    old = mcl.START_CAP
+    mcl._bufs.pop("out", None)
+    mcl._bufs.pop("cap", None)
+    mcl.START_CAP = 16
+    try:
+        _same(ref, meshing.build_chunks(cave, method="none", backend="opencl"))
+    finally:
+        mcl.START_CAP = old
+    assert mcl._bufs["cap"] >= sum(len(c.quads) for c in ref.values())
+
+
+def test_build_chunks_bad_input():
+    with pytest.raises(VoxelError, match="ring"):
+        meshing.build_chunks(np.zeros((20, 18, 256), np.uint16))
+    with pytest.raises(VoxelError, match="region"):
+        meshing.build_chunks(np.zeros((18, 18, 256), np.uint16), region_h=3)
+
+
+def _sparse(seed):
+    """2×2 chunks + ring: rock below z=100 with single air pockets, air above with single
+    blocks, many of them on tile edges and in the ring (the layer-skipping must see them)."""
+    rng = np.random.default_rng(seed)
+    b = np.zeros((34, 34, 256), np.uint16, order="F")
+    b[:, :, :100] = 1
+    edge = np.array([0, 1, 2, 15, 16, 17, 18, 31, 32, 33])
+    for k in range(120):
+        x, y = (rng.choice(edge), rng.integers(34)) if k % 2 else (rng.integers(34), rng.choice(edge))
+        if k % 3 == 0:
+            b[x, y, rng.integers(1, 100)] = 0          # pocket in the rock
+        else:
+            b[x, y, rng.integers(100, 255)] = rng.choice([1, 8, 9, 14, 16])
+    b[:, :, 0] = 0                                      # open floor in places
+    b[5:30, 5:30, 0] = 1
+    return b
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_opencl_sparse_edges(seed, cl_device):
+    b = _sparse(seed)
+    for m in ("greedy", "none"):
+        _same(meshing.build_chunks(b, method=m), meshing.build_chunks(b, method=m, backend="opencl"))
+        w = np.asfortranarray(b[15:33, 15:33])
+        assert covered_by_quads(meshing.quads(w, method=m, backend="opencl")) == exposed(w, "context")
+
+
+def test_wide_window_falls_back(cl_device):
+    from .helpers import random_window
+    b = random_window(9, shape=(300, 4, 256), band=(50, 54))
+    assert np.array_equal(meshing.quads(b, border="air"),
+                          meshing.quads(b, border="air", backend="opencl"))
+
+
+def test_opencl_flag_table_path(cl_device, cave):
+    """The kernels' table-lookup variant (used past 64 block types) gives the same."""
+    ref = meshing.build_chunks(cave[:, :18])
+    mcl.MASKS = False
+    try:
+        _same(ref, meshing.build_chunks(cave[:, :18], backend="opencl"))
+        b = _sparse(3)
+        assert np.array_equal(meshing.quads(b, method="none"),
+                              meshing.quads(b, method="none", backend="opencl"))
+    finally:
+        mcl.MASKS = True

@@ -1,0 +1,76 @@
+"""The renderer's camera-centred toroidal light volume feeds light.glsl's light_sample:
+it must give exactly what the NumPy sampler gives, also at negative coordinates and
+across the wrap, and open daylight outside the resident window."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from voxel_addon import light, resources
+from voxel_addon.light import scenes
+from voxel_addon.render.lightvol import LightVolume, window
+
+N = 96  # sample points
+
+
+@pytest.fixture(scope="module")
+def gl():
+    moderngl = pytest.importorskip("moderngl")
+    try:
+        ctx = moderngl.create_standalone_context(backend="egl")
+    except Exception as e:
+        pytest.skip(f"no EGL OpenGL: {e}")
+    yield ctx
+    ctx.release()
+
+
+def sample_gl(ctx, vol, pts, nrm):
+    src = resources.shader("include/lightvol.glsl")
+    prog = ctx.program(vertex_shader="""#version 410 core
+        in vec2 pos; void main() { gl_Position = vec4(pos, 0.0, 1.0); }""",
+                       fragment_shader="#version 410 core\n" + src + f"""
+        uniform vec3 pts[{N}]; uniform vec3 nrm[{N}];
+        out vec4 color;
+        void main() {{
+            int i = int(gl_FragCoord.x);
+            color = light_sample(light_vol, vec3(0.0), pts[i], nrm[i]);
+        }}""")
+    prog["pts"].write(pts.astype("f4").tobytes())
+    prog["nrm"].write(nrm.astype("f4").tobytes())
+    vol.bind(prog, 0)
+    quad = ctx.buffer(np.array([-1, -1, 1, -1, -1, 1, 1, 1], "f4").tobytes())
+    vao = ctx.vertex_array(prog, [(quad, "2f", "pos")])
+    fbo = ctx.framebuffer([ctx.renderbuffer((N, 1), 4, dtype="f4")])
+    fbo.use()
+    vao.render(ctx.TRIANGLE_STRIP)
+    out = np.frombuffer(fbo.read(components=4, dtype="f4"), "f4").reshape(N, 4)
+    for x in (fbo, vao, quad, prog):
+        x.release()
+    return out
+
+
+def test_torus_matches_numpy_sampler(gl):
+    b = scenes.terrain(48, 48, 4)
+    L = light.solve(b)
+    cx0, cy0 = -2, -1                 # negative chunks; 3 slots a side (48: no power of 2)
+    vol = LightVolume(gl, 3)
+    vol.upload_area(L[:32, :32], cx0, cy0)
+    vol.set_window(cx0, cy0, cx0 + 2, cy0 + 2)
+    org = np.array([16 * cx0, 16 * cy0, 0.0])
+    rng = np.random.default_rng(3)
+    pts = org + rng.uniform((1, 1, 30), (31, 31, 120), (N, 3))
+    nrm = np.eye(3)[rng.integers(0, 3, N)] * rng.choice([-1, 1], (N, 1))
+    got = sample_gl(gl, vol, pts, nrm)
+    want = light.sample(L[:32, :32], pts, nrm, origin=org)
+    assert want.std() > 0.05
+    assert np.allclose(got, want, atol=1e-5)
+    # outside the resident window: open daylight
+    far = org + np.array([40.0, 8.0, 70.0]) + np.zeros((N, 3))
+    assert np.allclose(sample_gl(gl, vol, far, nrm), [0, 0, 0, 1], atol=1e-6)
+    vol.release()
+
+
+def test_light_window_is_bounded():
+    # distance 32: 65 x 65 chunks shown, the light volume holds 17 x 17 around the centre
+    assert window((-30, -40, 35, 25), 8) == (-6, -16, 11, 1)
+    assert window((0, 0, 4, 4), 8) == (0, 0, 4, 4)

@@ -157,9 +157,31 @@ def task_bench(args) -> int:
                           cwd=ROOT, env=env()).returncode
 
 
+# Wheels bundled into the extension (Blender ships numpy): pyopencl with its pocl
+# CPU device, moderngl and zstandard, with their pure-Python dependencies.
+WHEELS = ["pyopencl==2026.1.4", "pocl-binary-distribution==3.0", "pytools", "platformdirs",
+          "typing_extensions", "siphash24", "moderngl==5.13.0", "glcontext==3.1.0",
+          "zstandard==0.25.0"]
+WHEEL_PLATFORMS = {"linux-x64": ["manylinux_2_17_x86_64", "manylinux2014_x86_64",
+                                 "manylinux_2_28_x86_64"]}
+
+
 def task_extension(args) -> int:
+    """extension [--no-wheels]: dist/voxel_worlds-<version>.zip (Linux x64 wheels bundled)."""
     setup()
-    return subprocess.run([PY, ROOT / "tools" / "extension.py", *args], cwd=ROOT, env=env()).returncode
+    extra = []
+    if "--no-wheels" not in args:
+        for platform, tags in WHEEL_PLATFORMS.items():
+            dest = ROOT / ".cache" / "wheels" / platform
+            dest.mkdir(parents=True, exist_ok=True)
+            log(f"pip download wheels for {platform} into {dest}")
+            run([PY, "-m", "pip", "download", "-q", "--disable-pip-version-check", "--no-deps",
+                 "--only-binary=:all:", "--python-version", "3.11", "--implementation", "cp",
+                 *[a for t in tags for a in ("--platform", t)], "-d", dest, *WHEELS], env=env())
+            extra += ["--wheels", dest, "--platform", platform]
+    rest = [a for a in args if a != "--no-wheels"]
+    return subprocess.run([PY, ROOT / "tools" / "extension.py", *extra, *rest], cwd=ROOT,
+                          env=env()).returncode
 
 
 def task_dev(args) -> int:

@@ -47,7 +47,7 @@ def blender_ext() -> Path:
     sys.exit("extension: blender_ext.py not found (is bpy installed in .venv? run build.py setup)")
 
 
-def stage(dest: Path, wheels: Path | None = None) -> Path:
+def stage(dest: Path, wheels: Path | None = None, platforms=()) -> Path:
     dest.mkdir(parents=True, exist_ok=True)
     manifest = (ROOT / "blender_manifest.toml").read_text()
     shutil.copy2(ROOT / "blender_manifest.toml", dest)
@@ -61,7 +61,12 @@ def stage(dest: Path, wheels: Path | None = None) -> Path:
         for w in whls:
             shutil.copy2(w, dest / "wheels")
         listed = ", ".join(f'"./wheels/{w.name}"' for w in whls)
-        (dest / "blender_manifest.toml").write_text(manifest + f"\nwheels = [{listed}]\n")
+        extra = f"wheels = [{listed}]\n"
+        if platforms:
+            extra += "platforms = [" + ", ".join(f'"{p}"' for p in platforms) + "]\n"
+        # Top-level keys must come before the first [table] or TOML files them under it.
+        head, sep, tail = manifest.partition("\n[")
+        (dest / "blender_manifest.toml").write_text(head + "\n" + extra + sep + tail)
     return dest
 
 
@@ -73,10 +78,10 @@ def _ext(*args) -> None:
         sys.exit(f"extension: blender_ext {args[0]} failed (exit {r.returncode})")
 
 
-def build(out: Path, wheels: Path | None = None, keep: Path | None = None) -> Path:
+def build(out: Path, wheels: Path | None = None, keep: Path | None = None, platforms=()) -> Path:
     out.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="voxel-ext-") as tmp:
-        src = stage(keep or Path(tmp) / "voxel_worlds", wheels)
+        src = stage(keep or Path(tmp) / "voxel_worlds", wheels, platforms)
         _ext("validate", src)
         version = next(line.split("=")[1].strip().strip('"')
                        for line in (src / "blender_manifest.toml").read_text().splitlines()
@@ -91,9 +96,11 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--out", type=Path, default=ROOT / "dist")
     p.add_argument("--wheels", type=Path, help="folder of .whl files to bundle")
+    p.add_argument("--platform", action="append", default=[],
+                   help="Blender platform the wheels are for, e.g. linux-x64 (repeatable)")
     p.add_argument("--keep-stage", type=Path, help="stage into this folder and keep it")
     a = p.parse_args(argv)
-    print(build(a.out, a.wheels, a.keep_stage))
+    print(build(a.out, a.wheels, a.keep_stage, a.platform))
     return 0
 
 

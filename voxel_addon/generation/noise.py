@@ -106,7 +106,7 @@ def grad2(h, x, y):
 
 def _lattice(v, shift: int):
     v = np.asarray(v, F)
-    fv = np.floor(v)
+    fv = np.floor(v) + F(0)  # + 0 turns floor(-0.0) into +0.0, as (float)vx_ifloor does
     return (fv.astype(np.int32) + np.int32(shift)) & 255, v - fv
 
 
@@ -162,7 +162,7 @@ def voronoi2(x, y, s: int, metric: int = 0):
     x, y = np.asarray(x, F), np.asarray(y, F)
     fx, fy = np.floor(x), np.floor(y)
     ix, iy = fx.astype(np.int32), fy.astype(np.int32)
-    x, y = x - fx, y - fy
+    x, y = x - (fx + F(0)), y - (fy + F(0))  # as vx_ifloor: -0.0 -> +0.0
     shape = np.broadcast(x, y).shape
     f1 = np.full(shape, F(1e9))
     f2 = f1.copy()
@@ -189,7 +189,7 @@ def voronoi3(x, y, z, s: int, metric: int = 0):
     x, y, z = np.asarray(x, F), np.asarray(y, F), np.asarray(z, F)
     fx, fy, fz = np.floor(x), np.floor(y), np.floor(z)
     ix, iy, iz = fx.astype(np.int32), fy.astype(np.int32), fz.astype(np.int32)
-    x, y, z = x - fx, y - fy, z - fz
+    x, y, z = x - (fx + F(0)), y - (fy + F(0)), z - (fz + F(0))
     shape = np.broadcast(x, y, z).shape
     f1 = np.full(shape, F(1e9))
     f2 = f1.copy()

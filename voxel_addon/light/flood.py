@@ -52,17 +52,20 @@ def flood(f: np.ndarray, cost: np.ndarray, seeds: np.ndarray, shift: int,
         n, cand = n[m], cand[m]
         if not n.size:
             break
-        # One write per voxel, the best candidate: sort (voxel, value) keys and keep
-        # each voxel's last; the survivors are the next frontier.
-        key = (n << 4) | cand.astype(np.int64)
-        key.sort()
-        n = key >> 4
-        last = np.empty(n.size, bool)
-        last[-1] = True
-        np.not_equal(n[1:], n[:-1], out=last[:-1])
-        key = key[last]
-        idx = key >> 4
-        f[idx] = (f[idx] & keep) | ((key & 15).astype(np.uint16) << sh)
+        idx, v = _best(n, cand)  # the survivors are the next frontier
+        f[idx] = (f[idx] & keep) | (v.astype(np.uint16) << sh)
+
+
+def _best(n: np.ndarray, cand: np.ndarray):
+    """One write per target, its best candidate: sort (target, value) keys and keep
+    each target's last. Returns (targets, values 0..15)."""
+    key = (n << 4) | cand.astype(np.int64)
+    key.sort()
+    last = np.empty(key.size, bool)
+    last[-1] = True
+    np.not_equal(key[1:] >> 4, key[:-1] >> 4, out=last[:-1])
+    key = key[last]
+    return key >> 4, key & 15
 
 
 def seeds(f: np.ndarray, cost: np.ndarray, shift: int, offs, lo: int, hi: int) -> np.ndarray:
@@ -102,15 +105,8 @@ def flood_lanes(f: np.ndarray, cost: np.ndarray, seeds: np.ndarray, sy: int, sz:
         n, cand = n[m], cand[m]
         if not n.size:
             break
-        key = (n << 4) | cand.astype(np.int64)
-        key.sort()
-        n = key >> 4
-        last = np.empty(n.size, bool)
-        last[-1] = True
-        np.not_equal(n[1:], n[:-1], out=last[:-1])
-        key = key[last]
-        idx = key >> 4
-        f[idx] = (key & 15).astype(np.uint8)
+        idx, v = _best(n, cand)
+        f[idx] = v.astype(np.uint8)
 
 
 def seeds_lanes(f: np.ndarray, cost: np.ndarray, offs, lo: int, hi: int) -> np.ndarray:

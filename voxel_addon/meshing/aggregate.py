@@ -91,12 +91,15 @@ def _emit(K, v0, u0, h, w):
     return s, v, u, h[s, v, u], w[s, v, u]
 
 
+def _merged(T, lab):
+    """Merge labelled cells along rows, then columns, and emit the quads."""
+    lab = _merge(T, *lab, axis=2)
+    return _emit(T, *_merge(T, *lab, axis=1))
+
+
 def lines(K):
     T, back = _tiles(K)
-    lab = _label_unit(T)
-    lab = _merge(T, *lab, axis=2)
-    lab = _merge(T, *lab, axis=1)
-    return back(*_emit(T, *lab))
+    return back(*_merged(T, _label_unit(T)))
 
 
 def _squares_labels(T):
@@ -137,10 +140,7 @@ def squares(K):
 
 def squares_ext(K):
     T, back = _tiles(K)
-    lab = _squares_labels(T)
-    lab = _merge(T, *lab, axis=2)
-    lab = _merge(T, *lab, axis=1)
-    return back(*_emit(T, *lab))
+    return back(*_merged(T, _squares_labels(T)))
 
 
 def greedy(K):

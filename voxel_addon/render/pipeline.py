@@ -47,6 +47,17 @@ class Renderer:
         self.targets: dict = {}
         self.stats: dict = {}
         self.area = None
+        # llvmpipe implements anisotropic filtering as an EWA scan (Heckbert) over the
+        # whole texel footprint of a pixel, derived from the coordinate differences of
+        # the 2x2 quad and not bounded by the maximum anisotropy. Nearly edge-on sliver
+        # triangles (waving shears plant planes and leaf faces that would otherwise be
+        # exactly edge-on) and MSAA-covered pixels whose centre lies outside the
+        # triangle get footprints of thousands of texels: the landscape took 5-10 s per
+        # frame, 98 % in the plant and leaf passes' texture fetches. Software GL gets
+        # plain trilinear-free mip sampling instead (GPUs bound the probe count).
+        r = ctx.info.get("GL_RENDERER", "").lower()
+        self.software = any(k in r for k in ("llvmpipe", "softpipe", "swrast"))
+        self.max_anisotropy = 1.0 if self.software else 16.0
         self._textures()
 
     # ------------------------------------------------------------------ data
@@ -61,7 +72,7 @@ class Renderer:
         self.tex.build_mipmaps()
         self.tex.filter = (0x2702, 0x2600)  # linear-mipmap-nearest min, nearest mag
         self.tex.repeat_x = self.tex.repeat_y = True
-        self.tex.anisotropy = 4.0
+        self.tex.anisotropy = 1.0  # per frame from the settings (draw)
         self.glow.filter = (0x2600, 0x2600)
         scale = np.zeros(64, np.float32)
         for i, b in enumerate(REGISTRY.blocks):
@@ -189,6 +200,9 @@ class Renderer:
         T = self._targets(w, h)
         ms = T["ms"]
         c = self.ctx
+        aniso = max(1.0, min(float(s.anisotropy), self.max_anisotropy))
+        if aniso != self.tex.anisotropy:
+            self.tex.anisotropy = aniso
         camera.aspect = w / h
         camera.fov = s.fov
         camera.far = s.distance * 16 * 1.5 + 256.0  # the whole height of the area stays in view

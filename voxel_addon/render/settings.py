@@ -29,6 +29,8 @@ class Settings:
     godray_strength: float = 1.0
     waving: bool = True
     smooth_mag: bool = True       # edge-aware texture magnification
+    anisotropy: float = 4.0       # GL anisotropic filtering (the thesis used it); 1 on
+                                  # software rasterizers, see Renderer.max_anisotropy
     fill_holes: bool = True       # T-junction hiding
     debug: str = "none"
     fov: float = 70.0

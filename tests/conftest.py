@@ -49,3 +49,15 @@ def bpy():
     except ImportError as e:
         pytest.skip(f"no bpy: {e}")
     return b
+
+
+@pytest.fixture(scope="module")
+def gl():
+    """A real OpenGL 4.x core context (Mesa llvmpipe through EGL is fine)."""
+    moderngl = pytest.importorskip("moderngl")
+    try:
+        ctx = moderngl.create_standalone_context(backend="egl")
+    except Exception as e:
+        pytest.skip(f"no EGL OpenGL context: {e}")
+    yield ctx
+    ctx.release()

@@ -20,12 +20,9 @@ def test_inner_corner_is_darker():
     assert s[2, 3] < s[1, 3] <= s[0, 3]
 
 
-def test_glsl_matches_numpy():
-    moderngl = pytest.importorskip("moderngl")
-    try:
-        ctx = moderngl.create_standalone_context(backend="egl")
-    except Exception as e:
-        pytest.skip(f"no EGL GL context: {e}")
+def test_glsl_matches_numpy(gl):
+    import moderngl
+    ctx = gl
     b = scenes.terrain(24, 24, 4)
     L = full.solve(b, "numpy")
     zlo = 40
@@ -72,4 +69,3 @@ def test_glsl_matches_numpy():
                            want[:, 3], nrm, p)
     assert np.allclose(got[1, :, :3], shaded, atol=1e-5)
     assert want.std() > 0.05  # the points are not all in one flat light level
-    ctx.release()

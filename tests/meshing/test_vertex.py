@@ -19,16 +19,6 @@ def _chunk():
     return np.asfortranarray(b)
 
 
-@pytest.fixture(scope="module")
-def gl():
-    moderngl = pytest.importorskip("moderngl")
-    try:
-        ctx = moderngl.create_standalone_context(backend="egl")
-    except Exception as e:  # pragma: no cover - depends on the machine
-        pytest.skip(f"no EGL context: {e}")
-    yield ctx
-    ctx.release()
-
 
 def _decode_on_gpu(ctx, verts):
     import moderngl

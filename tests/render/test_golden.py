@@ -29,16 +29,6 @@ MEAN_TOL = 0.75  # mean absolute difference, 0..255 (switching shadows off: 1..2
 P99_TOL = 12.0   # 99th percentile (no shadows: 35, no DOF: 15, no MSAA: 50)
 
 
-@pytest.fixture(scope="module")
-def gl():
-    moderngl = pytest.importorskip("moderngl")
-    try:
-        ctx = moderngl.create_standalone_context(backend="egl")
-    except Exception as e:
-        pytest.skip(f"no EGL OpenGL: {e}")
-    yield ctx
-    ctx.release()
-
 
 def _hashes() -> dict:
     p = GOLDEN / "scenes.txt"

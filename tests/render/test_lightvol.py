@@ -13,16 +13,6 @@ from voxel_addon.render.lightvol import LightVolume, window
 N = 96  # sample points
 
 
-@pytest.fixture(scope="module")
-def gl():
-    moderngl = pytest.importorskip("moderngl")
-    try:
-        ctx = moderngl.create_standalone_context(backend="egl")
-    except Exception as e:
-        pytest.skip(f"no EGL OpenGL: {e}")
-    yield ctx
-    ctx.release()
-
 
 def sample_gl(ctx, vol, pts, nrm):
     src = resources.shader("include/lightvol.glsl")

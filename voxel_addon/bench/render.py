@@ -2,15 +2,19 @@
 per reference scene and effect the frame time at 640×360, triangles and draw calls per
 frame, and the Python side's cost per frame; plus the CPU cost at view distance 32.
 
-Frame ms: ctx.finish(), then draw() and ctx.finish() again (no readback). Python side:
-`submit` is the wall time until draw() returns and `thread_cpu` the calling thread's CPU
-time in it (time.thread_time: llvmpipe's raster threads excluded, but work the driver
-does in the calling thread, e.g. vertex setup, included). `cull` is the frustum
-culling of all regions (NumPy), the part that grows with the view distance.
+Frame ms: ctx.finish(), then draw() and ctx.finish() again (no readback); the minimum
+of n frames after a warm-up frame. Python ms: the wall time of draw() minus the time
+spent inside moderngl calls (GLClock wraps every moderngl method and property setter
+the pipeline can reach; what happens inside them, including llvmpipe's vertex work in
+the calling thread and any driver wait, is GL time). So it is the time of our Python
+and NumPy code (culling, command gathering, uniform values, program lookup) plus the
+Python-level call overhead of reaching moderngl, measured in the same frames.
+`cull` is the frustum culling of the whole region table for one matrix.
 """
 from __future__ import annotations
 
 import time
+from contextlib import contextmanager
 
 VARIANTS = [("default", None), ("no_effects", "none"), ("no_shadows", "-shadows"),
             ("ssao", "+ssao"), ("peel0", "peel0"), ("msaa1", "msaa1"), ("msaa4", "msaa4"),
@@ -18,14 +22,67 @@ VARIANTS = [("default", None), ("no_effects", "none"), ("no_shadows", "-shadows"
             ("no_waving", "-waving")]
 
 
+class GLClock:
+    """Accumulates wall and calling-thread CPU time spent inside moderngl's API."""
+
+    def __init__(self):
+        self.t = self.cpu = 0.0
+        self._depth = 0
+
+    def wrap(self, f):
+        def w(*a, **k):
+            if self._depth:
+                return f(*a, **k)
+            self._depth = 1
+            t0, c0 = time.perf_counter(), time.thread_time()
+            try:
+                return f(*a, **k)
+            finally:
+                self.cpu += time.thread_time() - c0
+                self.t += time.perf_counter() - t0
+                self._depth = 0
+        return w
+
+    @contextmanager
+    def installed(self):
+        import moderngl
+        import _moderngl
+        pure = {"__getitem__", "__iter__", "get", "mglo"}  # dictionary lookups, no GL
+        saved = []
+        for cls in (moderngl.Context, moderngl.Buffer, moderngl.Framebuffer, moderngl.Texture,
+                    moderngl.TextureArray, moderngl.Texture3D, moderngl.VertexArray,
+                    moderngl.Program, moderngl.Query, _moderngl.Uniform):
+            for k, v in list(vars(cls).items()):
+                if k in pure or (k.startswith("__") and k != "__setitem__"):
+                    continue
+                if isinstance(v, property):
+                    if v.fset is None:
+                        continue
+                    new = property(v.fget, self.wrap(v.fset), v.fdel)
+                elif callable(v):
+                    new = self.wrap(v)
+                else:
+                    continue
+                saved.append((cls, k, v))
+                setattr(cls, k, new)
+        try:
+            yield self
+        finally:
+            for cls, k, v in saved:
+                setattr(cls, k, v)
+
+
 def _frame(gl, r, cam, hours, size):
-    """(frame ms, submit ms, thread CPU ms) of one frame."""
+    """(frame ms, Python CPU ms, Python wall ms) of one frame."""
     gl.finish()
-    t0, c0 = time.perf_counter(), time.thread_time()
-    r.draw(cam, hours, size)
-    sub, cpu = time.perf_counter() - t0, time.thread_time() - c0
+    clock = GLClock()
+    with clock.installed():
+        t0, c0 = time.perf_counter(), time.thread_time()
+        r.draw(cam, hours, size)
+        cpu, sub = time.thread_time() - c0, time.perf_counter() - t0
     gl.finish()
-    return (time.perf_counter() - t0) * 1e3, sub * 1e3, cpu * 1e3
+    return ((time.perf_counter() - t0) * 1e3, (cpu - clock.cpu) * 1e3,
+            (sub - clock.t) * 1e3)
 
 
 def _measure(gl, r, cam, hours, size, n):
@@ -51,7 +108,7 @@ def run(ctx):
         hours = sky.parse_time(sc.time)
         for vname, eff in variants:
             r.s = Settings().with_effects(eff)
-            ms, sub, cpu = _measure(gl, r, Camera(*sc.camera), hours, size, n)
+            ms, py, py_wall = _measure(gl, r, Camera(*sc.camera), hours, size, n)
             table[name, vname] = ms
             st = r.stats
             note = f"{size[0]}x{size[1]}, {st['triangles']} tris, {st['draw_calls']} draws"
@@ -60,8 +117,16 @@ def run(ctx):
                 yield (f"render_{name}_triangles", st["triangles"], "",
                        f"per frame incl. {st.get('shadow_triangles', 0)} in the shadow map")
                 yield (f"render_{name}_draw_calls", st["draw_calls"], "", "per frame, all passes")
-                yield (f"render_{name}_submit_ms", sub, "ms", "wall time until draw() returns")
-                yield (f"render_{name}_thread_cpu_ms", cpu, "ms", "calling thread CPU time")
+                yield (f"render_{name}_python_ms", py, "ms",
+                       "calling-thread CPU time in draw() outside moderngl calls (GLClock)")
+                yield (f"render_{name}_python_wall_ms", py_wall, "ms",
+                       "the same as wall time (includes being preempted by llvmpipe's threads)")
+        if name == "landscape" and not ctx.quick:
+            # the 5-10 s frames before: llvmpipe's unbounded EWA anisotropic filter
+            r.s, r.max_anisotropy = Settings(), 4.0
+            ms = _measure(gl, r, Camera(*sc.camera), hours, size, 1)[0]
+            yield ("render_landscape_llvmpipe_aniso4_ms", ms, "ms",
+                   "anisotropy 4 forced on llvmpipe (default caps it to 1 there)")
         r.release()
     yield from _distance32(ctx, gl)
     gl.release()
@@ -97,20 +162,35 @@ def _distance32(ctx, gl):
     r.set_light(a.light, a.cx0, a.cy0)  # outside the window: open daylight
     cam = Camera(8, 8, 100, 30, -15)
     hours = sky.parse_time("10:00")
-    ms, sub, cpu = _measure(gl, r, cam, hours, (160, 90), 1 if ctx.quick else 2)
+    ms, py_static, _ = _measure(gl, r, cam, hours, (160, 90), 1 if ctx.quick else 2)
     st = r.stats
-    vp = cam.view_proj()
+    # a moving camera changes the visible set every frame (command gathering + upload)
+    pys, walls = [], []
+    for i in range(3 if ctx.quick else 6):
+        cam.yaw, cam.x = 30 + 7 * i, 8 + 3 * i
+        f = _frame(gl, r, cam, hours, (160, 90))
+        pys.append(f[1])
+        walls.append(f[2])
+    # the same draw() when the GL has next to nothing to do (camera at the sky): the
+    # Python work without the cache pollution of llvmpipe's in-thread vertex work
+    up = Camera(8, 8, 250, 30, 80)
+    _frame(gl, r, up, hours, (160, 90))
+    idle = sorted(_frame(gl, r, up, hours, (160, 90))[1] for _ in range(5))[2]
     t0 = time.perf_counter()
     reps = 20
     for _ in range(reps):
-        for p in ("opaque", "cutout", "cutout2", "blend"):
-            r.geo.visible(p, vp)
+        r.geo.cull(cam.view_proj())
     cull = (time.perf_counter() - t0) / reps * 1e3
-    regions = sum(len(p["first"]) for p in r.geo.parts.values())
-    note = f"distance {d}: {len(meshes)} chunks, {regions} region draws before culling"
-    yield (f"render_d{d}_submit_ms", sub, "ms", note)
-    yield (f"render_d{d}_thread_cpu_ms", cpu, "ms", "calling thread CPU time in draw()")
-    yield (f"render_d{d}_cull_ms", cull, "ms", "NumPy frustum culling of all regions, 4 passes")
+    regions = len(r.geo.origin)
+    note = f"distance {d}: {len(meshes)} chunks, {regions} regions before culling"
+    yield (f"render_d{d}_python_ms", sorted(pys)[len(pys) // 2], "ms",
+           f"CPU outside moderngl, median of {len(pys)} frames, camera moving; {note}")
+    yield (f"render_d{d}_python_wall_ms", sorted(walls)[len(walls) // 2], "ms",
+           "the same as wall time (includes preemption by llvmpipe's threads)")
+    yield (f"render_d{d}_python_static_ms", py_static, "ms", "camera still (no command upload)")
+    yield (f"render_d{d}_python_idle_gl_ms", idle, "ms",
+           "the same, camera at the sky (GL does ~nothing; median of 5)")
+    yield (f"render_d{d}_cull_ms", cull, "ms", "NumPy frustum culling of the region table, one matrix")
     yield (f"render_d{d}_frame_ms", ms, "ms", f"160x90, {st['triangles']} tris, "
            f"{st['draw_calls']} draws (llvmpipe)")
     yield (f"render_d{d}_triangles", st["triangles"], "", "per frame")

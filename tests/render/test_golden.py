@@ -36,7 +36,8 @@ def _hashes() -> dict:
 
 
 def render_scene(gl, name):
-    from voxel_addon.render import Camera, Settings, sky, source
+    from voxel_addon.light import daytime
+    from voxel_addon.render import Camera, Settings, source
     from voxel_addon.render.pipeline import Renderer
     sc = scenes.SCENES[name]
     a = source.scene_area(name)
@@ -45,7 +46,7 @@ def render_scene(gl, name):
         h.update(np.ascontiguousarray(arr).tobytes())
     r = Renderer(gl, Settings())
     r.set_area(a.blocks, a.light, a.cx0, a.cy0, ring=True, light_at=a.light_at)
-    img = r.render(Camera(*sc.camera), sky.parse_time(sc.time), SIZE)
+    img = r.render(Camera(*sc.camera), daytime.parse_time(sc.time), SIZE)
     r.release()
     return img, h.hexdigest()[:16]
 

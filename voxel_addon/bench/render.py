@@ -93,7 +93,8 @@ def _measure(gl, r, cam, hours, size, n):
 
 def run(ctx):
     from ..meshing import scenes
-    from ..render import Camera, Settings, sky, source
+    from ..light import daytime
+    from ..render import Camera, Settings, source
     from ..render.pipeline import Renderer
     gl = source.context()
     size = (320, 180) if ctx.quick else (640, 360)
@@ -105,7 +106,7 @@ def run(ctx):
         a = source.scene_area(name)
         r = Renderer(gl, Settings())
         r.set_area(a.blocks, a.light, a.cx0, a.cy0, ring=True, light_at=a.light_at)
-        hours = sky.parse_time(sc.time)
+        hours = daytime.parse_time(sc.time)
         for vname, eff in variants:
             r.s = Settings().with_effects(eff)
             ms, py, py_wall = _measure(gl, r, Camera(*sc.camera), hours, size, n)
@@ -149,7 +150,8 @@ def _distance32(ctx, gl):
     bounded; measured on a small viewport so llvmpipe's raster time stays short."""
     from .. import opencl
     from ..meshing import build_chunk
-    from ..render import Camera, Settings, sky, source
+    from ..light import daytime
+    from ..render import Camera, Settings, source
     from ..render.pipeline import Renderer
     d = 8 if ctx.quick else 32
     a = source.scene_area("landscape")
@@ -161,7 +163,7 @@ def _distance32(ctx, gl):
     r.set_meshes(meshes)
     r.set_light(a.light, a.cx0, a.cy0)  # outside the window: open daylight
     cam = Camera(8, 8, 100, 30, -15)
-    hours = sky.parse_time("10:00")
+    hours = daytime.parse_time("10:00")
     ms, py_static, _ = _measure(gl, r, cam, hours, (160, 90), 1 if ctx.quick else 2)
     st = r.stats
     # a moving camera changes the visible set every frame (command gathering + upload)

@@ -30,7 +30,8 @@ def add_parser(sub):
 
 def run(args):
     from ..render import Camera, Settings
-    from ..render import sky, source
+    from ..light import daytime
+    from ..render import source
     from ..render.pipeline import Renderer
     from ..textures import png_bytes
     import numpy as np
@@ -53,7 +54,7 @@ def run(args):
     elif not args.world.is_file():
         raise VoxelError(f"no world file at {args.world}")
     # every cheap check before the slow part (loading, lighting, meshing)
-    hours = sky.parse_time(hhmm or "12:00")
+    hours = daytime.parse_time(hhmm or "12:00")
     if not 0 <= cam_args[2] <= 400:
         raise VoxelError("camera z must be between 0 and 400")
     if args.scene:

@@ -10,10 +10,6 @@ import numpy as np
 from ..light import daytime
 
 
-def parse_time(text: str) -> float:
-    return daytime.parse_time(text)
-
-
 def params(hours: float) -> dict:
     """Uniform values for the sky, fog and deferred light at `hours`."""
     d = daytime.at(hours)

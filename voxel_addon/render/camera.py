@@ -80,6 +80,7 @@ def ortho(l, r, b, t, n, f) -> np.ndarray:
 
 
 _CORNERS = np.array([[i & 1, (i >> 1) & 1, (i >> 2) & 1] for i in range(8)], float)
+_CLIP_CORNERS = np.c_[_CORNERS * 2 - 1, np.ones(8)]
 
 
 def visible(mvp: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
@@ -105,13 +106,18 @@ def visible_boxes(mvp: np.ndarray, ch: np.ndarray) -> np.ndarray:
     """visible() for boxes(lo, hi): the per-frame form, ~8k regions (view distance 32)
     in ~0.05 ms (the (6, n) layout is 10x faster than (n, 3) @ (3, 6) products)."""
     m = np.asarray(mvp, np.float64)
-    planes = np.stack([m[3] + m[0], m[3] - m[0], m[3] + m[1], m[3] - m[1], m[3] + m[2], m[3] - m[2]])
-    d = np.c_[planes[:, :3], np.abs(planes[:, :3])].astype(ch.dtype) @ ch
-    d += planes[:, 3:].astype(ch.dtype)
-    return np.logical_and.reduce(d >= 0, axis=0)
+    p = np.empty((6, 4))
+    p[0::2] = m[3] + m[:3]
+    p[1::2] = m[3] - m[:3]
+    a = np.empty((6, 6), ch.dtype)
+    a[:, :3] = p[:, :3]
+    a[:, 3:] = np.abs(p[:, :3])
+    d = a @ ch
+    d += p[:, 3:].astype(ch.dtype)
+    return d.min(0) >= 0  # all six planes non-negative (one reduction, not six compares)
 
 
 def frustum_corners(inv_vp: np.ndarray) -> np.ndarray:
     """The 8 world-space corners of the clip cube under inv_vp."""
-    c = np.c_[_CORNERS * 2 - 1, np.ones(8)] @ inv_vp.T
+    c = _CLIP_CORNERS @ inv_vp.T
     return c[:, :3] / c[:, 3:]

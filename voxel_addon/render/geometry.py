@@ -18,6 +18,7 @@ import numpy as np
 
 from .. import meshing
 from . import camera
+from .programs import set_uniforms
 
 PASSES = meshing.PASSES  # opaque, cutout (leaves), cutout2 (double-sided plants), blend
 
@@ -115,7 +116,7 @@ class Geometry:
         if stats is not None:
             stats["triangles"] += int(part["tris"][sel].sum())
         if self.indirect_ok:
-            prog["use_uniform_origin"].value = False
+            set_uniforms(prog, use_uniform_origin=False)
             buf = part["bufs"].get(slot)
             if buf is None or buf[1] is None or not np.array_equal(buf[1], sel):
                 data = part["cmd"][sel].tobytes()
@@ -131,7 +132,7 @@ class Geometry:
             vao.render_indirect(buf[0], mode=self.ctx.TRIANGLES, count=n)
             calls = 1
         else:
-            prog["use_uniform_origin"].value = True
+            set_uniforms(prog, use_uniform_origin=True)
             u = prog["region_origin"]
             cmd = part["cmd"][sel]
             for c, first, row in zip(cmd[:, 0].tolist(), cmd[:, 2].tolist(), cmd[:, 4].tolist()):

@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..core import chunk
+from .programs import set_uniforms
 
 
 def window(area, radius: int):
@@ -59,15 +60,7 @@ class LightVolume:
 
     def bind(self, prog, unit: int) -> None:
         self.tex.use(unit)
-        _set(prog, "light_vol", unit)
-        _set(prog, "vol_size", self.size)
-        _set(prog, "vol_lo", self.lo)
-        _set(prog, "vol_hi", self.hi)
+        set_uniforms(prog, light_vol=unit, vol_size=self.size, vol_lo=self.lo, vol_hi=self.hi)
 
     def release(self):
         self.tex.release()
-
-
-def _set(prog, name, value):
-    if name in prog:
-        prog[name].value = value

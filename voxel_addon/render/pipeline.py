@@ -15,7 +15,7 @@ from . import sky
 from .geometry import Geometry
 from . import lightvol
 from .lightvol import LightVolume
-from .programs import Programs
+from .programs import Programs, pack, set_uniforms as _set
 from .settings import DEBUG_VIEWS, Settings
 
 _TEX_UNIT = 6  # block texture array, +1 its glow
@@ -24,19 +24,6 @@ _BIAS = np.array([[.5, 0, 0, .5], [0, .5, 0, .5], [0, 0, .5, .5], [0, 0, 0, 1]])
 
 def _m(a) -> bytes:
     return np.asarray(a, np.float32).T.tobytes()  # column-major for GL
-
-
-def _set(prog, **kw):
-    """Set the uniforms the program has (the optimiser drops unused ones)."""
-    get = prog.get
-    for k, v in kw.items():
-        u = get(k, None)
-        if u is None:
-            continue
-        if isinstance(v, np.ndarray):  # float vectors and 4x4 matrices, packed directly
-            u.write(np.asarray(v, np.float32).T.tobytes())
-        else:
-            u.value = v
 
 
 class Renderer:
@@ -51,6 +38,7 @@ class Renderer:
         self.area = None
         self._fs: dict = {}          # program -> empty VAO for fullscreen passes
         self._static: set = set()    # programs whose constant uniforms are set
+        self._box = (None, None)     # (area, its 8 corners) for the shadow near plane
         # llvmpipe implements anisotropic filtering as an EWA scan (Heckbert) over the
         # whole texel footprint of a pixel, derived from the coordinate differences of
         # the 2x2 quad and not bounded by the maximum anisotropy. Nearly edge-on sliver
@@ -280,6 +268,9 @@ class Renderer:
                       fog_start=fog_end * 0.55, fog_end=fog_end,
                       shadow_mat=shadow_mat, shadow_fade=float(s.shadow_fade), shadow_eye=camera.pos,
                       shadow_texel=texel, shadow_bias=bias)
+        common = {k: pack(v) if isinstance(v, np.ndarray) else v for k, v in common.items()}
+        sp = {**sp, "sky": {f"sky_{k}": pack(sp[k]) for k in ("zenith", "horizon", "halo",
+                                                               "disc", "light_dir")}}
         ddefs = {"SAMPLES": ms, "PER_SAMPLE": s.per_sample, "SHADOWS": shadows,
                  "FOG": s.fog and debug == 0, "DEBUG": debug if debug != 6 else 0}
         self._deferred(T["shaded_fbo"], g, {**ddefs, "FILL_HOLES": s.fill_holes}, common, sp, T)
@@ -346,8 +337,7 @@ class Renderer:
                 prog["glow_scale"].write(self.glow_scale.tobytes())
 
     def _sky_uniforms(self, prog, sp):
-        _set(prog, sky_zenith=sp["zenith"], sky_horizon=sp["horizon"], sky_halo=sp["halo"],
-             sky_disc=sp["disc"], sky_light_dir=sp["light_dir"], sky_stars=sp["stars"])
+        _set(prog, sky_stars=sp["stars"], **sp["sky"])
 
     def _deferred(self, fbo, g, defs, common, sp, T):
         prog = self.progs.get("fullscreen.vert", "deferred.frag", defs)
@@ -393,9 +383,12 @@ class Renderer:
         # between the light and the view still cast; depth precision stays bounded
         top = hi[2]
         if self.area:
-            cx0, cy0, cx1, cy1 = self.area
-            box = np.array([[x, y, z] for x in (16 * cx0, 16 * cx1) for y in (16 * cy0, 16 * cy1)
-                            for z in (0.0, 256.0)], float)
+            if self._box[0] != self.area:
+                cx0, cy0, cx1, cy1 = self.area
+                self._box = (self.area, np.array([[x, y, z] for x in (16 * cx0, 16 * cx1)
+                                                  for y in (16 * cy0, 16 * cy1)
+                                                  for z in (0.0, 256.0)], float))
+            box = self._box[1]
             top = max(top, float((box @ view[:3, :3].T + view[:3, 3])[:, 2].max()))
         near, far = -top - 1.0, -lo[2] + 1.0
         proj = cam.ortho(lo[0], hi[0], lo[1], hi[1], near, far)
@@ -422,7 +415,7 @@ def _top_camera(camera: cam.Camera, distance: int) -> cam.Camera:
 
 
 def _sun_on_screen(vp, camera, light_dir, w, h, fov):
-    p = vp @ np.r_[camera.pos + np.asarray(light_dir) * 1000.0, 1.0]
+    p = vp[:, :3] @ (camera.pos + np.asarray(light_dir) * 1000.0) + vp[:, 3]
     vis = p[3] > 0
     ndc = p[:2] / p[3] if vis else np.zeros(2)
     px = ((ndc[0] * 0.5 + 0.5) * w, (ndc[1] * 0.5 + 0.5) * h)

@@ -5,6 +5,8 @@ several variants (the thesis's face contexts: opaque / alpha test / peel / shado
 """
 from __future__ import annotations
 
+import numpy as np
+
 from .. import resources
 
 
@@ -49,3 +51,36 @@ class Programs:
         for p in self._cache.values():
             p.release()
         self._cache.clear()
+
+
+def pack(v) -> bytes:
+    """A float vector or matrix as uniform bytes (column-major for GL); pack once
+    what several programs get in a frame."""
+    return np.asarray(v, np.float32).T.tobytes()
+
+
+def set_uniforms(prog, **kw):
+    """Set the uniforms the program has (the optimiser drops unused ones).
+
+    Per program (in its `extra`) the uniform objects and the last value written are
+    kept, so a frame skips the lookups and re-writing values that did not change
+    (texture units, sky colours of a still hour): GL keeps uniforms per program."""
+    c = prog.extra
+    if c is None:
+        c = prog.extra = {}
+    for k, v in kw.items():
+        e = c.get(k)
+        if e is None:
+            e = c[k] = [prog.get(k, None), None]
+        u = e[0]
+        if u is None:
+            continue
+        if isinstance(v, np.ndarray):
+            v = pack(v)
+        if type(v) is bytes:  # packed float vectors and 4x4 matrices
+            if v != e[1]:
+                u.write(v)
+                e[1] = v
+        elif type(v) is not type(e[1]) or v != e[1]:
+            u.value = v
+            e[1] = v

@@ -1,13 +1,14 @@
 // Block faces for the G-buffer, depth peeling and the shadow map (thesis §5.3.1).
+// UNIFORM_ORIGIN: the GL 4.1 path (Geometry.indirect_ok off).
 #include "include/vertex.glsl"
+#include "include/frame.glsl"
 
 in uint in_v;
+#ifdef UNIFORM_ORIGIN
+uniform vec3 region_origin;     // one draw per region (GL 4.1)
+#else
 in vec3 in_origin;              // per region, through baseInstance (GL 4.3+)
-uniform vec3 region_origin;     // the same, one draw per region (GL 4.1)
-uniform bool use_uniform_origin;
-uniform mat4 mvp;
-uniform float time;
-uniform bool waving;
+#endif
 
 out vec3 g_world;
 #if defined(MSAA_ALPHA) && defined(SAMPLES) && SAMPLES > 1
@@ -30,12 +31,20 @@ vec3 wave(vec3 p, uint anim, vec3 n) {
 
 void main() {
     Vertex v = decode(in_v);
-    vec3 p = v.position + (use_uniform_origin ? region_origin : in_origin);
+#ifdef UNIFORM_ORIGIN
+    vec3 p = v.position + region_origin;
+#else
+    vec3 p = v.position + in_origin;
+#endif
     if (waving && v.anim != 0u) p = wave(p, v.anim, v.normal);
     g_world = p;
     g_uv = v.uv;
     g_layer = float(v.layer);
     g_normal = v.normal;
     g_quad = uint(gl_VertexID) >> 2;
-    gl_Position = mvp * vec4(p, 1.0);
+    #ifdef SHADOW
+    gl_Position = shadow_vp * vec4(p, 1.0);
+#else
+    gl_Position = vp * vec4(p, 1.0);
+#endif
 }

@@ -12,12 +12,6 @@ uniform sampler2D layer2;
 #ifdef SSAO
 uniform sampler2D ao;
 #endif
-uniform mat4 inv_vp;
-uniform vec3 cam_pos;
-uniform vec2 sun_px;        // the light's centre in pixels
-uniform float sun_radius;   // its disc radius in pixels
-uniform bool sun_visible;   // in front of the camera
-uniform float godray_strength;
 
 in vec2 v_uv;
 out vec4 out_color;

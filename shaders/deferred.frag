@@ -11,21 +11,8 @@
 uniform GSAMPLER g_depth;
 uniform GSAMPLER g_albedo;
 uniform GSAMPLER g_normal;
-uniform mat4 inv_vp;
-uniform vec3 cam_pos;
-uniform vec3 day_ambient;
-uniform vec3 day_direct;
-uniform float day_u;
-uniform float fog_start;
-uniform float fog_end;
-uniform float far_dist;
 #ifdef SHADOWS
 uniform sampler2DShadow shadow_map;
-uniform mat4 shadow_mat;
-uniform float shadow_fade;
-uniform vec3 shadow_eye;     // the real camera (the culling view draws from above)
-uniform float shadow_texel;  // world size of one shadow-map texel
-uniform float shadow_bias;   // depth units
 #endif
 
 in vec2 v_uv;

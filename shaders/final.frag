@@ -1,10 +1,9 @@
 // Second global pass: mix in the distance blur by depth (§5.4.3), clamp to 8 bits.
 // Defines: DOF.
+#include "include/frame.glsl"
 uniform sampler2D sharp;
 #ifdef DOF
 uniform sampler2D blurred;
-uniform float dof_start;
-uniform float dof_end;
 #endif
 in vec2 v_uv;
 out vec4 out_color;

@@ -1,11 +1,8 @@
 // Screen-space ambient occlusion (§5.4.2): 2–8 samples by distance in the normal
 // hemisphere on a spiral, compared against the front distance buffer.
+#include "include/frame.glsl"
 uniform sampler2D front;
-uniform mat4 vp;
-uniform mat4 inv_vp;
-uniform vec3 cam_pos;
-uniform float radius;
-uniform float far_dist;
+const float radius = 1.0;  // blocks
 in vec2 v_uv;
 out vec4 out_ao;
 

@@ -1,10 +1,5 @@
 // Procedural sky, thesis eq. 5.1: base + horizon + halo + disc (sun by day, moon by night).
-uniform vec3 sky_zenith;
-uniform vec3 sky_horizon;
-uniform vec3 sky_halo;
-uniform vec3 sky_disc;
-uniform vec3 sky_light_dir;   // towards the sun (day) or moon (night)
-uniform float sky_stars;
+#include "include/frame.glsl"
 
 // Sky without the disc: the atmosphere colour fog blends toward (§5.4.3).
 vec3 sky_base(vec3 n) {

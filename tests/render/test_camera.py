@@ -26,3 +26,17 @@ def test_culling_equals_brute_force():
         assert (got == brute(cam.view_proj(), lo, hi)).all()
         culled += (~got).sum()
     assert culled > 10000  # the cameras do cull
+
+
+def test_closed_form_matrices_match_numpy():
+    rng = np.random.default_rng(1)
+    for _ in range(50):
+        cam = C.Camera(*rng.uniform(-1e4, 1e4, 2), rng.uniform(0, 256), rng.uniform(-720, 720),
+                       rng.uniform(-90, 90), rng.uniform(20, 110), rng.uniform(0.5, 3),
+                       rng.uniform(0.05, 1), rng.uniform(100, 2000))
+        vp, inv = cam.matrices()
+        assert np.allclose(vp, cam.proj() @ cam.view())
+        assert np.allclose(inv, np.linalg.inv(vp), rtol=1e-6, atol=1e-9 * np.abs(inv).max())
+        # what lies ahead of the camera lands in the middle of the screen
+        p = vp @ np.r_[cam.pos + cam.forward * (cam.near + 5.0), 1.0]
+        assert np.allclose(p[:2] / p[3], 0.0, atol=1e-6) and -1 < p[2] / p[3] < 1

@@ -8,7 +8,9 @@ spent inside moderngl calls (GLClock wraps every moderngl method and property se
 the pipeline can reach; what happens inside them, including llvmpipe's vertex work in
 the calling thread and any driver wait, is GL time). So it is the time of our Python
 and NumPy code (culling, command gathering, uniform values, program lookup) plus the
-Python-level call overhead of reaching moderngl, measured in the same frames.
+Python-level call overhead of reaching moderngl, measured in the same frames. The
+wrapper's own cost outside its clock (calibrated on a no-op per run, times the calls
+of the frame) is subtracted; its size is a row of its own.
 `cull` is the frustum culling of the whole region table for one matrix.
 """
 from __future__ import annotations
@@ -27,13 +29,33 @@ class GLClock:
 
     def __init__(self):
         self.t = self.cpu = 0.0
+        self.calls = 0
         self._depth = 0
+
+    @staticmethod
+    def overhead(n: int = 20000) -> tuple[float, float]:
+        """(CPU s, wall s) per wrapped call that the wrapper adds outside its own
+        clock: a wrapped no-op against the bare no-op."""
+        def noop():
+            return None
+        clock = GLClock()
+        f = clock.wrap(noop)
+        c0, t0 = time.thread_time(), time.perf_counter()
+        for _ in range(n):
+            f()
+        cw, tw = time.thread_time() - c0 - clock.cpu, time.perf_counter() - t0 - clock.t
+        c0, t0 = time.thread_time(), time.perf_counter()
+        for _ in range(n):
+            noop()
+        cb, tb = time.thread_time() - c0, time.perf_counter() - t0
+        return max(0.0, (cw - cb) / n), max(0.0, (tw - tb) / n)
 
     def wrap(self, f):
         def w(*a, **k):
             if self._depth:
                 return f(*a, **k)
             self._depth = 1
+            self.calls += 1
             t0, c0 = time.perf_counter(), time.thread_time()
             try:
                 return f(*a, **k)
@@ -72,8 +94,14 @@ class GLClock:
                 setattr(cls, k, v)
 
 
+_OVERHEAD = None  # GLClock.overhead(), once per process
+
+
 def _frame(gl, r, cam, hours, size):
-    """(frame ms, Python CPU ms, Python wall ms) of one frame."""
+    """(frame ms, Python CPU ms, Python wall ms, wrapped GL calls) of one frame."""
+    global _OVERHEAD
+    if _OVERHEAD is None:
+        _OVERHEAD = GLClock.overhead()
     gl.finish()
     clock = GLClock()
     with clock.installed():
@@ -81,14 +109,15 @@ def _frame(gl, r, cam, hours, size):
         r.draw(cam, hours, size)
         cpu, sub = time.thread_time() - c0, time.perf_counter() - t0
     gl.finish()
-    return ((time.perf_counter() - t0) * 1e3, (cpu - clock.cpu) * 1e3,
-            (sub - clock.t) * 1e3)
+    oc, ot = _OVERHEAD
+    return ((time.perf_counter() - t0) * 1e3, (cpu - clock.cpu - clock.calls * oc) * 1e3,
+            (sub - clock.t - clock.calls * ot) * 1e3, clock.calls)
 
 
 def _measure(gl, r, cam, hours, size, n):
     _frame(gl, r, cam, hours, size)  # compile + warm up
     runs = [_frame(gl, r, cam, hours, size) for _ in range(n)]
-    return [min(x[i] for x in runs) for i in range(3)]
+    return [min(x[i] for x in runs) for i in range(4)]
 
 
 def run(ctx):
@@ -109,7 +138,7 @@ def run(ctx):
         hours = daytime.parse_time(sc.time)
         for vname, eff in variants:
             r.s = Settings().with_effects(eff)
-            ms, py, py_wall = _measure(gl, r, Camera(*sc.camera), hours, size, n)
+            ms, py, py_wall, _ = _measure(gl, r, Camera(*sc.camera), hours, size, n)
             table[name, vname] = ms
             st = r.stats
             note = f"{size[0]}x{size[1]}, {st['triangles']} tris, {st['draw_calls']} draws"
@@ -164,7 +193,7 @@ def _distance32(ctx, gl):
     r.set_light(a.light, a.cx0, a.cy0)  # outside the window: open daylight
     cam = Camera(8, 8, 100, 30, -15)
     hours = daytime.parse_time("10:00")
-    ms, py_static, _ = _measure(gl, r, cam, hours, (160, 90), 1 if ctx.quick else 2)
+    ms, py_static, _, calls = _measure(gl, r, cam, hours, (160, 90), 1 if ctx.quick else 2)
     st = r.stats
     # a moving camera changes the visible set every frame (command gathering + upload)
     pys, walls = [], []
@@ -193,6 +222,9 @@ def _distance32(ctx, gl):
     yield (f"render_d{d}_python_idle_gl_ms", idle, "ms",
            "the same, camera at the sky (GL does ~nothing; median of 5)")
     yield (f"render_d{d}_cull_ms", cull, "ms", "NumPy frustum culling of the region table, one matrix")
+    yield ("render_glclock_overhead_ms", calls * _OVERHEAD[0] * 1e3, "ms",
+           f"subtracted per frame above: {calls} moderngl calls x {_OVERHEAD[0] * 1e6:.2f} us "
+           "of the measuring wrapper's own CPU time")
     yield (f"render_d{d}_frame_ms", ms, "ms", f"160x90, {st['triangles']} tris, "
            f"{st['draw_calls']} draws (llvmpipe)")
     yield (f"render_d{d}_triangles", st["triangles"], "", "per frame")

@@ -30,8 +30,7 @@ class Camera:
 
     @property
     def forward(self) -> np.ndarray:
-        y, p = math.radians(self.yaw), math.radians(self.pitch)
-        return np.array([math.cos(p) * math.cos(y), math.cos(p) * math.sin(y), math.sin(p)])
+        return np.array(self._fwd())
 
     def view(self) -> np.ndarray:
         return look_at(self.pos, self.forward)
@@ -42,24 +41,51 @@ class Camera:
     def view_proj(self) -> np.ndarray:
         return self.proj() @ self.view()
 
+    def matrices(self) -> tuple[np.ndarray, np.ndarray]:
+        """(view_proj, its inverse), in closed form on Python floats: a frame needs
+        them a few times and NumPy's per-call cost dwarfs 4x4 arithmetic. The inverse
+        is the rigid view's transpose times the perspective's own inverse."""
+        (sx, sy, sz, sw), (ux, uy, uz, uw), (bx, by, bz, bw) = _view_rows(
+            (self.x, self.y, self.z), self._fwd())
+        t = 1.0 / math.tan(math.radians(self.fov) / 2)
+        a, b = t / self.aspect, t
+        n, f = self.near, self.far
+        c, d = (f + n) / (n - f), 2 * f * n / (n - f)
+        vp = np.array([[a * sx, a * sy, a * sz, a * sw], [b * ux, b * uy, b * uz, b * uw],
+                       [c * bx, c * by, c * bz, c * bw + d], [-bx, -by, -bz, -bw]])
+        ex, ey, ez, k = self.x, self.y, self.z, c / d
+        inv = np.array([[sx / a, ux / b, ex / d, -bx + ex * k],
+                        [sy / a, uy / b, ey / d, -by + ey * k],
+                        [sz / a, uz / b, ez / d, -bz + ez * k],
+                        [0.0, 0.0, 1.0 / d, k]])
+        return vp, inv
+
+    def _fwd(self):
+        y, p = math.radians(self.yaw), math.radians(self.pitch)
+        return math.cos(p) * math.cos(y), math.cos(p) * math.sin(y), math.sin(p)
+
 
 def look_at(eye, fwd, up=(0.0, 0.0, 1.0)) -> np.ndarray:
-    f = np.asarray(fwd, float) / math.sqrt(float(np.dot(fwd, fwd)))
-    up = np.asarray(up, float)
-    if abs(f @ up) > 0.999:  # looking straight up/down: any horizontal "up" will do
-        up = np.array([0.0, 1.0, 0.0]) if abs(f[1]) < 0.9 else np.array([1.0, 0.0, 0.0])
-    s = _cross(f, up)
-    s /= math.sqrt(float(s @ s))
-    u = _cross(s, f)
-    m = np.eye(4)
-    m[0, :3], m[1, :3], m[2, :3] = s, u, -f
-    m[:3, 3] = -m[:3, :3] @ np.asarray(eye, float)
-    return m
+    """View matrix: camera at eye looking along fwd; x right, y up, -z forward."""
+    return np.array([*_view_rows(eye, fwd, up), (0.0, 0.0, 0.0, 1.0)])
 
 
-def _cross(a, b) -> np.ndarray:  # np.cross costs ~40 µs per call on 3-vectors
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
-                     a[0] * b[1] - a[1] * b[0]])
+def _view_rows(eye, fwd, up=(0.0, 0.0, 1.0)):
+    """The first three rows of look_at as float tuples (right, up, back)."""
+    fx, fy, fz = (float(v) for v in fwd)
+    k = 1.0 / math.sqrt(fx * fx + fy * fy + fz * fz)
+    fx, fy, fz = fx * k, fy * k, fz * k
+    ux, uy, uz = up
+    if abs(fx * ux + fy * uy + fz * uz) > 0.999:  # straight up/down: any horizontal "up"
+        ux, uy, uz = (0.0, 1.0, 0.0) if abs(fy) < 0.9 else (1.0, 0.0, 0.0)
+    sx, sy, sz = fy * uz - fz * uy, fz * ux - fx * uz, fx * uy - fy * ux
+    k = 1.0 / math.sqrt(sx * sx + sy * sy + sz * sz)
+    sx, sy, sz = sx * k, sy * k, sz * k
+    ux, uy, uz = sy * fz - sz * fy, sz * fx - sx * fz, sx * fy - sy * fx
+    ex, ey, ez = (float(v) for v in eye)
+    return ((sx, sy, sz, -(sx * ex + sy * ey + sz * ez)),
+            (ux, uy, uz, -(ux * ex + uy * ey + uz * ez)),
+            (-fx, -fy, -fz, fx * ex + fy * ey + fz * ez))
 
 
 def perspective(fov_deg, aspect, near, far) -> np.ndarray:

@@ -4,9 +4,10 @@ culling per region and one multi-draw per pass.
 
 All passes share one region table (chunk x region, with its box and origin), so a
 frame culls once per matrix (view, shadow) for every pass. Each pass keeps a static
-table of its indirect commands, one per region that has faces in it; a frame only
-gathers the rows of the visible regions (one NumPy mask index) and uploads them when
-the visible set changed since the same slot's last draw.
+table of its indirect commands, one per region that has faces in it, and where each
+table row's command is; a frame gathers the commands of the visible rows only (work
+by what is seen, not by the view distance) and uploads them when they changed since
+the same slot's last draw.
 
 GL 4.3+: glMultiDrawElementsIndirect, the region origin comes from baseInstance
 through an instanced attribute. GL 4.1 (macOS): one draw per visible region with the
@@ -18,7 +19,6 @@ import numpy as np
 
 from .. import meshing
 from . import camera
-from .programs import set_uniforms
 
 PASSES = meshing.PASSES  # opaque, cutout (leaves), cutout2 (double-sided plants), blend
 
@@ -69,9 +69,11 @@ class Geometry:
             # DrawElementsIndirectCommand: count, instances, first index, base vertex, base instance
             cmd = np.zeros((len(rows), 5), np.uint32)
             cmd[:, 0], cmd[:, 1], cmd[:, 2], cmd[:, 4] = count // 4 * 6, 1, first // 4 * 6, rows
+            at = np.full(len(ci), -1, np.int64)  # table row -> its command here, or -1
+            at[rows] = np.arange(len(rows))
             self.parts[name] = {
                 "vbo": self.ctx.buffer(verts.astype(np.uint32, copy=False).tobytes()),
-                "rows": rows, "cmd": cmd, "tris": (count // 2).astype(np.int64),
+                "rows": rows, "at": at, "cmd": cmd, "tris": (count // 2).astype(np.int64),
                 "vaos": {}, "bufs": {}}
         self.quads = sum(int(p["tris"].sum()) // 2 for p in self.parts.values())
         self.obo = self.ctx.buffer(self.origin.tobytes())
@@ -82,7 +84,7 @@ class Geometry:
         vao = part["vaos"].get(prog.glo)
         if vao is None:
             content = [(part["vbo"], "u4", "in_v")]
-            if self.indirect_ok:
+            if "in_origin" in prog:  # else UNIFORM_ORIGIN: one draw per region
                 content.append((self.obo, "3f4/i", "in_origin"))
             vao = self.ctx.vertex_array(prog, content, index_buffer=self.ibo,
                                         index_element_size=4)
@@ -90,56 +92,63 @@ class Geometry:
         return vao
 
     def cull(self, mvp: np.ndarray) -> np.ndarray:
-        """Mask over the region table: regions whose box may intersect the clip volume."""
-        return camera.visible_boxes(mvp, self.boxes)
+        """Region table rows (ascending) whose box may intersect the clip volume."""
+        return np.flatnonzero(camera.visible_boxes(mvp, self.boxes))
 
-    def visible(self, name: str, mvp: np.ndarray) -> np.ndarray:
-        """Indices into the region table of pass name's visible regions."""
+    def visible(self, name: str, rows: np.ndarray) -> np.ndarray:
+        """Pass name's commands (indices into its table) among the table rows from cull."""
         part = self.parts.get(name)
         if part is None:
-            return np.zeros(0, np.int64)
-        return part["rows"][self.cull(mvp)[part["rows"]]]
+            return rows[:0]
+        k = part["at"][rows]
+        return k[k >= 0]
 
-    def draw(self, name: str, prog, mask: np.ndarray, stats: dict | None = None,
-             slot: str = "view") -> None:
-        """Draw pass name's regions where mask (from cull) is set; counts triangles
-        and draw calls. slot names the command buffer (one per matrix in a frame), so
-        a frame never overwrites commands the GL may still be reading."""
-        part = self.parts.get(name)
-        if part is None:
-            return
-        sel = mask[part["rows"]]
-        n = int(np.count_nonzero(sel))
-        if not n:
-            return
-        vao = self.vao(name, prog)
-        if stats is not None:
-            stats["triangles"] += int(part["tris"][sel].sum())
+    def batch(self, name: str, rows: np.ndarray, slot: str = "view"):
+        """Pass name's visible regions among the table rows from cull, with their
+        commands uploaded when they changed since the slot's last batch; None if none.
+
+        A frame batches every pass before it draws any: the heavy draws (llvmpipe runs
+        vertex work in the calling thread) leave cold caches behind, which made the
+        Python between them 2-3x slower. slot names the command buffer (one per matrix
+        in a frame), so a frame never overwrites commands the GL may still be reading."""
+        sel = self.visible(name, rows)
+        if not len(sel):
+            return None
+        part = self.parts[name]
+        buf = None
         if self.indirect_ok:
-            set_uniforms(prog, use_uniform_origin=False)
             buf = part["bufs"].get(slot)
-            if buf is None or buf[1] is None or not np.array_equal(buf[1], sel):
-                data = part["cmd"][sel].tobytes()
+            if buf is None or not np.array_equal(buf[1], sel):
+                data = np.take(part["cmd"], sel, axis=0).tobytes()  # 2x a fancy index
                 if buf is None or buf[0].size < len(data):
                     if buf is not None:
                         buf[0].release()
-                    buf = [self.ctx.buffer(reserve=max(len(data), 4096) * 2), None]
+                    buf = [self.ctx.buffer(reserve=max(len(data), 4096) * 2), sel]
                 else:
                     buf[0].orphan()  # fresh storage: no wait for draws still reading it
                 buf[0].write(data)
                 buf[1] = sel
                 part["bufs"][slot] = buf
-            vao.render_indirect(buf[0], mode=self.ctx.TRIANGLES, count=n)
+        return name, sel, buf, int(part["tris"][sel].sum())
+
+    def draw(self, batch, prog, stats: dict | None = None) -> None:
+        """Draw a batch; counts triangles and draw calls into stats."""
+        if batch is None:
+            return
+        name, sel, buf, tris = batch
+        vao = self.vao(name, prog)
+        if buf is not None:
+            vao.render_indirect(buf[0], mode=self.ctx.TRIANGLES, count=len(sel))
             calls = 1
         else:
-            set_uniforms(prog, use_uniform_origin=True)
-            u = prog["region_origin"]
-            cmd = part["cmd"][sel]
+            u = prog["region_origin"]  # a program built with UNIFORM_ORIGIN
+            cmd = self.parts[name]["cmd"][sel]
             for c, first, row in zip(cmd[:, 0].tolist(), cmd[:, 2].tolist(), cmd[:, 4].tolist()):
                 u.value = tuple(self.origin[row].tolist())
                 vao.render(mode=self.ctx.TRIANGLES, vertices=c, first=first)
-            calls = n
+            calls = len(sel)
         if stats is not None:
+            stats["triangles"] += tris
             stats["draw_calls"] += calls
 
     def release(self) -> None:

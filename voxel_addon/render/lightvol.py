@@ -60,7 +60,12 @@ class LightVolume:
 
     def bind(self, prog, unit: int) -> None:
         self.tex.use(unit)
-        set_uniforms(prog, light_vol=unit, vol_size=self.size, vol_lo=self.lo, vol_hi=self.hi)
+        set_uniforms(prog, light_vol=unit)
+        self.uniforms(prog)
+
+    def uniforms(self, prog) -> None:
+        """The window's uniforms (the texture itself is bound by the caller's scope)."""
+        set_uniforms(prog, vol_size=self.size, vol_lo=self.lo, vol_hi=self.hi)
 
     def release(self):
         self.tex.release()

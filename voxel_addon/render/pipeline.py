@@ -15,15 +15,11 @@ from . import sky
 from .geometry import Geometry
 from . import lightvol
 from .lightvol import LightVolume
-from .programs import Programs, pack, set_uniforms as _set
+from .frame import BINDING, FrameBlock
+from .programs import UNITS, Programs
 from .settings import DEBUG_VIEWS, Settings
 
-_TEX_UNIT = 6  # block texture array, +1 its glow
 _BIAS = np.array([[.5, 0, 0, .5], [0, .5, 0, .5], [0, 0, .5, .5], [0, 0, 0, 1]])
-
-
-def _m(a) -> bytes:
-    return np.asarray(a, np.float32).T.tobytes()  # column-major for GL
 
 
 class Renderer:
@@ -32,12 +28,14 @@ class Renderer:
         self.s = settings or Settings()
         self.progs = Programs(ctx)
         self.geo = Geometry(ctx)
-        self.vol: LightVolume | None = None
+        self.vol = LightVolume(ctx, 1)  # nothing resident yet: open daylight everywhere
+        self.frame = FrameBlock(ctx)
         self.targets: dict = {}
         self.stats: dict = {}
         self.area = None
         self._fs: dict = {}          # program -> empty VAO for fullscreen passes
-        self._static: set = set()    # programs whose constant uniforms are set
+        self._plans: dict = {}       # switches -> the programs of every pass
+        self._pass = None            # pass -> _Pass, for the current targets
         self._box = (None, None)     # (area, its 8 corners) for the shadow near plane
         # llvmpipe implements anisotropic filtering as an EWA scan (Heckbert) over the
         # whole texel footprint of a pixel, derived from the coordinate differences of
@@ -112,10 +110,10 @@ class Renderer:
         x0, y0 = max(x0, cx0), max(y0, cy0)
         x1, y1 = max(x0, min(x1, cx0 + w)), max(y0, min(y1, cy0 + h))  # may be empty
         n = max(x1 - x0, y1 - y0, 1)
-        if self.vol is None or self.vol.n < n:
-            if self.vol:
-                self.vol.release()
+        if self.vol.n < n:
+            self.vol.release()
             self.vol = LightVolume(self.ctx, n)
+            self._pass = None
         i, j = 16 * (x0 - cx0), 16 * (y0 - cy0)
         self.vol.upload_area(light[i:i + 16 * (x1 - x0), j:j + 16 * (y1 - y0)], x0, y0)
         self.vol.set_window(x0, y0, x1, y1)
@@ -163,6 +161,7 @@ class Renderer:
         self.targets = t
         return t
 
+
     def _release_targets(self):
         def rel(x):
             if isinstance(x, dict):
@@ -173,6 +172,7 @@ class Renderer:
                     rel(v)
             elif hasattr(x, "release"):
                 x.release()
+        self._pass = None
         rel({k: v for k, v in self.targets.items() if k != "key"})
         self.targets = {}
 
@@ -185,16 +185,20 @@ class Renderer:
         return np.frombuffer(data, np.uint8).reshape(h, w, 3)[::-1].copy()
 
     def draw(self, camera: cam.Camera, hours: float, size):
-        """Run the frame; returns the framebuffer holding the final RGBA8 image."""
+        """Run the frame; returns the framebuffer holding the final RGBA8 image.
+
+        Per frame the Python side computes the frame's values into one uniform block,
+        culls and batches every pass's regions, all before the first draw; then it only
+        walks the passes. Programs, textures and GL switches of each pass are prepared
+        once (_plan, _passes) for the settings and targets."""
         t0 = time.perf_counter()
         s = self.s
         s.check()
         w, h = size
         T = self._targets(w, h)
-        ms = T["ms"]
-        c = self.ctx
-        self.tex.use(_TEX_UNIT)  # block textures: units no other pass uses
-        self.glow.use(_TEX_UNIT + 1)
+        S = self._passes(T)
+        self.tex.use(UNITS["tex"])  # the arrays stay bound: no pass uses their units
+        self.glow.use(UNITS["glow_tex"])
         aniso = max(1.0, min(float(s.anisotropy), self.max_anisotropy))
         if aniso != self._aniso:
             self.tex.anisotropy = self._aniso = aniso
@@ -202,166 +206,175 @@ class Renderer:
         camera.fov = s.fov
         camera.far = s.distance * 16 * 1.5 + 256.0  # the whole height of the area stays in view
         sp = sky.params(hours)
-        stats = {"triangles": 0, "draw_calls": 0}
         debug = DEBUG_VIEWS.index(s.debug)
-        vp = camera.view_proj()
-        cull_vp = vp
+        vp, inv_vp = cull_vp, _ = camera.matrices()
         draw_cam = camera
-        if s.debug == "culling":  # top-down view; regions still culled for the real camera
-            draw_cam = _top_camera(camera, s.distance)
-            vp = draw_cam.view_proj()
-        inv_vp = np.linalg.inv(vp)
-
-        # shadow map
+        if s.debug == "culling":  # from above; regions still culled for the real camera
+            draw_cam = _top_camera(camera)
+            vp, inv_vp = draw_cam.matrices()
         shadows = s.shadows and debug in (0, 4, 6) and sp["light_dir"][2] > 0.02
-        shadow_mat, texel, bias = np.eye(4), 0.0, 0.0
-        if shadows:
-            light_vp, texel, bias = self._shadow_matrix(camera, sp["light_dir"])
-            shadow_mat = _BIAS @ light_vp
-            T["shadow_fbo"].use()
-            T["shadow_fbo"].clear(depth=1.0)
-            c.enable(c.DEPTH_TEST | c.CULL_FACE)
-            mask = self.geo.cull(light_vp)
-            for name in ("opaque", "cutout", "cutout2"):  # blend casts no shadow (§5.4.1)
-                prog = self.progs.get("block.vert", "block.frag",
-                                      {"SHADOW": 1, "ALPHA_TEST": name != "opaque"})
-                self._block_uniforms(prog, light_vp)
-                self.geo.draw(name, prog, mask, stats, "shadow")
-            stats["shadow_triangles"] = stats["triangles"]
-
-        # opaque G-buffer
-        g = T["g"]
-        g["fbo"].use()
-        g["fbo"].clear(0, 0, 0, 0, depth=1.0)
-        c.enable(c.DEPTH_TEST)
-        defs = {"SAMPLES": ms, "SMOOTH_MAG": s.smooth_mag, "DEBUG_AGG": debug == 5}
-        cut = {"ALPHA_TEST": 1, "MSAA_ALPHA": s.msaa_alpha}
-        mask = self.geo.cull(cull_vp)
-        for name, extra in (("opaque", {}), ("cutout", cut), ("cutout2", cut)):
-            c.enable(c.CULL_FACE) if name != "cutout2" else c.disable(c.CULL_FACE)
-            prog = self.progs.get("block.vert", "block.frag", {**defs, **extra})
-            self._block_uniforms(prog, vp)
-            self.geo.draw(name, prog, mask, stats)
-
-        # transparent layers: depth peeling, no blending, nearest remaining layer each time
-        blend = self.geo.parts.get("blend")
-        layers = s.peel_layers if blend is not None and mask[blend["rows"]].any() else 0
-        c.disable(c.CULL_FACE)
-        for i in range(layers):
-            p = T["peel"][i]
-            p["fbo"].use()
-            p["fbo"].clear(0, 0, 0, 0, depth=1.0)
-            prog = self.progs.get("block.vert", "block.frag", {**defs, "PEEL": i + 1})
-            self._block_uniforms(prog, vp)
-            g["depth"].use(2)
-            _set(prog, opaque_depth=2)
-            if i > 0:
-                T["peel"][i - 1]["depth"].use(3)
-                _set(prog, prev_depth=3)
-            self.geo.draw("blend", prog, mask, stats)
-        c.disable(c.DEPTH_TEST | c.CULL_FACE)
-
-        # deferred light per layer; the fog is thick by the nearest edge of the shown area
-        fog_end = (s.distance + 0.5) * 16.0
-        common = dict(inv_vp=inv_vp, cam_pos=draw_cam.pos, day_ambient=sp["ambient"],
-                      day_direct=sp["direct"], day_u=sp["u"], far_dist=camera.far,
-                      fog_start=fog_end * 0.55, fog_end=fog_end,
-                      shadow_mat=shadow_mat, shadow_fade=float(s.shadow_fade), shadow_eye=camera.pos,
-                      shadow_texel=texel, shadow_bias=bias)
-        common = {k: pack(v) if isinstance(v, np.ndarray) else v for k, v in common.items()}
-        sp = {**sp, "sky": {f"sky_{k}": pack(sp[k]) for k in ("zenith", "horizon", "halo",
-                                                               "disc", "light_dir")}}
-        ddefs = {"SAMPLES": ms, "PER_SAMPLE": s.per_sample, "SHADOWS": shadows,
-                 "FOG": s.fog and debug == 0, "DEBUG": debug if debug != 6 else 0}
-        self._deferred(T["shaded_fbo"], g, {**ddefs, "FILL_HOLES": s.fill_holes}, common, sp, T)
-        for i in range(layers):
-            self._deferred(T["layer_fbo"][i], T["peel"][i], {**ddefs, "LAYER": 1}, common, sp, T)
-
-        # SSAO
+        geo = self.geo
+        rows = geo.cull(cull_vp)
+        view = {name: geo.batch(name, rows) for name in geo.parts}
+        layers = s.peel_layers if view.get("blend") else 0
         ssao = s.ssao and debug in (0, 6)
-        if ssao:
-            prog = self.progs.get("fullscreen.vert", "ssao.frag")
-            T["ao_fbo"][0].use()
-            T["front"].use(0)
-            _set(prog, front=0, vp=vp, inv_vp=inv_vp, cam_pos=draw_cam.pos, radius=1.0,
-                 far_dist=camera.far)
-            self._fullscreen(prog)
-            self._blur(T["ao"], T["ao_fbo"][1], T["ao2"], T["ao_fbo"][0], {})
-
-        # composite: sky, layers, god rays
         sun_px, sun_vis, sun_r = _sun_on_screen(vp, draw_cam, sp["light_dir"], w, h, s.fov)
         gods = s.godrays and debug in (0, 6) and sun_vis
-        prog = self.progs.get("fullscreen.vert", "composite.frag",
-                              {"LAYERS": layers, "SSAO": ssao, "GODRAYS": gods})
-        T["comp_fbo"].use()
-        T["opaque"].use(0)
-        T["front"].use(1)
-        _set(prog, opaque=0, front=1)
+        dof = s.dof and debug == 0
+        P = self._plan((T["ms"], debug, shadows, layers, ssao, gods, dof, s.smooth_mag,
+                        s.msaa_alpha, s.per_sample, s.fog, s.fill_holes, geo.indirect_ok))
+
+        # the frame's values, for every program at once
+        F = self.frame
+        fog_end = (s.distance + 0.5) * 16.0  # thick by the nearest edge of the shown area
+        if shadows:
+            light_vp, texel, bias = self._shadow_matrix(camera, sp["light_dir"])
+            F.set(shadow_vp=light_vp, shadow_mat=_BIAS @ light_vp, shadow_texel=texel,
+                  shadow_bias=bias)
+            lit = geo.cull(light_vp)
+            cast = [(geo.batch(name, lit, "shadow"), prog) for name, prog in P["shadow"]]
+        sky_on = debug in (0, 6)  # debug views show black where there is no surface
+        for k in ("zenith", "horizon", "halo", "disc"):
+            F.set(**{f"sky_{k}": sp[k] if sky_on else 0.0})
+        F.set(vp=vp, inv_vp=inv_vp, cam_pos=draw_cam.pos, far_dist=camera.far,
+              shadow_eye=camera.pos, shadow_fade=s.shadow_fade, day_ambient=sp["ambient"],
+              day_u=sp["u"], day_direct=sp["direct"], sky_stars=sp["stars"] if sky_on else 0.0,
+              sky_light_dir=sp["light_dir"], time=s.time, waving=s.waving,
+              godray_strength=s.godray_strength, sun_px=sun_px, sun_radius=sun_r,
+              sun_visible=sun_vis, fog_start=fog_end * 0.55, fog_end=fog_end,
+              dof_start=fog_end * 0.7, dof_end=fog_end * 1.1)
+        F.upload()
+        F.buf.bind_to_uniform_block(BINDING)
+        self.vol.uniforms(P["shade"])
+        if layers:
+            self.vol.uniforms(P["layer"])
+        stats = {"triangles": 0, "draw_calls": 0}
+
+        # shadow map: blend casts no shadow (§5.4.1)
+        if shadows:
+            with S["shadow"]:
+                T["shadow_fbo"].clear(depth=1.0)
+                for batch, prog in cast:
+                    geo.draw(batch, prog, stats)
+            stats["shadow_triangles"] = stats["triangles"]
+
+        # opaque G-buffer; double-sided plants without face culling
+        with S["g"]:
+            T["g"]["fbo"].clear(0, 0, 0, 0, depth=1.0)
+            for name, prog in P["g"]:
+                if name == "cutout2":
+                    self.ctx.disable(self.ctx.CULL_FACE)
+                geo.draw(view.get(name), prog, stats)
+
+        # transparent layers: depth peeling, no blending, nearest remaining layer each time
         for i in range(layers):
-            T["layers"][i].use(2 + i)
-            _set(prog, **{f"layer{i}": 2 + i})
+            with S["peel"][i]:
+                T["peel"][i]["fbo"].clear(0, 0, 0, 0, depth=1.0)
+                geo.draw(view["blend"], P["peel"][i], stats)
+
+        # deferred light per layer
+        with S["shade"]:
+            T["shaded_fbo"].clear(0, 0, 0, 0)
+            self._fullscreen(P["shade"])
+        for i in range(layers):
+            with S["layer"][i]:
+                T["layer_fbo"][i].clear(0, 0, 0, 0)
+                self._fullscreen(P["layer"])
+
         if ssao:
-            T["ao"].use(5)
-            _set(prog, ao=5)
-        self._sky_uniforms(prog, sp)
-        _set(prog, inv_vp=inv_vp, cam_pos=draw_cam.pos, sun_px=sun_px, sun_radius=sun_r,
-             sun_visible=sun_vis, godray_strength=float(s.godray_strength))
-        if debug not in (0, 6):
-            _set(prog, sky_zenith=np.zeros(3), sky_horizon=np.zeros(3), sky_halo=np.zeros(3),
-                 sky_disc=np.zeros(3), sky_stars=0.0)
-        self._fullscreen(prog)
+            with S["ssao"]:
+                self._fullscreen(P["ssao"])
+            for step, prog in zip(S["ao_blur"], P["ao_blur"]):
+                with step:
+                    self._fullscreen(prog)
+
+        # composite: sky, layers, god rays
+        with S["comp"]:
+            self._fullscreen(P["comp"])
 
         # distance blur, final
-        dof = s.dof and debug == 0
         if dof:
-            self._blur(T["comp"], T["blur_fbo"][0], T["blur"], T["blur_fbo"][1], {"BILATERAL": 1})
-        prog = self.progs.get("fullscreen.vert", "final.frag", {"DOF": dof})
-        T["out_fbo"].use()
-        T["comp"].use(0)
-        _set(prog, sharp=0)
-        if dof:
-            T["blur2"].use(1)
-            _set(prog, blurred=1, dof_start=fog_end * 0.7, dof_end=fog_end * 1.1)
-        self._fullscreen(prog)
+            for step, prog in zip(S["dof_blur"], P["dof_blur"]):
+                with step:
+                    self._fullscreen(prog)
+        with S["final"]:
+            self._fullscreen(P["final"])
         stats["cpu_ms"] = (time.perf_counter() - t0) * 1e3
         self.stats = stats
         return T["out_fbo"]
 
     # ------------------------------------------------------------------ helpers
-    def _block_uniforms(self, prog, mvp):
-        _set(prog, mvp=mvp, time=float(self.s.time), waving=self.s.waving)
-        if prog.glo not in self._static:  # per-program constants, set once
-            self._static.add(prog.glo)
-            _set(prog, tex=_TEX_UNIT, glow_tex=_TEX_UNIT + 1)
-            if prog.get("glow_scale", None) is not None:
+    def _plan(self, key):
+        """The programs of every pass for one combination of switches (memoised)."""
+        plan = self._plans.get(key)
+        if plan is not None:
+            return plan
+        ms, debug, shadows, layers, ssao, gods, dof, smooth, msaa_alpha, per_sample, fog, \
+            fill, indirect = key
+        get = self.progs.get
+        cut = {"ALPHA_TEST": 1, "MSAA_ALPHA": msaa_alpha}
+        g = {"SAMPLES": ms, "SMOOTH_MAG": smooth, "DEBUG_AGG": debug == 5,
+             "UNIFORM_ORIGIN": not indirect}
+        d = {"SAMPLES": ms, "PER_SAMPLE": per_sample, "SHADOWS": shadows,
+             "FOG": fog and debug == 0, "DEBUG": debug if debug != 6 else 0}
+        blocks = [("opaque", {}), ("cutout", cut), ("cutout2", cut)]
+        plan = {
+            "shadow": [(n, get("block.vert", "block.frag", {"SHADOW": 1, "ALPHA_TEST": n != "opaque",
+                                                            "UNIFORM_ORIGIN": not indirect}))
+                       for n, _ in blocks],
+            "g": [(n, get("block.vert", "block.frag", {**g, **x})) for n, x in blocks],
+            "peel": [get("block.vert", "block.frag", {**g, "PEEL": i + 1}) for i in range(layers)],
+            "shade": get("fullscreen.vert", "deferred.frag", {**d, "FILL_HOLES": fill}),
+            "layer": get("fullscreen.vert", "deferred.frag", {**d, "LAYER": 1}) if layers else None,
+            "ssao": get("fullscreen.vert", "ssao.frag") if ssao else None,
+            "ao_blur": [get("fullscreen.vert", "blur.frag", {"VERTICAL": v}) for v in (0, 1)],
+            "comp": get("fullscreen.vert", "composite.frag",
+                        {"LAYERS": layers, "SSAO": ssao, "GODRAYS": gods}),
+            "dof_blur": [get("fullscreen.vert", "blur.frag", {"BILATERAL": 1, "VERTICAL": v})
+                         for v in (0, 1)],
+            "final": get("fullscreen.vert", "final.frag", {"DOF": dof}),
+        }
+        for _, prog in plan["g"] + plan["shadow"]:
+            if "glow_scale" in prog:
                 prog["glow_scale"].write(self.glow_scale.tobytes())
+        self._plans[key] = plan
+        return plan
 
-    def _sky_uniforms(self, prog, sp):
-        _set(prog, sky_stars=sp["stars"], **sp["sky"])
+    def _passes(self, T):
+        """Per pass its framebuffer, GL switches and textures at their units
+        (programs.UNITS); rebuilt with the targets or the light volume. (moderngl's
+        scopes would bind these in one call, but they bind textures with a default
+        sampler object, whose mipmap filter makes our textures incomplete.)"""
+        if self._pass is not None:
+            return self._pass
+        c = self.ctx
 
-    def _deferred(self, fbo, g, defs, common, sp, T):
-        prog = self.progs.get("fullscreen.vert", "deferred.frag", defs)
-        fbo.use()
-        fbo.clear(0, 0, 0, 0)
-        g["depth"].use(0)
-        g["albedo"].use(1)
-        g["normal"].use(2)
-        _set(prog, g_depth=0, g_albedo=1, g_normal=2, **common)
-        if defs.get("SHADOWS"):
-            T["shadow"].use(3)
-            _set(prog, shadow_map=3)
-        self.vol.bind(prog, 4)
-        self._sky_uniforms(prog, sp)
-        self._fullscreen(prog)
+        def bound(fbo, flags=0, **tex):
+            return _Pass(c, fbo, flags, [(t, UNITS[k]) for k, t in tex.items()])
 
-    def _blur(self, src, tmp_fbo, tmp, dst_fbo, defs):
-        """Separable blur: src -> tmp (horizontal) -> dst_fbo (vertical)."""
-        prog = self.progs.get("fullscreen.vert", "blur.frag", defs)
-        for fbo, tex, step in ((tmp_fbo, src, (1.0, 0.0)), (dst_fbo, tmp, (0.0, 1.0))):
-            fbo.use()
-            tex.use(0)
-            _set(prog, src=0, step_px=step)
-            self._fullscreen(prog)
+        def gbuf(x):
+            return dict(g_depth=x["depth"], g_albedo=x["albedo"], g_normal=x["normal"],
+                        shadow_map=T["shadow"], light_vol=self.vol.tex)
+
+        g, peel = T["g"], T["peel"]
+        dt_cf = c.DEPTH_TEST | c.CULL_FACE
+        self._pass = {
+            "shadow": bound(T["shadow_fbo"], dt_cf),
+            "g": bound(g["fbo"], dt_cf),
+            "peel": [bound(p["fbo"], c.DEPTH_TEST, opaque_depth=g["depth"],
+                           prev_depth=peel[i - 1]["depth"] if i else g["depth"])
+                     for i, p in enumerate(peel)],
+            "shade": bound(T["shaded_fbo"], **gbuf(g)),
+            "layer": [bound(f, **gbuf(p)) for f, p in zip(T["layer_fbo"], peel)],
+            "ssao": bound(T["ao_fbo"][0], front=T["front"]),
+            "ao_blur": [bound(T["ao_fbo"][1], src=T["ao"]), bound(T["ao_fbo"][0], src=T["ao2"])],
+            "comp": bound(T["comp_fbo"], opaque=T["opaque"], front=T["front"], ao=T["ao"],
+                          **{f"layer{i}": x for i, x in enumerate(T["layers"])}),
+            "dof_blur": [bound(T["blur_fbo"][0], src=T["comp"]),
+                         bound(T["blur_fbo"][1], src=T["blur"])],
+            "final": bound(T["out_fbo"], sharp=T["comp"], blurred=T["blur2"]),
+        }
+        return self._pass
 
     def _fullscreen(self, prog):
         vao = self._fs.get(prog.glo)
@@ -373,10 +386,10 @@ class Renderer:
         """Ortho light matrix fitted to the view frustum up to the shadow fade distance.
 
         Returns (matrix, world size of a shadow texel, depth bias in depth units)."""
-        near_cam = cam.Camera(**{**camera.__dict__, "far": self.s.shadow_fade + 2.0})
-        corners = cam.frustum_corners(np.linalg.inv(near_cam.view_proj()))
-        d = np.asarray(light_dir, float)
-        view = cam.look_at(corners.mean(0), -d)  # light space: +z points toward the light
+        near_cam = cam.Camera(camera.x, camera.y, camera.z, camera.yaw, camera.pitch,
+                              camera.fov, camera.aspect, camera.near, self.s.shadow_fade + 2.0)
+        corners = cam.frustum_corners(near_cam.matrices()[1])
+        view = cam.look_at(corners.mean(0), -np.asarray(light_dir))  # light space: +z to the light
         lc = corners @ view[:3, :3].T + view[:3, 3]
         lo, hi = lc.min(0), lc.max(0)
         # the near plane reaches back to the top of the shown area so off-screen casters
@@ -385,11 +398,10 @@ class Renderer:
         if self.area:
             if self._box[0] != self.area:
                 cx0, cy0, cx1, cy1 = self.area
-                self._box = (self.area, np.array([[x, y, z] for x in (16 * cx0, 16 * cx1)
+                self._box = (self.area, np.array([[x, y, z, 1.0] for x in (16 * cx0, 16 * cx1)
                                                   for y in (16 * cy0, 16 * cy1)
-                                                  for z in (0.0, 256.0)], float))
-            box = self._box[1]
-            top = max(top, float((box @ view[:3, :3].T + view[:3, 3])[:, 2].max()))
+                                                  for z in (0.0, 256.0)]))
+            top = max(top, float((self._box[1] @ view[2]).max()))
         near, far = -top - 1.0, -lo[2] + 1.0
         proj = cam.ortho(lo[0], hi[0], lo[1], hi[1], near, far)
         texel = max(hi[0] - lo[0], hi[1] - lo[1]) / self.s.shadow_size
@@ -401,17 +413,33 @@ class Renderer:
         self._fs.clear()
         self._release_targets()
         self.geo.release()
-        if self.vol:
-            self.vol.release()
+        self.vol.release()
+        self.frame.release()
         self.progs.release()
         self.tex.release()
         self.glow.release()
 
 
-def _top_camera(camera: cam.Camera, distance: int) -> cam.Camera:
-    top = cam.Camera(camera.x, camera.y, 250.0, camera.yaw, -89.9, camera.fov, camera.aspect,
-                     1.0, 400.0)
-    return top
+class _Pass:
+    """A pass's target, GL switches and input textures: `with` binds them."""
+    __slots__ = ("ctx", "fbo", "flags", "tex")
+
+    def __init__(self, ctx, fbo, flags, tex):
+        self.ctx, self.fbo, self.flags, self.tex = ctx, fbo, flags, tex
+
+    def __enter__(self):
+        self.fbo.use()
+        self.ctx.enable_only(self.flags)
+        for t, unit in self.tex:
+            t.use(unit)
+
+    def __exit__(self, *exc):
+        return False
+
+
+def _top_camera(camera: cam.Camera) -> cam.Camera:
+    return cam.Camera(camera.x, camera.y, 250.0, camera.yaw, -89.9, camera.fov, camera.aspect,
+                      1.0, 400.0)
 
 
 def _sun_on_screen(vp, camera, light_dir, w, h, fov):

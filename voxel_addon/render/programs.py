@@ -8,6 +8,15 @@ from __future__ import annotations
 import numpy as np
 
 from .. import resources
+from .frame import BINDING
+
+# Every sampler name has one texture unit in all programs, set when a program is
+# built: a pass binds its textures to these units (a moderngl scope) and no frame
+# writes a sampler uniform.
+UNITS = {"g_depth": 0, "g_albedo": 1, "g_normal": 2, "shadow_map": 3, "light_vol": 4,
+         "tex": 6, "glow_tex": 7, "opaque_depth": 8, "prev_depth": 9, "front": 10,
+         "opaque": 11, "layer0": 12, "layer1": 13, "layer2": 14, "ao": 15,
+         "src": 0, "sharp": 0, "blurred": 1}
 
 
 def source(name: str, defines: dict | None = None, version: int = 410) -> str:
@@ -44,6 +53,11 @@ class Programs:
                 prog = self.ctx.program(**kw)
             except Exception as e:  # name the file: moderngl's message only has line numbers
                 raise RuntimeError(f"shader {vert}/{frag} {d}: {e}") from None
+            if "Frame" in prog:
+                prog["Frame"].binding = BINDING
+            for name, unit in UNITS.items():
+                if name in prog:
+                    prog[name].value = unit
             self._cache[key] = prog
         return prog
 

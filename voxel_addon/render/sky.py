@@ -5,13 +5,16 @@ bake); this module only derives what eq. 5.1 needs beyond it (halo, disc colours
 """
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from ..light import daytime
 
 
+@lru_cache(maxsize=16)  # a frame asks for the same hour as the last one
 def params(hours: float) -> dict:
-    """Uniform values for the sky, fog and deferred light at `hours`."""
+    """Uniform values (shared: do not modify) for the sky, fog and deferred light at `hours`."""
     d = daytime.at(hours)
     sun, moon = np.array(d.sun_dir), np.array(d.moon_dir)
     is_day = d.sun_dir[2] >= 0.0

@@ -84,9 +84,9 @@ def test_blender_context_renders_like_egl_and_blender_still_draws(bpy, egl_frame
 
 
 def test_a_pipeline_leaving_its_state_is_caught(bpy, egl_frame, tmp_path):
-    """The same frame straight on Blender's context without glstate.kept(): Blender's
-    state spoils our frame and ours spoils Blender's next draw. The checks above
-    would fail."""
+    """The same frame straight on Blender's context without glstate.kept(): our state
+    spoils Blender's next draw, so the check above would fail. (Our own frame comes
+    out right even so: every pass sets its framebuffer, switches, textures and the
+    frame block itself.)"""
     res = _job(tmp_path / "dirty", "--dirty")
-    assert not _close(res["view"], egl_frame)
     assert not _blender_ok(res)

@@ -13,7 +13,7 @@ from ..core.blocks import REGISTRY
 from . import camera as cam
 from . import sky
 from .geometry import Geometry
-from . import lightvol
+from . import lightvol, oit
 from .lightvol import LightVolume
 from .programs import Programs, pack, set_uniforms as _set
 from .settings import DEBUG_VIEWS, Settings
@@ -245,7 +245,9 @@ class Renderer:
 
         # transparent layers: depth peeling, no blending, nearest remaining layer each time
         blend = self.geo.parts.get("blend")
-        layers = s.peel_layers if blend is not None and mask[blend["rows"]].any() else 0
+        seen = blend is not None and bool(mask[blend["rows"]].any())
+        use_oit = seen and s.transparency == "oit"  # one forward pass instead (oit.py)
+        layers = s.peel_layers if seen and not use_oit else 0
         c.disable(c.CULL_FACE)
         for i in range(layers):
             p = T["peel"][i]
@@ -276,6 +278,10 @@ class Renderer:
         self._deferred(T["shaded_fbo"], g, {**ddefs, "FILL_HOLES": s.fill_holes}, common, sp, T)
         for i in range(layers):
             self._deferred(T["layer_fbo"][i], T["peel"][i], {**ddefs, "LAYER": 1}, common, sp, T)
+        if use_oit:  # resolved into layer 0: the composite blends it as one peel layer
+            oit.draw(self, T, T["layer_fbo"][0], mask, {**defs, **ddefs}, common, sp, stats,
+                     vp, shadows)
+            layers = 1
 
         # SSAO
         ssao = s.ssao and debug in (0, 6)

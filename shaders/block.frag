@@ -1,7 +1,11 @@
 // G-buffer writer. Defines: ALPHA_TEST, PEEL (discard at/before the previous layer),
 // SHADOW (depth only), DEBUG_AGG (colour by merged quad), SMOOTH_MAG (edge-aware
-// magnification), MSAA_ALPHA (alpha test per sample).
+// magnification), MSAA_ALPHA (alpha test per sample), OIT (forward-shaded weighted
+// blended order-independent transparency: accumulation instead of a G-buffer).
 #include "include/common.glsl"
+#ifdef OIT
+#include "include/shade.glsl"
+#endif
 
 uniform sampler2DArray tex;
 uniform sampler2DArray glow_tex;
@@ -21,7 +25,10 @@ flat in float g_layer;
 flat in vec3 g_normal;
 flat in uint g_quad;
 
-#ifndef SHADOW
+#if defined(OIT)
+layout(location = 0) out vec4 out_accum;   // sum of w * premultiplied colour, sum of w * alpha
+layout(location = 1) out vec4 out_reveal;  // r: sum of -log(1 - alpha)
+#elif !defined(SHADOW)
 layout(location = 0) out vec4 out_albedo;
 layout(location = 1) out vec4 out_normal;
 #endif
@@ -39,6 +46,27 @@ vec4 texel(vec2 uv) {
     return texture(tex, vec3(uv, g_layer));
 #endif
 }
+
+#ifdef OIT
+// McGuire & Bavoil 2013 (JCGT 2(2)), eq. 6 with the weight of eq. 9:
+//   w = alpha * clamp(0.03 / (1e-5 + (z / 200)^4), 1e-2, 3e3), z the view depth.
+// Eq. 9 is made for depths of about 0.1..500 units, and ours are blocks (metres) up
+// to the far edge of the area (~150-400): it separates layers a few blocks apart
+// from ~10 blocks on. Eq. 10 uses the hyperbolic depth-buffer value instead; with
+// near = 0.1 that is ~1 beyond a few blocks, so its weight sits at the 1e-2 floor and
+// would not tell near from far. Both clamps fit RGBA16F (max 65504).
+// Revealage prod(1 - alpha) is stored as sum(-log(1 - alpha)) so both attachments
+// add (ONE, ONE): moderngl sets one blend function for all draw buffers (no
+// glBlendFunci), both clear to 0 and the sum is as order-independent as the product.
+void oit(vec4 c) {
+    float a = min(c.a, 0.999);  // alpha 1 would be -log(0)
+    if (a <= 0.0) discard;
+    float z = 1.0 / gl_FragCoord.w;  // perspective: w_clip is the view depth
+    float w = a * clamp(0.03 / (1e-5 + pow(z / 200.0, 4.0)), 1e-2, 3e3);
+    out_accum = vec4(c.rgb, a) * w;
+    out_reveal = vec4(-log(1.0 - a), 0.0, 0.0, 0.0);
+}
+#endif
 
 void main() {
 #ifdef PEEL
@@ -61,7 +89,11 @@ void main() {
     c.rgb = hash_color(g_quad * 7919u + uint(g_layer));  // one colour per merged quad
     glow = 0.0;
 #endif
+#ifdef OIT
+    oit(shade_surface(c, g_world, n, glow));
+#else
     out_albedo = c;
     out_normal = vec4(n * 0.5 + 0.5, glow);
+#endif
 #endif
 }

@@ -84,16 +84,19 @@ def test_bad_input_is_one_line_exit_2(world, tmp_path, args, words):
     assert not (tmp_path / "x.png").exists()
 
 
-def test_opengl_41_core_context_draws_the_same_image(tmp_path):
+@pytest.mark.parametrize("scene, effects", [("desert", "peel3"), ("ocean", "oit")])
+def test_opengl_41_core_context_draws_the_same_image(tmp_path, scene, effects):
     """macOS offers at most GL 4.1 core (no compute, no multi-draw-indirect): Mesa
-    pretends to be exactly that, and the pipeline must compile and draw the same."""
+    pretends to be exactly that, and the pipeline must compile and draw the same
+    (with depth peeling, and with weighted blended OIT over the ocean's water)."""
     env41 = dict(os.environ, PYTHONPATH=str(ROOT), MESA_GL_VERSION_OVERRIDE="4.1",
                  MESA_GLSL_VERSION_OVERRIDE="410")
     probe = subprocess.run([sys.executable, "-c", "import moderngl; print(moderngl."
                             "create_standalone_context(backend='egl').version_code)"],
                            capture_output=True, text=True, env=env41, timeout=120)
     assert probe.stdout.strip() == "410", probe.stderr
-    args = ["-m", "voxel_addon", "render", "--scene", "desert", "--size", "160", "90"]
+    args = ["-m", "voxel_addon", "render", "--scene", scene, "--size", "160", "90",
+            "--effects", effects]
     r41 = subprocess.run([sys.executable, *args, "--out", str(tmp_path / "a.png")],
                          capture_output=True, text=True, env=env41, timeout=600)
     r45 = cli(*args[2:], "--out", tmp_path / "b.png")

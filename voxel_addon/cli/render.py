@@ -17,7 +17,8 @@ def add_parser(sub):
     p.add_argument("--distance", type=int, default=None, help="view distance in chunks")
     p.add_argument("--effects", default=None,
                    help="comma list: all, none, [+-]shadows, ssao, fog, dof, godrays, waving, "
-                        "smooth_mag, fill_holes, msaa_alpha, per_sample, peel0..3, msaa1/2/4/8")
+                        "smooth_mag, fill_holes, msaa_alpha, per_sample, peel0..3 (depth peeling, "
+                        "the default), oit (weighted blended OIT instead), msaa1/2/4/8")
     p.add_argument("--debug-view", default="none",
                    choices=("none", "albedo", "normal", "depth", "light", "aggregation", "culling"))
     p.add_argument("--scene", choices=("ocean", "desert", "landscape", "cave"),

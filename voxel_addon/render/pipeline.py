@@ -13,7 +13,7 @@ from ..core.blocks import REGISTRY
 from . import camera as cam
 from . import sky
 from .geometry import Geometry
-from . import lightvol
+from . import lightvol, oit
 from .lightvol import LightVolume
 from .frame import BINDING, FrameBlock
 from .programs import UNITS, Programs
@@ -121,7 +121,7 @@ class Renderer:
     # ------------------------------------------------------------------ targets
     def _targets(self, w, h):
         ms = max(1, min(self.s.msaa, self.ctx.max_samples))
-        key = (w, h, ms, self.s.shadow_size)
+        key = (w, h, ms, self.s.shadow_size, self.s.transparency == "oit")
         if self.targets.get("key") == key:
             return self.targets
         self._release_targets()
@@ -158,6 +158,8 @@ class Renderer:
         sm.filter = (0x2601, 0x2601)
         sm.repeat_x = sm.repeat_y = False
         t["shadow"], t["shadow_fbo"] = sm, c.framebuffer(depth_attachment=sm)
+        if key[-1]:  # only while OIT is chosen: peeling frames never pay for its targets
+            t["oit"] = oit.targets(c, (w, h), ms, t["g"]["depth"])
         self.targets = t
         return t
 
@@ -216,13 +218,16 @@ class Renderer:
         geo = self.geo
         rows = geo.cull(cull_vp)
         view = {name: geo.batch(name, rows) for name in geo.parts}
-        layers = s.peel_layers if view.get("blend") else 0
+        seen = view.get("blend") is not None
+        use_oit = seen and s.transparency == "oit"  # one forward pass instead (oit.py)
+        layers = s.peel_layers if seen and not use_oit else 0
         ssao = s.ssao and debug in (0, 6)
         sun_px, sun_vis, sun_r = _sun_on_screen(vp, draw_cam, sp["light_dir"], w, h, s.fov)
         gods = s.godrays and debug in (0, 6) and sun_vis
         dof = s.dof and debug == 0
         P = self._plan((T["ms"], debug, shadows, layers, ssao, gods, dof, s.smooth_mag,
-                        s.msaa_alpha, s.per_sample, s.fog, s.fill_holes, geo.indirect_ok))
+                        s.msaa_alpha, s.per_sample, s.fog, s.fill_holes, geo.indirect_ok,
+                        use_oit))
 
         # the frame's values, for every program at once
         F = self.frame
@@ -248,6 +253,8 @@ class Renderer:
         self.vol.uniforms(P["shade"])
         if layers:
             self.vol.uniforms(P["layer"])
+        if use_oit:
+            self.vol.uniforms(P["oit"])
         stats = {"triangles": 0, "draw_calls": 0}
 
         # shadow map: blend casts no shadow (§5.4.1)
@@ -280,6 +287,8 @@ class Renderer:
             with S["layer"][i]:
                 T["layer_fbo"][i].clear(0, 0, 0, 0)
                 self._fullscreen(P["layer"])
+        if use_oit:  # resolved into layer 0: the composite blends it as one peel layer
+            oit.draw(self, T, S, P, view["blend"], stats)
 
         if ssao:
             with S["ssao"]:
@@ -310,7 +319,7 @@ class Renderer:
         if plan is not None:
             return plan
         ms, debug, shadows, layers, ssao, gods, dof, smooth, msaa_alpha, per_sample, fog, \
-            fill, indirect = key
+            fill, indirect, use_oit = key
         get = self.progs.get
         cut = {"ALPHA_TEST": 1, "MSAA_ALPHA": msaa_alpha}
         g = {"SAMPLES": ms, "SMOOTH_MAG": smooth, "DEBUG_AGG": debug == 5,
@@ -329,7 +338,9 @@ class Renderer:
             "ssao": get("fullscreen.vert", "ssao.frag") if ssao else None,
             "ao_blur": [get("fullscreen.vert", "blur.frag", {"VERTICAL": v}) for v in (0, 1)],
             "comp": get("fullscreen.vert", "composite.frag",
-                        {"LAYERS": layers, "SSAO": ssao, "GODRAYS": gods}),
+                        {"LAYERS": 1 if use_oit else layers, "SSAO": ssao, "GODRAYS": gods}),
+            "oit": get("block.vert", "block.frag", {**g, **d, "OIT": 1}) if use_oit else None,
+            "oit_resolve": get("fullscreen.vert", "oit_resolve.frag", {"SAMPLES": ms}),
             "dof_blur": [get("fullscreen.vert", "blur.frag", {"BILATERAL": 1, "VERTICAL": v})
                          for v in (0, 1)],
             "final": get("fullscreen.vert", "final.frag", {"DOF": dof}),
@@ -374,6 +385,12 @@ class Renderer:
                          bound(T["blur_fbo"][1], src=T["blur"])],
             "final": bound(T["out_fbo"], sharp=T["comp"], blurred=T["blur2"]),
         }
+        if "oit" in T:
+            o = T["oit"]
+            self._pass["oit"] = bound(o["fbo"], c.DEPTH_TEST | c.BLEND, shadow_map=T["shadow"],
+                                      light_vol=self.vol.tex)
+            self._pass["oit_resolve"] = bound(T["layer_fbo"][0], accum=o["accum"],
+                                              reveal=o["reveal"])
         return self._pass
 
     def _fullscreen(self, prog):

@@ -16,7 +16,7 @@ from .frame import BINDING
 UNITS = {"g_depth": 0, "g_albedo": 1, "g_normal": 2, "shadow_map": 3, "light_vol": 4,
          "tex": 6, "glow_tex": 7, "opaque_depth": 8, "prev_depth": 9, "front": 10,
          "opaque": 11, "layer0": 12, "layer1": 13, "layer2": 14, "ao": 15,
-         "src": 0, "sharp": 0, "blurred": 1}
+         "src": 0, "sharp": 0, "blurred": 1, "accum": 0, "reveal": 1}
 
 
 def source(name: str, defines: dict | None = None, version: int = 410) -> str:

@@ -10,6 +10,8 @@ DEBUG_VIEWS = ("none", "albedo", "normal", "depth", "light", "aggregation", "cul
 EFFECTS = ("shadows", "ssao", "fog", "dof", "godrays", "waving", "smooth_mag",
            "fill_holes", "msaa_alpha", "per_sample")
 
+TRANSPARENCY = ("peel", "oit")
+
 
 @dataclass
 class Settings:
@@ -23,6 +25,8 @@ class Settings:
     shadow_fade: float = 50.0     # blocks from the camera: shadows fade linearly to none
                                   # there (§5.4.1, "ve vzdálenosti 50 bloků")
     peel_layers: int = 3          # transparency layers, 0..3
+    transparency: str = "peel"    # "peel" (depth peeling, peel_layers) or "oit" (weighted
+                                  # blended OIT, one pass: render/oit.py, README)
     ssao: bool = False            # off by default, as in the thesis
     fog: bool = True              # atmosphere
     dof: bool = True              # distance blur
@@ -47,18 +51,23 @@ class Settings:
                 for e in EFFECTS:
                     setattr(s, e, item == "all")
                 s.peel_layers = 3 if item == "all" else 0
+                if item == "none":
+                    s.transparency = "peel"
                 continue
             on = not item.startswith("-")
             name = item.lstrip("+-")
             if name.startswith("peel") and name[4:].isdigit():
                 s.peel_layers = int(name[4:])
+                s.transparency = "peel"
+            elif name == "oit":
+                s.transparency = "oit" if on else "peel"
             elif name.startswith("msaa") and name[4:].isdigit():
                 s.msaa = int(name[4:])
             elif name in EFFECTS:
                 setattr(s, name, on)
             else:
                 raise VoxelError(f"unknown effect {name!r} (known: {', '.join(EFFECTS)}, "
-                                 "peel0..peel3, msaa1/2/4/8, all, none)")
+                                 "peel0..peel3, oit, msaa1/2/4/8, all, none)")
         s.check()
         return s
 
@@ -67,6 +76,9 @@ class Settings:
             raise VoxelError(f"unknown debug view {self.debug!r} (known: {', '.join(DEBUG_VIEWS)})")
         if not 0 <= self.peel_layers <= 3:
             raise VoxelError("peel layers must be 0..3")
+        if self.transparency not in TRANSPARENCY:
+            raise VoxelError(f"unknown transparency {self.transparency!r} "
+                             f"(known: {', '.join(TRANSPARENCY)})")
         if self.msaa not in (1, 2, 4, 8):
             raise VoxelError("msaa must be 1, 2, 4 or 8")
         if not 1 <= self.distance <= 32:

@@ -2,7 +2,6 @@
 // hemisphere on a spiral, compared against the front distance buffer.
 #include "include/frame.glsl"
 uniform sampler2D front;
-const float radius = 1.0;  // blocks
 in vec2 v_uv;
 out vec4 out_ao;
 
@@ -22,12 +21,12 @@ void main() {
         if (i >= count) break;
         float k = (float(i) + 0.5) / float(count);
         float a = rot + k * 12.566;
-        vec3 s = p + n * 0.05 + (t * cos(a) * k + b * sin(a) * k + n * (1.0 - k) * 0.7) * radius;
+        vec3 s = p + n * 0.05 + (t * cos(a) * k + b * sin(a) * k + n * (1.0 - k) * 0.7) * ssao_radius;
         vec4 c = vp * vec4(s, 1.0);
         vec2 uv = c.xy / c.w * 0.5 + 0.5;
         float sd = texture(front, uv).r;
         float d = length(s - cam_pos);
-        if (sd < d - 0.02 && d - sd < radius * 2.0) occ += 1.0;
+        if (sd < d - 0.02 && d - sd < ssao_radius * 2.0) occ += 1.0;
     }
     out_ao = vec4(1.0 - 0.8 * occ / float(count));
 }

@@ -20,5 +20,6 @@ layout(std140) uniform Frame {
     vec3 sky_light_dir;    bool waving;        // towards the sun by day, the moon by night
     vec2 sun_px;           float sun_radius;   bool sun_visible;  // the disc on screen, pixels
     float fog_start;       float fog_end;      float dof_start;   float dof_end;
+    float ssao_radius;     // blocks
 };
 #endif

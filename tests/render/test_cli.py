@@ -73,6 +73,11 @@ GOOD = ["--world", "W", "--camera", 8, 8, 90, 0, 0, "--size", 32, 18]
     (GOOD + ["--size", "big", 10], "--size"),
     (GOOD + ["--distance", 0], "view distance"),
     (GOOD + ["--effects", "+bloom"], "unknown effect"),
+    (GOOD + ["--set", "bloom=2"], "NAME one of"),
+    (GOOD + ["--set", "fov"], "NAME=VALUE"),
+    (GOOD + ["--set", "fov=wide"], "not a valid float"),
+    (GOOD + ["--set", "fov=500"], "fov must be"),
+    (GOOD + ["--set", "ssao=maybe"], "not a valid bool"),
     (["--world", "W", "--camera", 8, 8, 900, 0, 0], "camera z"),
 ])
 def test_bad_input_is_one_line_exit_2(world, tmp_path, args, words):

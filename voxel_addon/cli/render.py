@@ -19,6 +19,9 @@ def add_parser(sub):
                    help="comma list: all, none, [+-]shadows, ssao, fog, dof, godrays, waving, "
                         "smooth_mag, fill_holes, msaa_alpha, per_sample, peel0..3 (depth peeling, "
                         "the default), oit (weighted blended OIT instead), msaa1/2/4/8")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                   help="tune a setting, e.g. godray_strength=2, shadow_size=4096, fov=60, "
+                        "shadow_fade=80, ssao_radius=1.5 (repeatable; see render/settings.py)")
     p.add_argument("--debug-view", default="none",
                    choices=("none", "albedo", "normal", "depth", "light", "aggregation", "culling"))
     p.add_argument("--scene", choices=("ocean", "desert", "landscape", "cave"),
@@ -40,7 +43,7 @@ def run(args):
     w, h = args.size
     if not (8 <= w <= 8192 and 8 <= h <= 8192):
         raise VoxelError("--size must be between 8 and 8192 pixels per side")
-    s = Settings(debug=args.debug_view).with_effects(args.effects)
+    s = Settings(debug=args.debug_view).with_effects(args.effects).with_values(args.set)
     if args.distance is not None:
         s.distance = args.distance
     s.check()

@@ -247,7 +247,7 @@ class Renderer:
               sky_light_dir=sp["light_dir"], time=s.time, waving=s.waving,
               godray_strength=s.godray_strength, sun_px=sun_px, sun_radius=sun_r,
               sun_visible=sun_vis, fog_start=fog_end * 0.55, fog_end=fog_end,
-              dof_start=fog_end * 0.7, dof_end=fog_end * 1.1)
+              dof_start=fog_end * 0.7, dof_end=fog_end * 1.1, ssao_radius=s.ssao_radius)
         F.upload()
         F.buf.bind_to_uniform_block(BINDING)
         self.vol.uniforms(P["shade"])

@@ -28,6 +28,7 @@ class Settings:
     transparency: str = "peel"    # "peel" (depth peeling, peel_layers) or "oit" (weighted
                                   # blended OIT, one pass: render/oit.py, README)
     ssao: bool = False            # off by default, as in the thesis
+    ssao_radius: float = 1.0      # blocks
     fog: bool = True              # atmosphere
     dof: bool = True              # distance blur
     godrays: bool = True
@@ -71,6 +72,30 @@ class Settings:
         s.check()
         return s
 
+    def with_values(self, items) -> "Settings":
+        """Apply '--set NAME=VALUE' items (any field; numbers, on/off for switches)."""
+        s = replace(self)
+        kinds = {f.name: f.type for f in fields(Settings)}
+        for item in items or ():
+            name, eq, text = item.partition("=")
+            name, text = name.strip(), text.strip()
+            if not eq or name not in kinds:
+                raise VoxelError(f"--set wants NAME=VALUE with NAME one of {', '.join(kinds)}"
+                                 if eq else f"--set {item!r}: expected NAME=VALUE")
+            kind = kinds[name]
+            try:
+                if kind == "bool":
+                    if text.lower() not in ("1", "0", "on", "off", "true", "false", "yes", "no"):
+                        raise ValueError
+                    value = text.lower() in ("1", "on", "true", "yes")
+                else:
+                    value = {"int": int, "float": float, "str": str}[kind](text)
+            except ValueError:
+                raise VoxelError(f"--set {name}: {text!r} is not a valid {kind}") from None
+            setattr(s, name, value)
+        s.check()
+        return s
+
     def check(self) -> None:
         if self.debug not in DEBUG_VIEWS:
             raise VoxelError(f"unknown debug view {self.debug!r} (known: {', '.join(DEBUG_VIEWS)})")
@@ -83,6 +108,12 @@ class Settings:
             raise VoxelError("msaa must be 1, 2, 4 or 8")
         if not 1 <= self.distance <= 32:
             raise VoxelError("view distance must be 1..32 chunks")
+        for name, lo, hi in (("light_radius", 1, 32), ("shadow_size", 256, 8192),
+                             ("shadow_fade", 1.0, 1000.0), ("godray_strength", 0.0, 10.0),
+                             ("anisotropy", 1.0, 16.0), ("fov", 10.0, 150.0),
+                             ("ssao_radius", 0.1, 8.0)):
+            if not lo <= getattr(self, name) <= hi:
+                raise VoxelError(f"{name} must be between {lo} and {hi}")
 
 
 def names() -> list[str]:

@@ -1,0 +1,25 @@
+"""Settings text from the command line: --effects switches, --set tunes any field."""
+import pytest
+
+from voxel_addon.core.errors import VoxelError
+from voxel_addon.render import Settings
+
+
+def test_set_parses_by_field_type():
+    s = Settings().with_values(["godray_strength=2.5", "shadow_size=4096", "ssao=on",
+                                "waving=0", "debug=depth", "fov = 55"])
+    assert (s.godray_strength, s.shadow_size, s.ssao, s.waving, s.debug, s.fov) == \
+        (2.5, 4096, True, False, "depth", 55.0)
+    assert Settings().godray_strength == 1.0  # a copy: defaults untouched
+
+
+@pytest.mark.parametrize("item", ["shadow_size=2.5", "fov=", "nope=1", "fov", "debug=sepia",
+                                  "shadow_fade=-1", "ssao=2"])
+def test_bad_set_is_a_user_error(item):
+    with pytest.raises(VoxelError):
+        Settings().with_values([item])
+
+
+def test_effects_then_values():
+    s = Settings().with_effects("none,+ssao,oit").with_values(["ssao_radius=2"])
+    assert s.ssao and not s.shadows and s.transparency == "oit" and s.ssao_radius == 2.0

@@ -90,3 +90,19 @@ def test_a_pipeline_leaving_its_state_is_caught(bpy, egl_frame, tmp_path):
     frame block itself.)"""
     res = _job(tmp_path / "dirty", "--dirty")
     assert not _blender_ok(res)
+
+
+def test_render_view_operator_draws_the_world_from_the_scene_camera(tmp_path):
+    """The add-on's operator: a flat world at noon seen from a camera looking down
+    toward the horizon is sky above and lit ground below, in the image datablock."""
+    out = tmp_path / "op"
+    out.mkdir()
+    r = subprocess.run([sys.executable, str(JOB.with_name("op_job.py")), str(out)],
+                       capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr[-3000:]
+    info = json.loads((out / "op.json").read_text())
+    assert info == {"result": ["FINISHED"], "size": [96, 54]}
+    px = np.load(out / "op.npy")[::-1, :, :3]  # top row first
+    top, bottom = px[:8].mean((0, 1)), px[-8:].mean((0, 1))
+    assert top[2] > top[0] + 0.1, f"sky is blue at noon: {top}"
+    assert abs(bottom - top).sum() > 0.3 and bottom.mean() > 0.1, (top, bottom)

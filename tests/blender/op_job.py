@@ -1,0 +1,49 @@
+"""Run in a fresh process by test_view.py: the add-on's "Render Voxel View" operator
+on a new flat world, from a scene camera, into its image datablock.
+
+    python tests/blender/op_job.py OUT_DIR
+
+Writes OUT_DIR/op.npy (the image's pixels, (h, w, 4) float, bottom row first) and
+OUT_DIR/op.json (the operator's result and the image size).
+"""
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))
+
+
+def main():
+    out = Path(sys.argv[1])
+    import bpy
+    import voxel_addon
+    voxel_addon.register()
+    sc = bpy.context.scene
+    v = sc.voxel
+    v.path, v.seed, v.generator = str(out / "w.sqlite"), 5, "flat"
+    assert bpy.ops.voxel.world_new() == {"FINISHED"}
+    sc.voxel_bake.hours = 12.0
+    cam = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
+    sc.collection.objects.link(cam)
+    sc.camera = cam
+    # 20 blocks above the flat ground, looking along +x, 20 degrees down
+    cam.location = (8.0, 8.0, 90.0)
+    cam.rotation_euler = (math.radians(70.0), 0.0, math.radians(-90.0))
+    sc.render.resolution_x, sc.render.resolution_y, sc.render.resolution_percentage = 96, 54, 100
+    res = bpy.ops.voxel.render_view()
+    im = bpy.data.images["Voxel View"]
+    px = np.empty(im.size[0] * im.size[1] * 4, np.float32)
+    im.pixels.foreach_get(px)
+    np.save(out / "op.npy", px.reshape(im.size[1], im.size[0], 4))
+    (out / "op.json").write_text(json.dumps({"result": sorted(res), "size": list(im.size)}))
+    voxel_addon.unregister()
+
+
+if __name__ == "__main__":
+    main()

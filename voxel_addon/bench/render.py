@@ -212,6 +212,17 @@ def _distance32(ctx, gl):
     up = Camera(8, 8, 250, 30, 80)
     _frame(gl, r, up, hours, (160, 90))
     idle = sorted(_frame(gl, r, up, hours, (160, 90))[1] for _ in range(5))[2]
+    # prepare() (all of a frame's Python: values, culling, batching, uploads) run back
+    # to back for two alternating cameras: the work itself, without the cost of waking
+    # up after each GL wait (on this VM the first NumPy call after any sleep, e.g. in
+    # glFinish or a pass that waits for the previous one, takes ~60 us instead of ~2)
+    hot, cams = [], [Camera(8, 8, 100, 30, -15), Camera(11, 8, 100, 37, -15)]
+    for i in range(40):
+        c0 = time.thread_time()
+        r.prepare(cams[i % 2], hours, (160, 90))
+        hot.append(time.thread_time() - c0)
+    gl.finish()
+    hot_ms = sorted(hot[10:])[len(hot[10:]) // 2] * 1e3
     t0 = time.perf_counter()
     reps = 20
     for _ in range(reps):
@@ -227,6 +238,9 @@ def _distance32(ctx, gl):
     yield (f"render_d{d}_python_idle_gl_ms", idle, "ms",
            "the same, camera at the sky (GL does ~nothing; median of 5)")
     yield (f"render_d{d}_cull_ms", cull, "ms", "NumPy frustum culling of the region table, one matrix")
+    yield (f"render_d{d}_prepare_hot_ms", hot_ms, "ms",
+           "Renderer.prepare (values, culling, batching, uploads; camera moving) back to back: "
+           "the Python work without the wake-up cost after GL waits (CPU, median)")
     yield ("render_glclock_overhead_ms", calls * _OVERHEAD[0] * 1e3, "ms",
            f"subtracted per frame above: {calls} moderngl calls x {_OVERHEAD[0] * 1e6:.2f} us "
            "of the measuring wrapper's own CPU time")

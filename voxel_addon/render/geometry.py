@@ -3,11 +3,12 @@ the meshing package's 4-byte vertices, a shared quad index pattern, CPU frustum
 culling per region and one multi-draw per pass.
 
 All passes share one region table (chunk x region, with its box and origin), so a
-frame culls once per matrix (view, shadow) for every pass. Each pass keeps a static
-table of its indirect commands, one per region that has faces in it, and where each
-table row's command is; a frame gathers the commands of the visible rows only (work
-by what is seen, not by the view distance) and uploads them when they changed since
-the same slot's last draw.
+frame culls once per matrix (view, shadow) for every pass. One static table holds the
+indirect commands of every pass (one per region with faces in that pass), and `at`
+says where each table row's command of each pass is; per matrix a frame gathers the
+commands of the visible rows only (work by what is seen, not by the view distance)
+into one buffer, uploaded when it changed since the same slot's last frame, and each
+pass draws its slice of it.
 
 GL 4.3+: glMultiDrawElementsIndirect, the region origin comes from baseInstance
 through an instanced attribute. GL 4.1 (macOS): one draw per visible region with the
@@ -33,6 +34,13 @@ class Geometry:
         self.quads = 0
         self.origin = np.zeros((0, 3), np.float32)
         self.boxes = np.zeros((6, 0), np.float32)
+        self._clear_tables(0)
+
+    def _clear_tables(self, n_rows: int) -> None:
+        self.at = np.full((n_rows, len(PASSES)), -1, np.int64)  # row, pass -> command
+        self.cmd = np.zeros((0, 5), np.uint32)
+        self.tris = np.zeros(0, np.int64)
+        self.bufs: dict = {}  # slot -> [buffer, the commands it holds]
 
     def set_chunks(self, meshes: dict) -> None:
         """meshes: {(cx, cy): meshing.ChunkMesh}. Replaces what was shown."""
@@ -55,6 +63,8 @@ class Geometry:
         # 0.5 slack for waving: vertices move by < 0.1 blocks
         self.boxes = camera.boxes(self.origin - 0.5, self.origin + [16.5, 16.5, h + 0.5])
         max_quads = 1
+        self._clear_tables(len(ci))
+        cmds, tris = [], []
         for p, name in enumerate(PASSES):
             c = cnt[ci, ri, p]
             rows = np.flatnonzero(c)
@@ -69,13 +79,15 @@ class Geometry:
             # DrawElementsIndirectCommand: count, instances, first index, base vertex, base instance
             cmd = np.zeros((len(rows), 5), np.uint32)
             cmd[:, 0], cmd[:, 1], cmd[:, 2], cmd[:, 4] = count // 4 * 6, 1, first // 4 * 6, rows
-            at = np.full(len(ci), -1, np.int64)  # table row -> its command here, or -1
-            at[rows] = np.arange(len(rows))
+            self.at[rows, p] = sum(map(len, cmds)) + np.arange(len(rows))
+            cmds.append(cmd)
+            tris.append((count // 2).astype(np.int64))
             self.parts[name] = {
                 "vbo": self.ctx.buffer(verts.astype(np.uint32, copy=False).tobytes()),
-                "rows": rows, "at": at, "cmd": cmd, "tris": (count // 2).astype(np.int64),
-                "vaos": {}, "bufs": {}}
-        self.quads = sum(int(p["tris"].sum()) // 2 for p in self.parts.values())
+                "rows": rows, "vaos": {}}
+        if cmds:
+            self.cmd, self.tris = np.concatenate(cmds), np.concatenate(tris)
+        self.quads = int(self.tris.sum()) // 2
         self.obo = self.ctx.buffer(self.origin.tobytes())
         self.ibo = self.ctx.buffer(meshing.quad_indices(max_quads).tobytes())
 
@@ -95,54 +107,53 @@ class Geometry:
         """Region table rows (ascending) whose box may intersect the clip volume."""
         return np.flatnonzero(camera.visible_boxes(mvp, self.boxes))
 
-    def visible(self, name: str, rows: np.ndarray) -> np.ndarray:
-        """Pass name's commands (indices into its table) among the table rows from cull."""
-        part = self.parts.get(name)
-        if part is None:
-            return rows[:0]
-        k = part["at"][rows]
-        return k[k >= 0]
+    def batches(self, rows: np.ndarray, names, slot: str = "view") -> dict:
+        """{pass name: its batch, or None} of the visible regions among the table rows
+        from cull, for the passes named: their commands gathered into the slot's one
+        buffer, uploaded when it changed since the slot's last frame.
 
-    def batch(self, name: str, rows: np.ndarray, slot: str = "view"):
-        """Pass name's visible regions among the table rows from cull, with their
-        commands uploaded when they changed since the slot's last batch; None if none.
-
-        A frame batches every pass before it draws any: the heavy draws (llvmpipe runs
-        vertex work in the calling thread) leave cold caches behind, which made the
-        Python between them 2-3x slower. slot names the command buffer (one per matrix
-        in a frame), so a frame never overwrites commands the GL may still be reading."""
-        sel = self.visible(name, rows)
-        if not len(sel):
-            return None
-        part = self.parts[name]
+        A frame batches before it draws anything: the heavy draws (llvmpipe runs vertex
+        work in the calling thread) leave cold caches behind, which made the Python
+        between them 2-3x slower. One slot per matrix in a frame (view, shadow), so a
+        frame never overwrites commands the GL may still be reading."""
+        names = [n for n in names if n in self.parts]
+        k = self.at[rows][:, [PASSES.index(n) for n in names]]
+        sels = [c[c >= 0] for c in k.T]
+        every = np.concatenate(sels) if sels else rows[:0]
         buf = None
-        if self.indirect_ok:
-            buf = part["bufs"].get(slot)
-            if buf is None or not np.array_equal(buf[1], sel):
-                data = np.take(part["cmd"], sel, axis=0).tobytes()  # 2x a fancy index
+        if self.indirect_ok and len(every):
+            buf = self.bufs.get(slot)
+            if buf is None or not np.array_equal(buf[1], every):
+                data = np.take(self.cmd, every, axis=0).tobytes()  # 2x a fancy index
                 if buf is None or buf[0].size < len(data):
                     if buf is not None:
                         buf[0].release()
-                    buf = [self.ctx.buffer(reserve=max(len(data), 4096) * 2), sel]
+                    buf = self.bufs[slot] = [self.ctx.buffer(reserve=max(len(data), 4096) * 2),
+                                             every]
                 else:
                     buf[0].orphan()  # fresh storage: no wait for draws still reading it
                 buf[0].write(data)
-                buf[1] = sel
-                part["bufs"][slot] = buf
-        return name, sel, buf, int(part["tris"][sel].sum())
+                buf[1] = every
+        tri = np.r_[0, np.cumsum(self.tris[every])]
+        out, off = {}, 0
+        for name, sel in zip(names, sels):
+            n = len(sel)
+            out[name] = (name, sel, buf, off, int(tri[off + n] - tri[off])) if n else None
+            off += n
+        return out
 
     def draw(self, batch, prog, stats: dict | None = None) -> None:
         """Draw a batch; counts triangles and draw calls into stats."""
         if batch is None:
             return
-        name, sel, buf, tris = batch
+        name, sel, buf, off, tris = batch
         vao = self.vao(name, prog)
         if buf is not None:
-            vao.render_indirect(buf[0], mode=self.ctx.TRIANGLES, count=len(sel))
+            vao.render_indirect(buf[0], mode=self.ctx.TRIANGLES, count=len(sel), first=off)
             calls = 1
         else:
             u = prog["region_origin"]  # a program built with UNIFORM_ORIGIN
-            cmd = self.parts[name]["cmd"][sel]
+            cmd = self.cmd[sel]
             for c, first, row in zip(cmd[:, 0].tolist(), cmd[:, 2].tolist(), cmd[:, 4].tolist()):
                 u.value = tuple(self.origin[row].tolist())
                 vao.render(mode=self.ctx.TRIANGLES, vertices=c, first=first)
@@ -156,8 +167,9 @@ class Geometry:
             for vao in part["vaos"].values():
                 vao.release()
             part["vbo"].release()
-            for buf in part["bufs"].values():
-                buf[0].release()
+        for buf in self.bufs.values():
+            buf[0].release()
+        self.bufs.clear()
         self.parts.clear()
         for b in (self.ibo, self.obo):
             if b is not None:

@@ -187,13 +187,20 @@ class Renderer:
         return np.frombuffer(data, np.uint8).reshape(h, w, 3)[::-1].copy()
 
     def draw(self, camera: cam.Camera, hours: float, size):
-        """Run the frame; returns the framebuffer holding the final RGBA8 image.
-
-        Per frame the Python side computes the frame's values into one uniform block,
-        culls and batches every pass's regions, all before the first draw; then it only
-        walks the passes. Programs, textures and GL switches of each pass are prepared
-        once (_plan, _passes) for the settings and targets."""
+        """Run the frame; returns the framebuffer holding the final RGBA8 image."""
         t0 = time.perf_counter()
+        f = self.prepare(camera, hours, size)
+        self.submit(f)
+        f.stats["cpu_ms"] = (time.perf_counter() - t0) * 1e3
+        self.stats = f.stats
+        return f.T["out_fbo"]
+
+    def prepare(self, camera: cam.Camera, hours: float, size) -> "_Frame":
+        """A frame's work that is not drawing, all before the first draw: its values
+        into the one uniform block, culling and the batches of every pass (the heavy
+        draws leave the calling thread's caches cold; see Geometry.batches). Programs,
+        textures and GL switches of each pass are made once (_plan, _passes) for the
+        settings and targets."""
         s = self.s
         s.check()
         w, h = size
@@ -217,7 +224,7 @@ class Renderer:
         shadows = s.shadows and debug in (0, 4, 6) and sp["light_dir"][2] > 0.02
         geo = self.geo
         rows = geo.cull(cull_vp)
-        view = {name: geo.batch(name, rows) for name in geo.parts}
+        view = geo.batches(rows, geo.parts)
         seen = view.get("blend") is not None
         use_oit = seen and s.transparency == "oit"  # one forward pass instead (oit.py)
         layers = s.peel_layers if seen and not use_oit else 0
@@ -237,7 +244,7 @@ class Renderer:
             F.set(shadow_vp=light_vp, shadow_mat=_BIAS @ light_vp, shadow_texel=texel,
                   shadow_bias=bias)
             lit = geo.cull(light_vp)
-            cast = [(geo.batch(name, lit, "shadow"), prog) for name, prog in P["shadow"]]
+            cast = geo.batches(lit, [name for name, _ in P["shadow"]], "shadow")
         sky_on = debug in (0, 6)  # debug views show black where there is no surface
         for k in ("zenith", "horizon", "halo", "disc"):
             F.set(**{f"sky_{k}": sp[k] if sky_on else 0.0})
@@ -255,14 +262,19 @@ class Renderer:
             self.vol.uniforms(P["layer"])
         if use_oit:
             self.vol.uniforms(P["oit"])
-        stats = {"triangles": 0, "draw_calls": 0}
+        return _Frame(T, S, P, view, cast if shadows else None, layers, use_oit, ssao, dof)
+
+    def submit(self, f: "_Frame") -> None:
+        """Walk the passes of a prepared frame."""
+        T, S, P, geo, view, layers = f.T, f.S, f.P, self.geo, f.view, f.layers
+        stats = f.stats
 
         # shadow map: blend casts no shadow (§5.4.1)
-        if shadows:
+        if f.cast is not None:  # shadows on: cleared even with no caster in view
             with S["shadow"]:
                 T["shadow_fbo"].clear(depth=1.0)
-                for batch, prog in cast:
-                    geo.draw(batch, prog, stats)
+                for name, prog in P["shadow"]:
+                    geo.draw(f.cast.get(name), prog, stats)
             stats["shadow_triangles"] = stats["triangles"]
 
         # opaque G-buffer; double-sided plants without face culling
@@ -287,10 +299,10 @@ class Renderer:
             with S["layer"][i]:
                 T["layer_fbo"][i].clear(0, 0, 0, 0)
                 self._fullscreen(P["layer"])
-        if use_oit:  # resolved into layer 0: the composite blends it as one peel layer
+        if f.use_oit:  # resolved into layer 0: the composite blends it as one peel layer
             oit.draw(self, T, S, P, view["blend"], stats)
 
-        if ssao:
+        if f.ssao:
             with S["ssao"]:
                 self._fullscreen(P["ssao"])
             for step, prog in zip(S["ao_blur"], P["ao_blur"]):
@@ -302,15 +314,12 @@ class Renderer:
             self._fullscreen(P["comp"])
 
         # distance blur, final
-        if dof:
+        if f.dof:
             for step, prog in zip(S["dof_blur"], P["dof_blur"]):
                 with step:
                     self._fullscreen(prog)
         with S["final"]:
             self._fullscreen(P["final"])
-        stats["cpu_ms"] = (time.perf_counter() - t0) * 1e3
-        self.stats = stats
-        return T["out_fbo"]
 
     # ------------------------------------------------------------------ helpers
     def _plan(self, key):
@@ -435,6 +444,16 @@ class Renderer:
         self.progs.release()
         self.tex.release()
         self.glow.release()
+
+
+class _Frame:
+    """What prepare() made for submit(): targets, passes, programs, batches, switches."""
+    __slots__ = ("T", "S", "P", "view", "cast", "layers", "use_oit", "ssao", "dof", "stats")
+
+    def __init__(self, T, S, P, view, cast, layers, use_oit, ssao, dof):
+        self.T, self.S, self.P, self.view, self.cast = T, S, P, view, cast
+        self.layers, self.use_oit, self.ssao, self.dof = layers, use_oit, ssao, dof
+        self.stats = {"triangles": 0, "draw_calls": 0}
 
 
 class _Pass:

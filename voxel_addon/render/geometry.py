@@ -33,7 +33,7 @@ class Geometry:
         self.obo = None
         self.quads = 0
         self.origin = np.zeros((0, 3), np.float32)
-        self.boxes = np.zeros((6, 0), np.float32)
+        self.boxes = np.zeros((7, 0), np.float32)
         self._clear_tables(0)
 
     def _clear_tables(self, n_rows: int) -> None:
@@ -117,9 +117,15 @@ class Geometry:
         between them 2-3x slower. One slot per matrix in a frame (view, shadow), so a
         frame never overwrites commands the GL may still be reading."""
         names = [n for n in names if n in self.parts]
-        k = self.at[rows][:, [PASSES.index(n) for n in names]]
-        sels = [c[c >= 0] for c in k.T]
-        every = np.concatenate(sels) if sels else rows[:0]
+        cols = [PASSES.index(n) for n in names]
+        k = self.at[rows]
+        if cols != list(range(len(cols))):  # else a leading slice: no copy (view, shadow)
+            k = k[:, cols]
+        else:
+            k = k[:, :len(cols)]
+        has = k >= 0
+        every = k.T[has.T]  # pass by pass, each pass's commands in table order
+        n_of = has.sum(0).tolist()
         buf = None
         if self.indirect_ok and len(every):
             buf = self.bufs.get(slot)
@@ -134,11 +140,12 @@ class Geometry:
                     buf[0].orphan()  # fresh storage: no wait for draws still reading it
                 buf[0].write(data)
                 buf[1] = every
-        tri = np.r_[0, np.cumsum(self.tris[every])]
+        tri = np.zeros(len(every) + 1, np.int64)
+        np.cumsum(self.tris[every], out=tri[1:])
         out, off = {}, 0
-        for name, sel in zip(names, sels):
-            n = len(sel)
-            out[name] = (name, sel, buf, off, int(tri[off + n] - tri[off])) if n else None
+        for name, n in zip(names, n_of):
+            out[name] = (name, every[off:off + n], buf, off,
+                         int(tri[off + n] - tri[off])) if n else None
             off += n
         return out
 

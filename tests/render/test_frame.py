@@ -23,7 +23,7 @@ def test_block_layout_matches_the_driver(gl):
                 v = rng.integers(0, 2, n)
         else:
             v = rng.uniform(-10, 10, n)
-        block.set(**{name: v.reshape(4, 4) if n == 16 else v})
+        block.set(**{name: v.reshape(4, 4) if n == 16 else v[0] if n == 1 else v})
         if n == 16:
             m = v.reshape(4, 4)
             for c in range(4):

@@ -6,6 +6,7 @@ the offsets come from it by the std140 rules of the member types it may use.
 from __future__ import annotations
 
 import re
+import struct
 
 import numpy as np
 
@@ -34,25 +35,41 @@ def layout(text: str | None = None) -> tuple[dict, int]:
 
 
 class FrameBlock:
+    """The block's values by member name; upload() packs them in one struct call (a
+    frame sets ~30 members: one NumPy write each cost more than the whole pack)."""
+
     def __init__(self, ctx):
         self.members, size = layout()
-        self.f = np.zeros(size // 4, np.float32)
-        self.i = self.f.view(np.int32)
+        self.order = sorted(self.members, key=lambda k: self.members[k][0])
+        fmt, at = "<", 0
+        for k in self.order:
+            o, n, kind = self.members[k]
+            fmt += f"{4 * (o - at)}x" if o > at else ""
+            fmt += ("i" if kind == "i" else "f") * n
+            at = o + n
+        self.fmt = fmt
+        self.data = bytearray(size)
+        self.values = {k: 0 if self.members[k][1] == 1 else (0,) * self.members[k][1]
+                       for k in self.order}
         self.buf = ctx.buffer(reserve=size)
 
     def set(self, **values) -> None:
-        for k, v in values.items():
-            o, n, kind = self.members[k]
-            if kind == "i":
-                self.i[o:o + n] = v
-            elif n == 16:  # matrices are row-major NumPy; GL wants columns
-                self.f[o:o + 16] = np.asarray(v).T.ravel()
-            else:
-                self.f[o:o + n] = v
+        """Scalars, sequences, or row-major 4x4 NumPy matrices (GL gets columns)."""
+        self.values.update(values)
 
     def upload(self) -> None:
+        flat = []
+        for k in self.order:
+            v, (_, n, kind) = self.values[k], self.members[k]
+            if n == 1:
+                flat.append(int(v) if kind == "i" else float(v))
+            elif n == 16:
+                flat.extend(np.asarray(v, float).T.ravel().tolist())
+            else:
+                flat.extend(map(int if kind == "i" else float, v))
+        struct.pack_into(self.fmt, self.data, 0, *flat)
         self.buf.orphan()  # fresh storage: no wait for the previous frame's draws
-        self.buf.write(self.f)
+        self.buf.write(self.data)
 
     def release(self) -> None:
         self.buf.release()

@@ -37,10 +37,9 @@ class Geometry:
         self._clear_tables(0)
 
     def _clear_tables(self, n_rows: int) -> None:
-        self.at = np.full((n_rows, len(PASSES)), -1, np.int64)  # row, pass -> command
+        self.at = np.full((len(PASSES), n_rows), -1, np.int32)  # pass, row -> command
         self.cmd = np.zeros((0, 5), np.uint32)
-        self.tris = np.zeros(0, np.int64)
-        self.bufs: dict = {}  # slot -> [buffer, the commands it holds]
+        self.bufs: dict = {}  # slot -> [buffer, its commands, pass names, batches]
 
     def set_chunks(self, meshes: dict) -> None:
         """meshes: {(cx, cy): meshing.ChunkMesh}. Replaces what was shown."""
@@ -64,7 +63,7 @@ class Geometry:
         self.boxes = camera.boxes(self.origin - 0.5, self.origin + [16.5, 16.5, h + 0.5])
         max_quads = 1
         self._clear_tables(len(ci))
-        cmds, tris = [], []
+        cmds = []
         for p, name in enumerate(PASSES):
             c = cnt[ci, ri, p]
             rows = np.flatnonzero(c)
@@ -79,15 +78,14 @@ class Geometry:
             # DrawElementsIndirectCommand: count, instances, first index, base vertex, base instance
             cmd = np.zeros((len(rows), 5), np.uint32)
             cmd[:, 0], cmd[:, 1], cmd[:, 2], cmd[:, 4] = count // 4 * 6, 1, first // 4 * 6, rows
-            self.at[rows, p] = sum(map(len, cmds)) + np.arange(len(rows))
+            self.at[p, rows] = sum(map(len, cmds)) + np.arange(len(rows))
             cmds.append(cmd)
-            tris.append((count // 2).astype(np.int64))
             self.parts[name] = {
                 "vbo": self.ctx.buffer(verts.astype(np.uint32, copy=False).tobytes()),
                 "rows": rows, "vaos": {}}
         if cmds:
-            self.cmd, self.tris = np.concatenate(cmds), np.concatenate(tris)
-        self.quads = int(self.tris.sum()) // 2
+            self.cmd = np.concatenate(cmds)
+        self.quads = int(self.cmd[:, 0].sum()) // 6  # 6 indices a quad
         self.obo = self.ctx.buffer(self.origin.tobytes())
         self.ibo = self.ctx.buffer(meshing.quad_indices(max_quads).tobytes())
 
@@ -118,35 +116,34 @@ class Geometry:
         frame never overwrites commands the GL may still be reading."""
         names = [n for n in names if n in self.parts]
         cols = [PASSES.index(n) for n in names]
-        k = self.at[rows]
-        if cols != list(range(len(cols))):  # else a leading slice: no copy (view, shadow)
-            k = k[:, cols]
-        else:
-            k = k[:, :len(cols)]
+        # leading passes (view: all, shadow: all but blend) are a slice, not a copy
+        at = self.at[:len(cols)] if cols == list(range(len(cols))) else self.at[cols]
+        k = np.take(at, rows, axis=1)  # 2x a fancy index, as below
         has = k >= 0
-        every = k.T[has.T]  # pass by pass, each pass's commands in table order
-        n_of = has.sum(0).tolist()
-        buf = None
+        every = k[has]  # pass by pass, each pass's commands in table order
+        last = self.bufs.get(slot)
+        key = (names, self.indirect_ok)
+        if last is not None and last[2] == key and np.array_equal(last[1], every):
+            return last[3]  # the same regions as the slot's last frame: nothing to do
+        n_of = [int(np.count_nonzero(h)) for h in has]
+        cmd = np.take(self.cmd, every, axis=0)
+        buf = last[0] if last is not None else None
         if self.indirect_ok and len(every):
-            buf = self.bufs.get(slot)
-            if buf is None or not np.array_equal(buf[1], every):
-                data = np.take(self.cmd, every, axis=0).tobytes()  # 2x a fancy index
-                if buf is None or buf[0].size < len(data):
-                    if buf is not None:
-                        buf[0].release()
-                    buf = self.bufs[slot] = [self.ctx.buffer(reserve=max(len(data), 4096) * 2),
-                                             every]
-                else:
-                    buf[0].orphan()  # fresh storage: no wait for draws still reading it
-                buf[0].write(data)
-                buf[1] = every
-        tri = np.zeros(len(every) + 1, np.int64)
-        np.cumsum(self.tris[every], out=tri[1:])
-        out, off = {}, 0
-        for name, n in zip(names, n_of):
-            out[name] = (name, every[off:off + n], buf, off,
-                         int(tri[off + n] - tri[off])) if n else None
-            off += n
+            data = cmd.tobytes()
+            if buf is None or buf.size < len(data):
+                if buf is not None:
+                    buf.release()
+                buf = self.ctx.buffer(reserve=max(len(data), 4096) * 2)
+            else:
+                buf.orphan()  # fresh storage: no wait for draws still reading it
+            buf.write(data)
+        starts = np.cumsum([0] + n_of[:-1]).tolist()
+        full = [s for s, n in zip(starts, n_of) if n]
+        # 3 indices a triangle
+        tris = iter((np.add.reduceat(cmd[:, 0], full) // 3).tolist() if full else ())
+        out = {name: (name, every[s:s + n], buf if self.indirect_ok else None, s, next(tris))
+               if n else None for name, s, n in zip(names, starts, n_of)}
+        self.bufs[slot] = [buf, every, key, out]
         return out
 
     def draw(self, batch, prog, stats: dict | None = None) -> None:
@@ -156,7 +153,7 @@ class Geometry:
         name, sel, buf, off, tris = batch
         vao = self.vao(name, prog)
         if buf is not None:
-            vao.render_indirect(buf[0], mode=self.ctx.TRIANGLES, count=len(sel), first=off)
+            vao.render_indirect(buf, mode=self.ctx.TRIANGLES, count=len(sel), first=off)
             calls = 1
         else:
             u = prog["region_origin"]  # a program built with UNIFORM_ORIGIN
@@ -174,8 +171,9 @@ class Geometry:
             for vao in part["vaos"].values():
                 vao.release()
             part["vbo"].release()
-        for buf in self.bufs.values():
-            buf[0].release()
+        for b in self.bufs.values():
+            if b[0] is not None:
+                b[0].release()
         self.bufs.clear()
         self.parts.clear()
         for b in (self.ibo, self.obo):

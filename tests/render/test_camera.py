@@ -40,3 +40,36 @@ def test_closed_form_matrices_match_numpy():
         # what lies ahead of the camera lands in the middle of the screen
         p = vp @ np.r_[cam.pos + cam.forward * (cam.near + 5.0), 1.0]
         assert np.allclose(p[:2] / p[3], 0.0, atol=1e-6) and -1 < p[2] / p[3] < 1
+
+
+def test_shadow_matrix_matches_numpy_reference(gl):
+    """The light matrix in Python floats equals the NumPy formulation: ortho fitted to
+    the frustum corners (from the inverse view-projection) in light space, the near
+    plane reaching back to the top of the area."""
+    from voxel_addon.render import Settings
+    from voxel_addon.render.pipeline import Renderer
+    r = Renderer(gl, Settings())
+    r.area = (-3, -2, 4, 5)
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        cam = C.Camera(*rng.uniform(-40, 40, 2), rng.uniform(60, 120), rng.uniform(0, 360),
+                       rng.uniform(-80, 80), 70.0, rng.uniform(1, 2), 0.1, 600.0)
+        d = rng.normal(size=3)
+        d[2] = abs(d[2]) + 0.1
+        d /= np.linalg.norm(d)
+        got, texel, bias = r._shadow_matrix(cam, d)
+        near_cam = C.Camera(cam.x, cam.y, cam.z, cam.yaw, cam.pitch, cam.fov, cam.aspect,
+                            cam.near, r.s.shadow_fade + 2.0)
+        corners = C.frustum_corners(np.linalg.inv(near_cam.view_proj()))
+        assert np.allclose(sorted(near_cam.corners()), sorted(map(tuple, corners)), atol=1e-6)
+        view = C.look_at(corners.mean(0), -d)
+        lc = corners @ view[:3, :3].T + view[:3, 3]
+        lo, hi = lc.min(0), lc.max(0)
+        box = np.array([[x, y, z, 1.0] for x in (-48, 64) for y in (-32, 80) for z in (0, 256)])
+        top = max(hi[2], (box @ view[2]).max())
+        near, far = -top - 1.0, -lo[2] + 1.0
+        want = C.ortho(lo[0], hi[0], lo[1], hi[1], near, far) @ view
+        assert np.allclose(got, want, atol=1e-9)
+        assert np.isclose(texel, max(hi[0] - lo[0], hi[1] - lo[1]) / r.s.shadow_size)
+        assert np.isclose(bias, 0.05 / (far - near))
+    r.release()

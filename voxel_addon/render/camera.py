@@ -60,6 +60,20 @@ class Camera:
                         [0.0, 0.0, 1.0 / d, k]])
         return vp, inv
 
+    def corners(self, far: float | None = None) -> list[tuple[float, float, float]]:
+        """The view frustum's 8 world corners (near plane first), up to `far`."""
+        (sx, sy, sz, _), (ux, uy, uz, _), (bx, by, bz, _) = _view_rows(
+            (self.x, self.y, self.z), self._fwd())
+        t = math.tan(math.radians(self.fov) / 2)
+        out = []
+        for d in (self.near, self.far if far is None else far):
+            cx, cy, cz = self.x - bx * d, self.y - by * d, self.z - bz * d
+            h, w = d * t, d * t * self.aspect
+            for i, j in ((-1, -1), (1, -1), (-1, 1), (1, 1)):
+                out.append((cx + sx * w * i + ux * h * j, cy + sy * w * i + uy * h * j,
+                            cz + sz * w * i + uz * h * j))
+        return out
+
     def _fwd(self):
         y, p = math.radians(self.yaw), math.radians(self.pitch)
         return math.cos(p) * math.cos(y), math.cos(p) * math.sin(y), math.sin(p)

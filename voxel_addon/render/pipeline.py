@@ -36,7 +36,6 @@ class Renderer:
         self._fs: dict = {}          # program -> empty VAO for fullscreen passes
         self._plans: dict = {}       # switches -> the programs of every pass
         self._pass = None            # pass -> _Pass, for the current targets
-        self._box = (None, None)     # (area, its 8 corners) for the shadow near plane
         # llvmpipe implements anisotropic filtering as an EWA scan (Heckbert) over the
         # whole texel footprint of a pixel, derived from the coordinate differences of
         # the 2x2 quad and not bounded by the maximum anisotropy. Nearly edge-on sliver
@@ -411,27 +410,36 @@ class Renderer:
     def _shadow_matrix(self, camera: cam.Camera, light_dir):
         """Ortho light matrix fitted to the view frustum up to the shadow fade distance.
 
-        Returns (matrix, world size of a shadow texel, depth bias in depth units)."""
-        near_cam = cam.Camera(camera.x, camera.y, camera.z, camera.yaw, camera.pitch,
-                              camera.fov, camera.aspect, camera.near, self.s.shadow_fade + 2.0)
-        corners = cam.frustum_corners(near_cam.matrices()[1])
-        view = cam.look_at(corners.mean(0), -np.asarray(light_dir))  # light space: +z to the light
-        lc = corners @ view[:3, :3].T + view[:3, 3]
-        lo, hi = lc.min(0), lc.max(0)
+        Returns (matrix, world size of a shadow texel, depth bias in depth units).
+        Python floats throughout: a few dozen products, where NumPy's per-call cost
+        was most of the frame's matrix work."""
+        pts = camera.corners(self.s.shadow_fade + 2.0)
+        n = len(pts)
+        mid = [sum(p[k] for p in pts) / n for k in range(3)]
+        rows = cam._view_rows(mid, [-v for v in light_dir])  # light space: +z to the light
+        lc = [[r[0] * x + r[1] * y + r[2] * z + r[3] for r in rows] for x, y, z in pts]
+        lo = [min(c[k] for c in lc) for k in range(3)]
+        hi = [max(c[k] for c in lc) for k in range(3)]
         # the near plane reaches back to the top of the shown area so off-screen casters
         # between the light and the view still cast; depth precision stays bounded
         top = hi[2]
         if self.area:
-            if self._box[0] != self.area:
-                cx0, cy0, cx1, cy1 = self.area
-                self._box = (self.area, np.array([[x, y, z, 1.0] for x in (16 * cx0, 16 * cx1)
-                                                  for y in (16 * cy0, 16 * cy1)
-                                                  for z in (0.0, 256.0)]))
-            top = max(top, float((self._box[1] @ view[2]).max()))
+            cx0, cy0, cx1, cy1 = self.area
+            r = rows[2]
+            top = max(top, max(r[0] * x + r[1] * y + r[2] * z + r[3]
+                               for x in (16 * cx0, 16 * cx1) for y in (16 * cy0, 16 * cy1)
+                               for z in (0.0, 256.0)))
         near, far = -top - 1.0, -lo[2] + 1.0
-        proj = cam.ortho(lo[0], hi[0], lo[1], hi[1], near, far)
+        # ortho(lo.x, hi.x, lo.y, hi.y, near, far) @ view, row by row
+        sx, sy, sz = 2 / (hi[0] - lo[0]), 2 / (hi[1] - lo[1]), -2 / (far - near)
+        ox, oy = -(hi[0] + lo[0]) / (hi[0] - lo[0]), -(hi[1] + lo[1]) / (hi[1] - lo[1])
+        oz = -(far + near) / (far - near)
+        m = np.array([[v * sx for v in rows[0][:3]] + [rows[0][3] * sx + ox],
+                      [v * sy for v in rows[1][:3]] + [rows[1][3] * sy + oy],
+                      [v * sz for v in rows[2][:3]] + [rows[2][3] * sz + oz],
+                      [0.0, 0.0, 0.0, 1.0]])
         texel = max(hi[0] - lo[0], hi[1] - lo[1]) / self.s.shadow_size
-        return proj @ view, texel, 0.05 / (far - near)  # 0.05 blocks of depth bias
+        return m, texel, 0.05 / (far - near)  # 0.05 blocks of depth bias
 
     def release(self):
         for vao in self._fs.values():

@@ -73,3 +73,40 @@ def test_shadow_matrix_matches_numpy_reference(gl):
         assert np.isclose(texel, max(hi[0] - lo[0], hi[1] - lo[1]) / r.s.shadow_size)
         assert np.isclose(bias, 0.05 / (far - near))
     r.release()
+
+
+def test_gpu_culling_matches_numpy(gl):
+    """shaders/cull.comp (instance count per indirect command) keeps exactly the
+    regions camera.visible_boxes keeps, up to float rounding on a plane."""
+    from voxel_addon import meshing
+    from voxel_addon.core import chunk
+    from voxel_addon.core.blocks import REGISTRY as R
+    from voxel_addon.render.geometry import Geometry
+    rng = np.random.default_rng(7)
+    b = chunk.empty(width=16 * 6 + 2, depth=16 * 6 + 2)
+    b[:, :, :40] = R.id("stone")
+    b[:, :, 40:200][rng.random((98, 98, 160)) < 0.002] = R.id("stone")  # scattered regions
+    b[rng.random(b.shape) < 0.0005] = R.id("water")
+    geo = Geometry(gl)
+    geo.set_chunks(meshing.build_chunks(b, (-3, -3), backend="numpy"))
+    assert len(geo.origin) > 50 and geo.gpu
+    checked = culled = 0
+    for _ in range(30):
+        cam = C.Camera(*rng.uniform(-80, 80, 2), rng.uniform(0, 250), rng.uniform(0, 360),
+                       rng.uniform(-89, 89), rng.uniform(30, 100), rng.uniform(0.5, 2.5))
+        vp = cam.view_proj()
+        gpu = geo.gpu_batches(vp, geo.parts)
+        geo.barrier()
+        cmd = np.frombuffer(geo.bufs["view"][0].read(), np.uint32).reshape(-1, 5)
+        cpu = geo.batches(geo.cull(vp), geo.parts)
+        d = (C.planes(vp)[:, :3] @ geo.boxes[0:3] + np.abs(C.planes(vp)[:, :3]) @ geo.boxes[3:6]
+             + C.planes(vp)[:, 3:]).min(0)  # the binding plane's margin per region (float64)
+        for name, (_, _, _, first, n, _) in gpu.items():
+            on_gpu = set(np.flatnonzero(cmd[first:first + n, 1]) + first)
+            on_cpu = set(cpu[name][1].tolist()) if cpu[name] else set()
+            for i in on_gpu ^ on_cpu:  # disagreements only where a box touches a plane
+                assert abs(d[cmd[i, 4]]) < 1e-3 * (1 + abs(vp).max()), (name, i, d[cmd[i, 4]])
+            checked += n
+            culled += n - len(on_gpu)
+    assert checked > 1000 and 0 < culled < checked
+    geo.release()

@@ -220,19 +220,44 @@ def test_waving_moves_plants_only_when_on(gl):
         assert (moved > 1.0) if on else (moved == 0.0), (on, moved)
 
 
-def test_per_region_draws_match_multi_draw_indirect(gl):
-    """The GL 4.1 path (one draw per visible region, origin as a uniform) draws the
-    same frame as the GL 4.3+ multi-draw indirect path, with culling and peeling."""
-    b = floor("grass")
+def test_culling_paths_draw_the_same_frame(gl):
+    """The three ways to cull and draw give the same frame and triangle count, with
+    culling, shadows and peeling: GPU culling (cull.comp sets instance counts, GL 4.3+),
+    CPU culling into a multi-draw indirect buffer, and the GL 4.1 path (CPU culling,
+    one draw per visible region with the origin as a uniform)."""
+    b = floor("grass", n=3)
     b[10:20, 10:20, 61:64] = R.id("water")
     b[5, 5, 61] = next(i for i, x in enumerate(R.blocks) if x.double_sided)  # a plant
     b[20, 8, 61:66] = R.id("leaves")
-    imgs, calls = [], []
-    for indirect in (True, False):
+    b[40, 40, 61:80] = R.id("stone")  # outside the view: culled
+    imgs, stats = [], []
+    for indirect, gpu in ((True, True), (True, False), (False, False)):
         r = renderer(gl, b, waving=False)
-        r.geo.indirect_ok = indirect
+        r.geo.indirect_ok, r.geo.gpu_cull = indirect, gpu
         imgs.append(r.render(Camera(2, 2, 72, 45, -30), 12.0, SIZE))
-        calls.append(r.stats["draw_calls"])
+        stats.append((r.stats["triangles"], r.stats["shadow_triangles"], r.stats["draw_calls"]))
         r.release()
-    assert calls[1] > calls[0]
-    assert np.array_equal(imgs[0], imgs[1])
+    assert stats[0] == stats[1] and stats[0][:2] == stats[2][:2], stats
+    assert stats[2][2] > stats[1][2]  # one draw per region
+    assert 0 < stats[0][1] < stats[0][0]
+    assert np.array_equal(imgs[0], imgs[1]) and np.array_equal(imgs[1], imgs[2])
+
+
+def test_gpu_culled_stats_count_the_frame_they_belong_to(gl):
+    """Triangles of GPU-culled draws are read back from the frame's command buffers
+    when asked: right after the frame they match the CPU count; once the next frame
+    has culled again, the old frame's unread stats refuse rather than mislead."""
+    b = floor("grass", n=2)
+    b[3:9, 3:9, 61:70] = R.id("stone")
+    r = renderer(gl, b)
+    r.render(Camera(2, 2, 72, 45, -30), 12.0, SIZE)
+    first = r.stats
+    assert first.pending  # not counted yet: nobody asked
+    r.render(Camera(30, 30, 90, 225, -40), 12.0, SIZE)
+    with pytest.raises(RuntimeError, match="earlier frame"):
+        first["triangles"]
+    gpu = r.stats.snapshot()
+    r.geo.gpu_cull = False
+    r.render(Camera(30, 30, 90, 225, -40), 12.0, SIZE)
+    assert gpu == r.stats.snapshot() | {"cpu_ms": gpu["cpu_ms"]} and gpu["triangles"] > 0
+    r.release()

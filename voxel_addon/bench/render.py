@@ -145,7 +145,7 @@ def run(ctx):
             r.s = Settings().with_effects(eff)
             ms, py, py_wall, _ = _measure(gl, r, Camera(*sc.camera), hours, size, n)
             table[name, vname] = ms
-            st = r.stats
+            st = r.stats.snapshot()
             note = f"{size[0]}x{size[1]}, {st['triangles']} tris, {st['draw_calls']} draws"
             yield (f"render_{name}_{vname}_ms", ms, "ms", note)
             if vname == "default":
@@ -199,7 +199,7 @@ def _distance32(ctx, gl):
     cam = Camera(8, 8, 100, 30, -15)
     hours = daytime.parse_time("10:00")
     ms, py_static, _, calls = _measure(gl, r, cam, hours, (160, 90), 1 if ctx.quick else 2)
-    st = r.stats
+    st = r.stats.snapshot()
     # a moving camera changes the visible set every frame (command gathering + upload)
     pys, walls = [], []
     for i in range(3 if ctx.quick else 15):
@@ -240,7 +240,8 @@ def _distance32(ctx, gl):
     yield (f"render_d{d}_python_static_ms", py_static, "ms", "camera still (no command upload)")
     yield (f"render_d{d}_python_idle_gl_ms", idle, "ms",
            "the same, camera at the sky (GL does ~nothing; median of 5)")
-    yield (f"render_d{d}_cull_ms", cull, "ms", "NumPy frustum culling of the region table, one matrix")
+    yield (f"render_d{d}_cull_ms", cull, "ms", "NumPy frustum culling of the region table, one matrix (the GL 4.1 path; "
+           "4.3+ culls on the GPU)")
     yield (f"render_d{d}_prepare_hot_ms", hot_ms, "ms",
            "Renderer.prepare (values, culling, batching; camera moving) back to back, outside "
            "moderngl calls: the Python work without the wake-up cost after GL waits")

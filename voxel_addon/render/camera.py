@@ -144,13 +144,20 @@ def boxes(lo, hi, dtype=np.float32) -> np.ndarray:
                                       np.ones((1, len(lo)))], dtype)
 
 
-def visible_boxes(mvp: np.ndarray, ch: np.ndarray) -> np.ndarray:
-    """visible() for boxes(lo, hi): the per-frame form, ~8k regions (view distance 32)
-    in ~0.05 ms (the (7, n) layout is 10x faster than (n, 3) @ (3, 6) products)."""
+def planes(mvp: np.ndarray) -> np.ndarray:
+    """(6, 4) clip planes of mvp (-w <= x, y, z <= w): inside where n . p + d >= 0."""
     m = np.asarray(mvp, np.float64)
     p = np.empty((6, 4))
     p[0::2] = m[3] + m[:3]
     p[1::2] = m[3] - m[:3]
+    return p
+
+
+def visible_boxes(mvp: np.ndarray, ch: np.ndarray) -> np.ndarray:
+    """visible() for boxes(lo, hi): the per-frame form, ~8k regions (view distance 32)
+    in ~0.05 ms (the (7, n) layout is 10x faster than (n, 3) @ (3, 6) products).
+    shaders/cull.comp is its GPU twin."""
+    p = planes(mvp)
     a = np.empty((6, 7), ch.dtype)
     a[:, :3] = p[:, :3]
     a[:, 3:6] = np.abs(p[:, :3])

@@ -11,8 +11,11 @@ into one buffer, uploaded when it changed since the same slot's last frame, and 
 pass draws its slice of it.
 
 GL 4.3+: glMultiDrawElementsIndirect, the region origin comes from baseInstance
-through an instanced attribute. GL 4.1 (macOS): one draw per visible region with the
-origin as a uniform.
+through an instanced attribute, and the culling runs on the GPU (`gpu_cull`,
+shaders/cull.comp, the twin of camera.visible_boxes): a slot's buffer holds every
+command and a compute pass sets each one's instance count to 1 or 0, so the CPU
+neither culls nor gathers. GL 4.1 (macOS): CPU culling and one draw per visible
+region with the origin as a uniform.
 """
 from __future__ import annotations
 
@@ -20,6 +23,7 @@ import numpy as np
 
 from .. import meshing
 from . import camera
+from .programs import source
 
 PASSES = meshing.PASSES  # opaque, cutout (leaves), cutout2 (double-sided plants), blend
 
@@ -28,6 +32,10 @@ class Geometry:
     def __init__(self, ctx):
         self.ctx = ctx
         self.indirect_ok = ctx.version_code >= 430
+        self.gpu_cull = True  # with indirect_ok (4.3 brings compute shaders); tests switch it
+        self.frames = 0  # gpu_batches calls: the command buffers' generation
+        self._cs = None
+        self._boxes = None  # the region boxes for cull.comp
         self.parts: dict[str, dict] = {}
         self.ibo = None
         self.obo = None
@@ -82,11 +90,16 @@ class Geometry:
             cmds.append(cmd)
             self.parts[name] = {
                 "vbo": self.ctx.buffer(verts.astype(np.uint32, copy=False).tobytes()),
-                "rows": rows, "vaos": {}}
+                "rows": rows, "vaos": {}, "first": sum(map(len, cmds)) - len(rows),
+                "boxes": self.boxes[:, rows]}
         if cmds:
             self.cmd = np.concatenate(cmds)
         self.quads = int(self.cmd[:, 0].sum()) // 6  # 6 indices a quad
         self.obo = self.ctx.buffer(self.origin.tobytes())
+        if self.indirect_ok:  # centre and half extent per region, vec4-aligned
+            b = np.zeros((len(ci), 2, 4), np.float32)
+            b[:, 0, :3], b[:, 1, :3] = self.boxes[0:3].T, self.boxes[3:6].T
+            self._boxes = self.ctx.buffer(b.tobytes() or b"\0" * 32)
         self.ibo = self.ctx.buffer(meshing.quad_indices(max_quads).tobytes())
 
     def vao(self, name: str, prog):
@@ -141,19 +154,58 @@ class Geometry:
         full = [s for s, n in zip(starts, n_of) if n]
         # 3 indices a triangle
         tris = iter((np.add.reduceat(cmd[:, 0], full) // 3).tolist() if full else ())
-        out = {name: (name, every[s:s + n], buf if self.indirect_ok else None, s, next(tris))
+        out = {name: (name, every[s:s + n], buf if self.indirect_ok else None, s, n, next(tris))
                if n else None for name, s, n in zip(names, starts, n_of)}
         self.bufs[slot] = [buf, every, key, out]
         return out
 
-    def draw(self, batch, prog, stats: dict | None = None) -> None:
-        """Draw a batch; counts triangles and draw calls into stats."""
+    def gpu_batches(self, mvp: np.ndarray, names, slot: str = "view") -> dict:
+        """batches() with the culling on the GPU: the slot's buffer holds every command
+        of every pass (uploaded once) and cull.comp sets their instance counts for mvp.
+        Call barrier() after the last one and before drawing. Triangles are counted
+        from the buffer when Stats are read."""
+        names = [n for n in names if n in self.parts]
+        self.frames += 1
+        last = self.bufs.get(slot)
+        if last is None or last[2] != "gpu":
+            if last is not None and last[0] is not None:
+                last[0].release()
+            last = self.bufs[slot] = [self.ctx.buffer(self.cmd.tobytes() or b"\0" * 20),
+                                      None, "gpu", None]
+        buf, n = last[0], len(self.cmd)
+        if self._cs is None:
+            self._cs = self.ctx.compute_shader(source("cull.comp", None, 430))
+        self._cs["planes"].write(camera.planes(mvp).astype(np.float32).tobytes())
+        self._cs["n"].value = n
+        buf.bind_to_storage_buffer(0)
+        self._boxes.bind_to_storage_buffer(1)
+        self._cs.run((n + 63) // 64)
+        return {name: (name, None, buf, self.parts[name]["first"],
+                       len(self.parts[name]["rows"]), None) for name in names}
+
+    @property
+    def gpu(self) -> bool:
+        """Whether frames cull on the GPU (gpu_batches) rather than the CPU (batches)."""
+        return self.gpu_cull and self.indirect_ok
+
+    def seen(self, name: str, mvp: np.ndarray) -> bool:
+        """Whether any region of pass name may be in view (CPU, that pass's boxes only:
+        with GPU culling the frame still needs to know if there is water to peel)."""
+        part = self.parts.get(name)
+        return part is not None and bool(camera.visible_boxes(mvp, part["boxes"]).any())
+
+    def barrier(self) -> None:
+        """The GPU culling's instance counts are visible to the draws that follow."""
+        self.ctx.memory_barrier(0x40)  # GL_COMMAND_BARRIER_BIT
+
+    def draw(self, batch, prog, stats: "Stats | None" = None, shadow: bool = False) -> None:
+        """Draw a batch; counts triangles (also as shadow_triangles) and draw calls."""
         if batch is None:
             return
-        name, sel, buf, off, tris = batch
+        name, sel, buf, off, n, tris = batch
         vao = self.vao(name, prog)
         if buf is not None:
-            vao.render_indirect(buf, mode=self.ctx.TRIANGLES, count=len(sel), first=off)
+            vao.render_indirect(buf, mode=self.ctx.TRIANGLES, count=n, first=off)
             calls = 1
         else:
             u = prog["region_origin"]  # a program built with UNIFORM_ORIGIN
@@ -163,8 +215,7 @@ class Geometry:
                 vao.render(mode=self.ctx.TRIANGLES, vertices=c, first=first)
             calls = len(sel)
         if stats is not None:
-            stats["triangles"] += tris
-            stats["draw_calls"] += calls
+            stats.add(tris, calls, shadow, (buf, off, n))
 
     def release(self) -> None:
         for part in self.parts.values():
@@ -175,8 +226,60 @@ class Geometry:
             if b[0] is not None:
                 b[0].release()
         self.bufs.clear()
+        if self._boxes is not None:
+            self._boxes.release()
+            self._boxes = None
         self.parts.clear()
         for b in (self.ibo, self.obo):
             if b is not None:
                 b.release()
         self.ibo = self.obo = None
+
+
+class Stats(dict):
+    """A frame's counters: triangles, shadow_triangles, draw_calls. Draws culled on
+    the GPU count their triangles from their command buffers when first read (a
+    readback, so only when someone asks): read them before the next frame culls."""
+
+    def __init__(self, geo: "Geometry"):
+        super().__init__(triangles=0, shadow_triangles=0, draw_calls=0)
+        self.pending = []
+        self.geo, self.frame = geo, geo.frames
+
+    def add(self, tris, calls: int, shadow: bool, cmds) -> None:
+        get, put = super().__getitem__, super().__setitem__  # no readback while drawing
+        put("draw_calls", get("draw_calls") + calls)
+        if tris is None:
+            self.pending.append((*cmds, shadow))
+            return
+        put("triangles", get("triangles") + tris)
+        if shadow:
+            put("shadow_triangles", get("shadow_triangles") + tris)
+
+    def _resolve(self) -> None:
+        if self.geo.frames != self.frame:
+            raise RuntimeError("these are an earlier frame's stats: the GPU culling has "
+                               "since been redone; read Renderer.stats before the next frame")
+        pending, self.pending, read = self.pending, [], {}
+        for buf, first, n, shadow in pending:
+            c = read.get(id(buf))
+            if c is None:
+                c = read[id(buf)] = np.frombuffer(buf.read(), np.uint32).reshape(-1, 5)
+            tris = int((c[first:first + n, 0].astype(np.int64) * c[first:first + n, 1]).sum()) // 3
+            self.add(tris, 0, shadow, None)
+
+    def snapshot(self) -> dict:
+        """The counters as a plain dict (resolved now)."""
+        if self.pending:
+            self._resolve()
+        return dict(self.items())
+
+    def __getitem__(self, key):
+        if self.pending:
+            self._resolve()
+        return super().__getitem__(key)
+
+    def get(self, key, default=None):
+        if self.pending:
+            self._resolve()
+        return super().get(key, default)

@@ -12,7 +12,7 @@ import numpy as np
 from ..core.blocks import REGISTRY
 from . import camera as cam
 from . import sky
-from .geometry import Geometry
+from .geometry import Geometry, Stats
 from . import lightvol, oit
 from .lightvol import LightVolume
 from .frame import BINDING, FrameBlock
@@ -222,9 +222,12 @@ class Renderer:
             vp, inv_vp = draw_cam.matrices()
         shadows = s.shadows and debug in (0, 4, 6) and sp["light_dir"][2] > 0.02
         geo = self.geo
-        rows = geo.cull(cull_vp)
-        view = geo.batches(rows, geo.parts)
-        seen = view.get("blend") is not None
+        if geo.gpu:
+            view = geo.gpu_batches(cull_vp, geo.parts)
+            seen = geo.seen("blend", cull_vp)
+        else:
+            view = geo.batches(geo.cull(cull_vp), geo.parts)
+            seen = view.get("blend") is not None
         use_oit = seen and s.transparency == "oit"  # one forward pass instead (oit.py)
         layers = s.peel_layers if seen and not use_oit else 0
         ssao = s.ssao and debug in (0, 6)
@@ -242,8 +245,9 @@ class Renderer:
             light_vp, texel, bias = self._shadow_matrix(camera, sp["light_dir"])
             F.set(shadow_vp=light_vp, shadow_mat=_BIAS @ light_vp, shadow_texel=texel,
                   shadow_bias=bias)
-            lit = geo.cull(light_vp)
-            cast = geo.batches(lit, [name for name, _ in P["shadow"]], "shadow")
+            names = [name for name, _ in P["shadow"]]
+            cast = (geo.gpu_batches(light_vp, names, "shadow") if geo.gpu
+                    else geo.batches(geo.cull(light_vp), names, "shadow"))
         sky_on = debug in (0, 6)  # debug views show black where there is no surface
         for k in ("zenith", "horizon", "halo", "disc"):
             F.set(**{f"sky_{k}": sp[k] if sky_on else (0.0, 0.0, 0.0)})
@@ -256,12 +260,14 @@ class Renderer:
               dof_start=fog_end * 0.7, dof_end=fog_end * 1.1, ssao_radius=s.ssao_radius)
         F.upload()
         F.buf.bind_to_uniform_block(BINDING)
+        if geo.gpu:
+            geo.barrier()
         self.vol.uniforms(P["shade"])
         if layers:
             self.vol.uniforms(P["layer"])
         if use_oit:
             self.vol.uniforms(P["oit"])
-        return _Frame(T, S, P, view, cast if shadows else None, layers, use_oit, ssao, dof)
+        return _Frame(T, S, P, view, cast if shadows else None, layers, use_oit, ssao, dof, geo)
 
     def submit(self, f: "_Frame") -> None:
         """Walk the passes of a prepared frame."""
@@ -273,8 +279,7 @@ class Renderer:
             with S["shadow"]:
                 T["shadow_fbo"].clear(depth=1.0)
                 for name, prog in P["shadow"]:
-                    geo.draw(f.cast.get(name), prog, stats)
-            stats["shadow_triangles"] = stats["triangles"]
+                    geo.draw(f.cast.get(name), prog, stats, shadow=True)
 
         # opaque G-buffer; double-sided plants without face culling
         with S["g"]:
@@ -458,10 +463,10 @@ class _Frame:
     """What prepare() made for submit(): targets, passes, programs, batches, switches."""
     __slots__ = ("T", "S", "P", "view", "cast", "layers", "use_oit", "ssao", "dof", "stats")
 
-    def __init__(self, T, S, P, view, cast, layers, use_oit, ssao, dof):
+    def __init__(self, T, S, P, view, cast, layers, use_oit, ssao, dof, geo):
         self.T, self.S, self.P, self.view, self.cast = T, S, P, view, cast
         self.layers, self.use_oit, self.ssao, self.dof = layers, use_oit, ssao, dof
-        self.stats = {"triangles": 0, "draw_calls": 0}
+        self.stats = Stats(geo)
 
 
 class _Pass:

@@ -15,6 +15,9 @@ from __future__ import annotations
 import ctypes
 from contextlib import contextmanager
 
+from .frame import BINDING
+from .programs import UNITS
+
 # glIsEnabled caps -> value in a fresh moderngl context (GL's defaults, plus what
 # moderngl enables when it creates a context: primitive restart, seamless cube maps)
 CAPS = {
@@ -75,11 +78,11 @@ PIXEL_STORE = {  # glPixelStorei name -> fresh value
 BUFFERS = {0x8892: 0x8894, 0x8F3F: 0x8F43, 0x88EB: 0x88ED, 0x88EC: 0x88EF,  # array, indirect, pack, unpack
            0x8A11: 0x8A28, 0x90D2: 0x90D3, 0x8F36: 0x8F36, 0x8F37: 0x8F37,  # uniform, storage, copy r/w
            0x90EE: 0x90EF}                                                  # dispatch indirect
-# texture targets moderngl binds -> binding query
-TEX_TARGETS = {0x0DE1: 0x8069, 0x8C1A: 0x8C1D, 0x806F: 0x806A, 0x9100: 0x9104, 0x8513: 0x8514}
-UNITS = 16        # texture units 0..15 are saved (the pipeline uses 0..7), and the last
-                  # one, where moderngl binds a texture to write it
-INDEXED = 16      # uniform / storage buffer binding points saved
+# texture targets the pipeline binds (2D, 2D array, 3D, 2D multisample) -> binding query
+TEX_TARGETS = {0x0DE1: 0x8069, 0x8C1A: 0x8C1D, 0x806F: 0x806A, 0x9100: 0x9104}
+# indexed buffer binding points the pipeline binds: the frame block (uniform), and
+# cull.comp's commands and boxes (storage); target -> (binding query, points)
+INDEXED = {0x8A11: (0x8A28, (BINDING,)), 0x90D2: (0x90D3, (0, 1))}
 
 _SIGS = {
     "glGetIntegerv": (None, ctypes.c_uint, ctypes.c_void_p),
@@ -137,13 +140,15 @@ class GL:
             ptr = load(name)
             setattr(self, name[2:], proto(res, *args)(ptr) if ptr else None)
 
+    _i = (ctypes.c_int * 16)()  # one scratch array: a ctypes allocation per query costs more
+
     def ints(self, enum, n=4):
-        a = (ctypes.c_int * n)()
-        self.GetIntegerv(enum, a)
-        return tuple(a)
+        self.GetIntegerv(enum, self._i)
+        return tuple(self._i[:n])
 
     def int(self, enum):
-        return self.ints(enum, 4)[0]
+        self.GetIntegerv(enum, self._i)
+        return self._i[0]
 
     def floats(self, enum, n=4):
         a = (ctypes.c_float * 16)()
@@ -169,8 +174,10 @@ def gl() -> GL:
 
 
 def saved_units() -> list[int]:
+    """The units the pipeline binds (programs.UNITS) and the last one, where moderngl
+    binds a texture to write it."""
     n = gl().int(0x8B4D)  # MAX_COMBINED_TEXTURE_IMAGE_UNITS
-    return sorted(set(range(min(UNITS, n))) | {n - 1})
+    return sorted(set(UNITS.values()) | {n - 1})
 
 
 def snapshot(units: list[int] | None = None) -> dict:
@@ -204,8 +211,8 @@ def snapshot(units: list[int] | None = None) -> dict:
         tex[u] = (tuple(g.int(q) for q in TEX_TARGETS.values()), g.int(0x8919))
     g.ActiveTexture(active)
     s["active_texture"], s["textures"] = active, tex
-    s["indexed"] = {t: [_indexed(g, t, q, i) for i in range(INDEXED)]
-                    for t, q in ((0x8A11, 0x8A28), (0x90D2, 0x90D3))}
+    s["indexed"] = {t: {i: _indexed(g, t, q, i) for i in points}
+                    for t, (q, points) in INDEXED.items()}
     return s
 
 
@@ -229,8 +236,8 @@ def restore(s: dict) -> None:
     g.BindRenderbuffer(0x8D41, s["renderbuffer"])
     # a program deleted while current stays current until replaced, then it is gone
     g.UseProgram(s["program"] if g.IsProgram(s["program"]) else 0)
-    for t, (bufs) in s["indexed"].items():  # indexed binds also set the generic binding
-        for i, (b, off, size) in enumerate(bufs):
+    for t, bufs in s["indexed"].items():  # indexed binds also set the generic binding
+        for i, (b, off, size) in bufs.items():
             if b and size:
                 g.BindBufferRange(t, i, b, off, size)
             else:
@@ -279,8 +286,8 @@ def reset(units: list[int] | None = None) -> None:
     g.BindVertexArray(0)
     for t in BUFFERS:
         g.BindBuffer(t, 0)
-    for t in (0x8A11, 0x90D2):
-        for i in range(INDEXED):
+    for t, (_, points) in INDEXED.items():
+        for i in points:
             g.BindBufferBase(t, i, 0)
     for name, (_, setter, fresh) in INTS.items():
         if setter:

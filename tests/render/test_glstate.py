@@ -4,7 +4,6 @@ so it draws the same image as on a context of its own."""
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from voxel_addon.render import Camera, Settings, glstate
 

@@ -4,7 +4,6 @@ across the wrap, and open daylight outside the resident window."""
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from voxel_addon import light, resources
 from voxel_addon.light import scenes

@@ -1,6 +1,6 @@
 """Render regions on the GPU (thesis §5.3.2, §5.3.4): per pass one big vertex buffer of
-the meshing package's 4-byte vertices, a shared quad index pattern, CPU frustum
-culling per region and one multi-draw per pass.
+the meshing package's 4-byte vertices, a shared quad index pattern, frustum culling
+per region and one multi-draw per pass.
 
 All passes share one region table (chunk x region, with its box and origin), so a
 frame culls once per matrix (view, shadow) for every pass. One static table holds the
@@ -51,7 +51,7 @@ class Geometry:
 
     def set_chunks(self, meshes: dict) -> None:
         """meshes: {(cx, cy): meshing.ChunkMesh}. Replaces what was shown."""
-        self.release()
+        self._free()
         if not meshes:
             self.ibo = self.ctx.buffer(meshing.quad_indices(1).tobytes())
             return
@@ -218,6 +218,13 @@ class Geometry:
             stats.add(tris, calls, shadow, (buf, off, n))
 
     def release(self) -> None:
+        self._free()
+        if self._cs is not None:
+            self._cs.release()
+            self._cs = None
+
+    def _free(self) -> None:
+        """Everything of the shown chunks (the culling program stays)."""
         for part in self.parts.values():
             for vao in part["vaos"].values():
                 vao.release()

@@ -252,8 +252,9 @@ class Renderer:
         for k in ("zenith", "horizon", "halo", "disc"):
             F.set(**{f"sky_{k}": sp[k] if sky_on else (0.0, 0.0, 0.0)})
         F.set(vp=vp, inv_vp=inv_vp, cam_pos=(draw_cam.x, draw_cam.y, draw_cam.z),
-              far_dist=camera.far, shadow_eye=(camera.x, camera.y, camera.z), shadow_fade=s.shadow_fade, day_ambient=sp["ambient"],
-              day_u=sp["u"], day_direct=sp["direct"], sky_stars=sp["stars"] if sky_on else 0.0,
+              far_dist=camera.far, shadow_eye=(camera.x, camera.y, camera.z),
+              shadow_fade=s.shadow_fade, day_ambient=sp["ambient"], day_u=sp["u"],
+              day_direct=sp["direct"], sky_stars=sp["stars"] if sky_on else 0.0,
               sky_light_dir=sp["light_dir"], time=s.time, waving=s.waving,
               godray_strength=s.godray_strength, sun_px=sun_px, sun_radius=sun_r,
               sun_visible=sun_vis, fog_start=fog_end * 0.55, fog_end=fog_end,

@@ -195,8 +195,9 @@ class Geometry:
         return part is not None and bool(camera.visible_boxes(mvp, part["boxes"]).any())
 
     def barrier(self) -> None:
-        """The GPU culling's instance counts are visible to the draws that follow."""
-        self.ctx.memory_barrier(0x40)  # GL_COMMAND_BARRIER_BIT
+        """The GPU culling's instance counts are visible to the draws that follow (and
+        to a Stats readback)."""
+        self.ctx.memory_barrier(0x40 | 0x200)  # GL_COMMAND_ and GL_BUFFER_UPDATE_BARRIER_BIT
 
     def draw(self, batch, prog, stats: "Stats | None" = None, shadow: bool = False) -> None:
         """Draw a batch; counts triangles (also as shadow_triangles) and draw calls."""

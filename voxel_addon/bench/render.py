@@ -3,7 +3,7 @@ per reference scene and effect the frame time at 640×360, triangles and draw ca
 frame, and the Python side's cost per frame; plus the CPU cost at view distance 32.
 
 Frame ms: ctx.finish(), then draw() and ctx.finish() again (no readback); the minimum
-of n frames after a warm-up frame. Python ms: the wall time of draw() minus the time
+of n (3) frames after a warm-up frame. Python ms: the wall time of draw() minus the time
 spent inside moderngl calls (GLClock wraps every moderngl method and property setter
 the pipeline can reach; what happens inside them, including llvmpipe's vertex work in
 the calling thread and any driver wait, is GL time). So it is the time of our Python
@@ -133,7 +133,7 @@ def run(ctx):
     gl = source.context()
     size = (320, 180) if ctx.quick else (640, 360)
     variants = [v for v in VARIANTS if v[0] in QUICK] if ctx.quick else VARIANTS
-    n = 1 if ctx.quick else 2
+    n = 1 if ctx.quick else 3
     table = {}
     for name in scenes.SCENES:
         sc = scenes.SCENES[name]

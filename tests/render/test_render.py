@@ -261,3 +261,16 @@ def test_gpu_culled_stats_count_the_frame_they_belong_to(gl):
     r.render(Camera(30, 30, 90, 225, -40), 12.0, SIZE)
     assert gpu == r.stats.snapshot() | {"cpu_ms": gpu["cpu_ms"]} and gpu["triangles"] > 0
     r.release()
+
+
+@pytest.mark.parametrize("gpu", [True, False])
+def test_nothing_to_show_is_just_sky(gl, gpu):
+    from voxel_addon.render.pipeline import Renderer
+    r = Renderer(gl, Settings(msaa=1))
+    r.geo.gpu_cull = gpu
+    r.set_meshes({})
+    img = r.render(Camera(0, 0, 80, 0, 10), 12.0, SIZE)
+    assert r.stats["triangles"] == 0
+    sky = img[:8].reshape(-1, 3).mean(0)
+    assert sky[2] > sky[0] + 20 and img.std(axis=(0, 1)).max() < 40  # a blue sky, no geometry
+    r.release()

@@ -166,6 +166,8 @@ class Geometry:
         from the buffer when Stats are read."""
         names = [n for n in names if n in self.parts]
         self.frames += 1
+        if not names:  # nothing shown (or none of these passes): nothing to cull
+            return {}
         last = self.bufs.get(slot)
         if last is None or last[2] != "gpu":
             if last is not None and last[0] is not None:

@@ -141,3 +141,31 @@ def test_snapshot_sees_each_change(gl):
     assert glstate.errors() == []
     assert g is glstate.gl()
 
+
+
+def test_a_gl41_context_is_not_asked_for_gl43_state(tmp_path):
+    """macOS's GL 4.1 answers INVALID_ENUM for storage / dispatch-indirect buffers and
+    fixed-index restart: on a 4.1 context (Mesa's override) the snapshot leaves them
+    out, and round-trips without a GL error."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+    root = Path(__file__).resolve().parents[2]
+    code = ("import moderngl, json\n"
+            "from voxel_addon.render import glstate\n"
+            "ctx = moderngl.create_standalone_context(backend='egl')\n"
+            "s = glstate.snapshot()\n"
+            "glstate.reset(); glstate.restore(s)\n"
+            "print(json.dumps([ctx.version_code, sorted(s['caps']), sorted(s['buffers']),"
+            " sorted(s['indexed']), glstate.errors()]))\n")
+    env = dict(os.environ, PYTHONPATH=str(root), MESA_GL_VERSION_OVERRIDE="4.1",
+               MESA_GLSL_VERSION_OVERRIDE="410")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
+                       timeout=120)
+    assert r.returncode == 0, r.stderr
+    import json
+    version, caps, bufs, indexed, errs = json.loads(r.stdout)
+    assert version == 410 and errs == []
+    assert not set(glstate.GL43) & set(caps + bufs + indexed)
+    assert 0x8A11 in indexed and 0x8892 in bufs  # the 4.1 state is still saved

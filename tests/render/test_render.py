@@ -274,3 +274,47 @@ def test_nothing_to_show_is_just_sky(gl, gpu):
     sky = img[:8].reshape(-1, 3).mean(0)
     assert sky[2] > sky[0] + 20 and img.std(axis=(0, 1)).max() < 40  # a blue sky, no geometry
     r.release()
+
+
+def test_rebuilding_targets_and_renderers_raises_no_gl_error(gl):
+    """Size, MSAA and transparency switches rebuild the targets, and a released renderer
+    makes way for a new one, without leaving a GL error behind (on Blender's context
+    a stale error would be the host's problem)."""
+    from voxel_addon.render import glstate
+    b = floor("grass")
+    b[10:20, 10:20, 61:63] = R.id("water")
+    glstate.errors()
+    r = renderer(gl, b)
+    for size, kw in ((SIZE, {}), ((64, 40), {}), ((64, 40), {"transparency": "oit"}),
+                     ((64, 40), {"msaa": 4})):
+        for k, v in kw.items():
+            setattr(r.s, k, v)
+        r.render(Camera(2, 2, 72, 45, -30), 12.0, size)
+        assert glstate.errors() == [], (size, kw)
+    r.release()
+    r = renderer(gl, b)
+    r.render(Camera(2, 2, 72, 45, -30), 12.0, SIZE)
+    assert glstate.errors() == []
+    # the transparent passes get the glow table too (peeling and OIT)
+    progs = [p for plan in r._plans.values() for p in plan["peel"] + [plan["oit"]] if p]
+    r.s.transparency = "oit"
+    r.render(Camera(2, 2, 72, 45, -30), 12.0, SIZE)
+    progs += [p for plan in r._plans.values() for p in [plan["oit"]] if p]
+    assert len(progs) >= 2
+    for p in progs:
+        assert np.allclose(np.frombuffer(p["glow_scale"].read(), "f4"), r.glow_scale)
+    r.release()
+
+
+def test_all_air_and_stale_stats(gl):
+    r = renderer(gl, chunk.empty(width=32, depth=32))  # nothing but air: sky only
+    img = r.render(Camera(8, 8, 80, 0, 10), 12.0, SIZE)
+    assert r.stats["triangles"] == 0 and img.std(axis=(0, 1)).max() < 40
+    b = floor("grass")
+    r.set_area(b, light.solve(b), 0, 0)
+    r.render(Camera(2, 2, 72, 45, -30), 12.0, SIZE)
+    old = r.stats
+    r.set_area(b, light.solve(b), 0, 0)  # the shown chunks change before it is read
+    with pytest.raises(RuntimeError, match="earlier frame"):
+        dict(old)
+    r.release()

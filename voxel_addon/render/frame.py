@@ -23,6 +23,9 @@ def layout(text: str | None = None) -> tuple[dict, int]:
     """{member: (first float index, floats, kind)} and the block's size in bytes."""
     text = resources.shader("include/frame.glsl") if text is None else text
     body = re.sub(r"//[^\n]*", "", re.search(r"uniform\s+Frame\s*\{(.*?)\}", text, re.S)[1])
+    left = re.sub(r"(\w+)\s+(\w+)\s*;", "", body).strip()
+    if left:  # e.g. "float a, b;" or arrays would shift every later offset
+        raise ValueError(f"frame.glsl: cannot lay out {left.split(';')[0]!r}")
     members, off = {}, 0
     for typ, name in re.findall(r"(\w+)\s+(\w+)\s*;", body):
         if typ not in _TYPES:

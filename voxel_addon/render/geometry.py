@@ -19,6 +19,8 @@ region with the origin as a uniform.
 """
 from __future__ import annotations
 
+from collections.abc import MutableMapping
+
 import numpy as np
 
 from .. import meshing
@@ -65,6 +67,9 @@ class Geometry:
         cnt = rng[..., 1]
         keep = cnt.sum(2) > 0                       # regions with any face
         ci, ri = np.nonzero(keep)                   # region table rows, chunk-major
+        if not len(ci):  # all air: nothing to draw
+            self.ibo = self.ctx.buffer(meshing.quad_indices(1).tobytes())
+            return
         keys = np.array(list(meshes), np.int64).reshape(-1, 2)
         self.origin = np.c_[keys[ci] * 16, ri * h].astype(np.float32)
         # 0.5 slack for waving: vertices move by < 0.1 blocks
@@ -128,6 +133,7 @@ class Geometry:
         between them 2-3x slower. One slot per matrix in a frame (view, shadow), so a
         frame never overwrites commands the GL may still be reading."""
         names = [n for n in names if n in self.parts]
+        self.frames += 1  # the slot's buffer may change: older GPU stats are void
         cols = [PASSES.index(n) for n in names]
         # leading passes (view: all, shadow: all but blend) are a slice, not a copy
         at = self.at[:len(cols)] if cols == list(range(len(cols))) else self.at[cols]
@@ -228,6 +234,7 @@ class Geometry:
 
     def _free(self) -> None:
         """Everything of the shown chunks (the culling program stays)."""
+        self.frames += 1
         for part in self.parts.values():
             for vao in part["vaos"].values():
                 vao.release()
@@ -246,50 +253,60 @@ class Geometry:
         self.ibo = self.obo = None
 
 
-class Stats(dict):
-    """A frame's counters: triangles, shadow_triangles, draw_calls. Draws culled on
-    the GPU count their triangles from their command buffers when first read (a
-    readback, so only when someone asks): read them before the next frame culls."""
+class Stats(MutableMapping):
+    """A frame's counters: triangles, shadow_triangles, draw_calls (and what the
+    renderer adds). Draws culled on the GPU count their triangles from their command
+    buffers when first read, in any way (a readback, so only when someone asks): read
+    them before the next frame culls or the shown chunks change."""
 
     def __init__(self, geo: "Geometry"):
-        super().__init__(triangles=0, shadow_triangles=0, draw_calls=0)
+        self._d = {"triangles": 0, "shadow_triangles": 0, "draw_calls": 0}
         self.pending = []
         self.geo, self.frame = geo, geo.frames
 
     def add(self, tris, calls: int, shadow: bool, cmds) -> None:
-        get, put = super().__getitem__, super().__setitem__  # no readback while drawing
-        put("draw_calls", get("draw_calls") + calls)
+        d = self._d  # no readback while drawing
+        d["draw_calls"] += calls
         if tris is None:
             self.pending.append((*cmds, shadow))
             return
-        put("triangles", get("triangles") + tris)
+        d["triangles"] += tris
         if shadow:
-            put("shadow_triangles", get("shadow_triangles") + tris)
+            d["shadow_triangles"] += tris
 
-    def _resolve(self) -> None:
-        if self.geo.frames != self.frame:
-            raise RuntimeError("these are an earlier frame's stats: the GPU culling has "
-                               "since been redone; read Renderer.stats before the next frame")
-        pending, self.pending, read = self.pending, [], {}
-        for buf, first, n, shadow in pending:
-            c = read.get(id(buf))
-            if c is None:
-                c = read[id(buf)] = np.frombuffer(buf.read(), np.uint32).reshape(-1, 5)
-            tris = int((c[first:first + n, 0].astype(np.int64) * c[first:first + n, 1]).sum()) // 3
-            self.add(tris, 0, shadow, None)
+    def _counted(self) -> dict:
+        if self.pending:
+            if self.geo.frames != self.frame:
+                raise RuntimeError("these are an earlier frame's stats: the command buffers "
+                                   "have changed since; read Renderer.stats before the next "
+                                   "frame")
+            pending, self.pending, read = self.pending, [], {}
+            for buf, first, n, shadow in pending:
+                c = read.get(id(buf))
+                if c is None:
+                    c = read[id(buf)] = np.frombuffer(buf.read(), np.uint32).reshape(-1, 5)
+                c = c[first:first + n]
+                self.add(int((c[:, 0].astype(np.int64) * c[:, 1]).sum()) // 3, 0, shadow, None)
+        return self._d
 
     def snapshot(self) -> dict:
-        """The counters as a plain dict (resolved now)."""
-        if self.pending:
-            self._resolve()
-        return dict(self.items())
+        """The counters as a plain dict (counted now)."""
+        return dict(self._counted())
 
     def __getitem__(self, key):
-        if self.pending:
-            self._resolve()
-        return super().__getitem__(key)
+        return self._counted()[key]
 
-    def get(self, key, default=None):
-        if self.pending:
-            self._resolve()
-        return super().get(key, default)
+    def __setitem__(self, key, value):
+        self._d[key] = value
+
+    def __delitem__(self, key):
+        del self._d[key]
+
+    def __iter__(self):
+        return iter(self._counted())
+
+    def __len__(self):
+        return len(self._d)
+
+    def __repr__(self):
+        return f"Stats({self._counted()!r})"

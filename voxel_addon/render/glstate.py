@@ -83,6 +83,9 @@ TEX_TARGETS = {0x0DE1: 0x8069, 0x8C1A: 0x8C1D, 0x806F: 0x806A, 0x9100: 0x9104}
 # indexed buffer binding points the pipeline binds: the frame block (uniform), and
 # cull.comp's commands and boxes (storage); target -> (binding query, points)
 INDEXED = {0x8A11: (0x8A28, (BINDING,)), 0x90D2: (0x90D3, (0, 1))}
+# GL 4.3 state (storage and dispatch-indirect buffers, fixed-index restart): a 4.1
+# context (macOS) answers INVALID_ENUM, so older contexts leave it out
+GL43 = {0x8D69, 0x90D2, 0x90EE}
 
 _SIGS = {
     "glGetIntegerv": (None, ctypes.c_uint, ctypes.c_void_p),
@@ -183,12 +186,13 @@ def saved_units() -> list[int]:
 def snapshot(units: list[int] | None = None) -> dict:
     """Everything restore() puts back, as plain values (comparable with ==)."""
     g = gl()
-    s = {"caps": {c: g.IsEnabled(c) for c in CAPS}}
+    known = _known(g)
+    s = {"caps": {c: g.IsEnabled(c) for c in CAPS if known(c)}}
     s["fb"] = (g.int(0x8CA6), g.int(0x8CAA))  # draw, read framebuffer
     s["renderbuffer"] = g.int(0x8CA7)
     s["program"] = g.int(0x8B8D)
     s["vao"] = g.int(0x85B5)
-    s["buffers"] = {t: g.int(q) for t, q in BUFFERS.items()}
+    s["buffers"] = {t: g.int(q) for t, q in BUFFERS.items() if known(t)}
     for name, (enums, _, _) in INTS.items():
         s[name] = tuple(v for e in enums for v in g.ints(e)[:4 if name in ("viewport", "scissor") else 1])
     for name, (enum, n, _, _) in FLOATS.items():
@@ -212,8 +216,14 @@ def snapshot(units: list[int] | None = None) -> dict:
     g.ActiveTexture(active)
     s["active_texture"], s["textures"] = active, tex
     s["indexed"] = {t: {i: _indexed(g, t, q, i) for i in points}
-                    for t, (q, points) in INDEXED.items()}
+                    for t, (q, points) in INDEXED.items() if known(t)}
     return s
+
+
+def _known(g):
+    """Whether the current context knows an enum of CAPS / BUFFERS / INDEXED."""
+    new = (g.int(0x821B), g.int(0x821C)) >= (4, 3)  # MAJOR, MINOR_VERSION
+    return lambda e: new or e not in GL43
 
 
 def _indexed(g, target, query, i):
@@ -279,15 +289,17 @@ def reset(units: list[int] | None = None) -> None:
     """The state of a fresh moderngl context for everything snapshot() covers, except
     what the pipeline sets itself before use (framebuffer, viewport, scissor)."""
     g = gl()
+    known = _known(g)
     for c, on in CAPS.items():
-        (g.Enable if on else g.Disable)(c)
+        if known(c):
+            (g.Enable if on else g.Disable)(c)
     g.BindRenderbuffer(0x8D41, 0)
     g.UseProgram(0)
     g.BindVertexArray(0)
-    for t in BUFFERS:
+    for t in filter(known, BUFFERS):
         g.BindBuffer(t, 0)
     for t, (_, points) in INDEXED.items():
-        for i in points:
+        for i in points if known(t) else ():
             g.BindBufferBase(t, i, 0)
     for name, (_, setter, fresh) in INTS.items():
         if setter:

@@ -30,6 +30,8 @@ class Renderer:
         self.geo = Geometry(ctx)
         self.vol = LightVolume(ctx, 1)  # nothing resident yet: open daylight everywhere
         self.frame = FrameBlock(ctx)
+        self._none = ctx.detect_framebuffer(0)  # GL's framebuffer 0: always valid to bind
+        self._idle = ctx.framebuffer(ctx.renderbuffer((1, 1)))  # bound while targets change
         self.targets: dict = {}
         self.stats: dict = {}
         self.area = None
@@ -164,6 +166,8 @@ class Renderer:
 
 
     def _release_targets(self):
+        # moderngl rebinds its last bound framebuffer after making one: not a released one
+        self._idle.use()
         def rel(x):
             if isinstance(x, dict):
                 for v in x.values():
@@ -199,7 +203,8 @@ class Renderer:
         into the one uniform block, culling and the batches of every pass (the heavy
         draws leave the calling thread's caches cold; see Geometry.batches). Programs,
         textures and GL switches of each pass are made once (_plan, _passes) for the
-        settings and targets."""
+        settings and targets. One prepared frame at a time: the frame block and the
+        command buffers are shared, so submit it before preparing the next."""
         s = self.s
         s.check()
         w, h = size
@@ -359,8 +364,8 @@ class Renderer:
                          for v in (0, 1)],
             "final": get("fullscreen.vert", "final.frag", {"DOF": dof}),
         }
-        for _, prog in plan["g"] + plan["shadow"]:
-            if "glow_scale" in prog:
+        for prog in [p for _, p in plan["g"] + plan["shadow"]] + plan["peel"] + [plan["oit"]]:
+            if prog is not None and "glow_scale" in prog:
                 prog["glow_scale"].write(self.glow_scale.tobytes())
         self._plans[key] = plan
         return plan
@@ -455,6 +460,9 @@ class Renderer:
         self.geo.release()
         self.vol.release()
         self.frame.release()
+        self._none.use()  # else moderngl would rebind a released framebuffer of ours later
+        for x in (self._idle, *self._idle.color_attachments):
+            x.release()
         self.progs.release()
         self.tex.release()
         self.glow.release()

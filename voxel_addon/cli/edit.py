@@ -17,7 +17,7 @@ def run(args):
     from ..core import chunk
     from ..core.blocks import REGISTRY
     from ..core.errors import VoxelError
-    from ..core.world import World
+    from ..world import World
     if args.set:
         try:
             x, y, z = (int(v) for v in args.set[:3])

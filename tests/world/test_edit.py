@@ -171,9 +171,9 @@ def test_closing_while_streaming_keeps_every_finished_edit(world_path):
         x, y = 5 * i - 20, 3 * i - 15
         edit(w, (x, y, 200, glass, i))
         done.append((x, y, 200, i))
-    assert s._thread is not None and s._thread.is_alive()   # still streaming
+    assert s.running                                         # still streaming
     w.close()                                                 # stops the stream, saves
-    assert s._thread is None
+    assert not s.running
     with World.open(world_path, loader=False) as w:
         for x, y, z, d in done:
             c = w.chunk_at(x >> 4, y >> 4)

@@ -180,6 +180,7 @@ def _apply(world, items):
                     new = lit[i:i + S, j:j + S]
                     if not np.array_equal(new, c.light):
                         c.light = np.asfortranarray(new)
+                        c.dirty = True
                         relit.add((cx, cy))
         # meshes: chunks holding a changed voxel or one of its face neighbours
         remesh = {C.key_of(x + i, y + j) for x, y, _ in last for i, j in
@@ -202,7 +203,9 @@ def _apply(world, items):
             payloads.append(Payload(k, c.mesh, c.light, v))
             fresh.pop(k, None)
     rows = [(x, y, z, *last[(x, y, z)]) for x, y, z in last]
-    world.commit(changed, rows)
+    # the changed chunks are written with their new light; relit neighbours' stored
+    # light is dropped now and saved again with them later (marked changed)
+    world.commit(changed, rows, stale_light=relit - changed)
     for s in list(world.streams):
         s.offer(payloads)
     rec = Record(tuple(voxels), tuple(first[v] for v in voxels), tuple(last[v] for v in voxels))

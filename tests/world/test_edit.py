@@ -196,3 +196,13 @@ def test_stored_light_dropped_when_blocks_around_change(world_path):
         assert w.chunk_at(1, 1).light is None
     with World.open(world_path, loader=False) as w:
         assert all(w.chunk_at(x, y).light is None for x in (-1, 0, 1) for y in (-1, 0, 1))
+
+
+def test_no_payload_when_nothing_visible_changes(world_path):
+    with World.create(world_path, seed=SEED, loader=False) as w:
+        edit(w, (8, 8, 3, "stone"))                    # light the 3x3 first
+        c = w.chunk_at(0, 0)
+        assert c.get(8, 8, 2) != 0 and REGISTRY.light_opaque[c.get(8, 8, 2)]
+        payloads, rec = edit(w, (8, 8, 2, c.get(8, 8, 2), 5))   # only its data value
+        assert payloads == [] and rec.after == ((c.get(8, 8, 2), 5),)
+        assert w.chunk_at(0, 0).data[8, 8, 2] == 5

@@ -4,8 +4,9 @@ an undo record, write one transaction per stroke.
 `edit(world, changes)`: changes is one (x, y, z, block[, data]) or a list of them
 (a brush stroke); block is a name or an id. Everything is checked before anything
 changes (a VoxelError on one line). Returns (payloads, record): the new Payload of
-every chunk whose light or mesh changed (at most the 3x3 around each change: light
-reaches 14 voxels, a mesh sees its one-voxel ring), and a Record holding the before
+every chunk whose light or mesh really changed (at most the 3x3 around each change:
+light reaches 14 voxels; the chunks holding a changed voxel or a face neighbour of
+one are remeshed and kept only if the mesh differs), and a Record holding the before
 and after (id, data) of every voxel that really changed. `undo(world, record)` and
 `redo(world, record)` apply it back or again the same way and return payloads.
 
@@ -193,9 +194,10 @@ def _apply(world, items):
         remeshed = set()
         for k in remesh:
             c = world.chunks.get(k)
-            if c is not None and k not in world.corrupt:
-                c.mesh = meshes[k]
-                remeshed.add(k)
+            if c is None or k in world.corrupt or _same(c.mesh, meshes[k]):
+                continue  # e.g. a hidden face stayed hidden: no new payload
+            c.mesh = meshes[k]
+            remeshed.add(k)
         payloads = []
         for k in sorted(relit | remeshed):
             c = world.chunks[k]
@@ -210,6 +212,11 @@ def _apply(world, items):
         s.offer(payloads)
     rec = Record(tuple(voxels), tuple(first[v] for v in voxels), tuple(last[v] for v in voxels))
     return sorted(payloads + list(fresh.values())), rec
+
+
+def _same(a, b) -> bool:
+    return a is not None and np.array_equal(a.vertices, b.vertices) and \
+        np.array_equal(a.ranges, b.ranges)
 
 
 def _mesh(meshing, blocks, origin, keys):

@@ -230,7 +230,9 @@ class World:
                 c.light = got[2]
         if to_make:
             with self._gen_lock:
-                arrays = self.generator.generate(to_make)
+                # another thread may have made some while this one waited for the lock
+                to_make = [k for k in to_make if k not in self.chunks]
+                arrays = self.generator.generate(to_make) if to_make else []
             for key, blocks in zip(to_make, arrays):
                 c = Chunk(key, *self.apply_stored_edits(key, blocks))
                 c.dirty = not self.readonly

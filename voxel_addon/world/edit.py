@@ -140,8 +140,8 @@ def _apply(world, items):
         lit = _gather(world, x0, y0, x1, y1, "light")
         first: dict = {}
         last: dict = {}
-        lo = [blocks.shape[0], blocks.shape[1]]
-        hi = [0, 0]
+        lo = [blocks.shape[0], blocks.shape[1], C.HEIGHT]  # union of the relit boxes
+        hi = [0, 0, 0]
         for x, y, z, b, d in items:
             c = world.chunks[C.key_of(x, y)]
             lx, ly = x & 15, y & 15
@@ -158,9 +158,9 @@ def _apply(world, items):
             if old[0] != b:
                 wx, wy = x - x0, y - y0
                 blocks[wx, wy, z] = b
-                sx, sy, _ = light.update(blocks, lit, wx, wy, z, old[0])
-                lo = [min(lo[0], sx.start), min(lo[1], sy.start)]
-                hi = [max(hi[0], sx.stop), max(hi[1], sy.stop)]
+                box = light.update(blocks, lit, wx, wy, z, old[0])
+                lo = [min(a, b.start) for a, b in zip(lo, box)]
+                hi = [max(a, b.stop) for a, b in zip(hi, box)]
         changed = {C.key_of(x, y) for x, y, _ in last}
         voxels = [v for v in last if first[v] != last[v]]
         if not changed:
@@ -178,9 +178,11 @@ def _apply(world, items):
                     if (cx, cy) not in near or c is None:
                         continue
                     i, j = cx * S - x0, cy * S - y0
-                    new = lit[i:i + S, j:j + S]
-                    if not np.array_equal(new, c.light):
-                        c.light = np.asfortranarray(new)
+                    zs = slice(lo[2], hi[2])  # outside the boxes nothing moved
+                    new = lit[i:i + S, j:j + S, zs]
+                    if not np.array_equal(new, c.light[:, :, zs]):
+                        c.light = c.light.copy(order="F")  # payloads out there keep theirs
+                        c.light[:, :, zs] = new
                         c.dirty = True
                         relit.add((cx, cy))
         # meshes: chunks holding a changed voxel or one of its face neighbours

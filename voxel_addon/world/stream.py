@@ -1,7 +1,7 @@
 """Streaming around a moving view point (SPEC F2, thesis §5.2, issue 11 §2).
 
-A background worker keeps every chunk within `distance` (Chebyshev, in chunks) of the
-view chunk generated or loaded, lit and meshed, and queues its Payload. Work goes in
+Background workers keep every chunk within `distance` (Chebyshev, in chunks) of the
+view chunk generated or loaded, lit and meshed, and queue its Payload. Work goes in
 batches: a rectangle of up to `tile` x `tile` chunks (aligned, so neighbouring views
 share them) is generated/loaded with its one-chunk ring in one call, lit in one
 solve and meshed in one build_chunks call; batching is what makes it fast on few
@@ -139,13 +139,14 @@ class Stream:
                    for k in list(self.world.corrupt))
 
     def offer(self, payloads) -> None:
-        """Queue payloads made elsewhere (edits) for the chunks in range."""
+        """Queue current payloads (the workers', edits') of the chunks in range."""
         with self._lock:
             if self._view is None:
                 return
             cx, cy, _ = self._view
             for p in payloads:
-                if max(abs(p.key[0] - cx), abs(p.key[1] - cy)) <= self.distance:
+                if max(abs(p.key[0] - cx), abs(p.key[1] - cy)) <= self.distance \
+                        and self.world.pver.get(p.key) == p.version:
                     self._emitted[p.key] = p.version
                     self._ready.append(p)
             self._changes += 1
@@ -258,18 +259,7 @@ class Stream:
             xs, ys = [k[0] for k in rest], [k[1] for k in rest]
             done += build.light_and_mesh(world, min(xs), min(ys), max(xs) + 1, max(ys) + 1,
                                          backends_=backends)
-        self.offer_own(done)
-
-    def offer_own(self, payloads) -> None:
-        with self._lock:
-            if self._view is None:
-                return
-            cx, cy, _ = self._view
-            for p in payloads:
-                if max(abs(p.key[0] - cx), abs(p.key[1] - cy)) <= self.distance \
-                        and self.world.pver.get(p.key) == p.version:
-                    self._emitted[p.key] = p.version
-                    self._ready.append(p)
+        self.offer(done)
 
     def _maintain(self, cx, cy) -> None:
         """Keep chunks near the view alive (the world's idle unloading), unload far ones."""

@@ -99,6 +99,11 @@ def test_drain_respects_budget_and_counts(world_path):
             assert s.counts == (9, 9, 1)
             rest, _ = s.drain(1.0)
             assert len(rest) == 8 and s.counts == (9, 9, 9)
+            s.set_distance(0)
+            _, gone = s.drain(0.0)
+            assert len(gone) == 8 and (0, 0) not in gone and s.counts == (1, 1, 1)
+            s.set_distance(1)
+            assert s.wait_ready(60) and len(s.drain(1.0)[0]) == 8
             s.set_view(16 * 10, 0)
             _, gone = s.drain(0.0)
             assert sorted(gone) == sorted((x, y) for x in (-1, 0, 1) for y in (-1, 0, 1))

@@ -79,14 +79,31 @@ class Stream:
             old = self._view
             self._view = (cx, cy, d)
             if old is None or old[:2] != (cx, cy):
-                r = self.distance
-                for k in [k for k in self._emitted if max(abs(k[0] - cx), abs(k[1] - cy)) > r]:
-                    del self._emitted[k]
-                    if k in self._drawn:
-                        self._drawn.discard(k)
-                        self._gone.append(k)
+                self._prune()
             self._changes += 1
             self._wake.notify_all()
+
+    def set_distance(self, distance: int) -> None:
+        """Change the view distance (chunks); what falls outside goes as in set_view."""
+        if int(distance) < 0:
+            raise VoxelError(f"view distance must be 0 or more, got {distance}")
+        with self._lock:
+            self.distance = int(distance)
+            self._prune()
+            self._changes += 1
+            self._wake.notify_all()
+
+    def _prune(self) -> None:
+        """Forget payloads of chunks now out of range; drawn ones are reported gone."""
+        if self._view is None:
+            return
+        cx, cy, _ = self._view
+        r = self.distance
+        for k in [k for k in self._emitted if max(abs(k[0] - cx), abs(k[1] - cy)) > r]:
+            del self._emitted[k]
+            if k in self._drawn:
+                self._drawn.discard(k)
+                self._gone.append(k)
 
     def drain(self, budget_s: float = 0.004):
         """(ready payloads, gone keys) since the last call, popping for at most

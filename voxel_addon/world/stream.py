@@ -216,13 +216,13 @@ class Stream:
             job = self._next(cx, cy, d, em, busy)
             if job is not None:
                 with self._lock:  # another worker may have claimed some meanwhile
-                    job = ([k for k in job[0] if k not in self._busy], None)
-                    self._busy.update(job[0])
-                    if not job[0]:
+                    job = [k for k in job if k not in self._busy]
+                    self._busy.update(job)
+                    if not job:
                         continue
             try:
                 if job is not None:
-                    self._do(job[0], backends)
+                    self._do(job, backends)
                 self._maintain(cx, cy)
             except BaseException as e:  # kept for the consumer; the worker goes on
                 self.error = e
@@ -230,7 +230,7 @@ class Stream:
             finally:
                 if job is not None:
                     with self._lock:
-                        self._busy.difference_update(job[0])
+                        self._busy.difference_update(job)
                         self._changes += 1
                         self._wake.notify_all()
             if job is None:
@@ -246,9 +246,9 @@ class Stream:
                 and (x, y) not in busy]
 
     def _next(self, cx, cy, d, em, busy):
-        """The next rectangle to do: the aligned tile holding the most
-        urgent pending chunk, half a tile near the view (first payloads sooner), two
-        far away (less light overhead: the solve's ring); None when all is done."""
+        """The pending keys of the aligned tile holding the most urgent pending chunk:
+        half a tile near the view (first payloads sooner), twice a tile far away (less
+        light overhead: the solve's ring); None when all is done."""
         pending = self._pending(cx, cy, em, busy)
         if not pending:
             return None
@@ -264,9 +264,7 @@ class Stream:
         u = urgency(best)
         t = max(1, self.tile // 2) if u < NEAR else self.tile if u < 2 * self.tile else 2 * self.tile
         tx, ty = best[0] // t, best[1] // t
-        keys = [k for k in pending if k[0] // t == tx and k[1] // t == ty]
-        xs, ys = [k[0] for k in keys], [k[1] for k in keys]
-        return keys, (min(xs), min(ys), max(xs) + 1, max(ys) + 1)
+        return [k for k in pending if k[0] // t == tx and k[1] // t == ty]
 
     def _do(self, keys, backends) -> None:
         world = self.world

@@ -254,6 +254,9 @@ class Geometry:
         off = np.cumsum([0] + self._cused[:-1])
         self.cmd = np.concatenate([c[:n] for c, n in zip(self._cmd, self._cused)])
         self.at = np.where(self._at >= 0, self._at + off[:, None].astype(np.int32), -1)
+        # rows with faces in some pass, and their boxes: what CPU culling tests
+        self.live = np.flatnonzero((self._at >= 0).any(0))
+        self._live_boxes = np.ascontiguousarray(self.boxes[:, self.live])
         self.parts: dict[str, dict] = {}
         for p, name in enumerate(PASSES):
             rows = np.flatnonzero(self._at[p] >= 0)
@@ -278,8 +281,9 @@ class Geometry:
         return vao
 
     def cull(self, mvp: np.ndarray) -> np.ndarray:
-        """Region table rows (ascending) whose box may intersect the clip volume."""
-        return np.flatnonzero(camera.visible_boxes(mvp, self.boxes))
+        """Region table rows with faces (ascending) whose box may intersect the clip
+        volume."""
+        return self.live[camera.visible_boxes(mvp, self._live_boxes)]
 
     def batches(self, rows: np.ndarray, names, slot: str = "view") -> dict:
         """{pass name: its batch, or None} of the visible regions among the table rows
@@ -333,8 +337,8 @@ class Geometry:
         if not names:  # nothing shown (or none of these passes): nothing to cull
             return {}
         last = self.bufs.get(slot)
-        data = self.cmd.tobytes()
         if last is None or last[2] != ("gpu", self.gen):
+            data = self.cmd.tobytes()
             buf = last[0] if last is not None else None
             if buf is None or buf.size < len(data):
                 if buf is not None:

@@ -148,8 +148,8 @@ def test_other_chunks_stay_where_they_are(gl, area):
         for row in np.flatnonzero(geo.at[p] >= 0):
             cmd = geo.cmd[geo.at[p, row]]
             start, nq = geo._slots[row // geo.nreg][1:3]
-            assert cmd[4] == row and cmd[0] > 0
-            assert 6 * start <= cmd[2] and cmd[2] + cmd[0] <= 6 * (start + nq)
+            assert cmd[4] == row and cmd[0] > 0 and cmd[3] == 4 * start
+            assert cmd[2] + cmd[0] <= 6 * nq
     r.release()
 
 

@@ -145,9 +145,7 @@ class Renderer:
 
     def _shown(self) -> None:
         """The shown chunks changed: their box (self.area), the light window again."""
-        ks = np.array(list(self.geo.keys), int).reshape(-1, 2)
-        self.area = (tuple(int(v) for v in (*ks.min(0), *(ks.max(0) + 1)))
-                     if len(ks) else None)
+        self.area = self.geo.bounds()
         self._vol_key = None
 
     def _sync_light(self, camera) -> None:

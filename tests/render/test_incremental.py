@@ -313,3 +313,24 @@ def test_orthographic_frames_with_every_effect_look_sane(gl, area):
     cols = [np.flatnonzero(row) for row in grey[:, 20:76]]
     widths = [c.max() - c.min() + 1 for c in cols if len(c) > 3]
     assert len(widths) > 10 and max(widths) - min(widths) <= 2, widths
+
+
+def test_frame_tells_a_host_what_to_composite(gl, area):
+    """prepare() returns what a host compositing the frame itself reads: the final
+    colour, the opaque depth and, when peeling drew water, its depth in front of it."""
+    b, L, meshes, lights = area
+    r = _renderer(gl, True, True)
+    r.set_area(b, L, -1, -1, ring=True, backend="numpy")
+    cam = Camera(16, 20, 75, 0, -89)  # straight down onto the pool
+    f = r.prepare(cam, 12.0, SIZE)
+    r.submit(f)
+    assert f.layers == 3 and not f.use_oit and f.color.size == SIZE
+    d = np.frombuffer(f.depth.read(), "f4").reshape(SIZE[1], SIZE[0])
+    w = np.frombuffer(f.blend_depth.read(), "f4").reshape(SIZE[1], SIZE[0])
+    water = w < 1.0
+    assert water.sum() > 50 and (w[water] < d[water]).all()  # the surface lies in front
+    r.s.transparency = "oit"
+    f = r.prepare(cam, 12.0, SIZE)
+    r.submit(f)
+    assert f.use_oit and f.layers == 0 and f.blend_depth is None
+    r.release()

@@ -334,3 +334,18 @@ def test_frame_tells_a_host_what_to_composite(gl, area):
     r.submit(f)
     assert f.use_oit and f.layers == 0 and f.blend_depth is None
     r.release()
+
+
+def test_from_matrices_takes_blender_matrices():
+    """Blender's region_3d.view_matrix / window_matrix are mathutils.Matrix (rows as
+    rows): they go in as they are."""
+    pytest.importorskip("bpy")  # brings mathutils
+    import mathutils
+    cam = Camera(12.0, -30.0, 90.0, 60.0, -25.0, 50.0, 1.6, 0.5, 800.0)
+    V = mathutils.Matrix([list(r) for r in cam.view()])
+    P = mathutils.Matrix([list(r) for r in cam.proj()])
+    m = Camera.from_matrices(V, P)
+    assert np.allclose(m.matrices()[0], cam.matrices()[0], atol=1e-5)
+    assert np.allclose((m.x, m.y, m.z, m.yaw, m.pitch, m.fov), (12, -30, 90, 60, -25, 50), atol=1e-4)
+    o = Camera.from_matrices(V, mathutils.Matrix([list(r) for r in C.ortho(-8, 8, -5, 5, -100, 100)]))
+    assert o.ortho and np.isclose(o.near, -100, atol=1e-3) and np.isclose(o.far, 100, atol=1e-3)

@@ -8,7 +8,8 @@ the vertex buffer (first fit in a free list; the buffer grows by copying on the 
 so the other chunks are never uploaded again). Every (region, pass) with faces has
 one indirect command in its pass's command table; a removed chunk's commands become
 empty holes that the next chunk reuses. `at` says where each table row's command of
-each pass is.
+each pass is. Commands reach their chunk's block through the base vertex, so the
+shared index pattern only spans the largest chunk.
 
 All passes share the region table, so a frame culls once per matrix (view, shadow)
 for every pass; per matrix it gathers the commands of the visible rows only (work by
@@ -20,7 +21,8 @@ through an instanced attribute, and the culling runs on the GPU (`gpu_cull`,
 shaders/cull.comp, the twin of camera.visible_boxes): a slot's buffer holds every
 command and a compute pass sets each one's instance count to 1 or 0, so the CPU
 neither culls nor gathers. GL 4.1 (macOS): CPU culling and one draw per visible
-region with the origin as a uniform.
+region with the origin as a uniform (moderngl draws those without a base vertex, so
+there the index pattern spans the whole vertex buffer).
 """
 from __future__ import annotations
 

@@ -130,7 +130,7 @@ class Renderer:
     def set_meshes(self, meshes: dict) -> None:
         """{(cx, cy): meshing.ChunkMesh} to draw instead of what was shown; the light
         known for chunks that stay is kept (set_light)."""
-        self.geo.remove([k for k in self.geo.keys if k not in meshes])
+        self.remove_chunks([k for k in self.geo.keys if k not in meshes])
         self.geo.update(meshes)
         self._shown()
 

@@ -163,9 +163,9 @@ class Renderer:
         if key == self._vol_key:
             return
         n = 1 if a is None else max(1, min(2 * r + 1, max(a[2] - a[0], a[3] - a[1])))
-        if self.vol.n < n:
+        if self.vol.n < n:  # grown by doubling: a streamed area grows chunk by chunk
             self.vol.release()
-            self.vol = LightVolume(self.ctx, n)
+            self.vol = LightVolume(self.ctx, min(2 * r + 1, max(n, 2 * self.vol.n)))
             self._graphs.clear()
         for x in range(win[0], win[2]):
             for y in range(win[1], win[3]):

@@ -349,3 +349,22 @@ def test_from_matrices_takes_blender_matrices():
     assert np.allclose((m.x, m.y, m.z, m.yaw, m.pitch, m.fov), (12, -30, 90, 60, -25, 50), atol=1e-4)
     o = Camera.from_matrices(V, mathutils.Matrix([list(r) for r in C.ortho(-8, 8, -5, 5, -100, 100)]))
     assert o.ortho and np.isclose(o.near, -100, atol=1e-3) and np.isclose(o.far, 100, atol=1e-3)
+
+
+def test_region_height_is_one_for_all_shown(gl, area):
+    """Chunks of another region height are refused while others are shown, and taken
+    once nothing is (the region table starts over)."""
+    b, L, meshes, lights = area
+    other = meshing.build_chunks(b, (-1, -1), backend="numpy", region_h=32)
+    r = _renderer(gl, True, True)
+    r.update_chunks(Chunk(k, m, lights[k]) for k, m in meshes.items())
+    with pytest.raises(ValueError, match="region height"):
+        r.update_chunks([Chunk((0, 0), other[0, 0], lights[0, 0])])
+    want = _frames(r)
+    r.remove_chunks(list(meshes))
+    r.update_chunks(Chunk(k, m, lights[k]) for k, m in other.items())
+    assert r.geo.nreg == 8
+    got = _frames(r)
+    # other merges and finer culling: other triangle counts, the same picture
+    assert got[1] > 0 and np.abs(got[0].astype(int) - want[0]).mean() < 0.5
+    r.release()

@@ -59,7 +59,7 @@ def test_lamp_lights_its_surroundings_at_night(gl):
 def at(img, cam, p, r=1):
     """Mean luminance of the pixels around world point p (after cam was rendered)."""
     h, w = img.shape[:2]
-    c = cam.view_proj() @ np.r_[p, 1.0]
+    c = cam.fitted(w / h, cam.fov, cam.far).view_proj() @ np.r_[p, 1.0]
     col, row = int((c[0] / c[3] * .5 + .5) * w), int((.5 - c[1] / c[3] * .5) * h)
     assert r <= row < h - r and r <= col < w - r, (p, row, col)
     return lum(img[row - r:row + r + 1, col - r:col + r + 1]).mean()
@@ -296,10 +296,12 @@ def test_rebuilding_targets_and_renderers_raises_no_gl_error(gl):
     r.render(Camera(2, 2, 72, 45, -30), 12.0, SIZE)
     assert glstate.errors() == []
     # the transparent passes get the glow table too (peeling and OIT)
-    progs = [p for plan in r._plans.values() for p in plan["peel"] + [plan["oit"]] if p]
+    progs = [p for G in r._graphs.values() for p in G.transparency.programs()
+             if "glow_scale" in p]
     r.s.transparency = "oit"
     r.render(Camera(2, 2, 72, 45, -30), 12.0, SIZE)
-    progs += [p for plan in r._plans.values() for p in [plan["oit"]] if p]
+    progs += [p for G in r._graphs.values() for p in G.transparency.programs()
+              if "glow_scale" in p]
     assert len(progs) >= 2
     for p in progs:
         assert np.allclose(np.frombuffer(p["glow_scale"].read(), "f4"), r.glow_scale)

@@ -120,10 +120,12 @@ def _app():
 def setup() -> None:
     if sys.version_info < (3, 11):
         sys.exit("Python 3.11 or newer is needed to run build.py")
-    setup_apt()
-    setup_venv()
-    _app().setup()
-    setup_wheels()
+    import time
+    for step in (setup_apt, setup_venv, _app().setup, setup_wheels):
+        t0 = time.monotonic()
+        step()
+        if time.monotonic() - t0 > 2:
+            log(f"{step.__module__}.{step.__name__}: {time.monotonic() - t0:.0f} s")
 
 
 def task_blender(args) -> int:

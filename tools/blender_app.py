@@ -281,6 +281,10 @@ def setup() -> None:
     if installed():
         _write_launchers(root)
         return
+    missing = [t for t in ("apt-get", "dpkg-deb", "tar", "cp") if not shutil.which(t)]
+    if missing:
+        raise SystemExit(f"blender: {', '.join(missing)} not found (set-up needs a Debian "
+                         "system to fetch Debian's Blender)")
     debs = download()
     want = _config() + "\n" + _stamp_of(debs)
     if not (stamp.exists() and stamp.read_text() == want and root.is_dir()):

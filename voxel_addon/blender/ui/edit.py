@@ -1,0 +1,354 @@
+"""Voxel Edit: the `voxel.edit` operator, the toolbar tool `voxel.edit_tool` (hover
+outline, click / Shift-click / Alt-click, drag strokes, box mode) and its settings
+with the block palette (issue 13). Undo is Blender's own: see blender/strokes.py."""
+from __future__ import annotations
+
+import bpy
+from bpy.props import BoolProperty, EnumProperty, IntProperty, IntVectorProperty, StringProperty
+
+TOOL = "voxel.edit_tool"
+SHAPE_ITEMS = [("CUBE", "Cube", "A cube of size³ blocks"),
+               ("SPHERE", "Sphere", "A ball of diameter size")]
+
+_previews = None
+_items: list = []  # Blender keeps no reference to dynamic enum items: we must
+
+
+def palette_icons():
+    """One preview icon per block from the project's own textures (side face)."""
+    global _previews
+    if _previews is None:
+        import bpy.utils.previews
+        import numpy as np
+        from ...core.blocks import REGISTRY
+        from ... import textures
+        _previews = bpy.utils.previews.new()
+        for b in REGISTRY.blocks[1:]:
+            rgba = textures.image(b.texture("-y"))[0]
+            px = (np.repeat(np.repeat(rgba[::-1], 2, 0), 2, 1).astype(np.float32) / 255.0)
+            p = _previews.new(b.name)
+            p.icon_size = p.image_size = (32, 32)
+            flat = px.ravel().tolist()
+            p.icon_pixels_float = flat
+            p.image_pixels_float = flat
+    return _previews
+
+
+def _palette(self, context):
+    if not _items:
+        from ...core.blocks import REGISTRY
+        icons = palette_icons()
+        _items.extend((b.name, b.name.replace("_", " ").capitalize(), f"Place {b.name}",
+                       icons[b.name].icon_id, i) for i, b in enumerate(REGISTRY.blocks) if i)
+    return _items
+
+
+class VoxelEditSettings(bpy.types.PropertyGroup):
+    # The stroke the world file should show; Blender's undo restores it (strokes.py).
+    step: IntProperty(name="Stroke", default=0, options={"HIDDEN"})
+    block: EnumProperty(name="Block", items=_palette, description="Block placed by a click")
+    size: IntProperty(name="Size", default=1, min=1, max=8, description="Brush size in blocks")
+    shape: EnumProperty(name="Shape", items=SHAPE_ITEMS, default="CUBE")
+    box: BoolProperty(name="Box", default=False,
+                      description="Click one corner, then the opposite one: fills (or, with "
+                                  "Shift, clears) the box between them")
+
+
+def _changes(cells, bid):
+    return [(x, y, z, bid) for x, y, z in cells]
+
+
+class VOXEL_OT_edit(bpy.types.Operator):
+    bl_idname = "voxel.edit"
+    bl_label = "Voxel Edit"
+    bl_description = "Set blocks around a cell (air clears): what a click of the Voxel Edit tool does"
+    bl_options = {"REGISTER", "UNDO"}
+
+    location: IntVectorProperty(name="Location", size=3)
+    block: StringProperty(name="Block", default="stone", description="Block name; air clears")
+    size: IntProperty(name="Size", default=1, min=1, max=8)
+    shape: EnumProperty(name="Shape", items=SHAPE_ITEMS, default="CUBE")
+    box: BoolProperty(name="Box", default=False, description="Fill the box location..corner")
+    corner: IntVectorProperty(name="Corner", size=3)
+
+    def execute(self, context):
+        from .. import strokes
+        from ...core import brush, chunk
+        from ...core.blocks import REGISTRY
+        from ...core.errors import VoxelError
+        try:
+            bid = REGISTRY.id(self.block)
+            chunk.check_z(self.location[2])
+            cells = brush.box(self.location, self.corner) if self.box else \
+                brush.cells(self.location, self.size, self.shape)
+            n = strokes.stroke(context, _changes(cells, bid))
+        except VoxelError as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        if not n:
+            self.report({"INFO"}, "nothing changed")
+            return {"CANCELLED"}
+        return {"FINISHED"}
+
+
+class _Hover:
+    """What the tool points at, for the outline (updated on mouse moves)."""
+    hit = None
+    message = ""
+    corner = None       # box mode: the first corner, until the second click
+
+    @classmethod
+    def clear(cls):
+        cls.hit, cls.message, cls.corner = None, "", None
+
+
+def _target(context, world, event, ignore=frozenset()):
+    from .. import pick
+    return pick.target(context, world, (event.mouse_region_x, event.mouse_region_y), ignore)
+
+
+class VOXEL_OT_edit_stroke(bpy.types.Operator):
+    bl_idname = "voxel.edit_stroke"
+    bl_label = "Voxel Stroke"
+    bl_description = "Place (or remove) blocks on the face under the mouse; drag to paint"
+    bl_options = {"REGISTER", "UNDO"}
+
+    mode: EnumProperty(items=[("PLACE", "Place", ""), ("REMOVE", "Remove", "")], default="PLACE")
+
+    @classmethod
+    def poll(cls, context):
+        return context.area is not None and context.area.type == "VIEW_3D"
+
+    def invoke(self, context, event):
+        from .. import strokes
+        from ...core import brush
+        from ...core.blocks import REGISTRY
+        from ...core.errors import VoxelError
+        s = context.scene.voxel_edit
+        try:
+            self.world = strokes.begin(context)
+            self.bid = 0 if self.mode == "REMOVE" else REGISTRY.id(s.block)
+            t = _target(context, self.world, event)
+            if t.hit is None:
+                self.report({"WARNING"}, t.message)
+                return {"CANCELLED"}
+            cell = self._cell(t.hit)
+            if s.box:
+                if _Hover.corner is None:
+                    _Hover.corner = cell
+                    self.report({"INFO"}, "box: now click the opposite corner")
+                    return {"CANCELLED"}
+                a, _Hover.corner = _Hover.corner, None
+                n = strokes.stroke(context, _changes(brush.box(a, cell), self.bid))
+                return {"FINISHED"} if n else {"CANCELLED"}
+            self.rec = strokes.Record()
+            self.placed: set = set()
+            self.last = None
+            self._paint(context, cell)
+        except VoxelError as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        context.window_manager.modal_handler_add(self)
+        return {"RUNNING_MODAL"}
+
+    def _cell(self, hit):
+        from ...core import chunk
+        cell = hit.before if self.mode == "PLACE" else hit.cell
+        chunk.check_z(cell[2])
+        return cell
+
+    def _paint(self, context, cell):
+        from .. import strokes
+        from ...core import brush
+        if cell == self.last:
+            return
+        self.last = cell
+        s = context.scene.voxel_edit
+        cells = brush.cells(cell, s.size, s.shape)
+        payloads, rec = strokes.apply(self.world, _changes(cells, self.bid))
+        self.rec.extend(rec)
+        if self.mode == "PLACE":  # paint along the surface, not up a tower of our own
+            self.placed.update(cells)
+        strokes.show(payloads)
+
+    def modal(self, context, event):
+        from ...core.errors import VoxelError
+        if event.type in {"MOUSEMOVE", "INBETWEEN_MOUSEMOVE"}:
+            t = _target(context, self.world, event, self.placed)
+            if t.hit is not None:
+                try:
+                    self._paint(context, self._cell(t.hit))
+                except VoxelError:
+                    pass  # off the world's top or bottom mid-drag: skip that sample
+            return {"RUNNING_MODAL"}
+        if (event.type == "LEFTMOUSE" and event.value == "RELEASE") or \
+                event.type in {"ESC", "RIGHTMOUSE"}:
+            return self._finish(context)
+        return {"RUNNING_MODAL"}
+
+    def _finish(self, context):
+        from .. import strokes
+        if not len(self.rec):
+            return {"CANCELLED"}
+        strokes.commit(context.scene, self.rec)
+        return {"FINISHED"}
+
+
+class VOXEL_OT_pick_block(bpy.types.Operator):
+    bl_idname = "voxel.pick_block"
+    bl_label = "Pick Block"
+    bl_description = "Take the block under the mouse as the block to place"
+
+    def invoke(self, context, event):
+        from .. import session
+        from ...core.blocks import REGISTRY
+        from ...core.errors import VoxelError
+        try:
+            t = _target(context, session.world(context.scene.voxel.path), event)
+        except VoxelError as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        if t.hit is None:
+            self.report({"WARNING"}, t.message)
+            return {"CANCELLED"}
+        context.scene.voxel_edit.block = REGISTRY[t.hit.block].name
+        self.report({"INFO"}, f"block: {REGISTRY[t.hit.block].name}")
+        return {"FINISHED"}
+
+
+# ---- hover outline ---------------------------------------------------------
+def outline(hit, corner=None):
+    """Line segment end points (pairs) outlining the hovered face, or the box from
+    `corner` to the hovered cell, pushed a little toward the eye so depth tests pass."""
+    if corner is not None:
+        c = hit.before if hit.before is not None else hit.cell
+        lo = [min(a, b) for a, b in zip(corner, c)]
+        hi = [max(a, b) + 1 for a, b in zip(corner, c)]
+        pts = [(x, y, z) for z in (lo[2], hi[2]) for y in (lo[1], hi[1]) for x in (lo[0], hi[0])]
+        edges = [(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7),
+                 (0, 4), (1, 5), (2, 6), (3, 7)]
+        return [pts[i] for e in edges for i in e]
+    ax = next(i for i in range(3) if hit.normal[i])
+    u, v = [i for i in range(3) if i != ax]
+    base = [float(c) for c in hit.cell]
+    base[ax] += (1.0 if hit.normal[ax] > 0 else 0.0) + 0.004 * hit.normal[ax]
+    quad = []
+    for du, dv in ((0, 0), (1, 0), (1, 1), (0, 1)):
+        p = list(base)
+        p[u] += du
+        p[v] += dv
+        quad.append(tuple(p))
+    return [quad[i] for k in range(4) for i in (k, (k + 1) % 4)]
+
+
+def draw_hover(region_size) -> None:
+    import gpu
+    from gpu_extras.batch import batch_for_shader
+    if _Hover.hit is None or _Hover.hit.normal is None:
+        return
+    sh = gpu.shader.from_builtin("POLYLINE_UNIFORM_COLOR")
+    batch = batch_for_shader(sh, "LINES", {"pos": outline(_Hover.hit, _Hover.corner)})
+    gpu.state.depth_test_set("LESS_EQUAL")
+    gpu.state.blend_set("ALPHA")
+    sh.bind()
+    sh.uniform_float("viewportSize", region_size)
+    sh.uniform_float("lineWidth", 2.0)
+    sh.uniform_float("color", (1.0, 1.0, 1.0, 0.9))
+    batch.draw(sh)
+    gpu.state.blend_set("NONE")
+    gpu.state.depth_test_set("NONE")
+
+
+class VOXEL_GT_hover(bpy.types.Gizmo):
+    """Never selectable: Blender calls test_select on every mouse move, which is
+    where the hovered face is found; draw outlines it."""
+    bl_idname = "VOXEL_GT_hover"
+
+    def setup(self):
+        pass
+
+    def test_select(self, context, location):
+        from .. import session
+        from ...core.errors import VoxelError
+        try:
+            w = session.world(context.scene.voxel.path)
+            from .. import pick
+            t = pick.target(context, w, tuple(location))
+        except VoxelError as e:
+            t = None
+            msg = str(e)
+        else:
+            msg = t.message
+        hit = None if t is None else t.hit
+        if (hit and (hit.cell, hit.normal)) != (_Hover.hit and (_Hover.hit.cell, _Hover.hit.normal)):
+            context.area.tag_redraw()
+        _Hover.hit, _Hover.message = hit, msg
+        return -1
+
+    def draw(self, context):
+        draw_hover((context.region.width, context.region.height))
+
+
+class VOXEL_GGT_hover(bpy.types.GizmoGroup):
+    bl_idname = "VOXEL_GGT_hover"
+    bl_label = "Voxel Edit Hover"
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "WINDOW"
+    bl_options = {"3D"}
+
+    @classmethod
+    def poll(cls, context):
+        tool = context.workspace.tools.from_space_view3d_mode(context.mode, create=False)
+        return tool is not None and tool.idname == TOOL
+
+    def setup(self, context):
+        self.gizmos.new(VOXEL_GT_hover.bl_idname)
+
+
+class VoxelEditTool(bpy.types.WorkSpaceTool):
+    bl_space_type = "VIEW_3D"
+    bl_context_mode = "OBJECT"
+    bl_idname = TOOL
+    bl_label = "Voxel Edit"
+    bl_description = ("Click: place the block on the face under the mouse; Shift: remove; "
+                      "Alt: pick the block; drag paints one stroke")
+    bl_icon = "ops.generic.select_paint"
+    bl_widget = VOXEL_GGT_hover.bl_idname
+    bl_keymap = (
+        (VOXEL_OT_edit_stroke.bl_idname, {"type": "LEFTMOUSE", "value": "PRESS"},
+         {"properties": [("mode", "PLACE")]}),
+        (VOXEL_OT_edit_stroke.bl_idname, {"type": "LEFTMOUSE", "value": "PRESS", "shift": True},
+         {"properties": [("mode", "REMOVE")]}),
+        (VOXEL_OT_pick_block.bl_idname, {"type": "LEFTMOUSE", "value": "PRESS", "alt": True}, None),
+    )
+
+    def draw_settings(context, layout, tool):
+        s = context.scene.voxel_edit
+        layout.template_icon_view(s, "block", show_labels=True, scale=1.0, scale_popup=4.0)
+        layout.prop(s, "size")
+        layout.prop(s, "shape", text="")
+        layout.prop(s, "box")
+
+
+CLASSES = [VoxelEditSettings, VOXEL_OT_edit, VOXEL_OT_edit_stroke, VOXEL_OT_pick_block,
+           VOXEL_GT_hover, VOXEL_GGT_hover]
+SCENE_PROPS = {"voxel_edit": VoxelEditSettings}
+
+
+def register():
+    from .. import strokes
+    strokes.register_handlers()
+    bpy.utils.register_tool(VoxelEditTool, separator=True)
+
+
+def unregister():
+    global _previews
+    from .. import strokes
+    bpy.utils.unregister_tool(VoxelEditTool)
+    strokes.unregister_handlers()
+    strokes.forget()
+    _Hover.clear()
+    _items.clear()
+    if _previews is not None:
+        bpy.utils.previews.remove(_previews)
+        _previews = None

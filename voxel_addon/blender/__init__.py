@@ -33,7 +33,8 @@ def register():
 
 def unregister():
     import bpy
-    from . import session
+    from . import session, viewport
+    viewport.shutdown()
     session.close_all()
     for attr in reversed(_scene_props):
         if hasattr(bpy.types.Scene, attr):

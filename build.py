@@ -1,6 +1,8 @@
 """Task runner for Voxel Worlds (plain Python 3.11, no bpy import).
 
-    python build.py setup       install what is missing (apt when root, .venv, npm tools)
+    python build.py setup       install what is missing (apt when root, .venv, npm tools,
+                                the real Blender application in .blender/)
+    python build.py blender [-- ARGS]  run that Blender (Debian trixie's 4.3) with ARGS
     python build.py test [ARGS] setup, then pytest (ARGS go to pytest)
     python build.py demo        setup, then generate a world, render a picture, bake a .glb
     python build.py bench [DIR] setup, then `python -m voxel_addon bench --out DIR`
@@ -27,7 +29,8 @@ STAMP = VENV / ".setup-stamp"
 TOOLS = ROOT / ".tools"          # npm tools (git-ignored)
 DEMO = ROOT / "demo_out"         # demo outputs (git-ignored)
 
-APT_PACKAGES = ["libgl1", "libegl1", "libegl-mesa0", "libgl1-mesa-dri", "libgbm1", "binutils"]
+APT_PACKAGES = ["libgl1", "libegl1", "libegl-mesa0", "libgl1-mesa-dri", "libgbm1", "binutils",
+                "xvfb", "x11-apps", "netpbm"]  # the last three: GUI tests (X server, screenshots)
 # Wanted only when the command is missing (a machine may have Node.js from elsewhere).
 APT_FOR_COMMAND = {"node": "nodejs", "npm": "npm"}
 NPM_PACKAGES = ["gltf-validator@2.0.0-dev.3.10"]
@@ -105,11 +108,26 @@ def setup_venv() -> None:
     STAMP.write_text(want)
 
 
+def _app():
+    """tools/blender_app.py: the real Blender application (installed by setup)."""
+    sys.path.insert(0, str(ROOT / "tools"))
+    import blender_app
+    return blender_app
+
+
 def setup() -> None:
     if sys.version_info < (3, 11):
         sys.exit("Python 3.11 or newer is needed to run build.py")
     setup_apt()
     setup_venv()
+    _app().setup()
+
+
+def task_blender(args) -> int:
+    """blender [-- ARGS]: the real Blender (.blender/blender) with ARGS, in the checkout."""
+    setup()
+    args = args[1:] if args[:1] == ["--"] else args
+    return subprocess.run([_app().LAUNCHER, *args], cwd=ROOT, env=env()).returncode
 
 
 def task_test(args) -> int:
@@ -194,7 +212,8 @@ def task_dev(args) -> int:
 
 
 TASKS = {"setup": lambda a: (setup(), 0)[1], "test": task_test, "demo": task_demo,
-         "bench": task_bench, "extension": task_extension, "dev": task_dev}
+         "bench": task_bench, "extension": task_extension, "dev": task_dev,
+         "blender": task_blender}
 
 
 def main(argv) -> int:

@@ -40,9 +40,10 @@ def register():
 
 def unregister():
     import bpy
-    from . import session
+    from . import session, viewport
     while _hooked:
         _hooked.pop().unregister()
+    viewport.shutdown()
     session.close_all()
     for attr in reversed(_scene_props):
         if hasattr(bpy.types.Scene, attr):

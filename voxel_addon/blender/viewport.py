@@ -1,0 +1,479 @@
+"""The world live in Blender's 3D viewports (issue 12; thesis §5.3.4–5.5).
+
+A SpaceView3D POST_VIEW draw handler: Blender has drawn its scene and bound the
+overlay framebuffer that holds the viewport's depth. Per redraw and region:
+
+1. the CPU side (`_Feed`, one per world, shared by every window) takes the chunks
+   that became ready within a small time budget;
+2. the GPU side of the current GL context (`_Gpu`: a moderngl context attached to
+   Blender's, a Renderer, the composite program; VAOs and framebuffers are not shared
+   between contexts, so a second window gets its own) uploads what changed and renders
+   the pipeline with the region's own view and window matrices into its targets;
+3. a full-screen pass (shaders/viewport.frag) writes the frame's colour and its depth
+   converted to Blender's projection into Blender's framebuffer with the depth test
+   LEQUAL: Blender's objects in front hide voxels, voxels in front hide objects; the
+   sky only where Blender drew nothing (far plane);
+4. `OVERLAYS` callbacks run with Blender's state back and the voxels' depth in the
+   depth buffer (the edit tool's hover outline draws there with the gpu module).
+
+Everything GL runs inside glstate.kept(): Blender caches its bindings, the pipeline
+wants a fresh context's state. While chunks stream in, or after a draft frame, a timer
+asks for another redraw. shutdown() removes handlers, timer, GL objects and threads.
+"""
+from __future__ import annotations
+
+import math
+import time
+import traceback
+
+import numpy as np
+
+from ..core.errors import VoxelError
+
+# What the panel shows (the last frame of any region).
+STATUS = {"drawn": 0, "wanted": 0, "ms": 0.0, "python_ms": 0.0, "quality": "full",
+          "error": None, "frames": 0}
+# Callables f(context) run after each voxel frame with Blender's GL state and the
+# voxels' depth in the depth buffer (draw with gpu.state.depth_test_set("LESS_EQUAL")).
+OVERLAYS: list = []
+
+DRAFT_SCALE = 0.5    # draft frames render at this fraction of the region's size
+STILL_S = 0.25       # the view is still this long after its last change: full quality
+BUDGET_S = 0.004     # CPU time per redraw for taking in streamed chunks
+MIN_GL = 410
+
+_handle = None
+_timer_on = False
+_gpus: dict = {}      # native GL context -> _Gpu
+_regions: dict = {}   # region pointer -> _Region
+_feed = None          # _Feed of the shown world
+
+
+# ---------------------------------------------------------------------- settings
+def settings_of(vv, draft: bool = False):
+    """render.Settings from scene.voxel_view; draft drops the expensive passes."""
+    from ..render.settings import EFFECTS, Settings
+    s = Settings(distance=vv.distance, light_radius=min(8, vv.distance))
+    for e in EFFECTS:
+        setattr(s, e, bool(getattr(vv, e)))
+    s.msaa = 2 if vv.msaa else 1
+    s.transparency = vv.transparency
+    s.debug = vv.debug_view or "none"
+    if draft:
+        s.shadows = s.ssao = s.dof = s.godrays = False
+        s.msaa, s.per_sample = 1, False
+        s.peel_layers = min(s.peel_layers, 1)
+    return s
+
+
+def problem(context) -> str | None:
+    """Why the view cannot run here, as one sentence, or None."""
+    import os
+    import bpy
+    import gpu
+    try:
+        b = gpu.platform.backend_type_get()
+    except SystemError:
+        return "the viewport needs Blender's window (no GPU in background mode)"
+    if b != "OPENGL":
+        return f"the voxel view needs the OpenGL backend, not {b} (Preferences > System)"
+    path = context.scene.voxel.path
+    if not path or not os.path.exists(bpy.path.abspath(path)):
+        return "no world open: create or open one in the World panel"
+    if STATUS["error"]:
+        return STATUS["error"]
+    return None
+
+
+# ---------------------------------------------------------------------- camera
+class ViewCamera:
+    """A render camera from Blender's view and window matrices (perspective or
+    orthographic, off-centre for camera view), duck-typed like render.Camera.
+
+    The pipeline draws with the window's x/y rows but its own near/far (Blender's
+    clip range spoils the G-buffer's depth precision); the composite converts depth."""
+
+    def __init__(self, view, window):
+        self.V = np.array(view, np.float64)
+        self.W = np.array(window, np.float64)
+        self.ortho = abs(self.W[3, 3] - 1.0) < 1e-6
+        inv = np.linalg.inv(self.V)
+        self.x, self.y, self.z = (float(v) for v in inv[:3, 3])
+        f = -inv[:3, 2]
+        self.yaw = math.degrees(math.atan2(f[1], f[0]))
+        self.pitch = math.degrees(math.asin(max(-1.0, min(1.0, f[2]))))
+        self.fov = 70.0 if self.ortho else math.degrees(2 * math.atan(1.0 / self.W[1, 1]))
+        self.aspect = 1.0
+        if self.ortho:
+            self.near = -1.0
+        else:  # Blender's near as given, but not so close it eats the depth buffer
+            n = self.W[2, 3] / (self.W[2, 2] - 1.0)
+            self.near = max(float(n), 0.05)
+        self.far = 600.0
+
+    @property
+    def pos(self):
+        return np.array([self.x, self.y, self.z])
+
+    def proj(self):
+        P = self.W.copy()
+        n, f = (-self.far, self.far) if self.ortho else (self.near, self.far)
+        if self.ortho:
+            P[2, :] = (0.0, 0.0, -2 / (f - n), -(f + n) / (f - n))
+        else:
+            P[2, 2], P[2, 3] = (f + n) / (n - f), 2 * f * n / (n - f)
+        return P
+
+    def matrices(self):
+        vp = self.proj() @ self.V
+        return vp, np.linalg.inv(vp)
+
+    def corners(self, far=None):
+        """The view's 8 world corners from the eye's plane (ortho) or near plane
+        (perspective) to view depth `far`."""
+        P = self.proj()
+        ip, iv = np.linalg.inv(P), np.linalg.inv(self.V)
+        out = []
+        n0 = 0.0 if self.ortho else self.near
+        f0 = self.far if far is None else far
+        lo, hi = (-self.far, self.far) if self.ortho else (self.near, self.far)
+        for depth in (n0, f0):
+            t = (depth - lo) / (hi - lo)
+            for i, j in ((-1, -1), (1, -1), (-1, 1), (1, 1)):
+                a = ip @ (i, j, -1.0, 1.0)
+                b = ip @ (i, j, 1.0, 1.0)
+                p = a[:3] / a[3] + (b[:3] / b[3] - a[:3] / a[3]) * t
+                w = iv @ (*p, 1.0)
+                out.append(tuple(float(v) for v in w[:3]))
+        return out
+
+
+# ---------------------------------------------------------------------- CPU side
+class _Feed:
+    """The chunks of one world to show, shared by every GL context: a Stream when
+    the world layer has one (nearest first, in the background), else the whole
+    area around the view read at once when the view enters another chunk."""
+
+    def __init__(self, path, world, distance):
+        self.path, self.world, self.distance = path, world, distance
+        self.chunks: dict = {}   # key -> payload (.key, .mesh, .light, .version)
+        self.gone: set = set()
+        self.area = None         # fallback: render.source.Area and its serial
+        self.serial = 0
+        self.centre = None
+        try:
+            from ..world.stream import Stream
+        except ImportError:
+            self.stream = None
+        else:
+            self.stream = Stream(world, distance)
+
+    def update(self, x, y, direction, budget):
+        """Take in what is ready; returns whether more is on its way."""
+        if self.stream is not None:
+            self.stream.set_view(x, y, direction)
+            ready, gone = self.stream.drain(budget)
+            for p in ready:
+                self.chunks[p.key] = p
+            for k in gone:
+                self.chunks.pop(k, None)
+            self.gone.update(gone)
+            wanted, _, drawn = self.stream.counts
+            STATUS["wanted"] = wanted
+            return len(self.chunks) < wanted
+        from ..render import source
+        c = (math.floor(x) >> 4, math.floor(y) >> 4)
+        if c != self.centre:
+            self.centre = c
+            self.area = source.world_area(self.world, x, y, self.distance,
+                                          min(8, self.distance))
+            self.serial += 1
+        STATUS["wanted"] = (2 * self.distance + 1) ** 2
+        return False
+
+    def close(self):
+        if self.stream is not None:
+            self.stream.close()
+            self.stream = None
+        self.chunks.clear()
+
+
+def _feed_for(scene):
+    global _feed
+    from . import session
+    vv = scene.voxel_view
+    world = session.world(scene.voxel.path)
+    if _feed is None or _feed.world is not world or _feed.distance != vv.distance:
+        if _feed is not None:
+            _feed.close()
+        _feed = _Feed(scene.voxel.path, world, vv.distance)
+        for g in _gpus.values():
+            g.reset_chunks()
+    return _feed
+
+
+# ---------------------------------------------------------------------- GPU side
+class _Gpu:
+    """The GL objects of one GL context: moderngl on Blender's context, a Renderer,
+    the composite program; which chunk versions it has uploaded."""
+
+    def __init__(self, native):
+        import moderngl
+        from _moderngl import DefaultLoader
+        from ..render.pipeline import Renderer
+        from ..render.settings import Settings
+        # create_context() without a loader may take GLX on an EGL Blender (offscreen.py)
+        self.ctx = moderngl.create_context(context=DefaultLoader())
+        if self.ctx.version_code < MIN_GL:
+            v = self.ctx.info.get("GL_VERSION", "?")
+            self.ctx = None
+            raise VoxelError(f"the voxel view needs OpenGL 4.1 or newer (this is {v})")
+        self.native = native
+        self.r = Renderer(self.ctx, Settings())
+        self.versions: dict = {}
+        self.serial = None
+        self._comp: dict = {}
+        self._vao: dict = {}
+
+    def reset_chunks(self):
+        self.versions.clear()
+        self.serial = None
+
+    def sync(self, feed) -> int:
+        """Upload what changed in the feed; returns the number of chunks drawn."""
+        r = self.r
+        if feed.stream is None:
+            if feed.serial != self.serial and feed.area is not None:
+                a = feed.area
+                r.set_area(a.blocks, a.light, a.cx0, a.cy0, ring=True, light_at=a.light_at)
+                self.serial = feed.serial
+            return STATUS["wanted"] if self.serial is not None else 0
+        gone = [k for k in self.versions if k not in feed.chunks]
+        if gone:
+            r.remove_chunks(gone)
+            for k in gone:
+                del self.versions[k]
+        new = [p for k, p in feed.chunks.items() if self.versions.get(k) != p.version]
+        if new:
+            r.update_chunks(new)
+            for p in new:
+                self.versions[p.key] = p.version
+        return len(self.versions)
+
+    def program(self, samples, layers):
+        key = (samples, layers)
+        p = self._comp.get(key)
+        if p is None:
+            p = self._comp[key] = self.r.progs.get(
+                "fullscreen.vert", "viewport.frag", {"SAMPLES": samples, "LAYERS": layers})
+            for k in ("color", "g_depth", "prev_depth"):
+                if k in p:
+                    p[k].value = {"color": 5, "g_depth": 0, "prev_depth": 9}[k]
+        return p
+
+    def composite(self, f, host, host_vp, sky):
+        """The frame into Blender's framebuffer (bound again here), depth tested."""
+        from ..render import glstate
+        gl = glstate.gl()
+        T = f.T
+        prog = self.program(T["ms"], 1 if f.layers else 0)
+        T["out"].use(5)
+        T["g"]["depth"].use(0)
+        if f.layers:
+            T["peel"][0]["depth"].use(9)
+        prog["host_vp"].write(np.asarray(host_vp, np.float32).T.tobytes())
+        prog["host_range"].value = tuple(host["depth_range"])
+        prog["host_zero_one"].value = bool(host["clip"] and host["clip"][1] == 0x935F)
+        prog["sky"].value = bool(sky)
+        gl.BindFramebuffer(0x8CA9, host["fb"][0])
+        gl.Viewport(*host["viewport"])
+        gl.Enable(0x0B71)       # DEPTH_TEST
+        gl.DepthFunc(0x0203)    # LEQUAL
+        gl.DepthMask(1)
+        vao = self._vao.get(prog.glo)
+        if vao is None:
+            vao = self._vao[prog.glo] = self.ctx.vertex_array(prog, [])
+        vao.render(mode=self.ctx.TRIANGLES, vertices=3)
+
+    def release(self):
+        for v in self._vao.values():
+            v.release()
+        self._vao.clear()
+        self._comp.clear()  # (programs belong to the Renderer's cache)
+        if self.r is not None:
+            self.r.release()
+            self.r = None
+
+
+class _Region:
+    __slots__ = ("view", "changed", "quality")
+
+    def __init__(self):
+        self.view, self.changed, self.quality = None, 0.0, "full"
+
+
+# ---------------------------------------------------------------------- handler
+def _draw():
+    import bpy
+    context = bpy.context
+    scene = context.scene
+    vv = getattr(scene, "voxel_view", None)
+    if vv is None or not vv.show:
+        return
+    if problem(context) and not STATUS["error"]:
+        return
+    try:
+        _frame(context, scene, vv)
+        STATUS["error"] = None
+    except VoxelError as e:
+        STATUS["error"] = str(e)
+    except Exception as e:  # keep drawing Blender; say it once in the panel and console
+        if STATUS["error"] is None:
+            traceback.print_exc()
+        STATUS["error"] = f"voxel view failed: {e}"
+    for fn in list(OVERLAYS):
+        fn(context)
+
+
+def _frame(context, scene, vv):
+    from ..render import glstate
+    from .offscreen import _native
+    from .ui.view import hours_of
+    t0 = time.perf_counter()
+    region, rv3d = context.region, context.region_data
+    if region is None or rv3d is None:
+        return
+    view = [tuple(r) for r in rv3d.view_matrix]
+    st = _regions.setdefault(region.as_pointer(), _Region())
+    now = time.perf_counter()
+    if view != st.view:
+        st.view, st.changed = view, now
+    moving = now - st.changed < STILL_S
+    draft = vv.quality == "draft" or (vv.quality == "auto" and moving)
+    cam = ViewCamera(rv3d.view_matrix, rv3d.window_matrix)
+    fwd = (-cam.V[2, 0], -cam.V[2, 1])
+    feed = _feed_for(scene)
+    loading = feed.update(cam.x, cam.y, fwd, BUDGET_S)
+    native = _native()
+    s = settings_of(vv, draft)
+    s.fov = min(150.0, max(10.0, cam.fov))
+    if cam.ortho:
+        s.godrays = False
+    host_vp = np.array(rv3d.perspective_matrix, np.float64)
+    hours = hours_of(scene)
+    t_py = time.perf_counter() - t0
+    with glstate.kept() as host:
+        g = _gpus.get(native)
+        if g is None:
+            g = _gpus[native] = _Gpu(native)
+        drawn = g.sync(feed)
+        g.r.s = s
+        vw, vh = host["viewport"][2], host["viewport"][3]
+        scale = DRAFT_SCALE if draft else 1.0
+        size = (max(8, int(vw * scale)), max(8, int(vh * scale)))
+        t1 = time.perf_counter()
+        f = g.r.prepare(cam, hours, size)
+        t_py += time.perf_counter() - t1
+        g.r.submit(f)
+        g.composite(f, host, host_vp, vv.sky)
+        g.ctx.finish() if _SYNC else None
+    STATUS.update(drawn=drawn, ms=(time.perf_counter() - t0) * 1e3, python_ms=t_py * 1e3,
+                  quality="draft" if draft else "full", frames=STATUS["frames"] + 1)
+    st.quality = "draft" if draft else "full"
+    if loading or draft or drawn < STATUS["wanted"]:
+        _want_redraw()
+
+
+_SYNC = False  # bench: wait for the GPU so frame times are real
+
+
+def _want_redraw():
+    global _timer_on
+    import bpy
+    if not _timer_on:
+        _timer_on = True
+        bpy.app.timers.register(_tick, first_interval=0.05)
+
+
+def _tick():
+    """Redraw while chunks stream in or a region still shows a draft frame."""
+    global _timer_on
+    _timer_on = False
+    _tag_redraw()
+    return None
+
+
+def _tag_redraw():
+    import bpy
+    wm = bpy.context.window_manager
+    for win in (wm.windows if wm else ()):
+        for area in win.screen.areas:
+            if area.type == "VIEW_3D":
+                area.tag_redraw()
+
+
+# ---------------------------------------------------------------------- life cycle
+def sync(context=None) -> None:
+    """Install the draw handler when a scene shows the view; redraw viewports."""
+    global _handle
+    import bpy
+    show = any(getattr(getattr(s, "voxel_view", None), "show", False) for s in bpy.data.scenes)
+    if show and _handle is None:
+        _handle = bpy.types.SpaceView3D.draw_handler_add(_draw, (), "WINDOW", "POST_VIEW")
+        if _load_pre not in bpy.app.handlers.load_pre:
+            bpy.app.handlers.load_pre.append(bpy.app.handlers.persistent(_load_pre))
+    STATUS["error"] = None
+    _tag_redraw()
+
+
+def _load_pre(*_):
+    """File › New / Open: drop the world's chunks and this file's state; the handler
+    comes back when the new file shows the view (load_post)."""
+    import bpy
+    _close_data()
+    if _load_post not in bpy.app.handlers.load_post:
+        bpy.app.handlers.load_post.append(bpy.app.handlers.persistent(_load_post))
+
+
+def _load_post(*_):
+    import bpy
+    if _load_post in bpy.app.handlers.load_post:
+        bpy.app.handlers.load_post.remove(_load_post)
+    sync()
+
+
+def _close_data():
+    global _feed, _handle
+    import bpy
+    from .offscreen import _native
+    if _handle is not None:
+        bpy.types.SpaceView3D.draw_handler_remove(_handle, "WINDOW")
+        _handle = None
+    if _feed is not None:
+        _feed.close()
+        _feed = None
+    _regions.clear()
+    native = _native()
+    for key, g in list(_gpus.items()):
+        # GL names are per context: free them only on their own (a context that is
+        # not current here goes away with its window, and its objects with it)
+        if key == native:
+            from ..render import glstate
+            with glstate.kept():
+                g.release()
+        del _gpus[key]
+    STATUS.update(drawn=0, wanted=0, error=None)
+
+
+def shutdown() -> None:
+    """Unregister: every handler, timer, thread (the stream's) and GL object goes."""
+    global _timer_on
+    import bpy
+    _close_data()
+    for hs, fn in ((bpy.app.handlers.load_pre, _load_pre), (bpy.app.handlers.load_post, _load_post)):
+        while fn in hs:
+            hs.remove(fn)
+    if bpy.app.timers.is_registered(_tick):
+        bpy.app.timers.unregister(_tick)
+    _timer_on = False
+    OVERLAYS.clear()

@@ -74,17 +74,19 @@ def redo(world, rec: Record) -> list:
 
 # ---- the journal -------------------------------------------------------------
 class Journal:
-    """Stroke tree of one world file: serial -> (parent serial, record)."""
+    """Stroke tree: serial -> (parent serial, world file path, record). One tree for
+    every world, so undoing past a change of the scene's world file still undoes
+    the strokes made in the file it named before."""
 
     def __init__(self, root: int = 0):
-        self.nodes: dict[int, tuple[int | None, Record | None]] = {root: (None, None)}
-        self.applied = root      # the stroke whose state the world file holds
+        self.nodes: dict[int, tuple] = {root: (None, None, None)}
+        self.applied = root      # the stroke whose state the world files hold
         self.next = root + 1
 
-    def push(self, rec: Record) -> int:
+    def push(self, rec: Record, path: str | None = None) -> int:
         s = self.next
         self.next += 1
-        self.nodes[s] = (self.applied, rec)
+        self.nodes[s] = (self.applied, path, rec)
         self.applied = s
         return s
 
@@ -104,44 +106,41 @@ class Journal:
         return [("undo", s) for s in up[:up.index(common)]] + \
             [("redo", s) for s in reversed(down[:down.index(common)])]
 
-    def go(self, world, target: int) -> list:
-        """Bring the world file to `target`; returns the payloads of every step."""
+    def go(self, world_of, target: int) -> list:
+        """Bring the world files to `target` (world_of(path) -> World); returns the
+        payloads of every step."""
         payloads = []
         for op, s in self.route(target):
-            rec = self.nodes[s][1]
-            payloads += undo(world, rec) if op == "undo" else redo(world, rec)
-            self.applied = self.nodes[s][0] if op == "undo" else s
+            parent, path, rec = self.nodes[s]
+            w = world_of(path)
+            payloads += undo(w, rec) if op == "undo" else redo(w, rec)
+            self.applied = parent if op == "undo" else s
         return payloads
 
 
-_journals: dict[str, Journal] = {}
+_journal: Journal | None = None
 
 
-def journal(path: str, step: int) -> Journal:
-    """The journal of world file `path`, started at the scene's current step."""
-    key = os.path.realpath(path)
-    j = _journals.get(key)
-    if j is None:
-        j = _journals[key] = Journal(step)
-    return j
+def journal(step: int) -> Journal:
+    """The session's journal, started at the scene's current step."""
+    global _journal
+    if _journal is None:
+        _journal = Journal(step)
+    return _journal
 
 
 def forget() -> None:
-    """A new .blend: its undo history starts afresh, so do the journals."""
-    _journals.clear()
+    """A new .blend: its undo history starts afresh, so does the journal."""
+    global _journal
+    _journal = None
 
 
 # ---- Blender side ------------------------------------------------------------
 def stroke(context, changes) -> int:
     """Apply one stroke to the scene's world, record it, and move the scene's step;
     returns the number of voxels changed (0: nothing recorded)."""
-    import bpy
-    from . import session
     sc = context.scene
-    world = session.world(sc.voxel.path)
-    j = journal(bpy.path.abspath(sc.voxel.path), sc.voxel_edit.step)
-    if j.applied != sc.voxel_edit.step:  # a script set the step: follow it first
-        _reconcile(sc)
+    world = begin(context)
     payloads, rec = apply(world, changes)
     if not len(rec):
         return 0
@@ -152,53 +151,48 @@ def stroke(context, changes) -> int:
 
 def begin(context):
     """Start a drag stroke: the world and its journal, reconciled with the scene."""
-    import bpy
     from . import session
     sc = context.scene
     world = session.world(sc.voxel.path)
-    j = journal(bpy.path.abspath(sc.voxel.path), sc.voxel_edit.step)
-    if j.applied != sc.voxel_edit.step:
-        _reconcile(sc)
+    if journal(sc.voxel_edit.step).applied != sc.voxel_edit.step:
+        _reconcile(sc)  # a script set the step: follow it first
     return world
 
 
 def commit(scene, rec: Record) -> None:
     """Record a finished stroke: the scene's step names it (Blender's undo keeps that)."""
     import bpy
-    j = journal(bpy.path.abspath(scene.voxel.path), scene.voxel_edit.step)
-    scene.voxel_edit.step = j.push(rec)
+    scene.voxel_edit.step = journal(scene.voxel_edit.step).push(
+        rec, bpy.path.abspath(scene.voxel.path))
 
 
 def show(payloads) -> None:
-    """Hand new chunk payloads to the live viewport and redraw it."""
-    import bpy
-    try:
-        from . import viewport  # the live view (issue 12), when present
-    except ImportError:
-        viewport = None
-    if viewport is not None and hasattr(viewport, "update"):
-        viewport.update(payloads)
-    for win in getattr(bpy.context.window_manager, "windows", ()):
-        for area in win.screen.areas:
-            if area.type == "VIEW_3D":
-                area.tag_redraw()
+    """Hand new chunk payloads to the live viewport (blender/viewport.py) and redraw."""
+    from . import viewport
+    take = getattr(viewport, "take", None)
+    if take is not None:
+        take(payloads)
+    else:
+        feed = getattr(viewport, "_feed", None)
+        if feed is not None:
+            if feed.stream is None:
+                feed.centre = None      # the whole-area fallback reads the area again
+            else:
+                for p in payloads:
+                    feed.chunks[p.key] = p
+    viewport._tag_redraw()
 
 
 def _reconcile(scene) -> None:
-    import bpy
     from . import session
-    path = scene.voxel.path
-    if not session.is_open(path):
-        return
-    j = _journals.get(os.path.realpath(bpy.path.abspath(path)))
-    target = scene.voxel_edit.step
+    j, target = _journal, scene.voxel_edit.step
     if j is None or j.applied == target:
         return
     try:
-        payloads = j.go(session.world(path), target)
+        payloads = j.go(session.world, target)
     except KeyError:  # a step from before this session's history: nothing to replay
         print(f"voxel: undo step {target} is not in this session's history")
-        j.nodes.setdefault(target, (None, None))
+        j.nodes.setdefault(target, (None, None, None))
         j.applied = target
         return
     show(payloads)

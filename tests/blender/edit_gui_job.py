@@ -1,0 +1,414 @@
+"""Run inside the real Blender GUI (Xvfb, --enable-event-simulate) by test_edit_gui.py:
+the Voxel Edit tool driven by simulated mouse and key events.
+
+    blender --factory-startup --enable-event-simulate -p 0 0 W H -P edit_gui_job.py -- OUT CASE
+
+Every check compares with an oracle computed here from the view's matrices alone
+(not with core/ray.py): the flat world's top surface is a plane, so the cell a pixel
+points at is where the pixel's ray meets that plane. Results go to OUT/CASE.json
+({"checks": [[name, ok, detail]...], "error": ...}); screenshots to OUT/*.png.
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import random
+import signal
+import sys
+import time
+import traceback
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))
+
+import bpy  # noqa: E402
+from mathutils import Quaternion, Vector  # noqa: E402
+
+ARGS = sys.argv[sys.argv.index("--") + 1:]
+OUT, CASE = Path(ARGS[0]), ARGS[1]
+RESULT = {"checks": [], "error": None, "figures": {}}
+TOP = None  # z of the flat world's highest solid block
+
+
+def check(name, ok, detail=""):
+    RESULT["checks"].append([name, bool(ok), str(detail)])
+    print(f"CHECK {name}: {'ok' if ok else 'FAIL'} {detail}", flush=True)
+
+
+def save():
+    (OUT / f"{CASE}.json").write_text(json.dumps(RESULT, indent=1))
+
+
+# ---------------------------------------------------------------- the scene
+def view3d():
+    win = bpy.context.window_manager.windows[0]
+    area = next(a for a in win.screen.areas if a.type == "VIEW_3D")
+    region = next(r for r in area.regions if r.type == "WINDOW")
+    return win, area, region, area.spaces.active
+
+
+def setup():
+    global TOP
+    import voxel_addon
+    from voxel_addon.blender import session
+    voxel_addon.register()
+    sc = bpy.context.scene
+    for ob in list(bpy.data.objects):
+        bpy.data.objects.remove(ob)
+    sc.voxel.path, sc.voxel.seed, sc.voxel.generator = str(OUT / "w.sqlite"), 1, "flat"
+    assert bpy.ops.voxel.world_new() == {"FINISHED"}
+    w = session.world(sc.voxel.path)
+    w.idle_timeout = 1e9   # keep what the tool may point at resident (no stream here)
+    for cx in range(-3, 4):
+        for cy in range(-3, 4):
+            w.chunk_at(cx, cy)
+    col = w.chunk_at(0, 0).blocks[0, 0]
+    TOP = int(max(i for i in range(256) if col[i]))
+    win, area, region, space = view3d()
+    space.overlay.show_floor = space.overlay.show_axis_x = space.overlay.show_axis_y = False
+    space.clip_end = 1000.0
+    with bpy.context.temp_override(window=win, area=area, region=region):
+        bpy.ops.wm.tool_set_by_id(name="voxel.edit_tool")
+    tool = win.workspace.tools.from_space_view3d_mode("OBJECT", create=False)
+    check("tool_active", tool is not None and tool.idname == "voxel.edit_tool",
+          tool and tool.idname)
+    sc.voxel_edit.block = "lamp_red"
+    bpy.ops.ed.undo_push(message="voxel test set-up")
+    return w
+
+
+def set_view(ortho: bool, loc=(8.0, 8.0, None), dist=40.0, rot=None):
+    _, _, _, space = view3d()
+    r = space.region_3d
+    r.view_perspective = "ORTHO" if ortho else "PERSP"
+    r.view_rotation = rot or Quaternion((1.0, 0.0, 0.0, 0.0))   # top view
+    r.view_location = Vector((loc[0], loc[1], TOP + 1 if loc[2] is None else loc[2]))
+    r.view_distance = dist
+
+
+# ---------------------------------------------------------------- oracle
+def pixel_ray(px, py):
+    """(origin, direction) of region pixel (px, py) from the view's matrices."""
+    _, _, region, space = view3d()
+    r = space.region_3d
+    inv = r.perspective_matrix.inverted()
+    ndc = Vector((2 * (px + 0.5) / region.width - 1, 2 * (py + 0.5) / region.height - 1))
+    a = inv @ Vector((ndc.x, ndc.y, -1.0, 1.0))
+    b = inv @ Vector((ndc.x, ndc.y, 1.0, 1.0))
+    a, b = a.xyz / a.w, b.xyz / b.w
+    return a, (b - a).normalized()
+
+
+def surface_cell(px, py, z_top):
+    """The cell above the plane z = z_top + 1 that pixel (px, py) points at, and how far
+    its hit point lies from the cell's edges (a test avoids pixels near an edge)."""
+    o, d = pixel_ray(px, py)
+    if d.z >= 0:
+        return None, 0.0
+    t = (z_top + 1 - o.z) / d.z
+    p = o + d * t
+    fx, fy = p.x - math.floor(p.x), p.y - math.floor(p.y)
+    return (math.floor(p.x), math.floor(p.y), z_top + 1), min(fx, 1 - fx, fy, 1 - fy)
+
+
+def good_pixel(rng, z_top, margin=0.25):
+    _, _, region, _ = view3d()
+    for _ in range(500):
+        px = rng.randrange(region.width // 4, 3 * region.width // 4)
+        py = rng.randrange(region.height // 4, 3 * region.height // 4)
+        cell, m = surface_cell(px, py, z_top)
+        if cell and m > margin:
+            return (px, py), cell
+    raise RuntimeError("no pixel away from cell edges")
+
+
+def file_block(x, y, z):
+    from voxel_addon.core.blocks import REGISTRY
+    from voxel_addon.storage import WorldFile
+    wf = WorldFile(bpy.context.scene.voxel.path, readonly=True)
+    try:
+        got = wf.read_chunk((x >> 4, y >> 4))
+    finally:
+        wf.close()
+    if got is None:
+        return None
+    return REGISTRY[int(got[0][x & 15, y & 15, z])].name
+
+
+def file_snapshot(keys=((0, 0), (0, -1), (-1, 0), (-1, -1), (1, 0), (0, 1), (1, 1))):
+    from voxel_addon.storage import WorldFile
+    wf = WorldFile(bpy.context.scene.voxel.path, readonly=True)
+    try:
+        return {k: (None if (g := wf.read_chunk(k)) is None else g[0].copy()) for k in keys}
+    finally:
+        wf.close()
+
+
+def diff(a, b):
+    import numpy as np
+    out = []
+    for k in a:
+        x, y = a[k], b[k]
+        if x is None and y is None:
+            continue
+        if x is None or y is None:
+            x = x if x is not None else generated(k)
+            y = y if y is not None else generated(k)
+        for lx, ly, z in zip(*np.nonzero(x != y)):
+            out.append((k[0] * 16 + int(lx), k[1] * 16 + int(ly), int(z)))
+    return sorted(out)
+
+
+def generated(key):
+    from voxel_addon.blender import session
+    w = session.world(bpy.context.scene.voxel.path)
+    return w.generator.generate([key])[0]
+
+
+# ---------------------------------------------------------------- events
+def ev(type, value="NOTHING", **kw):
+    win, _, region, _ = view3d()
+    if "at" in kw:
+        px, py = kw.pop("at")
+        kw["x"], kw["y"] = region.x + px, region.y + py
+    win.event_simulate(type=type, value=value, **kw)
+
+
+def move(at):
+    ev("MOUSEMOVE", at=at)
+
+
+def click(at, **mods):
+    move(at)
+    yield 2
+    ev("LEFTMOUSE", "PRESS", at=at, **mods)
+    yield 1
+    ev("LEFTMOUSE", "RELEASE", at=at, **mods)
+    yield 2
+
+
+def key(k, **mods):
+    ev(k, "PRESS", **mods)
+    yield 1
+    ev(k, "RELEASE", **mods)
+    yield 2
+
+
+def shot(name):
+    win, area, region, _ = view3d()
+    with bpy.context.temp_override(window=win, area=area, region=region):
+        bpy.ops.screen.screenshot_area(filepath=str(OUT / f"{name}.png"))
+
+
+# ---------------------------------------------------------------- cases
+def case_click(w):
+    rng = random.Random(3)
+    sc = bpy.context.scene
+    for ortho in (True, False):
+        name = "ortho" if ortho else "persp"
+        set_view(ortho, rot=None if ortho else Quaternion(Vector((1, 0.3, 0)).normalized(), 0.6))
+        yield 3
+        at, cell = good_pixel(rng, TOP)
+        move((at[0] + 5, at[1] + 5))
+        yield 3
+        sc = bpy.context.scene   # undo replaces the scene's Python object
+        before, step = file_snapshot(), sc.voxel_edit.step
+        yield from click(at)
+        got = diff(before, file_snapshot())
+        check(f"{name}_click_places_the_cell", got == [cell] and file_block(*cell) == "lamp_red",
+              f"want {cell}, changed {got[:5]}")
+        check(f"{name}_one_undo_step", sc.voxel_edit.step != step)
+        shot(f"{name}_placed")
+        # Shift-click on the same pixel hits the new block's top: removes it
+        yield from click(at, shift=True)
+        check(f"{name}_shift_removes", diff(before, file_snapshot()) == [],
+              diff(before, file_snapshot())[:5])
+        # Alt-click picks the terrain block
+        sc.voxel_edit.block = "glass"
+        want = file_block(cell[0], cell[1], TOP) or generated_name(cell[0], cell[1], TOP)
+        yield from click(at, alt=True)
+        check(f"{name}_alt_picks", sc.voxel_edit.block == want, (sc.voxel_edit.block, want))
+        sc.voxel_edit.block = "lamp_red"
+        # Ctrl+Z restores the file, Ctrl+Shift+Z re-applies
+        yield from click(at)
+        after = file_snapshot()
+        yield from key("Z", ctrl=True)
+        sc = bpy.context.scene
+        check(f"{name}_ctrl_z_restores", diff(before, file_snapshot()) == [],
+              diff(before, file_snapshot())[:5])
+        yield from key("Z", ctrl=True, shift=True)
+        check(f"{name}_ctrl_shift_z_reapplies", diff(after, file_snapshot()) == [],
+              diff(after, file_snapshot())[:5])
+
+
+def generated_name(x, y, z):
+    from voxel_addon.core.blocks import REGISTRY
+    return REGISTRY[int(generated((x >> 4, y >> 4))[x & 15, y & 15, z])].name
+
+
+def case_drag(w):
+    sc = bpy.context.scene
+    set_view(True, dist=30.0)
+    yield 3
+    _, _, region, _ = view3d()
+    y = region.height // 2
+    xs = list(range(region.width // 2 - 120, region.width // 2 + 120, 6))
+    cells = sorted({c for x in xs for c in [surface_cell(x, y, TOP)[0]]})
+    before, step = file_snapshot(), sc.voxel_edit.step
+    move((xs[0], y))
+    yield 2
+    ev("LEFTMOUSE", "PRESS", at=(xs[0], y))
+    yield 1
+    for x in xs[1:]:
+        move((x, y))
+        yield 1
+    ev("LEFTMOUSE", "RELEASE", at=(xs[-1], y))
+    yield 2
+    got = diff(before, file_snapshot())
+    check("drag_paints_the_row", got == cells, f"{len(got)} cells vs {len(cells)}")
+    check("drag_is_one_stroke", sc.voxel_edit.step == step + 1 or
+          (sc.voxel_edit.step != step and len(got) > 1), (step, sc.voxel_edit.step))
+    shot("drag")
+    yield from key("Z", ctrl=True)
+    check("drag_one_ctrl_z_undoes_it_all", diff(before, file_snapshot()) == [])
+
+
+def case_blocked(w):
+    """A click on the sky, and on a Blender object in front of the terrain: no change."""
+    sc = bpy.context.scene
+    # looking toward the horizon: the top rows are sky
+    set_view(False, loc=(8.0, 8.0, TOP + 3), dist=10.0,
+             rot=Quaternion(Vector((1, 0, 0)), math.radians(80)))
+    yield 3
+    _, _, region, _ = view3d()
+    before, step = file_snapshot(), sc.voxel_edit.step
+    sky = (region.width // 2, region.height - 20)
+    o, d = pixel_ray(*sky)
+    check("sky_pixel_looks_up", d.z > 0, d)
+    yield from click(sky)
+    check("sky_click_changes_nothing", diff(before, file_snapshot()) == [] and
+          sc.voxel_edit.step == step)
+    # a cube floating over the terrain, seen from above
+    set_view(True, dist=30.0)
+    bpy.ops.mesh.primitive_cube_add(size=4.0, location=(8.0, 8.0, TOP + 6))
+    yield 3
+    _, _, region, _ = view3d()
+    centre = (region.width // 2, region.height // 2)
+    yield from click(centre)
+    check("object_in_front_blocks", diff(before, file_snapshot()) == [] and
+          sc.voxel_edit.step == step)
+    shot("blocked")
+    bpy.data.objects.remove(bpy.data.objects["Cube"])
+
+
+def case_interleave(w):
+    """Random strokes, object moves, Ctrl+Z and Ctrl+Shift+Z against a model of
+    Blender's history (a list of states and a cursor)."""
+    sc = bpy.context.scene
+    set_view(True, dist=30.0)
+    bpy.ops.object.empty_add(location=(0.0, 0.0, TOP + 20))
+    name = bpy.context.object.name    # undo replaces Python objects: look it up by name
+    bpy.ops.ed.undo_push(message="add empty")
+    yield 3
+    rng = random.Random(11)
+    hist = [(file_snapshot(), tuple(bpy.data.objects[name].location))]
+    cur = 0
+    win, area, region, _ = view3d()
+    for i in range(30):
+        r = rng.random()
+        if r >= 0.55 and r < 0.8 and cur == 0:
+            r = 0.1   # an undo past the first step would undo the test's own set-up
+        if r < 0.35:
+            at, cell = good_pixel(rng, TOP)
+            step = bpy.context.scene.voxel_edit.step
+            yield from click(at, shift=rng.random() < 0.3)
+            if bpy.context.scene.voxel_edit.step == step:
+                check(f"interleave_{i}_stroke_recorded", False)
+                break
+            del hist[cur + 1:]
+            hist.append((file_snapshot(), tuple(bpy.data.objects[name].location)))
+            cur = len(hist) - 1
+            op = "stroke"
+        elif r < 0.55:
+            with bpy.context.temp_override(window=win, area=area, region=region):
+                bpy.ops.transform.translate("EXEC_DEFAULT", True, value=(rng.uniform(-3, 3), 1.0, 0.0))
+            yield 2
+            del hist[cur + 1:]
+            hist.append((file_snapshot(), tuple(bpy.data.objects[name].location)))
+            cur = len(hist) - 1
+            op = "move"
+        elif r < 0.8:
+            yield from key("Z", ctrl=True)
+            cur = max(0, cur - 1)
+            op = "undo"
+        else:
+            yield from key("Z", ctrl=True, shift=True)
+            cur = min(len(hist) - 1, cur + 1)
+            op = "redo"
+        snap, loc = hist[cur]
+        now = bpy.data.objects[name].location
+        ok = diff(snap, file_snapshot()) == [] and (Vector(loc) - now).length < 1e-4
+        check(f"interleave_{i}_{op}", ok, (cur, len(hist), tuple(now), loc))
+        if not ok:
+            break
+
+
+def case_kill(w):
+    """A stroke, then SIGKILL at once: the file must hold it (the test reads it)."""
+    set_view(True, dist=30.0)
+    yield 3
+    at, cell = good_pixel(random.Random(5), TOP)
+    RESULT["figures"]["kill_cell"] = cell
+    save()
+    yield from click(at)
+    os.kill(os.getpid(), signal.SIGKILL)
+
+
+def warm_up(case):
+    """A user moves the mouse into the view before clicking: the first events after
+    the tool is set only wake the window up."""
+    _, _, region, _ = view3d()
+    for i in range(6):
+        move((region.width // 2 + 10 * i, region.height // 2))
+        yield 3
+    # The first click of a fresh window never reaches a keymap (seen with simulated
+    # events); an Alt-click (pick) changes no voxel either way.
+    yield from click((region.width // 2, region.height // 2), alt=True)
+    bpy.context.scene.voxel_edit.block = "lamp_red"
+    yield from case
+
+
+CASES = {"click": case_click, "drag": case_drag, "blocked": case_blocked,
+         "interleave": case_interleave, "kill": case_kill}
+
+
+def driver():
+    gen = None
+
+    def tick():
+        nonlocal gen
+        try:
+            if gen is None:
+                w = setup()
+                gen = warm_up(CASES[CASE](w))
+                return 0.3
+            n = next(gen)
+            return 0.05 * (n or 1)
+        except StopIteration:
+            pass
+        except Exception:
+            RESULT["error"] = traceback.format_exc()
+            print(RESULT["error"], flush=True)
+        save()
+        import voxel_addon
+        try:
+            voxel_addon.unregister()
+        finally:
+            sys.stdout.flush()
+            os._exit(0)
+    bpy.app.timers.register(tick, first_interval=0.5)
+
+
+driver()

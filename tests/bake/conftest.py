@@ -17,7 +17,7 @@ DECOR = [(3, 3, 7, "lamp_red"), (5, 5, 7, "glass"), (6, 5, 7, "glass"), (8, 8, 7
 
 @pytest.fixture(scope="session")
 def small_world(tmp_path_factory):
-    from voxel_addon.core.world import World
+    from voxel_addon.world import World
     path = tmp_path_factory.mktemp("bake") / "w.sqlite"
     w = World.create(path, seed=3, generator="flat", loader=False,
                      params={"layers": [["stone", 4], ["dirt", 2], ["grass", 1]]})

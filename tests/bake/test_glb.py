@@ -15,7 +15,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 
 
 def _baked(small_world, **kw):
-    from voxel_addon.core.world import World
+    from voxel_addon.world import World
     with World.open(small_world, readonly=True, loader=False) as w:
         return bake.bake_world(w, -5, -5, 24, 22, **kw)
 

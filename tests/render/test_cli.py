@@ -25,7 +25,7 @@ def png(path) -> np.ndarray:
 
 @pytest.fixture(scope="module")
 def world(tmp_path_factory):
-    from voxel_addon.core.world import World
+    from voxel_addon.world import World
     p = tmp_path_factory.mktemp("render") / "w.sqlite"
     r = cli("generate", "--world", p, "--seed", 2019, "--center", 0, 0, "--radius", 1)
     assert r.returncode == 0, r.stderr

@@ -9,13 +9,13 @@ import textwrap
 import time
 from pathlib import Path
 
-from voxel_addon.core.world import World
+from voxel_addon.world import World
 
 ROOT = Path(__file__).resolve().parents[2]
 
 WRITER = textwrap.dedent("""
     import sys
-    from voxel_addon.core.world import World
+    from voxel_addon.world import World
     w = World.create(sys.argv[1], seed=5, generator="flat", loader=False)
     i = 0
     while True:

@@ -12,7 +12,7 @@ import zstandard
 from voxel_addon.core import chunk
 from voxel_addon.core.blocks import REGISTRY
 from voxel_addon.core.errors import VoxelError
-from voxel_addon.core.world import World
+from voxel_addon.world import World
 from voxel_addon.storage import FORMAT_VERSION, CorruptChunk, WorldFile
 
 

@@ -84,7 +84,7 @@ def check_region(x0, y0, x1, y1, limit: int = 4096) -> tuple[int, int, int, int]
 
 
 def region_of(world, x0, y0, x1, y1) -> np.ndarray:
-    """(X1-X0, Y1-Y0, 256) blocks of the region from a core.world.World."""
+    """(X1-X0, Y1-Y0, 256) blocks of the region from a world.World."""
     cx0, cy0, cx1, cy1 = x0 >> 4, y0 >> 4, ((x1 - 1) >> 4) + 1, ((y1 - 1) >> 4) + 1
     b = world.region_blocks(cx0, cy0, cx1, cy1)
     ox, oy = x0 - cx0 * C.SIZE, y0 - cy0 * C.SIZE

@@ -12,7 +12,7 @@ import time
 
 def run(ctx):
     from .. import bake
-    from ..core.world import World
+    from ..world import World
     size = 32 if ctx.quick else 48
     x0, y0 = -size // 2, -size // 2
     x1, y1 = x0 + size, y0 + size

@@ -7,7 +7,7 @@ import time
 import numpy as np
 
 from ..core import chunk as C
-from ..core.world import World
+from ..world import World
 from ..storage import codecs
 
 SEED = 2019

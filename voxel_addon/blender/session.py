@@ -18,7 +18,7 @@ def _key(path: str) -> str:
 def world(path: str, *, create_seed: int | None = None, generator: str | None = None):
     """The open World for `path`; created with `create_seed` if given and missing."""
     from ..core.errors import VoxelError
-    from ..core.world import World
+    from ..world import World
     if not path:
         raise VoxelError("no world file set (Voxel panel > World > File)")
     key = _key(path)

@@ -28,7 +28,7 @@ def add_parser(sub):
 
 def run(args):
     from .. import bake
-    from ..core.world import World
+    from ..world import World
     from ..light import daytime
     if args.out.suffix.lower() != ".glb":
         raise VoxelError(f"--out must end in .glb (got {args.out.name})")

@@ -23,7 +23,7 @@ def chunk_light(blocks3x3: np.ndarray) -> np.ndarray:
 
 def run(args):
     from ..core.errors import VoxelError
-    from ..core.world import World
+    from ..world import World
     cx, cy = args.chunk
     if not args.out.parent.is_dir():
         raise VoxelError(f"folder {args.out.parent} does not exist")

@@ -1,4 +1,5 @@
-"""edit: set or clear one block and save it (SPEC §5)."""
+"""edit: set or clear one block and save it (SPEC §5), relit and remeshed through
+world.edit like any other edit (one transaction)."""
 from __future__ import annotations
 
 from .common import add_world
@@ -17,7 +18,8 @@ def run(args):
     from ..core import chunk
     from ..core.blocks import REGISTRY
     from ..core.errors import VoxelError
-    from ..core.world import World
+    from ..world import World
+    from ..world.edit import edit
     if args.set:
         try:
             x, y, z = (int(v) for v in args.set[:3])
@@ -29,5 +31,7 @@ def run(args):
     bid = REGISTRY.id(name)        # check everything before the file is opened for writing
     chunk.check_z(z)
     with World.open(args.world, loader=False) as world:
-        old = world.set_block(x, y, z, bid)
-    print(f"({x}, {y}, {z}): {REGISTRY[old].name} -> {name} (saved)")
+        payloads, rec = edit(world, (x, y, z, bid))
+    old = rec.before[0][0] if rec.voxels else bid
+    note = f"{len(payloads)} chunks relit/remeshed" if rec.voxels else "unchanged"
+    print(f"({x}, {y}, {z}): {REGISTRY[old].name} -> {name} (saved; {note})")

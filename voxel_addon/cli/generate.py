@@ -22,7 +22,7 @@ def add_parser(sub):
 
 
 def run(args):
-    from ..core.world import World
+    from ..world import World
     from ..generation import DEFAULT
     if not 0 <= args.radius <= 256:
         raise VoxelError(f"--radius must be between 0 and 256 (got {args.radius})")

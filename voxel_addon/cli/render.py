@@ -64,7 +64,7 @@ def run(args):
     if args.scene:
         data = source.scene_area(args.scene)
     else:
-        from ..core.world import World
+        from ..world import World
         world = World.open(args.world, readonly=True, loader=False)
         try:
             data = source.world_area(world, cam_args[0], cam_args[1], s.distance,

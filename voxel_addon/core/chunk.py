@@ -54,14 +54,16 @@ class Chunk:
     `large` maps a small-data index to any Python object (e.g. a chest's contents).
     """
 
-    __slots__ = ("key", "blocks", "data", "large", "light", "dirty", "last_use", "__weakref__")
+    __slots__ = ("key", "blocks", "data", "large", "light", "mesh", "dirty", "last_use",
+                 "__weakref__")
 
     def __init__(self, key, blocks=None, data=None):
         self.key = tuple(key)
         self.blocks = empty() if blocks is None else blocks
         self.data = data
         self.large: dict[int, object] = {}
-        self.light = None  # filled by the light module when asked
+        self.light = None  # final light, filled by the world layer (stream, edit)
+        self.mesh = None   # its mesh with the neighbour ring, likewise
         self.dirty = False
         self.last_use = time.monotonic()
 
@@ -79,7 +81,7 @@ class Chunk:
                 self.data = empty()
             self.data[lx, ly, z] = data
         self.dirty = True
-        self.light = None
+        self.light = self.mesh = None  # stale now
 
     def nbytes(self) -> int:
         n = self.blocks.nbytes

@@ -130,6 +130,6 @@ def region_light(blocks: np.ndarray, backend: str | None = None, tile: int = TIL
 
 def world_region(world, cx0: int, cy0: int, cx1: int, cy1: int,
                  backend: str | None = None) -> np.ndarray:
-    """Light of chunks [cx0, cx1) x [cy0, cy1) of a core.world.World, solved at once
+    """Light of chunks [cx0, cx1) x [cy0, cy1) of a world.World, solved at once
     (reads the 1-chunk ring around it through world.region_blocks)."""
     return region_light(world.region_blocks(cx0 - 1, cy0 - 1, cx1 + 1, cy1 + 1), backend)

@@ -10,7 +10,7 @@ import pytest
 
 from voxel_addon.core.blocks import REGISTRY
 from voxel_addon.core.errors import VoxelError
-from voxel_addon.core.world import World
+from voxel_addon.world import World
 
 STONE, LAMP = REGISTRY.id("stone"), REGISTRY.id("lamp_red")
 

@@ -8,19 +8,30 @@ Chunks not asked for during `idle_timeout` seconds are saved (if changed) and
 unloaded by the loader thread. Unloading never loses an edit: a chunk leaves the map
 and enters `_saving` (a snapshot) atomically under the lock, and loads look there
 first, so a chunk re-requested before its write lands comes back with every edit.
+
+A chunk row that cannot be decoded is reported once (`corrupt`, a log warning) and
+treated as missing: never generated in its place, never written over.
+Besides blocks, an active chunk may hold its final light and mesh (world.stream and
+world.edit fill them); `tick` numbers every change so payload versions only grow.
 """
 from __future__ import annotations
 
+import itertools
+import logging
 import threading
 import time
+import weakref
 from collections import OrderedDict
 
 import numpy as np
 
-from . import chunk as C
-from .blocks import REGISTRY
-from .chunk import Chunk
-from .errors import VoxelError
+from ..core import chunk as C
+from ..core.blocks import REGISTRY
+from ..core.chunk import Chunk
+from ..core.errors import VoxelError
+from ..storage import CorruptChunk
+
+log = logging.getLogger(__name__)
 
 BATCH = 32  # chunks generated per loader step: amortises kernel launches
 
@@ -40,6 +51,11 @@ class World:
         self._saving: dict[tuple[int, int], tuple] = {}
         self._evictions: dict[tuple[int, int], int] = {}
         self._edits: dict[tuple[int, int, int], tuple[int, int]] = {}  # unsaved user edits
+        self.corrupt: dict[tuple[int, int], str] = {}  # key -> message, reported once
+        self.bver: dict[tuple[int, int], int] = {}   # key -> tick of its last block change
+        self.pver: dict[tuple[int, int], int] = {}   # key -> version of its newest payload
+        self._tick = itertools.count(1)
+        self.streams = weakref.WeakSet()  # closed before the world closes
         self._stop = False
         self.loader_error: BaseException | None = None
         self._thread = None
@@ -79,6 +95,10 @@ class World:
     @property
     def seed(self) -> int:
         return self.file.seed
+
+    def tick(self) -> int:
+        """A new number, larger than every one before (versions, block changes)."""
+        return next(self._tick)
 
     # ---- the three access functions ----------------------------------------
     def maybe_chunk_at(self, cx: int, cy: int) -> Chunk | None:
@@ -121,32 +141,48 @@ class World:
             c = self.chunk_at(x >> 4, y >> 4)
             old = c.get(x & 15, y & 15, z)
             c.set(x & 15, y & 15, z, bid, data)
+            self.bver[c.key] = self.tick()
             self._edits[(x, y, z)] = (bid, data)
+            # light and meshes around are stale: streams make them again
+            # (world.edit.edit relights and remeshes them at once instead)
+            for i in (-1, 0, 1):
+                for j in (-1, 0, 1):
+                    k = (c.key[0] + i, c.key[1] + j)
+                    self.pver.pop(k, None)
+                    n = self.chunks.get(k)
+                    if n is not None:
+                        n.light = n.mesh = None
         return old
 
     def region_blocks(self, cx0: int, cy0: int, cx1: int, cy1: int) -> np.ndarray:
         """Blocks of chunks [cx0, cx1) x [cy0, cy1) as one (W, H, 256) array."""
         keys = [(cx, cy) for cy in range(cy0, cy1) for cx in range(cx0, cx1)]
         out = C.empty(width=C.SIZE * (cx1 - cx0), depth=C.SIZE * (cy1 - cy0))
-        missing = [k for k in keys if k not in self.chunks]
-        if missing:
-            self._activate(missing)
-        for cx, cy in keys:
-            c = self.chunk_at(cx, cy)
+        got = self.load(keys)
+        for (cx, cy), c in got.items():
             x, y = (cx - cx0) * C.SIZE, (cy - cy0) * C.SIZE
             out[x:x + C.SIZE, y:y + C.SIZE] = c.blocks
         return out
 
     # ---- loading, generating ------------------------------------------------
     def _activate(self, keys) -> list[Chunk]:
-        """Make `keys` active (load, or generate + apply stored edits); returns them.
+        """Make `keys` active and return them; a corrupt one raises CorruptChunk."""
+        got = self.load(keys)
+        for k in keys:
+            if k not in got:
+                raise CorruptChunk(self.corrupt[k])
+        return [got[k] for k in keys]
+
+    def load(self, keys) -> dict:
+        """Make `keys` active (load, or generate + apply stored edits); returns
+        {key: Chunk} without the corrupt ones (shown as missing).
 
         Reading happens outside the lock, so another thread may load, edit and evict
         the same chunk meanwhile; the eviction counter catches that and the stale
         read is thrown away and redone.
         """
         out: dict = {}
-        pending = list(keys)
+        pending = [k for k in dict.fromkeys(map(tuple, keys)) if k not in self.corrupt]
         while pending:
             with self._lock:
                 epochs = {k: self._evictions.get(k, 0) for k in pending}
@@ -156,6 +192,8 @@ class World:
                 now = time.monotonic()
                 for k in pending:
                     c = self.chunks.get(k)
+                    if c is None and k in self.corrupt:
+                        continue
                     if c is None:
                         if k not in found or self._evictions.get(k, 0) != epochs[k]:
                             retry.append(k)
@@ -164,7 +202,7 @@ class World:
                     c.last_use = now
                     out[k] = c
             pending = retry
-        return [out[k] for k in keys]
+        return out
 
     def _fetch(self, keys) -> dict:
         """New Chunk objects for keys: from an unsaved snapshot, the file, or the generator."""
@@ -177,7 +215,11 @@ class World:
                 found[key] = Chunk(key, snap[0].copy(order="F"),
                                    None if snap[1] is None else snap[1].copy(order="F"))
                 continue
-            got = self.file.read_chunk(key)
+            try:
+                got = self.file.read_chunk(key)
+            except CorruptChunk as e:
+                self._report_corrupt(key, str(e))
+                continue
             if got is None:
                 to_make.append(key)
             else:
@@ -186,12 +228,28 @@ class World:
             with self._gen_lock:
                 arrays = self.generator.generate(to_make)
             for key, blocks in zip(to_make, arrays):
-                c = Chunk(key, blocks)
-                for x, y, z, b, d in self.file.edits_in(key):
-                    c.set(x & 15, y & 15, z, b, d)
+                c = Chunk(key, *self.apply_stored_edits(key, blocks))
                 c.dirty = not self.readonly
                 found[key] = c
         return found
+
+    def apply_stored_edits(self, key, blocks, data=None):
+        """The file's edits inside chunk `key` applied to freshly generated arrays
+        (in place, data values included: the one place that does it); (blocks, data)."""
+        for x, y, z, b, d in self.file.edits_in(key):
+            blocks[x & 15, y & 15, z] = b
+            if d or data is not None:
+                if data is None:
+                    data = C.empty()
+                data[x & 15, y & 15, z] = d
+        return blocks, data
+
+    def _report_corrupt(self, key, msg: str) -> None:
+        with self._lock:
+            if key in self.corrupt:
+                return
+            self.corrupt[key] = msg
+        log.warning("%s (shown as missing)", msg)
 
     def _loader(self) -> None:
         while True:
@@ -229,21 +287,23 @@ class World:
                 self._evictions[k] = self._evictions.get(k, 0) + 1
                 if c.dirty and not self.readonly:
                     self._saving[k] = (c.blocks, c.data)
-        self.flush()
+        self.flush(only=keys)
         return len(keys)
 
-    def flush(self) -> None:
-        """Write every changed chunk and pending edit in one transaction."""
+    def flush(self, only=None) -> None:
+        """Write every changed chunk (or those of `only` and the unloaded ones) and
+        every pending edit in one transaction."""
         if self.readonly:
             return
         with self._flush_lock:
-            self._flush()
+            self._flush(only)
 
-    def _flush(self) -> None:
+    def _flush(self, only=None) -> None:
         # Snapshots go into _saving before the write so a chunk evicted and reloaded
         # while this write is in flight is rebuilt from them, not from the stale file.
         with self._lock:
-            for k, c in self.chunks.items():
+            for k in self.chunks if only is None else [k for k in only if k in self.chunks]:
+                c = self.chunks[k]
                 if c.dirty:
                     self._saving[k] = (c.blocks.copy(order="F"),
                                        None if c.data is None else c.data.copy(order="F"))
@@ -264,13 +324,46 @@ class World:
                 if self._saving.get(k) is snap:
                     del self._saving[k]
 
+    def commit(self, keys, edits) -> None:
+        """Write chunks `keys` (if active and changed) and `edits` ((x, y, z, block,
+        data) rows) in one transaction, leaving other changed chunks for later."""
+        if self.readonly:
+            return
+        with self._flush_lock:
+            # As in _flush: the snapshots sit in _saving until the write lands, so an
+            # eviction + reload meanwhile rebuilds from them, not from the stale file.
+            with self._lock:
+                snaps = {}
+                for k in keys:
+                    c = self.chunks.get(k)
+                    if c is not None and c.dirty:
+                        snaps[k] = self._saving[k] = (
+                            c.blocks.copy(order="F"),
+                            None if c.data is None else c.data.copy(order="F"))
+                        c.dirty = False
+            try:
+                self.file.save([self.file.encode_chunk(k, b, d) for k, (b, d) in snaps.items()],
+                               edits)
+            except BaseException:
+                with self._lock:  # the edits stay pending for the next flush
+                    for x, y, z, b, d in edits:
+                        self._edits.setdefault((x, y, z), (b, d))
+                raise
+            with self._lock:
+                for k, snap in snaps.items():
+                    if self._saving.get(k) is snap:
+                        del self._saving[k]
+
     def unload_all(self) -> None:
         with self._lock:
             keys = list(self.chunks)
         self._evict(keys)
 
     def close(self) -> None:
-        """Stop the loader, save everything, close the file. Safe to call twice."""
+        """Stop streams and the loader, save everything, close the file. Safe to
+        call twice."""
+        for s in list(self.streams):
+            s.close()
         with self._lock:
             self._stop = True
             self._wake.notify_all()
@@ -299,11 +392,8 @@ class World:
             batch = todo[i:i + BATCH]
             with self._gen_lock:
                 arrays = self.generator.generate(batch)
-            rows = []
-            for key, blocks in zip(batch, arrays):
-                for x, y, z, b, d in self.file.edits_in(key):
-                    blocks[x & 15, y & 15, z] = b
-                rows.append(self.file.encode_chunk(key, blocks))
+            rows = [self.file.encode_chunk(key, *self.apply_stored_edits(key, blocks))
+                    for key, blocks in zip(batch, arrays)]
             self.file.save(rows)
             done += len(batch)
             if progress:
@@ -316,6 +406,7 @@ class World:
             self.chunks.clear()
             self._saving.clear()
             self._queue.clear()
+            self.corrupt.clear()
         self.flush()
         self.file.delete_chunks()
         if not keep_edits:

@@ -1,0 +1,181 @@
+"""Edits: model check with undo/redo against full recomputes, refusals, payloads, saving."""
+from __future__ import annotations
+
+import hashlib
+
+import numpy as np
+import pytest
+
+from voxel_addon import light, meshing
+from voxel_addon.core.blocks import REGISTRY
+from voxel_addon.core.errors import VoxelError
+from voxel_addon.generation import make_generator
+from voxel_addon.world import Stream, World
+from voxel_addon.world.edit import Record, edit, redo, undo
+
+SEED = 7
+PALETTE = [REGISTRY.id(n) for n in ("air", "stone", "glass", "lamp_red", "lamp_blue",
+                                    "leaves", "water", "torch" if "torch" in REGISTRY.names()
+                                    else "sand")]
+
+
+def top(w, x, y):
+    c = w.chunk_at(x >> 4, y >> 4)
+    return int(np.flatnonzero(c.blocks[x & 15, y & 15])[-1])
+
+
+def check_against_full(w, path, model, cx0, cy0, cx1, cy1):
+    """Blocks = generated terrain + model; light and meshes of every chunk that has
+    them = a full NumPy recompute of the region."""
+    gen = make_generator("overworld", SEED, None, "numpy")
+    keys = [(x, y) for y in range(cy0 - 1, cy1 + 1) for x in range(cx0 - 1, cx1 + 1)]
+    region = np.zeros((16 * (cx1 - cx0 + 2), 16 * (cy1 - cy0 + 2), 256), np.uint16, order="F")
+    for (kx, ky), a in zip(keys, gen.generate(keys)):
+        region[16 * (kx - cx0 + 1):16 * (kx - cx0 + 2), 16 * (ky - cy0 + 1):16 * (ky - cy0 + 2)] = a
+    for (x, y, z), (b, _) in model.items():
+        region[x - 16 * (cx0 - 1), y - 16 * (cy0 - 1), z] = b
+    assert np.array_equal(w.region_blocks(cx0 - 1, cy0 - 1, cx1 + 1, cy1 + 1), region)
+    for (x, y, z), (b, d) in model.items():
+        c = w.chunk_at(x >> 4, y >> 4)
+        assert (0 if c.data is None else int(c.data[x & 15, y & 15, z])) == d
+    full = light.region_light(region, backend="numpy")
+    meshes = meshing.build_chunks(region[15:-15, 15:-15], (cx0, cy0), backend="numpy")
+    n = 0
+    for k, m in meshes.items():
+        c = w.chunks.get(k)
+        if c is None or c.light is None:
+            continue
+        i, j = 16 * (k[0] - cx0), 16 * (k[1] - cy0)
+        assert np.array_equal(c.light, full[i:i + 16, j:j + 16]), k
+        assert np.array_equal(c.mesh.vertices, m.vertices), k
+        assert np.array_equal(c.mesh.ranges, m.ranges), k
+        n += 1
+    return n
+
+
+def test_random_strokes_with_undo_redo_equal_model_and_full_recompute(world_path):
+    rng = np.random.default_rng(11)
+    model: dict = {}          # voxel -> (id, data), over the generated terrain
+    base: dict = {}           # voxel -> generated (id, data)
+    done: list[Record] = []
+    redo_stack: list[Record] = []
+    seen_keys = set()
+    with World.create(world_path, seed=SEED, loader=False) as w:
+        for step in range(40):
+            op = rng.random()
+            if op < 0.15 and done:
+                rec = done.pop()
+                payloads = undo(w, rec)
+                redo_stack.append(rec)
+                for v, b in zip(rec.voxels, rec.before):
+                    model[v] = b
+            elif op < 0.3 and redo_stack:
+                rec = redo_stack.pop()
+                payloads = redo(w, rec)
+                done.append(rec)
+                for v, a in zip(rec.voxels, rec.after):
+                    model[v] = a
+            else:
+                cx, cy = int(rng.integers(0, 40)), int(rng.integers(0, 40))
+                stroke = []
+                for _ in range(int(rng.integers(1, 7))):
+                    x, y = cx + int(rng.integers(-2, 3)), cy + int(rng.integers(-2, 3))
+                    z = top(w, x, y) + int(rng.integers(-2, 3))
+                    b = int(rng.choice(PALETTE))
+                    d = int(rng.integers(0, 4)) if rng.random() < 0.3 else 0
+                    if (x, y, z) not in base:
+                        c = w.chunk_at(x >> 4, y >> 4)
+                        base[(x, y, z)] = (c.get(x & 15, y & 15, z), 0)
+                    stroke.append((x, y, z, b, d))
+                payloads, rec = edit(w, stroke)
+                for x, y, z, b, d in stroke:
+                    model[(x, y, z)] = (b, d)
+                if rec.voxels:
+                    done.append(rec)
+                    redo_stack.clear()
+                # the record holds exactly the voxels that changed, before and after
+                for v, b0, a in zip(rec.voxels, rec.before, rec.after):
+                    assert b0 != a and model[v] == a
+            keys = {p.key for p in payloads}
+            seen_keys |= keys
+            for p in payloads:
+                assert p.version == w.pver[p.key]
+                c = w.chunks[p.key]
+                assert p.light is c.light and p.mesh is c.mesh
+        n = check_against_full(w, world_path, model, -1, -1, 4, 4)
+        assert n >= 9
+    # every stroke was saved: a fresh open sees the model
+    with World.open(world_path, loader=False) as w:
+        for (x, y, z), (b, d) in model.items():
+            c = w.chunk_at(x >> 4, y >> 4)
+            assert c.get(x & 15, y & 15, z) == b
+            assert (0 if c.data is None else int(c.data[x & 15, y & 15, z])) == d
+
+
+def test_payloads_only_for_what_changed(world_path):
+    stone, glass, lamp = (REGISTRY.id(n) for n in ("stone", "glass", "lamp_red"))
+    with World.create(world_path, seed=SEED, loader=False) as w:
+        payloads, _ = edit(w, (8, 8, 3, stone))  # lights the 3x3 around chunk (0, 0) first
+        assert sorted(p.key for p in payloads) == [(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)]
+        edit(w, [(24, 8, 3, stone), (24, 24, 3, stone)])   # ... and around (1, 0), (1, 1)
+        # glass deep inside rock: its own chunk's mesh changes, no light anywhere
+        old = w.chunk_at(0, 0).get(8, 8, 4)
+        assert old != 0
+        payloads, rec = edit(w, (8, 8, 4, glass))
+        assert [p.key for p in payloads] == [(0, 0)]
+        assert rec == (((8, 8, 4),), ((old, 0),), ((glass, 0),))
+        # on the chunk border: both chunks' meshes
+        payloads, _ = edit(w, (16, 8, 4, glass))
+        assert sorted(p.key for p in payloads) == [(0, 0), (1, 0)]
+        # setting what is there already changes nothing
+        payloads, rec = edit(w, (16, 8, 4, glass))
+        assert payloads == [] and rec.voxels == ()
+        # a lamp in the open lights its neighbours: at most the 3x3 around it
+        z = top(w, 20, 20) + 1
+        payloads, rec = edit(w, (20, 20, z, lamp))
+        keys = {p.key for p in payloads}
+        assert (1, 1) in keys and len(keys) > 1
+        assert keys <= {(1 + i, 1 + j) for i in (-1, 0, 1) for j in (-1, 0, 1)}
+        before = {p.key: p.version for p in payloads}
+        payloads = undo(w, rec)
+        assert {p.key for p in payloads} == keys
+        assert all(p.version > before[p.key] for p in payloads)
+
+
+@pytest.mark.parametrize("bad, msg", [
+    ((1, 1, 256, "stone"), "outside the world"),
+    ((1, 1, -1, "stone"), "outside the world"),
+    ((1, 1, 100, "unobtainium"), "unknown block name"),
+    ((1, 1, 100, 9999), "unknown block id"),
+    ((1, 1, 100, "stone", 70000), "data must be"),
+])
+def test_bad_edits_refused_before_anything_changes(world_path, bad, msg):
+    with World.create(world_path, seed=1, generator="flat", loader=False) as w:
+        w.generate_area([(0, 0)])
+    digest = hashlib.sha256(world_path.read_bytes()).hexdigest()
+    with World.open(world_path, loader=False) as w:
+        with pytest.raises(VoxelError, match=msg) as e:
+            edit(w, [(2, 2, 100, "glass"), (3, 3, 100, "glass"), bad])
+        assert "\n" not in str(e.value)
+        assert w.chunks == {} and w.file.edit_count() == 0
+    assert hashlib.sha256(world_path.read_bytes()).hexdigest() == digest
+
+
+def test_closing_while_streaming_keeps_every_finished_edit(world_path):
+    glass = REGISTRY.id("glass")
+    done = []
+    w = World.create(world_path, seed=SEED)
+    s = Stream(w, 4, tile=4)
+    s.set_view(0, 0, (1, 0))
+    for i in range(12):
+        x, y = 5 * i - 20, 3 * i - 15
+        edit(w, (x, y, 200, glass, i))
+        done.append((x, y, 200, i))
+    assert s._thread is not None and s._thread.is_alive()   # still streaming
+    w.close()                                                 # stops the stream, saves
+    assert s._thread is None
+    with World.open(world_path, loader=False) as w:
+        for x, y, z, d in done:
+            c = w.chunk_at(x >> 4, y >> 4)
+            assert c.get(x & 15, y & 15, z) == glass
+            assert (0 if c.data is None else c.data[x & 15, y & 15, z]) == d

@@ -1,0 +1,126 @@
+"""Streaming with the real worker thread, real SQLite, real OpenCL (and NumPy)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from voxel_addon import meshing
+from voxel_addon.core.blocks import REGISTRY
+from voxel_addon.render.source import world_area
+from voxel_addon.world import Payload, Stream, World
+
+SEED = 7
+
+
+def collect(stream, timeout=120.0):
+    """Drain until every wanted chunk came out; {key: Payload}."""
+    assert stream.wait_ready(timeout), stream.counts
+    got = {}
+    for _ in range(10000):
+        ready, gone = stream.drain(0.004)
+        for k in gone:
+            got.pop(k, None)
+        got.update((p.key, p) for p in ready)
+        w, r, d = stream.counts
+        if d >= w and not ready:
+            break
+    return got
+
+
+def same_mesh(a, b):
+    return np.array_equal(a.vertices, b.vertices) and np.array_equal(a.ranges, b.ranges)
+
+
+def one_shot(path, x, y, distance):
+    """The reference: render.source.world_area (blocks + exact light) and one
+    meshing.build_chunks call over the whole area, on a fresh World."""
+    with World.open(path, loader=False) as w:
+        area = world_area(w, x, y, distance, light_radius=distance)
+        meshes = meshing.build_chunks(area.blocks, (area.cx0, area.cy0), backend="numpy")
+    return area, meshes
+
+
+def check_equal(got, area, meshes):
+    s = 16
+    assert set(got) == set(meshes)
+    for k, p in got.items():
+        assert isinstance(p, Payload) and p.key == k
+        i, j = (k[0] - area.light_at[0]) * s, (k[1] - area.light_at[1]) * s
+        assert p.light.shape == (16, 16, 256) and p.light.dtype == np.uint16
+        assert np.array_equal(p.light, area.light[i:i + s, j:j + s]), k
+        assert same_mesh(p.mesh, meshes[k]), k
+
+
+@pytest.mark.parametrize("backend", ["opencl", "numpy"])
+def test_stream_equals_one_shot(world_path, backend, request):
+    if backend == "opencl":
+        request.getfixturevalue("cl_device")
+    with World.create(world_path, seed=SEED) as w:
+        # a small tile so the area is done in several batches, in some order
+        with Stream(w, 3, tile=4, backends=(backend, backend)) as s:
+            s.set_view(40.0, -20.0, direction=(1, 1, 0))
+            got = collect(s)
+            assert s.counts == (49, 49, 49)
+    area, meshes = one_shot(world_path, 40.0, -20.0, 3)
+    check_equal(got, area, meshes)
+
+
+def test_moving_view_drops_reloads_and_keeps_edits(world_path):
+    from voxel_addon.world.edit import edit
+    glass = REGISTRY.id("glass")
+    with World.create(world_path, seed=SEED) as w:
+        with Stream(w, 2, tile=4, margin=0) as s:
+            s.set_view(8, 8)
+            collect(s)
+            top = int(np.flatnonzero(w.chunk_at(0, 0).blocks[3, 4])[-1])
+            payloads, _ = edit(w, (3, 4, top + 1, "glass"))
+            assert (0, 0) in {p.key for p in payloads}
+            s.set_view(8 + 16 * 12, 8)           # far away: old chunks gone, unloaded
+            got = collect(s)
+            assert all(k[0] >= 10 for k in got)
+            assert (0, 0) not in w.chunks        # unloaded (and saved)
+            s.set_view(8, 8)                      # back: reloaded from the file
+            got = collect(s)
+            assert set(got) == {(x, y) for x in range(-2, 3) for y in range(-2, 3)}
+            assert w.chunk_at(0, 0).get(3, 4, top + 1) == glass
+    area, meshes = one_shot(world_path, 8, 8, 2)
+    assert area.blocks[1 + 32 + 3, 1 + 32 + 4, top + 1] == glass  # area from chunk -2, ring
+    check_equal(got, area, meshes)
+
+
+def test_drain_respects_budget_and_counts(world_path):
+    with World.create(world_path, seed=SEED, generator="flat") as w:
+        with Stream(w, 1) as s:
+            assert s.counts[1:] == (0, 0)
+            s.set_view(0, 0)
+            assert s.wait_ready(60)
+            ready, gone = s.drain(0.0)            # a zero budget still hands out one
+            assert len(ready) == 1 and gone == []
+            assert s.counts == (9, 9, 1)
+            rest, _ = s.drain(1.0)
+            assert len(rest) == 8 and s.counts == (9, 9, 9)
+            s.set_view(16 * 10, 0)
+            _, gone = s.drain(0.0)
+            assert sorted(gone) == sorted((x, y) for x in (-1, 0, 1) for y in (-1, 0, 1))
+
+
+def test_corrupt_chunk_shown_missing_reported_once(world_path, caplog):
+    import sqlite3
+    with World.create(world_path, seed=1, generator="flat", loader=False) as w:
+        w.generate_area([(x, y) for x in range(-2, 3) for y in range(-2, 3)])
+    db = sqlite3.connect(world_path)
+    db.execute("UPDATE chunks SET blocks=X'deadbeef' WHERE cx=1 AND cy=0")
+    db.commit()
+    db.close()
+    with World.open(world_path) as w:
+        with Stream(w, 1) as s:
+            s.set_view(0, 0)
+            got = collect(s)
+            assert (1, 0) not in got and len(got) == 8
+            assert s.counts == (8, 8, 8)
+            w.region_blocks(0, 0, 3, 1)          # asked again: not reported again
+        assert list(w.corrupt) == [(1, 0)]
+    assert sum("(1, 0)" in r.getMessage() for r in caplog.records) == 1
+    db = sqlite3.connect(world_path)
+    assert db.execute("SELECT blocks FROM chunks WHERE cx=1 AND cy=0").fetchone()[0] == \
+        b"\xde\xad\xbe\xef"

@@ -1,0 +1,102 @@
+"""Light and mesh a rectangle of chunks in one batch and hand out payloads: the one
+path that streaming (stream.py) and edits (edit.py, for chunks not lit yet) share.
+
+A chunk's light is final only when its 8 neighbours' blocks were known, so a batch
+reads its rectangle plus a one-chunk ring. Blocks are copied under the world's lock
+with the tick of each chunk's last block change; the light and meshes are kept only
+for chunks whose 3x3 did not change meanwhile (an edit raced us: done again later).
+"""
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+
+from ..core import chunk as C
+from .payload import Payload
+
+# Kernel objects (light, meshing) are shared per process and are not re-entrant:
+# the stream's workers and edits take this lock around OpenCL light and meshing.
+CL_LOCK = threading.Lock()
+
+
+def backends() -> tuple[str, str]:
+    """(light, meshing) backends for the world layer: OpenCL where present (faster
+    in batches on this machine: bench world/light/meshing), else the NumPy reference."""
+    from .. import opencl
+    return ("opencl", "opencl") if opencl.available() else ("numpy", "numpy")
+
+
+def keys_of(cx0: int, cy0: int, cx1: int, cy1: int) -> list[tuple[int, int]]:
+    return [(x, y) for y in range(cy0, cy1) for x in range(cx0, cx1)]
+
+
+def snapshot(world, cx0: int, cy0: int, cx1: int, cy1: int):
+    """(blocks, ticks): active chunks of [cx0, cx1) x [cy0, cy1) as one array (air
+    where a chunk is not active, e.g. corrupt) and {key: block tick} at copy time."""
+    out = C.empty(width=C.SIZE * (cx1 - cx0), depth=C.SIZE * (cy1 - cy0))
+    ticks = {}
+    with world._lock:
+        for k in keys_of(cx0, cy0, cx1, cy1):
+            ticks[k] = world.bver.get(k, 0)
+            c = world.chunks.get(k)
+            if c is not None:
+                x, y = (k[0] - cx0) * C.SIZE, (k[1] - cy0) * C.SIZE
+                out[x:x + C.SIZE, y:y + C.SIZE] = c.blocks
+    return out, ticks
+
+
+def _run(backend, fn, *a, **kw):
+    if backend == "opencl":
+        with CL_LOCK:
+            return fn(*a, backend=backend, **kw)
+    return fn(*a, backend=backend, **kw)
+
+
+def light_and_mesh(world, cx0: int, cy0: int, cx1: int, cy1: int, *, backends_=None,
+                   load: bool = True) -> list[Payload]:
+    """Final light + mesh of chunks [cx0, cx1) x [cy0, cy1), stored on the chunks;
+    returns their payloads (chunks that are missing or raced by an edit left out)."""
+    from .. import light, meshing
+    lb, mb = backends_ or backends()
+    ring = keys_of(cx0 - 1, cy0 - 1, cx1 + 1, cy1 + 1)
+    if load:
+        world.load(ring)
+    blocks, ticks = snapshot(world, cx0 - 1, cy0 - 1, cx1 + 1, cy1 + 1)
+    # one solve for the whole rectangle: its ring is the only overhead
+    lit = _run(lb, light.region_light, blocks, tile=max(cx1 - cx0, cy1 - cy0))
+    meshes = _run(mb, meshing.build_chunks, blocks[15:-15, 15:-15], (cx0, cy0))
+    return store(world, cx0, cy0, cx1, cy1, lit, meshes, ticks)
+
+
+def store(world, cx0, cy0, cx1, cy1, lit, meshes, ticks) -> list[Payload]:
+    """Keep light (an array over the rectangle) and meshes on chunks whose 3x3 is
+    unchanged since `ticks`; returns their new payloads."""
+    out = []
+    s = C.SIZE
+    with world._lock:
+        for k in keys_of(cx0, cy0, cx1, cy1):
+            c = world.chunks.get(k)
+            if c is None:
+                continue
+            if any(world.bver.get((k[0] + i, k[1] + j), 0) != ticks[(k[0] + i, k[1] + j)]
+                   for i in (-1, 0, 1) for j in (-1, 0, 1)):
+                continue
+            x, y = (k[0] - cx0) * s, (k[1] - cy0) * s
+            c.light = np.asfortranarray(lit[x:x + s, y:y + s])
+            c.mesh = meshes[k]
+            v = world.pver[k] = world.tick()
+            out.append(Payload(k, c.mesh, c.light, v))
+    return out
+
+
+def payload(world, key) -> Payload | None:
+    """The current payload of an active chunk whose light and mesh are known."""
+    with world._lock:
+        c = world.chunks.get(key)
+        if c is None or c.light is None or c.mesh is None:
+            return None
+        v = world.pver.get(key)
+        if v is None:
+            v = world.pver[key] = world.tick()
+        return Payload(key, c.mesh, c.light, v)

@@ -1,0 +1,248 @@
+"""Streaming around a moving view point (SPEC F2, thesis §5.2, issue 11 §2).
+
+A background worker keeps every chunk within `distance` (Chebyshev, in chunks) of the
+view chunk generated or loaded, lit and meshed, and queues its Payload. Work goes in
+batches: a rectangle of up to `tile` x `tile` chunks (aligned, so neighbouring views
+share them) is generated/loaded with its one-chunk ring in one call, lit in one
+solve and meshed in one build_chunks call; batching is what makes it fast on few
+cores. Nearest rectangles first, and in-view before behind when a direction is
+given; near the view the rectangles are smaller so the first payloads come soon.
+A payload comes out only when the chunk's light is final (its 8 neighbours' blocks
+were known), so the result is the same whatever the order (tests compare it with
+the one-shot path).
+
+Chunks that fell out of range: their queued payloads are dropped at drain, drawn ones
+are reported in `gone`, and chunks farther than distance + 1 + margin are unloaded by
+the world (saved first if changed). The consumer calls `drain(budget_s)` from its
+own thread; it only pops a queue, so it stays within its budget.
+
+Edits: world.edit.edit() returns the new payloads, and every Stream of that world
+also queues them, so a consumer that only drains stays right too (applying a payload
+twice is harmless: same key, same version).
+"""
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections import deque
+
+from ..core.errors import VoxelError
+from . import build
+
+NEAR = 6  # chunks: closer than this, work in quarter tiles (first payloads sooner)
+
+
+class Stream:
+    def __init__(self, world, distance: int, *, tile: int = 8, margin: int = 2, backends=None):
+        if int(distance) < 0:
+            raise VoxelError(f"view distance must be 0 or more, got {distance}")
+        if tile < 1:
+            raise VoxelError(f"tile must be at least 1, got {tile}")
+        self.world = world
+        self.distance = int(distance)
+        self.tile = int(tile)
+        self.margin = int(margin)
+        self.backends = backends or build.backends()
+        self.error: BaseException | None = None
+        self._lock = threading.Lock()
+        self._wake = threading.Condition(self._lock)
+        self._view = None           # (cx, cy, (dx, dy) or None)
+        self._changes = 0           # bumped by set_view and offer: the worker rechecks
+        self._ready: deque = deque()
+        self._gone: deque = deque()
+        self._emitted: dict = {}    # key in range -> version of its queued/drawn payload
+        self._drawn: set = set()
+        self._stop = False
+        world.streams.add(self)
+        self._thread = threading.Thread(target=self._run, name="voxel-stream", daemon=True)
+        self._thread.start()
+
+    # ---- consumer side -----------------------------------------------------
+    def set_view(self, x: float, y: float, direction=None) -> None:
+        """View point in world units (voxels); direction: optional (dx, dy[, dz])."""
+        cx, cy = math.floor(x) >> 4, math.floor(y) >> 4
+        d = None
+        if direction is not None:
+            dx, dy = float(direction[0]), float(direction[1])
+            n = math.hypot(dx, dy)
+            d = (dx / n, dy / n) if n > 1e-9 else None
+        with self._lock:
+            old = self._view
+            self._view = (cx, cy, d)
+            if old is None or old[:2] != (cx, cy):
+                r = self.distance
+                for k in [k for k in self._emitted if max(abs(k[0] - cx), abs(k[1] - cy)) > r]:
+                    del self._emitted[k]
+                    if k in self._drawn:
+                        self._drawn.discard(k)
+                        self._gone.append(k)
+            self._changes += 1
+            self._wake.notify_all()
+
+    def drain(self, budget_s: float = 0.004):
+        """(ready payloads, gone keys) since the last call, popping for at most
+        budget_s. Drained payloads count as drawn (see mark_drawn)."""
+        end = time.perf_counter() + budget_s
+        out = []
+        pver = self.world.pver
+        with self._lock:
+            gone = list(self._gone)
+            self._gone.clear()
+            while self._ready:
+                p = self._ready.popleft()
+                if self._emitted.get(p.key) == p.version and pver.get(p.key) == p.version:
+                    out.append(p)
+                    self._drawn.add(p.key)
+                if time.perf_counter() >= end:
+                    break
+        if out and gone:
+            keys = {p.key for p in out}
+            gone = [k for k in gone if k not in keys]
+        return out, gone
+
+    def mark_drawn(self, keys) -> None:
+        """For consumers that draw later than they drain: count these as drawn."""
+        with self._lock:
+            self._drawn.update(k for k in map(tuple, keys) if k in self._emitted)
+
+    @property
+    def counts(self) -> tuple[int, int, int]:
+        """(wanted, ready, drawn): chunks in range, of them with a payload made,
+        of them handed to the consumer."""
+        n = 2 * self.distance + 1
+        with self._lock:
+            return n * n - self._corrupt_in_range(), len(self._emitted), len(self._drawn)
+
+    def _corrupt_in_range(self) -> int:
+        if self._view is None or not self.world.corrupt:
+            return 0
+        cx, cy, _ = self._view
+        return sum(max(abs(k[0] - cx), abs(k[1] - cy)) <= self.distance
+                   for k in list(self.world.corrupt))
+
+    def offer(self, payloads) -> None:
+        """Queue payloads made elsewhere (edits) for the chunks in range."""
+        with self._lock:
+            if self._view is None:
+                return
+            cx, cy, _ = self._view
+            for p in payloads:
+                if max(abs(p.key[0] - cx), abs(p.key[1] - cy)) <= self.distance:
+                    self._emitted[p.key] = p.version
+                    self._ready.append(p)
+            self._changes += 1
+            self._wake.notify_all()
+
+    def wait_ready(self, timeout: float = 60.0) -> bool:
+        """Block until every wanted chunk has a payload (tests, bench, CLI)."""
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            if self.error is not None:
+                raise self.error
+            w, r, _ = self.counts
+            if r >= w and self._view is not None:
+                return True
+            time.sleep(0.005)
+        return False
+
+    def close(self) -> None:
+        """Stop the worker (it finishes its batch first). Safe to call twice."""
+        with self._lock:
+            self._stop = True
+            self._wake.notify_all()
+        if self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join()
+        self._thread = None
+        self.world.streams.discard(self)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    # ---- worker ------------------------------------------------------------
+    def _run(self) -> None:
+        while True:
+            with self._lock:
+                while not self._stop and self._view is None:
+                    self._wake.wait()
+                if self._stop:
+                    return
+                cx, cy, d = self._view
+                seen = self._changes
+            try:
+                job = self._next(cx, cy, d)
+                if job is not None:
+                    self._do(*job)
+                self._maintain(cx, cy)
+            except BaseException as e:  # kept for the consumer; the worker goes on
+                self.error = e
+                job = None
+            if job is None:
+                with self._lock:
+                    if self._changes == seen and not self._stop:
+                        self._wake.wait(0.5)
+
+    def _pending(self, cx, cy):
+        r, pver, bad = self.distance, self.world.pver, self.world.corrupt
+        with self._lock:
+            em = dict(self._emitted)
+        return [(x, y) for y in range(cy - r, cy + r + 1) for x in range(cx - r, cx + r + 1)
+                if em.get((x, y), -1) != pver.get((x, y), -2) and (x, y) not in bad]
+
+    def _next(self, cx, cy, d):
+        """The next rectangle to do: the aligned tile (or quarter tile near the view)
+        holding the most urgent pending chunk; None when all is done."""
+        pending = self._pending(cx, cy)
+        if not pending:
+            return None
+
+        def urgency(k):
+            vx, vy = k[0] - cx, k[1] - cy
+            dist = math.hypot(vx, vy)
+            if d is None or dist == 0:
+                return dist
+            return dist * (1.5 - 0.5 * (vx * d[0] + vy * d[1]) / dist)  # behind: x2
+
+        best = min(pending, key=urgency)
+        t = self.tile if urgency(best) >= NEAR else max(1, self.tile // 2)
+        tx, ty = best[0] // t, best[1] // t
+        keys = [k for k in pending if k[0] // t == tx and k[1] // t == ty]
+        xs, ys = [k[0] for k in keys], [k[1] for k in keys]
+        return keys, (min(xs), min(ys), max(xs) + 1, max(ys) + 1)
+
+    def _do(self, keys, rect) -> None:
+        world = self.world
+        done = [p for p in (build.payload(world, k) for k in keys) if p is not None]
+        rest = {k for k in keys} - {p.key for p in done}
+        if rest:
+            xs, ys = [k[0] for k in rest], [k[1] for k in rest]
+            done += build.light_and_mesh(world, min(xs), min(ys), max(xs) + 1, max(ys) + 1,
+                                         backends_=self.backends)
+        self.offer_own(done)
+
+    def offer_own(self, payloads) -> None:
+        with self._lock:
+            if self._view is None:
+                return
+            cx, cy, _ = self._view
+            for p in payloads:
+                if max(abs(p.key[0] - cx), abs(p.key[1] - cy)) <= self.distance \
+                        and self.world.pver.get(p.key) == p.version:
+                    self._emitted[p.key] = p.version
+                    self._ready.append(p)
+
+    def _maintain(self, cx, cy) -> None:
+        """Keep chunks near the view alive (the world's idle unloading), unload far ones."""
+        world, keep, now = self.world, self.distance + 1 + self.margin, time.monotonic()
+        far = []
+        with world._lock:
+            for k, c in world.chunks.items():
+                if max(abs(k[0] - cx), abs(k[1] - cy)) > keep:
+                    far.append(k)
+                else:
+                    c.last_use = now
+        if far:
+            world._evict(far)

@@ -1,7 +1,7 @@
 // First global pass (§5.4): sky behind the opaque layer, peel layers back to front,
 // SSAO, god rays sampled across the whole sun disc (fixes fig. 5.23).
 // Defines: LAYERS (0..3), SSAO, GODRAYS.
-#include "include/common.glsl"
+#include "include/eye.glsl"
 #include "include/sky.glsl"
 
 uniform sampler2D opaque;
@@ -40,7 +40,7 @@ float godrays(vec2 p) {
 
 void main() {
     vec2 size = vec2(textureSize(opaque, 0));
-    vec3 dir = normalize(world_pos(inv_vp, v_uv, 1.0) - cam_pos);
+    vec3 dir = ray_dir(v_uv);
     vec3 sky = sky_color(dir, sun_visible ? distance(gl_FragCoord.xy, sun_px) : 1e9, sun_radius);
     vec4 o = texture(opaque, v_uv);
 #ifdef SSAO

@@ -21,5 +21,5 @@ void main() {
     bool vis = true;
     for (int k = 0; k < 6; k++)
         vis = vis && dot(planes[k].xyz, c) + dot(abs(planes[k].xyz), h) + planes[k].w >= 0.0;
-    cmd[i].instances = vis ? 1u : 0u;
+    cmd[i].instances = vis && cmd[i].count > 0u ? 1u : 0u;  // count 0: a removed chunk's hole
 }

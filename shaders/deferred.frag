@@ -31,7 +31,7 @@ Frag fetch(ivec2 c, int s) {
 
 vec4 shade(Frag f, vec2 uv, out float dist) {
     vec3 p = world_pos(inv_vp, uv, f.depth);
-    dist = length(p - cam_pos);
+    dist = eye_dist(p);
     return shade_surface(f.albedo, p, normalize(f.n), f.glow);
 }
 

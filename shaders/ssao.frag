@@ -1,6 +1,6 @@
 // Screen-space ambient occlusion (§5.4.2): 2–8 samples by distance in the normal
 // hemisphere on a spiral, compared against the front distance buffer.
-#include "include/frame.glsl"
+#include "include/eye.glsl"
 uniform sampler2D front;
 in vec2 v_uv;
 out vec4 out_ao;
@@ -8,9 +8,7 @@ out vec4 out_ao;
 void main() {
     vec4 f = texture(front, v_uv);
     if (f.r > 1e8) { out_ao = vec4(1.0); return; }
-    vec4 q = inv_vp * vec4(v_uv * 2.0 - 1.0, 1.0, 1.0);
-    vec3 dir = normalize(q.xyz / q.w - cam_pos);
-    vec3 p = cam_pos + dir * f.r;
+    vec3 p = ray_at(v_uv, f.r);
     vec3 n = normalize(f.yzw);
     vec3 t = normalize(abs(n.z) < 0.9 ? cross(n, vec3(0, 0, 1)) : cross(n, vec3(1, 0, 0)));
     vec3 b = cross(n, t);
@@ -25,7 +23,7 @@ void main() {
         vec4 c = vp * vec4(s, 1.0);
         vec2 uv = c.xy / c.w * 0.5 + 0.5;
         float sd = texture(front, uv).r;
-        float d = length(s - cam_pos);
+        float d = eye_dist(s);
         if (sd < d - 0.02 && d - sd < ssao_radius * 2.0) occ += 1.0;
     }
     out_ao = vec4(1.0 - 0.8 * occ / float(count));

@@ -21,5 +21,6 @@ layout(std140) uniform Frame {
     vec2 sun_px;           float sun_radius;   bool sun_visible;  // the disc on screen, pixels
     float fog_start;       float fog_end;      float dof_start;   float dof_end;
     float ssao_radius;     // blocks
+    vec3 cam_fwd;          bool ortho;         // orthographic: parallel rays along cam_fwd
 };
 #endif

@@ -4,6 +4,7 @@
 // with PCF (§5.4.1), distance fog (§5.4.3), the debug views.
 // Defines: SHADOWS, FOG, DEBUG (1 albedo, 2 normal, 3 depth, 4 light, 5 aggregation).
 #include "include/lightvol.glsl"
+#include "include/eye.glsl"
 #include "include/sky.glsl"
 
 #ifndef DEBUG
@@ -52,7 +53,7 @@ vec4 shade_surface(vec4 albedo, vec3 p, vec3 n, float glow) {
 #elif DEBUG == 2
     return vec4(n * 0.5 + 0.5, 1.0) * albedo.a;
 #elif DEBUG == 3
-    float dist = length(p - cam_pos);
+    float dist = eye_dist(p);
     return vec4(vec3(1.0 - pow(clamp(dist / far_dist, 0.0, 1.0), 0.5)), 1.0) * albedo.a;
 #else
 #if DEBUG == 4
@@ -64,7 +65,7 @@ vec4 shade_surface(vec4 albedo, vec3 p, vec3 n, float glow) {
     // horizontal distance: the area ends sideways, a high camera looking down sees clearly
     float k = clamp((length(p.xy - cam_pos.xy) - fog_start) / max(fog_end - fog_start, 1e-3),
                     0.0, 1.0);
-    c = mix(c, sky_base(normalize(p - cam_pos)), k * k);
+    c = mix(c, sky_base(eye_dir(p)), k * k);
 #endif
     return vec4(c * albedo.a, albedo.a);
 #endif

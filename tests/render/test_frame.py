@@ -3,6 +3,8 @@ rules must be where the real GL driver puts the members (a shader reads every me
 back out)."""
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
 from voxel_addon import resources
@@ -16,10 +18,12 @@ def test_block_layout_matches_the_driver(gl):
     lines, want, k = [], [], 0
     rng = np.random.default_rng(5)
     block = frame.FrameBlock(gl)
+    bools = set(re.findall(r"\bbool\s+(\w+)\s*;", resources.shader("include/frame.glsl")))
+    assert {"waving", "sun_visible", "ortho"} <= bools
     for name, (_, n, kind) in members.items():
         if kind == "i":
             v = rng.integers(-100, 100, n)
-            if name in ("waving", "sun_visible"):  # bools: GLSL gives true for any non-zero
+            if name in bools:  # bools: GLSL gives true for any non-zero
                 v = rng.integers(0, 2, n)
         else:
             v = rng.uniform(-10, 10, n)

@@ -59,7 +59,7 @@ def test_lamp_lights_its_surroundings_at_night(gl):
 def at(img, cam, p, r=1):
     """Mean luminance of the pixels around world point p (after cam was rendered)."""
     h, w = img.shape[:2]
-    c = cam.view_proj() @ np.r_[p, 1.0]
+    c = cam.fitted(w / h, cam.fov, cam.far).view_proj() @ np.r_[p, 1.0]
     col, row = int((c[0] / c[3] * .5 + .5) * w), int((.5 - c[1] / c[3] * .5) * h)
     assert r <= row < h - r and r <= col < w - r, (p, row, col)
     return lum(img[row - r:row + r + 1, col - r:col + r + 1]).mean()

@@ -1,4 +1,5 @@
-"""The viewport pipeline. Use: Renderer(ctx, Settings()).set_area(...); .render(camera, hours, size)."""
+"""The viewport pipeline. Use: Renderer(ctx, Settings()); .update_chunks(payloads) /
+.remove_chunks(keys) (or .set_area(...) for a whole area); .render(camera, hours, size)."""
 from .camera import Camera
 from .settings import Settings
 

@@ -3,11 +3,16 @@
 World axes as SPEC §3: x, y horizontal, z up. Yaw is degrees counter-clockwise from
 +x about +z, pitch degrees up. Matrices are row-major NumPy (M @ v); upload `.T`
 (column-major) to GL.
+
+A camera is either parametric (position, yaw, pitch, fov: the renderer fits aspect,
+fov and far to the frame) or built from a host's view and projection matrices
+(`Camera.from_matrices`, Blender's view and window matrices, perspective or
+orthographic), which are then used exactly as given.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -23,6 +28,46 @@ class Camera:
     aspect: float = 16 / 9
     near: float = 0.1
     far: float = 600.0
+    # from_matrices: the host's matrices, used as given (the fields above describe them)
+    view_m: np.ndarray | None = field(default=None, repr=False, compare=False)
+    proj_m: np.ndarray | None = field(default=None, repr=False, compare=False)
+
+    @classmethod
+    def from_matrices(cls, view, projection) -> "Camera":
+        """A camera for a host's 4x4 view matrix (world -> eye, rigid) and projection
+        matrix (eye -> clip, OpenGL conventions; perspective or orthographic), e.g.
+        Blender's `region_3d.view_matrix` and `.window_matrix`. Rows are rows (M @ v;
+        a mathutils.Matrix converts with np.array(m)). Frames use the matrices exactly,
+        so the depth matches the host's."""
+        V = np.array(view, np.float64).reshape(4, 4)
+        P = np.array(projection, np.float64).reshape(4, 4)
+        R, t = V[:3, :3], V[:3, 3]
+        eye = -np.linalg.solve(R, t)
+        fwd = -R[2] / np.linalg.norm(R[2])
+        yaw = math.degrees(math.atan2(fwd[1], fwd[0]))
+        pitch = math.degrees(math.asin(max(-1.0, min(1.0, float(fwd[2])))))
+        aspect = float(P[1, 1] / P[0, 0])
+        if _is_ortho(P):
+            near, far = (P[2, 3] + 1) / P[2, 2], (P[2, 3] - 1) / P[2, 2]
+            fov = 0.0
+        else:
+            near = P[2, 3] / (P[2, 2] - 1)
+            far = P[2, 3] / (P[2, 2] + 1) if abs(P[2, 2] + 1) > 1e-12 else math.inf
+            fov = math.degrees(2 * math.atan(1 / P[1, 1]))
+        return cls(*map(float, eye), yaw, pitch, fov, aspect, float(near), float(far), V, P)
+
+    @property
+    def ortho(self) -> bool:
+        """Orthographic (parallel rays): only from_matrices makes one."""
+        return self.proj_m is not None and _is_ortho(self.proj_m)
+
+    def fitted(self, aspect: float, fov: float, far: float) -> "Camera":
+        """The camera a frame draws with: a parametric one with the frame's aspect and
+        the renderer's fov and far (a copy: the caller's camera is left alone); one
+        from matrices as it is."""
+        if self.proj_m is not None:
+            return self
+        return replace(self, aspect=aspect, fov=fov, far=far)
 
     @property
     def pos(self) -> np.ndarray:
@@ -33,9 +78,13 @@ class Camera:
         return np.array(self._fwd())
 
     def view(self) -> np.ndarray:
+        if self.view_m is not None:
+            return self.view_m.copy()
         return look_at(self.pos, self.forward)
 
     def proj(self) -> np.ndarray:
+        if self.proj_m is not None:
+            return self.proj_m.copy()
         return perspective(self.fov, self.aspect, self.near, self.far)
 
     def view_proj(self) -> np.ndarray:
@@ -45,6 +94,9 @@ class Camera:
         """(view_proj, its inverse), in closed form on Python floats: a frame needs
         them a few times and NumPy's per-call cost dwarfs 4x4 arithmetic. The inverse
         is the rigid view's transpose times the perspective's own inverse."""
+        if self.proj_m is not None:
+            vp = self.proj_m @ self.view_m
+            return vp, np.linalg.inv(vp)
         (sx, sy, sz, sw), (ux, uy, uz, uw), (bx, by, bz, bw) = _view_rows(
             (self.x, self.y, self.z), self._fwd())
         t = 1.0 / math.tan(math.radians(self.fov) / 2)
@@ -60,8 +112,18 @@ class Camera:
                         [0.0, 0.0, 1.0 / d, k]])
         return vp, inv
 
-    def corners(self, far: float | None = None) -> list[tuple[float, float, float]]:
-        """The view frustum's 8 world corners (near plane first), up to `far`."""
+    def corners(self, far: float | None = None,
+                near: float | None = None) -> list[tuple[float, float, float]]:
+        """The view frustum's 8 world corners (near plane first), from `near` to `far`
+        (view depths; default the camera's own)."""
+        if self.proj_m is not None or near is not None:
+            # along the frustum's edges, linear in view depth (perspective or ortho)
+            c = frustum_corners(np.linalg.inv(self.view_proj()))
+            a, b = self.near, self.far
+            t = [((self.near if near is None else near) - a) / (b - a),
+                 ((self.far if far is None else far) - a) / (b - a)]
+            return [tuple(float(v) for v in c[i] + (c[i + 4] - c[i]) * k)
+                    for k in t for i in range(4)]
         (sx, sy, sz, _), (ux, uy, uz, _), (bx, by, bz, _) = _view_rows(
             (self.x, self.y, self.z), self._fwd())
         t = math.tan(math.radians(self.fov) / 2)
@@ -74,9 +136,22 @@ class Camera:
                             cz + sz * w * i + uz * h * j))
         return out
 
+    def depth(self, p) -> float:
+        """View depth of world point p (along the forward axis from the eye)."""
+        f = self._fwd()
+        return (p[0] - self.x) * f[0] + (p[1] - self.y) * f[1] + (p[2] - self.z) * f[2]
+
     def _fwd(self):
+        if self.view_m is not None:
+            r = self.view_m[2, :3]
+            k = -1.0 / math.sqrt(float(r @ r))
+            return float(r[0] * k), float(r[1] * k), float(r[2] * k)
         y, p = math.radians(self.yaw), math.radians(self.pitch)
         return math.cos(p) * math.cos(y), math.cos(p) * math.sin(y), math.sin(p)
+
+
+def _is_ortho(P) -> bool:
+    return abs(P[3, 2]) < 1e-12 and abs(P[3, 3] - 1) < 1e-12
 
 
 def look_at(eye, fwd, up=(0.0, 0.0, 1.0)) -> np.ndarray:

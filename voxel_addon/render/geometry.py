@@ -1,14 +1,19 @@
-"""Render regions on the GPU (thesis §5.3.2, §5.3.4): per pass one big vertex buffer of
-the meshing package's 4-byte vertices, a shared quad index pattern, frustum culling
-per region and one multi-draw per pass.
+"""Render regions on the GPU (thesis §5.3.2, §5.3.4): one vertex buffer of the meshing
+package's 4-byte vertices for every shown chunk, a shared quad index pattern, frustum
+culling per region and one multi-draw per pass.
 
-All passes share one region table (chunk x region, with its box and origin), so a
-frame culls once per matrix (view, shadow) for every pass. One static table holds the
-indirect commands of every pass (one per region with faces in that pass), and `at`
-says where each table row's command of each pass is; per matrix a frame gathers the
-commands of the visible rows only (work by what is seen, not by the view distance)
-into one buffer, uploaded when it changed since the same slot's last frame, and each
-pass draws its slice of it.
+Chunks come and go one at a time (`update`, `remove`): each has a slot, which owns
+its rows of the region table (slot x region, with box and origin) and one block of
+the vertex buffer (first fit in a free list; the buffer grows by copying on the GPU,
+so the other chunks are never uploaded again). Every (region, pass) with faces has
+one indirect command in its pass's command table; a removed chunk's commands become
+empty holes that the next chunk reuses. `at` says where each table row's command of
+each pass is.
+
+All passes share the region table, so a frame culls once per matrix (view, shadow)
+for every pass; per matrix it gathers the commands of the visible rows only (work by
+what is seen, not by the view distance) into one buffer, uploaded when it changed
+since the same slot's last frame, and each pass draws its slice of it.
 
 GL 4.3+: glMultiDrawElementsIndirect, the region origin comes from baseInstance
 through an instanced attribute, and the culling runs on the GPU (`gpu_cull`,
@@ -28,6 +33,42 @@ from . import camera
 from .programs import source
 
 PASSES = meshing.PASSES  # opaque, cutout (leaves), cutout2 (double-sided plants), blend
+_QUAD = 4 * meshing.BYTES_PER_VERTEX  # bytes of one quad's vertices
+
+
+class _Free:
+    """First-fit allocation of [start, start + n) ranges (in quads) with merging."""
+
+    def __init__(self):
+        self.holes: list[list[int]] = []  # sorted [start, size]
+        self.end = 0                      # high-water mark
+
+    def take(self, n: int) -> int:
+        for i, h in enumerate(self.holes):
+            if h[1] >= n:
+                start = h[0]
+                if h[1] == n:
+                    del self.holes[i]
+                else:
+                    h[0] += n
+                    h[1] -= n
+                return start
+        start, self.end = self.end, self.end + n
+        return start
+
+    def give(self, start: int, n: int) -> None:
+        hs = self.holes
+        i = 0
+        while i < len(hs) and hs[i][0] < start:
+            i += 1
+        hs.insert(i, [start, n])
+        if i + 1 < len(hs) and start + n == hs[i + 1][0]:  # merge with the next
+            hs[i][1] += hs.pop(i + 1)[1]
+        if i > 0 and hs[i - 1][0] + hs[i - 1][1] == start:  # and the previous
+            hs[i - 1][1] += hs.pop(i)[1]
+            i -= 1
+        if hs[i][0] + hs[i][1] == self.end:  # the tail is free: lower the mark
+            self.end = hs.pop(i)[0]
 
 
 class Geometry:
@@ -35,88 +76,205 @@ class Geometry:
         self.ctx = ctx
         self.indirect_ok = ctx.version_code >= 430
         self.gpu_cull = True  # with indirect_ok (4.3 brings compute shaders); tests switch it
-        self.frames = 0  # gpu_batches calls: the command buffers' generation
+        self.frames = 0  # gpu_batches calls and changes: the command buffers' generation
+        self.gen = 0     # changes of the shown chunks: cached batches are void
         self._cs = None
-        self._boxes = None  # the region boxes for cull.comp
-        self.parts: dict[str, dict] = {}
-        self.ibo = None
-        self.obo = None
-        self.quads = 0
+        self._reset()
+
+    def _reset(self) -> None:
+        self.region_h = meshing.REGION_H
+        self.nreg = 256 // self.region_h
+        self.slot_of: dict[tuple[int, int], int] = {}
+        self._slots: list = []         # slot -> (key, vertex start, quads, [(pass, cmd)])
+        self._free_slots: list[int] = []
+        self._verts = _Free()
+        self.vbo = self.ibo = self.obo = self._boxes = None
+        self._vbo_q = self._ibo_q = 0  # capacities in quads
+        self._rows_cap = 0             # rows in obo / _boxes
         self.origin = np.zeros((0, 3), np.float32)
         self.boxes = np.zeros((7, 0), np.float32)
-        self._clear_tables(0)
+        self._cmd = [np.zeros((0, 5), np.uint32) for _ in PASSES]  # per pass, local
+        self._cused = [0] * len(PASSES)                             # high-water marks
+        self._cfree: list[list[int]] = [[] for _ in PASSES]
+        self._at = np.full((len(PASSES), 0), -1, np.int32)         # pass, row -> local
+        self._vaos: dict = {}
+        self.bufs: dict = {}  # slot -> [buffer, its commands, key, batches]
+        self._commit()
 
-    def _clear_tables(self, n_rows: int) -> None:
-        self.at = np.full((len(PASSES), n_rows), -1, np.int32)  # pass, row -> command
-        self.cmd = np.zeros((0, 5), np.uint32)
-        self.bufs: dict = {}  # slot -> [buffer, its commands, pass names, batches]
+    @property
+    def keys(self):
+        """The shown chunks."""
+        return self.slot_of.keys()
 
+    # ------------------------------------------------------------------ chunks
     def set_chunks(self, meshes: dict) -> None:
         """meshes: {(cx, cy): meshing.ChunkMesh}. Replaces what was shown."""
         self._free()
-        if not meshes:
-            self.ibo = self.ctx.buffer(meshing.quad_indices(1).tobytes())
-            return
-        ms = list(meshes.values())
-        h = ms[0].region_h
-        nr = max(m.ranges.shape[0] for m in ms)
-        # (chunk, region, pass) -> (first, count) of that chunk's own vertex array
-        rng = np.zeros((len(ms), nr, len(PASSES), 2), np.int64)
-        for i, m in enumerate(ms):
-            rng[i, :m.ranges.shape[0]] = m.ranges
-        cnt = rng[..., 1]
-        keep = cnt.sum(2) > 0                       # regions with any face
-        ci, ri = np.nonzero(keep)                   # region table rows, chunk-major
-        if not len(ci):  # all air: nothing to draw
-            self.ibo = self.ctx.buffer(meshing.quad_indices(1).tobytes())
-            return
-        keys = np.array(list(meshes), np.int64).reshape(-1, 2)
-        self.origin = np.c_[keys[ci] * 16, ri * h].astype(np.float32)
-        # 0.5 slack for waving: vertices move by < 0.1 blocks
-        self.boxes = camera.boxes(self.origin - 0.5, self.origin + [16.5, 16.5, h + 0.5])
-        max_quads = 1
-        self._clear_tables(len(ci))
-        cmds = []
-        for p, name in enumerate(PASSES):
-            c = cnt[ci, ri, p]
-            rows = np.flatnonzero(c)
-            if not len(rows):
-                continue
-            f = rng[ci[rows], ri[rows], p, 0]
-            verts = np.concatenate([ms[ci[k]].vertices[a:a + n]
-                                    for k, a, n in zip(rows.tolist(), f.tolist(), c[rows].tolist())])
-            count = c[rows]
-            first = np.r_[0, np.cumsum(count)[:-1]]
-            max_quads = max(max_quads, len(verts) // 4)
-            # DrawElementsIndirectCommand: count, instances, first index, base vertex, base instance
-            cmd = np.zeros((len(rows), 5), np.uint32)
-            cmd[:, 0], cmd[:, 1], cmd[:, 2], cmd[:, 4] = count // 4 * 6, 1, first // 4 * 6, rows
-            self.at[p, rows] = sum(map(len, cmds)) + np.arange(len(rows))
-            cmds.append(cmd)
-            self.parts[name] = {
-                "vbo": self.ctx.buffer(verts.astype(np.uint32, copy=False).tobytes()),
-                "rows": rows, "vaos": {}, "first": sum(map(len, cmds)) - len(rows),
-                "boxes": self.boxes[:, rows]}
-        if cmds:
-            self.cmd = np.concatenate(cmds)
-        self.quads = int(self.cmd[:, 0].sum()) // 6  # 6 indices a quad
-        self.obo = self.ctx.buffer(self.origin.tobytes())
-        if self.indirect_ok:  # centre and half extent per region, vec4-aligned
-            b = np.zeros((len(ci), 2, 4), np.float32)
-            b[:, 0, :3], b[:, 1, :3] = self.boxes[0:3].T, self.boxes[3:6].T
-            self._boxes = self.ctx.buffer(b.tobytes() or b"\0" * 32)
-        self.ibo = self.ctx.buffer(meshing.quad_indices(max_quads).tobytes())
+        self._reset()
+        self.update(meshes)
 
+    def update(self, meshes: dict) -> None:
+        """Show or replace these chunks ({(cx, cy): ChunkMesh}); the others stay as
+        they are on the GPU."""
+        meshes = {(int(k[0]), int(k[1])): m for k, m in meshes.items()}
+        if not meshes:
+            return
+        hs = {m.region_h for m in meshes.values()}
+        if len(hs) > 1 or (self.slot_of and hs != {self.region_h}):
+            raise ValueError("all shown chunks must share one region height")
+        if not self.slot_of:
+            self.region_h = hs.pop()
+            self.nreg = 256 // self.region_h
+        self._drop([k for k in meshes if k in self.slot_of])
+        new = []
+        for key, m in meshes.items():
+            s = self._free_slots.pop() if self._free_slots else len(self._slots)
+            if s == len(self._slots):
+                self._slots.append(None)
+            nq = len(m.vertices) // 4
+            start = self._verts.take(nq) if nq else 0
+            self._slots[s] = [key, start, nq, []]
+            self.slot_of[key] = s
+            new.append((s, key, m, start))
+        self._grow()
+        nreg, h = self.nreg, self.region_h
+        for s, key, m, start in new:
+            if len(m.vertices):
+                self.vbo.write(np.ascontiguousarray(m.vertices, np.uint32), offset=start * _QUAD)
+            rows = s * nreg + np.arange(nreg)
+            self.origin[rows] = np.c_[np.full((nreg, 2), (key[0] * 16, key[1] * 16)),
+                                      np.arange(nreg) * h]
+            # 0.5 slack for waving: vertices move by < 0.1 blocks
+            o = self.origin[rows]
+            self.boxes[:, rows] = camera.boxes(o - 0.5, o + [16.5, 16.5, h + 0.5])
+            rng = np.asarray(m.ranges)
+            reg, ps = np.nonzero(rng[..., 1])
+            cmds = self._slots[s][3]
+            for r, p, first, count in zip(reg.tolist(), ps.tolist(),
+                                          rng[reg, ps, 0].tolist(), rng[reg, ps, 1].tolist()):
+                c = self._cfree[p].pop() if self._cfree[p] else self._new_cmd(p)
+                # DrawElementsIndirectCommand: count, instances, first index, base vertex,
+                # base instance (= the region table row: its origin and box)
+                self._cmd[p][c] = (count // 4 * 6, 1, (start + first // 4) * 6, 0, s * nreg + r)
+                self._at[p, s * nreg + r] = c
+                cmds.append((p, c))
+            self._write_rows(rows)
+        self._commit()
+
+    def remove(self, keys) -> None:
+        """Stop showing these chunks (unknown keys are ignored)."""
+        keys = [k for k in ((int(k[0]), int(k[1])) for k in keys) if k in self.slot_of]
+        if keys:
+            self._drop(keys)
+            self._commit()
+
+    def _drop(self, keys) -> None:
+        for key in keys:
+            s = self.slot_of.pop(key)
+            _, start, nq, cmds = self._slots[s]
+            if nq:
+                self._verts.give(start, nq)
+            for p, c in cmds:  # an empty hole until reused (count 0 draws nothing)
+                self._cmd[p][c] = 0
+                self._cfree[p].append(c)
+            self._at[:, s * self.nreg:(s + 1) * self.nreg] = -1
+            self._slots[s] = None
+            self._free_slots.append(s)
+        self._free_slots.sort(reverse=True)  # lowest slot first: full rebuilds stay in order
+
+    def _new_cmd(self, p: int) -> int:
+        c = self._cused[p]
+        if c == len(self._cmd[p]):
+            grown = np.zeros((max(64, 2 * c), 5), np.uint32)
+            grown[:c] = self._cmd[p]
+            self._cmd[p] = grown
+        self._cused[p] += 1
+        return c
+
+    def _grow(self) -> None:
+        """Room for the slots and vertices taken: bigger buffers, the old contents
+        copied on the GPU (no chunk is uploaded again)."""
+        c = self.ctx
+        rows = len(self._slots) * self.nreg
+        if rows > self.origin.shape[0]:
+            n = max(rows, 2 * self.origin.shape[0], 16 * self.nreg)
+            o = np.zeros((n, 3), np.float32)
+            o[:len(self.origin)] = self.origin
+            b = np.zeros((7, n), np.float32)
+            b[:, :self.boxes.shape[1]] = self.boxes
+            at = np.full((len(PASSES), n), -1, np.int32)
+            at[:, :self._at.shape[1]] = self._at
+            self.origin, self.boxes, self._at = o, b, at
+        if self.origin.shape[0] > self._rows_cap:
+            for buf in (self.obo, self._boxes):
+                if buf is not None:
+                    buf.release()
+            self._rows_cap = self.origin.shape[0]
+            self.obo = c.buffer(reserve=12 * self._rows_cap)
+            if self.indirect_ok:
+                self._boxes = c.buffer(reserve=32 * self._rows_cap)
+            self._write_rows(np.arange(len(self._slots) * self.nreg))
+            self._vaos_void()
+        need = self._verts.end
+        if need > self._vbo_q or self.vbo is None:
+            n = max(need, 2 * self._vbo_q, 1024)
+            vbo = c.buffer(reserve=n * _QUAD)
+            if self.vbo is not None:
+                if self._vbo_q:
+                    c.copy_buffer(vbo, self.vbo, self._vbo_q * _QUAD)
+                self.vbo.release()
+            self.vbo, self._vbo_q = vbo, n
+            self._vaos_void()
+        if self._vbo_q > self._ibo_q:
+            if self.ibo is not None:
+                self.ibo.release()
+            self.ibo = c.buffer(meshing.quad_indices(self._vbo_q).tobytes())
+            self._ibo_q = self._vbo_q
+            self._vaos_void()
+
+    def _write_rows(self, rows) -> None:
+        if not len(rows):
+            return
+        a, b = int(rows[0]), int(rows[-1]) + 1  # a slot's rows are one run
+        self.obo.write(self.origin[a:b].tobytes(), offset=12 * a)
+        if self._boxes is not None:  # centre and half extent per region, vec4-aligned
+            x = np.zeros((b - a, 2, 4), np.float32)
+            x[:, 0, :3], x[:, 1, :3] = self.boxes[0:3, a:b].T, self.boxes[3:6, a:b].T
+            self._boxes.write(x.tobytes(), offset=32 * a)
+
+    def _vaos_void(self) -> None:
+        for vao in self._vaos.values():
+            vao.release()
+        self._vaos.clear()
+
+    def _commit(self) -> None:
+        """The global command table (pass by pass) and each pass's part, after a change."""
+        self.frames += 1
+        self.gen += 1
+        off = np.cumsum([0] + self._cused[:-1])
+        self.cmd = np.concatenate([c[:n] for c, n in zip(self._cmd, self._cused)])
+        self.at = np.where(self._at >= 0, self._at + off[:, None].astype(np.int32), -1)
+        self.parts: dict[str, dict] = {}
+        for p, name in enumerate(PASSES):
+            rows = np.flatnonzero(self._at[p] >= 0)
+            if len(rows):
+                self.parts[name] = {"rows": rows, "first": int(off[p]), "n": self._cused[p],
+                                    "boxes": self.boxes[:, rows]}
+
+    @property
+    def quads(self) -> int:
+        return int(self.cmd[:, 0].sum()) // 6  # 6 indices a quad
+
+    # ------------------------------------------------------------------ frames
     def vao(self, name: str, prog):
-        part = self.parts[name]
-        vao = part["vaos"].get(prog.glo)
+        vao = self._vaos.get(prog.glo)
         if vao is None:
-            content = [(part["vbo"], "u4", "in_v")]
+            content = [(self.vbo, "u4", "in_v")]
             if "in_origin" in prog:  # else UNIFORM_ORIGIN: one draw per region
                 content.append((self.obo, "3f4/i", "in_origin"))
             vao = self.ctx.vertex_array(prog, content, index_buffer=self.ibo,
                                         index_element_size=4)
-            part["vaos"][prog.glo] = vao
+            self._vaos[prog.glo] = vao
         return vao
 
     def cull(self, mvp: np.ndarray) -> np.ndarray:
@@ -141,7 +299,7 @@ class Geometry:
         has = k >= 0
         every = k[has]  # pass by pass, each pass's commands in table order
         last = self.bufs.get(slot)
-        key = (names, self.indirect_ok)
+        key = (names, self.indirect_ok, self.gen)
         if last is not None and last[2] == key and np.array_equal(last[1], every):
             return last[3]  # the same regions as the slot's last frame: nothing to do
         n_of = [int(np.count_nonzero(h)) for h in has]
@@ -167,19 +325,25 @@ class Geometry:
 
     def gpu_batches(self, mvp: np.ndarray, names, slot: str = "view") -> dict:
         """batches() with the culling on the GPU: the slot's buffer holds every command
-        of every pass (uploaded once) and cull.comp sets their instance counts for mvp.
-        Call barrier() after the last one and before drawing. Triangles are counted
-        from the buffer when Stats are read."""
+        of every pass (uploaded when the shown chunks changed) and cull.comp sets their
+        instance counts for mvp. Call barrier() after the last one and before drawing.
+        Triangles are counted from the buffer when Stats are read."""
         names = [n for n in names if n in self.parts]
         self.frames += 1
         if not names:  # nothing shown (or none of these passes): nothing to cull
             return {}
         last = self.bufs.get(slot)
-        if last is None or last[2] != "gpu":
-            if last is not None and last[0] is not None:
-                last[0].release()
-            last = self.bufs[slot] = [self.ctx.buffer(self.cmd.tobytes() or b"\0" * 20),
-                                      None, "gpu", None]
+        data = self.cmd.tobytes()
+        if last is None or last[2] != ("gpu", self.gen):
+            buf = last[0] if last is not None else None
+            if buf is None or buf.size < len(data):
+                if buf is not None:
+                    buf.release()
+                buf = self.ctx.buffer(reserve=max(len(data), 4096) * 2)
+            else:
+                buf.orphan()
+            buf.write(data)
+            last = self.bufs[slot] = [buf, None, ("gpu", self.gen), None]
         buf, n = last[0], len(self.cmd)
         if self._cs is None:
             self._cs = self.ctx.compute_shader(source("cull.comp", None, 430))
@@ -188,8 +352,8 @@ class Geometry:
         buf.bind_to_storage_buffer(0)
         self._boxes.bind_to_storage_buffer(1)
         self._cs.run((n + 63) // 64)
-        return {name: (name, None, buf, self.parts[name]["first"],
-                       len(self.parts[name]["rows"]), None) for name in names}
+        return {name: (name, None, buf, self.parts[name]["first"], self.parts[name]["n"], None)
+                for name in names}
 
     @property
     def gpu(self) -> bool:
@@ -235,22 +399,16 @@ class Geometry:
     def _free(self) -> None:
         """Everything of the shown chunks (the culling program stays)."""
         self.frames += 1
-        for part in self.parts.values():
-            for vao in part["vaos"].values():
-                vao.release()
-            part["vbo"].release()
+        self._vaos_void()
         for b in self.bufs.values():
             if b[0] is not None:
                 b[0].release()
         self.bufs.clear()
-        if self._boxes is not None:
-            self._boxes.release()
-            self._boxes = None
-        self.parts.clear()
-        for b in (self.ibo, self.obo):
+        for b in (self.vbo, self.ibo, self.obo, self._boxes):
             if b is not None:
                 b.release()
-        self.ibo = self.obo = None
+        self.vbo = self.ibo = self.obo = self._boxes = None
+        self._vbo_q = self._ibo_q = self._rows_cap = 0
 
 
 class Stats(MutableMapping):
@@ -284,7 +442,8 @@ class Stats(MutableMapping):
             for buf, first, n, shadow in pending:
                 c = read.get(id(buf))
                 if c is None:
-                    c = read[id(buf)] = np.frombuffer(buf.read(), np.uint32).reshape(-1, 5)
+                    c = np.frombuffer(buf.read(), np.uint32)  # reserved with room to spare
+                    c = read[id(buf)] = c[:len(c) // 5 * 5].reshape(-1, 5)
                 c = c[first:first + n]
                 self.add(int((c[:, 0].astype(np.int64) * c[:, 1]).sum()) // 3, 0, shadow, None)
         return self._d

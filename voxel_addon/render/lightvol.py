@@ -11,6 +11,8 @@ import numpy as np
 from ..core import chunk
 from .programs import set_uniforms
 
+_OPEN = None  # a chunk of open daylight (full daylight, no block light), as bytes
+
 
 def window(area, radius: int):
     """The chunk box with exact light: `radius` chunks around the centre chunk of the
@@ -33,13 +35,30 @@ class LightVolume:
         self.lo = (0, 0)
         self.hi = (0, 0)
 
-    def upload(self, key, light: np.ndarray) -> None:
-        """Put one chunk's (16, 16, 256) light into its slot."""
+    def upload(self, key, light: np.ndarray | None) -> None:
+        """Put one chunk's (16, 16, 256) light into its slot (None: open daylight, as
+        outside the window)."""
+        global _OPEN
         slot = (key[0] % self.n, key[1] % self.n)
-        arr = np.asarray(light, dtype=np.uint16)
-        self.tex.write(np.asfortranarray(arr).tobytes(order="F"),
-                       viewport=(slot[0] * 16, slot[1] * 16, 0, 16, 16, chunk.HEIGHT))
+        if light is None:
+            if _OPEN is None:
+                _OPEN = np.full(16 * 16 * chunk.HEIGHT, 0xF000, np.uint16).tobytes()
+            data = _OPEN
+        else:
+            arr = np.asarray(light, dtype=np.uint16)
+            data = np.asfortranarray(arr).tobytes(order="F")
+        self.tex.write(data, viewport=(slot[0] * 16, slot[1] * 16, 0, 16, 16, chunk.HEIGHT))
         self.slots[slot] = tuple(key)
+
+    def resident(self, key) -> bool:
+        return self.slots.get((key[0] % self.n, key[1] % self.n)) == key
+
+    def forget(self, key) -> None:
+        """The chunk's light changed: its slot no longer holds it (uploaded again when
+        the window needs it)."""
+        slot = (key[0] % self.n, key[1] % self.n)
+        if self.slots.get(slot) == key:
+            del self.slots[slot]
 
     def upload_area(self, light: np.ndarray, cx0: int, cy0: int) -> None:
         """A (16w, 16h, 256) light array whose first chunk is (cx0, cy0)."""

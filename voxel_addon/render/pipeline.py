@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 import time
+from typing import NamedTuple
 
 import numpy as np
 
@@ -13,7 +14,7 @@ from ..core.blocks import REGISTRY
 from . import camera as cam
 from . import sky
 from .geometry import Geometry, Stats
-from . import lightvol, oit
+from . import oit
 from .lightvol import LightVolume
 from .frame import BINDING, FrameBlock
 from .programs import UNITS, Programs
@@ -34,7 +35,9 @@ class Renderer:
         self._idle = ctx.framebuffer(ctx.renderbuffer((1, 1)))  # bound while targets change
         self.targets: dict = {}
         self.stats: dict = {}
-        self.area = None
+        self.area = None             # (cx0, cy0, cx1, cy1): the box of the shown chunks
+        self.lights: dict = {}       # (cx, cy) -> its light (or None: open daylight)
+        self._vol_key = None         # the light window last made resident
         self._fs: dict = {}          # program -> empty VAO for fullscreen passes
         self._plans: dict = {}       # switches -> the programs of every pass
         self._pass = None            # pass -> _Pass, for the current targets
@@ -73,14 +76,43 @@ class Renderer:
                     scale[layer] = max(scale[layer], b.glow)
         self.glow_scale = scale
 
+    def update_chunks(self, payloads) -> None:
+        """Show or replace chunks, each an object with .key (cx, cy), .mesh (a
+        meshing.ChunkMesh built with the chunk's one-voxel ring of neighbours) and
+        .light (its (16, 16, 256) uint16 packed light, or None: open daylight). Only
+        these are uploaded: meshes into free slots of the geometry, light into the
+        volume once the light window (around the camera, prepare) needs it."""
+        meshes = {}
+        for p in payloads:
+            k = (int(p.key[0]), int(p.key[1]))
+            light = p.light
+            if light is not None and np.shape(light) != (16, 16, 256):
+                raise ValueError(f"chunk {k}: light must be (16, 16, 256), got {np.shape(light)}")
+            meshes[k] = p.mesh
+            self.lights[k] = light
+            self.vol.forget(k)
+        self.geo.update(meshes)
+        self._shown()
+
+    def remove_chunks(self, keys) -> None:
+        """Stop showing these chunks (unknown keys are ignored); nothing else moves."""
+        keys = [(int(k[0]), int(k[1])) for k in keys]
+        self.geo.remove(keys)
+        for k in keys:
+            self.lights.pop(k, None)
+            self.vol.forget(k)
+        self._shown()
+
     def set_area(self, blocks: np.ndarray, light: np.ndarray, cx0: int, cy0: int,
                  ring: bool = False, method: str = "greedy", backend: str | None = None,
                  light_at: tuple[int, int] | None = None):
-        """Show the chunks [cx0, cx0+w) x [cy0, cy0+h) from a block array and their light.
+        """Show the chunks [cx0, cx0+w) x [cy0, cy0+h) from a block array and their light
+        instead of what was shown.
 
         blocks is (16w, 16h, 256), or with ring=True (16w+2, 16h+2, 256) including a
         one-voxel ring of neighbours (else outside counts as air); light is the packed
-        light of whole chunks from light_at (default (cx0, cy0)), e.g. (16w, 16h, 256).
+        light of whole chunks from light_at (default (cx0, cy0)), e.g. (16w, 16h, 256);
+        chunks it does not cover get open daylight.
         """
         from .. import meshing, opencl
         if backend is None:  # the OpenCL twin builds the same meshes, much faster
@@ -91,33 +123,58 @@ class Renderer:
             blocks = pad
         # one batched call for the whole area (meshing README: build_chunks)
         meshes = meshing.build_chunks(blocks, (cx0, cy0), method=method, backend=backend)
-        self.set_meshes(meshes)
-        self.set_light(light, *(light_at or (cx0, cy0)))
+        lights = _chunks_of(light, *(light_at or (cx0, cy0)))
+        self.remove_chunks([k for k in self.geo.keys if k not in meshes])
+        self.update_chunks(_Chunk(k, m, lights.get(k)) for k, m in meshes.items())
 
     def set_meshes(self, meshes: dict) -> None:
-        """{(cx, cy): meshing.ChunkMesh} to draw."""
-        self.geo.set_chunks(meshes)
-        ks = np.array(list(meshes), int).reshape(-1, 2)
-        if len(ks):
-            self.area = tuple(int(v) for v in (*ks.min(0), *(ks.max(0) + 1)))
+        """{(cx, cy): meshing.ChunkMesh} to draw instead of what was shown; the light
+        known for chunks that stay is kept (set_light)."""
+        self.geo.remove([k for k in self.geo.keys if k not in meshes])
+        self.geo.update(meshes)
+        self._shown()
 
     def set_light(self, light: np.ndarray, cx0: int, cy0: int) -> None:
-        """Upload packed light of whole chunks from (cx0, cy0): the part inside
-        lightvol.window (outside it surfaces get open daylight, the fog hides them)."""
-        w, h = light.shape[0] // 16, light.shape[1] // 16
-        if self.area is None:
-            self.area = (cx0, cy0, cx0 + w, cy0 + h)
-        x0, y0, x1, y1 = lightvol.window(self.area, self.s.light_radius)
-        x0, y0 = max(x0, cx0), max(y0, cy0)
-        x1, y1 = max(x0, min(x1, cx0 + w)), max(y0, min(y1, cy0 + h))  # may be empty
-        n = max(x1 - x0, y1 - y0, 1)
+        """Packed light of whole chunks from (cx0, cy0), e.g. (16w, 16h, 256); the
+        volume takes the part inside the light window (outside it surfaces get open
+        daylight, the fog hides them)."""
+        for k, v in _chunks_of(light, cx0, cy0).items():
+            self.lights[k] = v
+            self.vol.forget(k)
+        self._vol_key = None
+
+    def _shown(self) -> None:
+        """The shown chunks changed: their box (self.area), the light window again."""
+        ks = np.array(list(self.geo.keys), int).reshape(-1, 2)
+        self.area = (tuple(int(v) for v in (*ks.min(0), *(ks.max(0) + 1)))
+                     if len(ks) else None)
+        self._vol_key = None
+
+    def _sync_light(self, camera) -> None:
+        """The light window (Settings.light_radius chunks around the camera's chunk,
+        within the shown area) resident in the toroidal volume: only chunks that
+        entered it or whose light changed are uploaded."""
+        a, r = self.area, self.s.light_radius
+        cx, cy = math.floor(camera.x) >> 4, math.floor(camera.y) >> 4
+        if a is None:
+            win = (cx, cy, cx, cy)
+        else:
+            x0, y0 = max(a[0], cx - r), max(a[1], cy - r)
+            win = (x0, y0, max(x0, min(a[2], cx + r + 1)), max(y0, min(a[3], cy + r + 1)))
+        key = (win, r)
+        if key == self._vol_key:
+            return
+        n = 1 if a is None else max(1, min(2 * r + 1, max(a[2] - a[0], a[3] - a[1])))
         if self.vol.n < n:
             self.vol.release()
             self.vol = LightVolume(self.ctx, n)
             self._pass = None
-        i, j = 16 * (x0 - cx0), 16 * (y0 - cy0)
-        self.vol.upload_area(light[i:i + 16 * (x1 - x0), j:j + 16 * (y1 - y0)], x0, y0)
-        self.vol.set_window(x0, y0, x1, y1)
+        for x in range(win[0], win[2]):
+            for y in range(win[1], win[3]):
+                if not self.vol.resident((x, y)):
+                    self.vol.upload((x, y), self.lights.get((x, y)))
+        self.vol.set_window(*win)
+        self._vol_key = key
 
     # ------------------------------------------------------------------ targets
     def _targets(self, w, h):
@@ -208,6 +265,9 @@ class Renderer:
         s = self.s
         s.check()
         w, h = size
+        # the whole height of the area stays in view; the caller's camera is left alone
+        camera = camera.fitted(w / h, s.fov, s.distance * 16 * 1.5 + 256.0)
+        self._sync_light(camera)  # before _passes: it may make a bigger volume
         T = self._targets(w, h)
         S = self._passes(T)
         self.tex.use(UNITS["tex"])  # the arrays stay bound: no pass uses their units
@@ -215,9 +275,6 @@ class Renderer:
         aniso = max(1.0, min(float(s.anisotropy), self.max_anisotropy))
         if aniso != self._aniso:
             self.tex.anisotropy = self._aniso = aniso
-        camera.aspect = w / h
-        camera.fov = s.fov
-        camera.far = s.distance * 16 * 1.5 + 256.0  # the whole height of the area stays in view
         sp = sky.params(hours)
         debug = DEBUG_VIEWS.index(s.debug)
         vp, inv_vp = cull_vp, _ = camera.matrices()
@@ -238,7 +295,7 @@ class Renderer:
         ssao = s.ssao and debug in (0, 6)
         sun_px, sun_vis, sun_r = _sun_on_screen(vp, draw_cam, sp["light_dir"], w, h, s.fov)
         gods = s.godrays and debug in (0, 6) and sun_vis
-        dof = s.dof and debug == 0
+        dof = s.dof and debug == 0 and not camera.ortho  # parallel rays: no distance blur
         P = self._plan((T["ms"], debug, shadows, layers, ssao, gods, dof, s.smooth_mag,
                         s.msaa_alpha, s.per_sample, s.fog, s.fill_holes, geo.indirect_ok,
                         use_oit))
@@ -257,8 +314,10 @@ class Renderer:
         for k in ("zenith", "horizon", "halo", "disc"):
             F.set(**{f"sky_{k}": sp[k] if sky_on else (0.0, 0.0, 0.0)})
         F.set(vp=vp, inv_vp=inv_vp, cam_pos=(draw_cam.x, draw_cam.y, draw_cam.z),
+              cam_fwd=draw_cam._fwd(), ortho=draw_cam.ortho,
               far_dist=camera.far, shadow_eye=(camera.x, camera.y, camera.z),
-              shadow_fade=s.shadow_fade, day_ambient=sp["ambient"], day_u=sp["u"],
+              # orthographic: no eye to fade from; the map covers the view box
+              shadow_fade=1e9 if camera.ortho else s.shadow_fade, day_ambient=sp["ambient"], day_u=sp["u"],
               day_direct=sp["direct"], sky_stars=sp["stars"] if sky_on else 0.0,
               sky_light_dir=sp["light_dir"], time=s.time, waving=s.waving,
               godray_strength=s.godray_strength, sun_px=sun_px, sun_radius=sun_r,
@@ -424,7 +483,16 @@ class Renderer:
         Returns (matrix, world size of a shadow texel, depth bias in depth units).
         Python floats throughout: a few dozen products, where NumPy's per-call cost
         was most of the frame's matrix work."""
-        pts = camera.corners(self.s.shadow_fade + 2.0)
+        if camera.ortho:  # the view box, in depth where the shown area is
+            lo, hi = camera.near, camera.far
+            if self.area:
+                cx0, cy0, cx1, cy1 = self.area
+                d = [camera.depth((x, y, z)) for x in (16 * cx0, 16 * cx1)
+                     for y in (16 * cy0, 16 * cy1) for z in (0.0, 256.0)]
+                lo, hi = max(lo, min(d)), min(hi, max(d))
+            pts = camera.corners(max(hi, lo + 1.0), lo)
+        else:
+            pts = camera.corners(self.s.shadow_fade + 2.0)
         n = len(pts)
         mid = [sum(p[k] for p in pts) / n for k in range(3)]
         rows = cam._view_rows(mid, [-v for v in light_dir])  # light space: +z to the light
@@ -500,7 +568,23 @@ def _top_camera(camera: cam.Camera) -> cam.Camera:
                       1.0, 400.0)
 
 
+class _Chunk(NamedTuple):
+    """What update_chunks takes (the world layer's Payload has these too)."""
+    key: tuple
+    mesh: object
+    light: np.ndarray | None
+
+
+def _chunks_of(light: np.ndarray, cx0: int, cy0: int) -> dict:
+    """{(cx, cy): (16, 16, 256) view} of a light array of whole chunks from (cx0, cy0)."""
+    w, h = light.shape[0] // 16, light.shape[1] // 16
+    return {(cx0 + i, cy0 + j): light[16 * i:16 * i + 16, 16 * j:16 * j + 16]
+            for i in range(w) for j in range(h)}
+
+
 def _sun_on_screen(vp, camera, light_dir, w, h, fov):
+    if camera.ortho:  # parallel rays: the sun is no point on the screen
+        return (0.0, 0.0), False, 0.0
     p = vp[:, :3] @ (camera.pos + np.asarray(light_dir) * 1000.0) + vp[:, 3]
     vis = p[3] > 0
     ndc = p[:2] / p[3] if vis else np.zeros(2)

@@ -1,0 +1,315 @@
+"""Chunks in and out one at a time (Renderer.update_chunks / remove_chunks) draw the
+same frame as the one-shot full rebuild, on every culling path; the other chunks'
+vertices stay where they were; cameras from host matrices (perspective and
+orthographic) draw what the parametric camera draws, and orthographic frames look
+like orthographic projections."""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+import pytest
+
+from voxel_addon import light, meshing
+from voxel_addon.core import chunk
+from voxel_addon.core.blocks import REGISTRY as R
+from voxel_addon.render import Camera, Settings
+from voxel_addon.render import camera as C
+
+SIZE = (96, 64)
+PATHS = [(True, True), (True, False), (False, False)]  # (indirect, GPU culling)
+
+
+class Chunk(NamedTuple):
+    key: tuple
+    mesh: object
+    light: np.ndarray
+
+
+def _area():
+    """3 x 3 chunks from (-1, -1): terrain with water, glass, leaves and plants, lamps."""
+    rng = np.random.default_rng(11)
+    b = chunk.empty(width=50, depth=50)  # 48 + ring
+    hgt = (58 + 4 * np.sin(np.arange(50) / 5)[:, None] + 3 * np.cos(np.arange(50) / 7)[None]).astype(int)
+    for x in range(50):
+        for y in range(50):
+            b[x, y, :hgt[x, y]] = R.id("stone")
+            b[x, y, hgt[x, y]] = R.id("grass")
+    b[10:22, 12:30, 55:62][b[10:22, 12:30, 55:62] == 0] = R.id("water")
+    b[30:34, 5:40, 62:66] = R.id("glass")
+    b[rng.random(b.shape) < 0.0008] = R.id("leaves")
+    plant = next(i for i, x in enumerate(R.blocks) if x.double_sided)
+    top = hgt + 1
+    for x, y in rng.integers(1, 49, (40, 2)):
+        if b[x, y, top[x, y]] == 0:
+            b[x, y, top[x, y]] = plant
+    b[25, 25, top[25, 25]] = R.id("lamp_red")
+    L = light.solve(b)[1:-1, 1:-1]
+    meshes = meshing.build_chunks(b, (-1, -1), backend="numpy")
+    lights = {(cx, cy): L[16 * (cx + 1):16 * (cx + 2), 16 * (cy + 1):16 * (cy + 2)]
+              for cx, cy in meshes}
+    return b, L, meshes, lights
+
+
+@pytest.fixture(scope="module")
+def area():
+    return _area()
+
+
+def _renderer(gl, indirect, gpu, **kw):
+    from voxel_addon.render.pipeline import Renderer
+    r = Renderer(gl, Settings(**{"msaa": 1, "waving": False, **kw}))
+    r.geo.indirect_ok, r.geo.gpu_cull = indirect, gpu
+    return r
+
+
+CAMS = [Camera(-12, -14, 80, 45, -25), Camera(8, 8, 100, 200, -60), Camera(30, -10, 66, 120, -5)]
+
+
+def _frames(r, hours=12.0):
+    out = []
+    for cam in CAMS:
+        out.append(r.render(cam, hours, SIZE))
+        out.append(r.stats.snapshot()["triangles"])
+    return out
+
+
+@pytest.mark.parametrize("indirect,gpu", PATHS)
+def test_incremental_equals_full_rebuild(gl, area, indirect, gpu):
+    b, L, meshes, lights = area
+    full = _renderer(gl, indirect, gpu)
+    full.set_area(b, L, -1, -1, ring=True, backend="numpy")
+    want = _frames(full)
+    full.release()
+    assert want[1] > 0 and want[0].std() > 10
+
+    rng = np.random.default_rng(5)
+    keys = list(meshes)
+    r = _renderer(gl, indirect, gpu)
+    # arrive in a shuffled order, in small batches, with frames in between
+    order = [keys[i] for i in rng.permutation(len(keys))]
+    for i in range(0, len(order), 2):
+        r.update_chunks(Chunk(k, meshes[k], lights[k]) for k in order[i:i + 2])
+        r.render(CAMS[0], 12.0, SIZE)
+    # wrong data first (another chunk's mesh, no light), then replaced by the right one
+    wrong = order[:3]
+    r.update_chunks(Chunk(k, meshes[order[-1]], None) for k in wrong)
+    r.render(CAMS[1], 12.0, SIZE)
+    r.update_chunks(Chunk(k, meshes[k], lights[k]) for k in wrong)
+    # some leave and come back; a chunk that is not shown is ignored on removal
+    gone = order[2:6]
+    r.remove_chunks(gone + [(40, 40)])
+    mid = r.render(CAMS[0], 12.0, SIZE)
+    assert set(r.geo.keys) == set(keys) - set(gone)
+    r.update_chunks(Chunk(k, meshes[k], lights[k]) for k in reversed(gone))
+    assert _same(_frames(r), want)
+    assert not np.array_equal(mid, want[0])  # removing chunks did change the frame
+    # set_area on a renderer that shows something else is the same full rebuild
+    r.remove_chunks([keys[0]])
+    r.update_chunks([Chunk((5, 5), meshes[keys[1]], lights[keys[1]])])
+    r.set_area(b, L, -1, -1, ring=True, backend="numpy")
+    assert set(r.geo.keys) == set(keys)
+    assert _same(_frames(r), want)
+    r.release()
+
+
+def _same(got, want):
+    for g, w in zip(got, want):
+        if isinstance(g, np.ndarray):
+            if not np.array_equal(g, w):
+                return False
+        elif g != w:
+            return False
+    return True
+
+
+def test_other_chunks_stay_where_they_are(gl, area):
+    """An update writes only its own chunks: every other chunk keeps its vertex block,
+    its commands and the contents of the vertex buffer there."""
+    b, L, meshes, lights = area
+    r = _renderer(gl, True, True)
+    r.update_chunks(Chunk(k, m, lights[k]) for k, m in meshes.items())
+    geo = r.geo
+    before = {k: tuple(geo._slots[s][1:3]) for k, s in geo.slot_of.items()}
+    vbo = geo.vbo
+    k0, k1 = (-1, -1), (0, 0)
+    r.update_chunks([Chunk(k0, meshes[k1], lights[k1])])   # smaller or larger: moves
+    r.remove_chunks([(1, 1)])
+    data = np.frombuffer(geo.vbo.read(), np.uint32)
+    for k, s in geo.slot_of.items():
+        start, nq = geo._slots[s][1:3]
+        if k != k0:
+            assert (start, nq) == before[k]
+        m = meshes[k1] if k == k0 else meshes[k]
+        assert np.array_equal(data[4 * start:4 * (start + nq)], m.vertices)
+    assert geo.vbo is vbo  # no regrowth needed: nothing was copied
+    # commands of the rows still shown point into their own chunk's block
+    for p in range(len(meshing.PASSES)):
+        for row in np.flatnonzero(geo.at[p] >= 0):
+            cmd = geo.cmd[geo.at[p, row]]
+            start, nq = geo._slots[row // geo.nreg][1:3]
+            assert cmd[4] == row and cmd[0] > 0
+            assert 6 * start <= cmd[2] and cmd[2] + cmd[0] <= 6 * (start + nq)
+    r.release()
+
+
+def test_growing_buffers_keep_what_was_there(gl, area):
+    """Chunks arriving one by one grow the buffers (copied on the GPU) and still draw
+    the frame of one upload of them all."""
+    b, L, meshes, lights = area
+    r = _renderer(gl, True, True)
+    r.update_chunks(Chunk(k, m, lights[k]) for k, m in meshes.items())
+    want = _frames(r)
+    r.release()
+    r = _renderer(gl, True, True)
+    many = {(cx + 10 * i, cy): m for i in range(4) for (cx, cy), m in meshes.items()}
+    for k, m in many.items():  # far away copies: only to make the buffers grow
+        r.update_chunks([Chunk(k, m, None)])
+    r.update_chunks(Chunk(k, m, lights[k]) for k, m in meshes.items())
+    r.remove_chunks([k for k in many if k not in meshes])
+    assert r.geo._vbo_q >= r.geo._verts.end and len(r.geo.keys) == len(meshes)
+    assert _same(_frames(r), want)
+    r.release()
+
+
+def test_light_window_follows_the_camera(gl):
+    """The light window is around the camera's chunk: a chunk's light is in the volume
+    when the camera is near it and open daylight far away; a chunk whose light changes
+    is uploaded again."""
+    n = 5
+    b = chunk.empty(width=16 * n + 2, depth=16 * n + 2)
+    b[:, :, :60] = R.id("stone")
+    meshes = meshing.build_chunks(b, (0, 0), backend="numpy")
+    dark = np.zeros((16, 16, 256), np.uint16)
+    r = _renderer(gl, True, True, light_radius=1)
+    r.update_chunks(Chunk(k, m, dark) for k, m in meshes.items())
+    r.render(Camera(8, 8, 80, 45, -30), 12.0, SIZE)
+    assert r.vol.n == 3 and r.vol.lo == (0, 0) and r.vol.hi == (32, 32)
+    assert r.vol.resident((1, 1)) and not r.vol.resident((4, 4))
+    r.render(Camera(72, 72, 80, 45, -30), 12.0, SIZE)
+    assert r.vol.lo == (48, 48) and r.vol.hi == (80, 80) and r.vol.resident((4, 4))
+    # the camera's chunk gets new light: uploaded before the next frame
+    lit = np.full((16, 16, 256), 0xF000, np.uint16)
+    r.update_chunks([Chunk((4, 4), meshes[4, 4], lit)])
+    assert not r.vol.resident((4, 4))
+    r.render(Camera(72, 72, 80, 45, -30), 12.0, SIZE)
+    assert r.vol.resident((4, 4))
+    r.release()
+
+
+def test_prepare_leaves_the_callers_camera_alone(gl, area):
+    b, L, meshes, lights = area
+    r = _renderer(gl, True, True)
+    r.set_area(b, L, -1, -1, ring=True, backend="numpy")
+    cam = Camera(-12, -14, 80, 45, -25, fov=50.0, aspect=3.0, near=0.5, far=99.0)
+    keep = (cam.x, cam.y, cam.z, cam.yaw, cam.pitch, cam.fov, cam.aspect, cam.near, cam.far)
+    r.render(cam, 12.0, SIZE)
+    assert keep == (cam.x, cam.y, cam.z, cam.yaw, cam.pitch, cam.fov, cam.aspect, cam.near, cam.far)
+    r.release()
+
+
+def test_from_matrices_is_the_same_camera():
+    rng = np.random.default_rng(2)
+    for _ in range(50):
+        cam = Camera(*rng.uniform(-500, 500, 2), rng.uniform(0, 256), rng.uniform(-180, 180),
+                     rng.uniform(-89, 89), rng.uniform(20, 110), rng.uniform(0.5, 3),
+                     rng.uniform(0.05, 1), rng.uniform(100, 2000))
+        m = Camera.from_matrices(cam.view(), cam.proj())
+        for f in ("x", "y", "z", "yaw", "pitch", "fov", "aspect", "near", "far"):
+            assert np.isclose(getattr(m, f), getattr(cam, f), rtol=1e-7, atol=1e-6), f
+        assert not m.ortho
+        vp, inv = m.matrices()
+        assert np.allclose(vp, cam.matrices()[0], atol=1e-9)
+        assert np.allclose(inv @ vp, np.eye(4), atol=1e-6)
+        assert np.allclose(m.corners(50.0), cam.corners(50.0), atol=1e-6)
+        assert np.allclose(m.forward, cam.forward)
+        assert m.fitted(2.0, 30.0, 5.0) is m  # the host's projection stays as given
+
+
+def test_from_matrices_orthographic():
+    view = C.look_at((10.0, 20.0, 200.0), (0.3, 0.2, -1.0))
+    proj = C.ortho(-30, 30, -20, 20, -50.0, 400.0)
+    m = Camera.from_matrices(view, proj)
+    assert m.ortho and np.isclose(m.near, -50) and np.isclose(m.far, 400)
+    assert np.allclose((m.x, m.y, m.z), (10, 20, 200)) and np.isclose(m.aspect, 1.5)
+    c = np.array(m.corners(100.0, 10.0))
+    # parallel rays: both planes are the same rectangle, shifted along the forward axis
+    shift = c[4:] - c[:4]
+    assert np.allclose(shift, shift[0]) and np.allclose(shift[0], 90 * m.forward)
+    assert np.isclose(np.linalg.norm(c[1] - c[0]), 60) and np.isclose(np.linalg.norm(c[2] - c[0]), 40)
+
+
+@pytest.mark.parametrize("indirect,gpu", PATHS)
+def test_from_matrices_draws_the_same_frame(gl, area, indirect, gpu):
+    b, L, meshes, lights = area
+    r = _renderer(gl, indirect, gpu, ssao=True)
+    r.set_area(b, L, -1, -1, ring=True, backend="numpy")
+    for cam in CAMS:
+        want = r.render(cam, 9.0, SIZE).astype(int)
+        f = cam.fitted(SIZE[0] / SIZE[1], r.s.fov, r.s.distance * 16 * 1.5 + 256.0)
+        got = r.render(Camera.from_matrices(f.view(), f.proj()), 9.0, SIZE).astype(int)
+        assert np.abs(got - want).max() <= 2 and np.abs(got - want).mean() < 0.05
+    r.release()
+
+
+def _ortho_top(cx, cy, half_h, z=150.0, aspect=1.0):
+    view = C.look_at((cx, cy, z), (0.0, 0.0, -1.0))
+    return Camera.from_matrices(view, C.ortho(-half_h * aspect, half_h * aspect,
+                                              -half_h, half_h, 1.0, 300.0))
+
+
+def test_orthographic_from_above_shows_footprints(gl):
+    """Straight down through parallel rays a pillar covers exactly its footprint (a
+    perspective view would show it larger and its sides): 4 pixels a block."""
+    b = chunk.empty(width=34, depth=34)
+    b[:, :, :60] = R.id("stone")
+    b[:, :, 60] = R.id("grass")
+    b[13:21, 9:17, 61:100] = R.id("stone")  # 8 x 8 blocks, 39 high: x 12..20, y 8..16
+    r = _renderer(gl, True, True, debug="depth")
+    r.set_area(b, light.solve(b), 0, 0, ring=True, backend="numpy")
+    cam = _ortho_top(16, 16, 16)
+    img = r.render(cam, 12.0, (128, 128)).astype(int)[..., 0]
+    top = img == img.max()  # the nearest surface: the pillar's top
+    rows, cols = np.nonzero(top)
+    # image row 0 = y 32 (top), column 0 = x 0: 4 pixels a block
+    assert top.sum() == 32 * 32, top.sum()
+    assert (cols.min(), cols.max() + 1) == (48, 80) and (rows.min(), rows.max() + 1) == (64, 96)
+    # every other pixel is the ground, at one depth (no sides, no perspective)
+    assert len(np.unique(img[~top])) == 1 and img[~top][0] < img.max()
+    r.s.debug = "normal"
+    nrm = r.render(cam, 12.0, (128, 128)).astype(float) / 255
+    assert np.allclose(nrm.reshape(-1, 3).mean(0), [0.5, 0.5, 1.0], atol=0.01)  # only +z faces
+    r.release()
+
+
+def test_orthographic_frames_with_every_effect_look_sane(gl, area):
+    """An oblique orthographic view with shadows, fog, SSAO and god rays on: sky above,
+    lit ground below, shadows from the pillar, nothing black or NaN; parallel vertical
+    edges stay parallel (the pillar is as wide at its top as at its foot)."""
+    b = chunk.empty(width=50, depth=50)
+    b[:, :, :60] = R.id("stone")
+    b[:, :, 60] = R.id("grass")
+    b[22:28, 22:28, 61:90] = R.id("stone")
+    eye = np.array([24.0, -60.0, 110.0])
+    view = C.look_at(eye, np.array([24.0, 24.0, 60.0]) - eye)
+    cam = Camera.from_matrices(view, C.ortho(-36, 36, -24, 24, -100.0, 400.0))
+    out = {}
+    for shadows in (False, True):
+        r = _renderer(gl, True, True, ssao=True, shadows=shadows, godrays=True, fog=True)
+        r.set_area(b, light.solve(b), -1, -1, ring=True, backend="numpy")
+        out[shadows] = r.render(cam, 9.0, (96, 64)).astype(float)
+        r.s.debug = "albedo"
+        alb = r.render(cam, 9.0, (96, 64)).astype(float)
+        r.release()
+    img = out[True]
+    assert np.isfinite(img).all() and img.mean() > 40
+    sky, ground = img[:3].reshape(-1, 3).mean(0), img[-10:].reshape(-1, 3).mean(0)
+    assert sky[2] > sky[0] + 20, "a blue sky above"
+    assert abs(ground - sky).sum() > 30, "the ground is not sky"
+    darker = (out[False] - out[True]).mean(-1) > 30
+    assert darker.sum() > 20 and darker[:20].sum() == 0, "the pillar casts a shadow on the ground"
+    # the pillar in the albedo view: stone is grey, grass green; its width per row
+    grey = (np.abs(alb[..., 1] - alb[..., 0]) < 12) & (alb.mean(-1) > 30)  # sky: black
+    cols = [np.flatnonzero(row) for row in grey[:, 20:76]]
+    widths = [c.max() - c.min() + 1 for c in cols if len(c) > 3]
+    assert len(widths) > 10 and max(widths) - min(widths) <= 2, widths

@@ -94,6 +94,9 @@ def settle(n=3):
 
 
 # ------------------------------------------------------------------ scene
+CAM = (40.0, -60.0, 110.0, 90.0, -25.0, 50.0)   # x y z yaw pitch, vertical fov
+
+
 def setup():
     import voxel_addon
     voxel_addon.register()
@@ -102,38 +105,153 @@ def setup():
     vv = sc.voxel_view
     vv.distance = 4
     vv.hours = 12.0
-    # Blender's default cube: one in front of the terrain, one buried in it
+    # Blender's default cube: one high in front of the terrain, one buried in it
     cube = bpy.data.objects.get("Cube")
     cube.location = (8.0, 8.0, 120.0)
     cube.scale = (4.0, 4.0, 4.0)
     buried = cube.copy()
-    buried.data = cube.data
     buried.name = "Buried"
-    buried.location = (8.0, 8.0, 20.0)
+    buried.location = (40.0, 24.0, 20.0)
     sc.collection.objects.link(buried)
-    for o in ("Light", "Camera"):
-        if o in bpy.data.objects:
-            bpy.data.objects[o].hide_set(True)
+    bpy.data.objects["Light"].hide_set(True)
+    cam = bpy.data.objects["Camera"]
+    x, y, z, yaw, pitch, fov = CAM
+    cam.location = (x, y, z)
+    cam.rotation_euler = (math.radians(90 + pitch), 0.0, math.radians(yaw - 90))
+    cam.data.sensor_fit = "VERTICAL"
+    cam.data.angle_y = math.radians(fov)
+    sc.render.resolution_x, sc.render.resolution_y = 640, 360
+    cam.hide_set(True)
     _, _, sp = view3d()
-    sp.overlay.show_floor = sp.overlay.show_axis_x = sp.overlay.show_axis_y = False
-    sp.overlay.show_cursor = False
-    sp.overlay.show_text = False
+    sp.overlay.show_overlays = False
     sp.show_gizmo = False
     sp.clip_end = 1000.0
     bpy.ops.object.select_all(action="DESELECT")
     yield 0.5
 
 
+def project(p):
+    """A world point's pixel in the screenshot (x, y from the top-left)."""
+    from bpy_extras.view3d_utils import location_3d_to_region_2d
+    win, area, sp = view3d()
+    r = next(r for r in area.regions if r.type == "WINDOW")
+    q = location_3d_to_region_2d(r, sp.region_3d, p)
+    return None if q is None else (r.x + q.x, win.height - (r.y + q.y))
+
+
+def record(name, **extra):
+    RESULT["steps"][name] = {"png": shot(name), "rect": region_rect(), "status": status(),
+                             "cube": project((8.0, 8.0, 124.0)),
+                             "buried": project((40.0, 24.0, 24.0)), **extra}
+
+
 def step_top():
-    """Top view from above the two cubes, perspective."""
+    """Perspective from above: Show off / on; the cube in front keeps its pixels,
+    the buried one disappears, voxels wherever the terrain is."""
     sc = bpy.context.scene
-    set_view((8.0, 8.0, 80.0), (0, 0, 0), 140.0)
+    set_view((24.0, 16.0, 80.0), (0, 0, 0), 140.0)
     sc.voxel_view.show = False
     yield from settle()
-    RESULT["steps"]["off"] = {"png": shot("off"), "rect": region_rect()}
+    record("off")
     sc.voxel_view.show = True
     yield from wait_frames()
-    RESULT["steps"]["on"] = {"png": shot("on"), "rect": region_rect(), "status": status()}
+    record("on")
+    sc.voxel_view.show = False
+    yield from settle()
+    record("off_again")
+
+
+def step_sky():
+    """Looking toward the horizon at noon and at night: the sky changes."""
+    sc = bpy.context.scene
+    sc.voxel_view.show = True
+    set_view((8.0, 8.0, 100.0), (80, 0, -90), 30.0)
+    for h in (12.0, 21.0):
+        sc.voxel_view.hours = h
+        yield from wait_frames()
+        record(f"sky{int(h)}")
+
+
+def step_camera():
+    """Camera view and orthographic top view; the test compares them with the CLI."""
+    sc = bpy.context.scene
+    sc.voxel_view.show = True
+    sc.voxel_view.hours = 12.0
+    _, area, sp = view3d()
+    sp.region_3d.view_perspective = "CAMERA"
+    sp.region_3d.view_camera_zoom = 0.0
+    sp.region_3d.view_camera_offset = (0.0, 0.0)
+    yield from wait_frames()
+    from bpy_extras.view3d_utils import location_3d_to_region_2d
+    cam = sc.camera
+    frame = [cam.matrix_world @ v for v in cam.data.view_frame(scene=sc)]
+    pts = [project(v) for v in frame]
+    record("camera", frame=pts, cam=CAM)
+    set_view((24.0, 24.0, 64.0), (0, 0, 0), 60.0, "ORTHO")
+    yield from wait_frames()
+    corners = [project((x, y, 64.0)) for x, y in ((0, 0), (48, 0), (0, 48), (48, 48))]
+    record("ortho", corners=corners)
+
+
+def step_stream():
+    """Moving the view by 6 chunks brings in new chunks."""
+    from voxel_addon.blender import viewport
+    sc = bpy.context.scene
+    sc.voxel_view.show = True
+    set_view((8.0, 8.0, 80.0), (60, 0, 0), 80.0)
+    yield from wait_frames()
+    before = viewport._feed.centre if viewport._feed.stream is None else sorted(viewport._feed.chunks)
+    record("stream0")
+    set_view((8.0 + 96.0, 8.0, 80.0), (60, 0, 0), 80.0)
+    yield from wait_frames()
+    after = viewport._feed.centre if viewport._feed.stream is None else sorted(viewport._feed.chunks)
+    record("stream1", moved=before != after)
+
+
+def step_redraws():
+    """100 redraws while orbiting (draft) and still; Python errors go to the log."""
+    from voxel_addon.blender import viewport
+    sc = bpy.context.scene
+    sc.voxel_view.show = True
+    n0 = viewport.STATUS["frames"]
+    for i in range(100):
+        set_view((8.0, 8.0, 80.0), (60, 0, 3.6 * i), 80.0)
+        yield 0.0
+    yield from wait_frames()
+    RESULT["steps"]["redraws"] = {"frames": viewport.STATUS["frames"] - n0,
+                                  "error": viewport.STATUS["error"]}
+
+
+def step_leak():
+    """Unregister / register 10 times with the view shown: no handler, timer,
+    thread or renderer is left."""
+    import gc
+    import threading
+    import voxel_addon
+    from voxel_addon.blender import viewport
+    from voxel_addon.render.pipeline import Renderer
+    sc = bpy.context.scene
+    threads0 = threading.active_count()
+    for i in range(10):
+        voxel_addon.unregister()
+        yield 0.1
+        voxel_addon.register()
+        sc = bpy.context.scene
+        sc.voxel.path = WORLD
+        sc.voxel_view.show = True
+        yield from wait_frames(1, full=False)
+    voxel_addon.unregister()
+    yield 0.2
+    gc.collect()
+    RESULT["steps"]["leak"] = {
+        "renderers": sum(isinstance(o, Renderer) for o in gc.get_objects()),
+        "gpus": len(viewport._gpus), "feed": viewport._feed is not None,
+        "handle": viewport._handle is not None,
+        "timer": bpy.app.timers.is_registered(viewport._tick),
+        "load_pre": sum(getattr(f, "__name__", "") == "_load_pre" for f in bpy.app.handlers.load_pre),
+        "threads": threading.active_count() - threads0}
+    yield from settle()
+    record("unregistered")
 
 
 def run():
@@ -150,7 +268,8 @@ def run():
     bpy.ops.wm.quit_blender()
 
 
-STEPS = {"top": step_top}
+STEPS = {"top": step_top, "sky": step_sky, "camera": step_camera, "stream": step_stream,
+         "redraws": step_redraws, "leak": step_leak}
 _gen = run()
 
 

@@ -122,10 +122,10 @@ def test_random_strokes_undo_redo_jumps_equal_a_model(bpy, addon):
 
 def test_journal_routes_through_the_common_ancestor():
     j = strokes.Journal()
-    a = j.push(strokes.Record())
-    b = j.push(strokes.Record())
+    a = j.push(strokes.empty())
+    b = j.push(strokes.empty())
     j.applied = a                   # undo b
-    c = j.push(strokes.Record())    # new branch
+    c = j.push(strokes.empty())    # new branch
     assert j.route(b) == [("undo", c), ("redo", b)]
     assert j.route(0) == [("undo", c), ("undo", a)]
     j.applied = 0

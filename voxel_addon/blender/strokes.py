@@ -21,55 +21,41 @@ so killing Blender right after a stroke loses nothing that was shown.
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
 
 
-# ---- the world side: the one place that changes blocks ---------------------
-@dataclass
-class Record:
-    """Before and after of every changed voxel: (x, y, z, block, data) tuples."""
-    before: list = field(default_factory=list)
-    after: list = field(default_factory=list)
-
-    def __len__(self):
-        return len(self.after)
-
-    def extend(self, other: "Record") -> None:
-        """Append a later part of the same stroke (undo replays befores in reverse)."""
-        self.before += other.before
-        self.after += other.after
+# ---- the world side: world/edit.py does the work -----------------------------
+def apply(world, changes):
+    """Set `changes` ((x, y, z, block[, data]) tuples) in one transaction, relit and
+    remeshed; returns (payloads for the viewport, world.edit.Record)."""
+    from ..world import edit
+    return edit.edit(world, list(changes))
 
 
-def apply(world, changes) -> tuple[list, Record]:
-    """Set `changes` ((x, y, z, block_id[, data]) tuples) in one transaction;
-    returns (payloads for the viewport, undo record). Unchanged voxels are left out."""
-    from ..core import chunk as C
-    from ..core.errors import VoxelError
-    for x, y, z, *_ in changes:
-        C.check_z(z)  # refuse before anything changes
-    if world.readonly:
-        raise VoxelError(f"{world.file.path} is open read-only")
-    rec = Record()
-    for x, y, z, b, *d in changes:
-        c = world.chunk_at(x >> 4, y >> 4)
-        old = (c.get(x & 15, y & 15, z), 0 if c.data is None else int(c.data[x & 15, y & 15, z]))
-        new = (int(b), int(d[0]) if d else 0)
-        if old == new:
-            continue
-        world.set_block(x, y, z, *new)
-        rec.before.append((x, y, z, *old))
-        rec.after.append((x, y, z, *new))
-    if rec.after:
-        world.flush()
-    return [], rec
+def undo(world, rec) -> list:
+    from ..world import edit
+    return edit.undo(world, rec)
 
 
-def undo(world, rec: Record) -> list:
-    return apply(world, list(reversed(rec.before)))[0]
+def redo(world, rec) -> list:
+    from ..world import edit
+    return edit.redo(world, rec)
 
 
-def redo(world, rec: Record) -> list:
-    return apply(world, rec.after)[0]
+def merge(a, b):
+    """One record for two parts of the same stroke (a drag): each voxel's first
+    before and last after; voxels that ended as they began drop out."""
+    from ..world.edit import Record
+    first, last = dict(zip(a.voxels, a.before)), dict(zip(a.voxels, a.after))
+    for v, bf, af in zip(b.voxels, b.before, b.after):
+        first.setdefault(v, bf)
+        last[v] = af
+    vs = tuple(v for v in first if first[v] != last[v])
+    return Record(vs, tuple(first[v] for v in vs), tuple(last[v] for v in vs))
+
+
+def empty():
+    from ..world.edit import Record
+    return Record((), (), ())
 
 
 # ---- the journal -------------------------------------------------------------
@@ -83,7 +69,7 @@ class Journal:
         self.applied = root      # the stroke whose state the world files hold
         self.next = root + 1
 
-    def push(self, rec: Record, path: str | None = None) -> int:
+    def push(self, rec, path: str | None = None) -> int:
         s = self.next
         self.next += 1
         self.nodes[s] = (self.applied, path, rec)
@@ -142,11 +128,11 @@ def stroke(context, changes) -> int:
     sc = context.scene
     world = begin(context)
     payloads, rec = apply(world, changes)
-    if not len(rec):
+    show(payloads)
+    if not rec.voxels:
         return 0
     commit(sc, rec)
-    show(payloads)
-    return len(rec)
+    return len(rec.voxels)
 
 
 def begin(context):
@@ -159,7 +145,7 @@ def begin(context):
     return world
 
 
-def commit(scene, rec: Record) -> None:
+def commit(scene, rec) -> None:
     """Record a finished stroke: the scene's step names it (Blender's undo keeps that)."""
     import bpy
     scene.voxel_edit.step = journal(scene.voxel_edit.step).push(
@@ -167,19 +153,9 @@ def commit(scene, rec: Record) -> None:
 
 
 def show(payloads) -> None:
-    """Hand new chunk payloads to the live viewport (blender/viewport.py) and redraw."""
+    """Redraw the live viewport: world.edit already queued the payloads on every
+    Stream of the world, so the viewport's next drain takes them in."""
     from . import viewport
-    take = getattr(viewport, "take", None)
-    if take is not None:
-        take(payloads)
-    else:
-        feed = getattr(viewport, "_feed", None)
-        if feed is not None:
-            if feed.stream is None:
-                feed.centre = None      # the whole-area fallback reads the area again
-            else:
-                for p in payloads:
-                    feed.chunks[p.key] = p
     viewport._tag_redraw()
 
 

@@ -141,7 +141,7 @@ class VOXEL_OT_edit_stroke(bpy.types.Operator):
                 a, _Hover.corner = _Hover.corner, None
                 n = strokes.stroke(context, _changes(brush.box(a, cell), self.bid))
                 return {"FINISHED"} if n else {"CANCELLED"}
-            self.rec = strokes.Record()
+            self.rec = strokes.empty()
             self.placed: set = set()
             self.last = None
             self._paint(context, cell)
@@ -166,7 +166,7 @@ class VOXEL_OT_edit_stroke(bpy.types.Operator):
         s = context.scene.voxel_edit
         cells = brush.cells(cell, s.size, s.shape)
         payloads, rec = strokes.apply(self.world, _changes(cells, self.bid))
-        self.rec.extend(rec)
+        self.rec = strokes.merge(self.rec, rec)
         if self.mode == "PLACE":  # paint along the surface, not up a tower of our own
             self.placed.update(cells)
         strokes.show(payloads)
@@ -188,7 +188,7 @@ class VOXEL_OT_edit_stroke(bpy.types.Operator):
 
     def _finish(self, context):
         from .. import strokes
-        if not len(self.rec):
+        if not self.rec.voxels:
             return {"CANCELLED"}
         strokes.commit(context.scene, self.rec)
         return {"FINISHED"}

@@ -286,7 +286,9 @@ class VOXEL_GT_hover(bpy.types.Gizmo):
         return -1
 
     def draw(self, context):
-        draw_hover((context.region.width, context.region.height))
+        vv = getattr(context.scene, "voxel_view", None)
+        if vv is None or not vv.show:  # else the voxel view's overlay hook draws it
+            draw_hover((context.region.width, context.region.height))
 
 
 class VOXEL_GGT_hover(bpy.types.GizmoGroup):
@@ -335,15 +337,26 @@ CLASSES = [VoxelEditSettings, VOXEL_OT_edit, VOXEL_OT_edit_stroke, VOXEL_OT_pick
 SCENE_PROPS = {"voxel_edit": VoxelEditSettings}
 
 
+def _overlay(context):
+    """Drawn by the voxel view right after its frame (voxel depth in the buffer)."""
+    tool = context.workspace.tools.from_space_view3d_mode(context.mode, create=False)
+    if tool is not None and tool.idname == TOOL and context.region is not None:
+        draw_hover((context.region.width, context.region.height))
+
+
 def register():
-    from .. import strokes
+    from .. import strokes, viewport
     strokes.register_handlers()
     bpy.utils.register_tool(VoxelEditTool, separator=True)
+    if _overlay not in viewport.OVERLAYS:
+        viewport.OVERLAYS.append(_overlay)
 
 
 def unregister():
     global _previews
-    from .. import strokes
+    from .. import strokes, viewport
+    if _overlay in viewport.OVERLAYS:
+        viewport.OVERLAYS.remove(_overlay)
     bpy.utils.unregister_tool(VoxelEditTool)
     strokes.unregister_handlers()
     strokes.forget()

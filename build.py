@@ -121,6 +121,7 @@ def setup() -> None:
     setup_apt()
     setup_venv()
     _app().setup()
+    setup_wheels()
 
 
 def task_blender(args) -> int:
@@ -176,12 +177,58 @@ def task_bench(args) -> int:
 
 
 # Wheels bundled into the extension (Blender ships numpy): pyopencl with its pocl
-# CPU device, moderngl and zstandard, with their pure-Python dependencies.
+# CPU device, moderngl and zstandard, with their pure-Python dependencies, for the
+# Pythons of the Blenders we support: 3.11 (official 4.2-5.0 builds) and 3.13 (newer
+# builds, Linux distributions' Blender). Blender installs only the matching ones.
 WHEELS = ["pyopencl==2026.1.4", "pocl-binary-distribution==3.0", "pytools", "platformdirs",
           "typing_extensions", "siphash24", "moderngl==5.13.0", "glcontext==3.1.0",
           "zstandard==0.25.0"]
+WHEEL_PYTHONS = ["3.11", "3.13"]
 WHEEL_PLATFORMS = {"linux-x64": ["manylinux_2_17_x86_64", "manylinux2014_x86_64",
                                  "manylinux_2_28_x86_64"]}
+WHEEL_DIR = ROOT / ".cache" / "wheels"
+# Test tools for the real Blender's Python (.blender/site), versions as in requirements.txt;
+# with their dependencies but not numpy (Blender's own must be the one imported).
+BLENDER_TEST_PACKAGES = ["pytest==9.2.0"]
+BLENDER_TEST_NODEPS = ["matplotlib==3.11.2", "contourpy", "cycler", "fonttools", "kiwisolver",
+                       "pillow", "pyparsing", "python-dateutil", "six"]
+
+
+def _pip_for(python: str, tags, *args) -> None:
+    run([PY, "-m", "pip", *args[:1], "-q", "--disable-pip-version-check", "--only-binary=:all:",
+         "--python-version", python, "--implementation", "cp",
+         *[a for t in tags for a in ("--platform", t)], *args[1:]], env=env())
+
+
+def setup_wheels() -> None:
+    """The extension's wheels in .cache/wheels/<platform> (downloaded once), and
+    .blender/site: pytest and the 3.13 wheels for tests run inside the real Blender."""
+    want = hashlib.sha256(f"{WHEELS} {WHEEL_PYTHONS} {WHEEL_PLATFORMS}".encode()).hexdigest()
+    stamp = WHEEL_DIR / ".stamp"
+    if not (stamp.exists() and stamp.read_text() == want):
+        for platform, tags in WHEEL_PLATFORMS.items():
+            dest = WHEEL_DIR / platform
+            shutil.rmtree(dest, ignore_errors=True)  # no stale versions next to new ones
+            dest.mkdir(parents=True)
+            for python in WHEEL_PYTHONS:
+                log(f"pip download wheels for {platform}, Python {python}")
+                _pip_for(python, tags, "download", "--no-deps", "-d", dest, *WHEELS)
+        stamp.write_text(want)
+    app = _app()
+    site = app.site_packages()
+    want_site = hashlib.sha256(f"{want} {BLENDER_TEST_PACKAGES} {BLENDER_TEST_NODEPS} "
+                               f"{app.PYVER}".encode()).hexdigest()
+    if (site / ".stamp").exists() and (site / ".stamp").read_text() == want_site:
+        return
+    shutil.rmtree(site, ignore_errors=True)
+    tags = WHEEL_PLATFORMS["linux-x64"]
+    log(f"pip install pytest, matplotlib and the extension's wheels into {site} "
+        f"(Python {app.PYVER})")
+    _pip_for(app.PYVER, tags, "install", "--target", site, *BLENDER_TEST_PACKAGES)
+    _pip_for(app.PYVER, tags, "install", "--target", site, "--no-deps", *BLENDER_TEST_NODEPS)
+    _pip_for(app.PYVER, tags, "install", "--target", site, "--no-deps", "--no-index",
+             "--find-links", WHEEL_DIR / "linux-x64", *[w.split("=")[0] for w in WHEELS])
+    (site / ".stamp").write_text(want_site)
 
 
 def task_extension(args) -> int:
@@ -189,14 +236,8 @@ def task_extension(args) -> int:
     setup()
     extra = []
     if "--no-wheels" not in args:
-        for platform, tags in WHEEL_PLATFORMS.items():
-            dest = ROOT / ".cache" / "wheels" / platform
-            dest.mkdir(parents=True, exist_ok=True)
-            log(f"pip download wheels for {platform} into {dest}")
-            run([PY, "-m", "pip", "download", "-q", "--disable-pip-version-check", "--no-deps",
-                 "--only-binary=:all:", "--python-version", "3.11", "--implementation", "cp",
-                 *[a for t in tags for a in ("--platform", t)], "-d", dest, *WHEELS], env=env())
-            extra += ["--wheels", dest, "--platform", platform]
+        for platform in WHEEL_PLATFORMS:
+            extra += ["--wheels", WHEEL_DIR / platform, "--platform", platform]
     rest = [a for a in args if a != "--no-wheels"]
     return subprocess.run([PY, ROOT / "tools" / "extension.py", *extra, *rest], cwd=ROOT,
                           env=env()).returncode

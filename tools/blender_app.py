@@ -217,6 +217,7 @@ export __EGL_VENDOR_LIBRARY_DIRS="$R/usr/share/glvnd/egl_vendor.d"
 export FONTCONFIG_FILE="$H/fonts.conf"
 export POCL_CACHE_DIR="${{POCL_CACHE_DIR:-$U/cache/pocl}}"
 export PYOPENCL_CACHE_DIR="${{PYOPENCL_CACHE_DIR:-$U/cache/pyopencl}}"
+export VOXEL_BLENDER="{LAUNCHER}"
 unset PYTHONPATH PYTHONHOME
 exec "{loader}" --library-path "{libs}" "$R/usr/bin/blender" "$@"
 """)

@@ -182,14 +182,13 @@ def _distance32(ctx, gl):
     """View distance 32 (65 × 65 chunks): the landscape scene's chunk meshes tiled over
     the whole area (the same geometry a real world would have per chunk), light window
     bounded; measured on a small viewport so llvmpipe's raster time stays short."""
-    from .. import opencl
     from ..meshing import build_chunk
     from ..light import daytime
     from ..render import Camera, Settings, source
     from ..render.pipeline import Renderer
     d = 8 if ctx.quick else 32
     a = source.scene_area("landscape")
-    tiles = [[build_chunk(a.blocks[16 * i:16 * i + 18, 16 * j:16 * j + 18], backend="opencl" if opencl.available() else "numpy")
+    tiles = [[build_chunk(a.blocks[16 * i:16 * i + 18, 16 * j:16 * j + 18], backend=None)
               for j in range(4)] for i in range(4)]
     meshes = {(cx, cy): tiles[cx % 4][cy % 4] for cx in range(-d, d + 1) for cy in range(-d, d + 1)}
     s = Settings(distance=d, msaa=1, waving=False)  # CPU side is measured; keep llvmpipe short

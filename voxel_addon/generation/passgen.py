@@ -9,16 +9,10 @@ import numpy as np
 
 from .. import opencl
 from ..core import chunk as C
-from ..core.errors import VoxelError
 from . import noise
 from .base import Generator
 
-BACKENDS = ("opencl", "numpy")
-
-
-def default_backend() -> str:
-    """OpenCL when a device is present, else NumPy."""
-    return "opencl" if opencl.available() else "numpy"
+BACKENDS = opencl.BACKENDS
 
 
 class PassGenerator(Generator):
@@ -27,11 +21,7 @@ class PassGenerator(Generator):
 
     def __init__(self, seed, params=None, backend=None):
         super().__init__(seed, params, backend)
-        if backend not in (None, *BACKENDS):
-            raise VoxelError(f"unknown backend {backend!r} (opencl or numpy)")
-        if backend == "opencl" and not opencl.available():
-            raise VoxelError("backend opencl asked for, but no OpenCL device is available")
-        self.backend_used = backend or default_backend()
+        self.backend_used = opencl.pick(backend, "generation")
         self.backend = self.backend_used
         self.seed32 = noise.seed32(self.seed)
         self.perm = noise.perm_table(self.seed32)

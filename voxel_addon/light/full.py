@@ -10,21 +10,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import opencl
 from ..core import chunk
 from ..core.errors import VoxelError
 from . import flood, model
 
-BACKENDS = ("opencl", "numpy")
 TILE = 8  # interior chunks per tile side in region_light (10x10 solved per 8x8 kept)
-
-
-def pick(backend: str | None) -> str:
-    if backend is None:
-        from .. import opencl
-        return "opencl" if opencl.available() else "numpy"
-    if backend not in BACKENDS:
-        raise VoxelError(f"unknown light backend {backend!r} (known: {', '.join(BACKENDS)})")
-    return backend
 
 
 def _check(blocks: np.ndarray) -> np.ndarray:
@@ -44,7 +35,7 @@ def solve(blocks: np.ndarray, backend: str | None = None) -> np.ndarray:
     out[:, :, z1:] = model.SKY
     out[:, :, :z0] = packed[blocks[:, :, :z0]]
     if z1 > z0:
-        if pick(backend) == "opencl":
+        if opencl.pick(backend, "light") == "opencl":
             from . import cl
             out[:, :, z0:z1] = cl.solve_slab(blocks[:, :, z0:z1])
         else:

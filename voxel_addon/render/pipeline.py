@@ -10,6 +10,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..core import chunk
 from ..core.blocks import REGISTRY
 from . import camera as cam
 from . import sky
@@ -114,16 +115,15 @@ class Renderer:
         light of whole chunks from light_at (default (cx0, cy0)), e.g. (16w, 16h, 256);
         chunks it does not cover get open daylight.
         """
-        from .. import meshing, opencl
-        if backend is None:  # the OpenCL twin builds the same meshes, much faster
-            backend = "opencl" if opencl.available() else "numpy"
+        from .. import meshing
         if not ring:
             pad = np.zeros((blocks.shape[0] + 2, blocks.shape[1] + 2, 256), np.uint16, order="F")
             pad[1:-1, 1:-1] = blocks
             blocks = pad
-        # one batched call for the whole area (meshing README: build_chunks)
+        # one batched call for the whole area (meshing README: build_chunks); backend
+        # None: the OpenCL twin when there is a device (same meshes, much faster)
         meshes = meshing.build_chunks(blocks, (cx0, cy0), method=method, backend=backend)
-        lights = _chunks_of(light, *(light_at or (cx0, cy0)))
+        lights = chunk.cut(light, *(light_at or (cx0, cy0)))
         self.remove_chunks([k for k in self.geo.keys if k not in meshes])
         self.update_chunks(_Chunk(k, m, lights.get(k)) for k, m in meshes.items())
 
@@ -138,7 +138,7 @@ class Renderer:
         """Packed light of whole chunks from (cx0, cy0), e.g. (16w, 16h, 256); the
         volume takes the part inside the light window (outside it surfaces get open
         daylight, the fog hides them)."""
-        for k, v in _chunks_of(light, cx0, cy0).items():
+        for k, v in chunk.cut(light, cx0, cy0).items():
             self.lights[k] = v
             self.vol.forget(k)
         self._vol_key = None
@@ -573,13 +573,6 @@ class _Chunk(NamedTuple):
     key: tuple
     mesh: object
     light: np.ndarray | None
-
-
-def _chunks_of(light: np.ndarray, cx0: int, cy0: int) -> dict:
-    """{(cx, cy): (16, 16, 256) view} of a light array of whole chunks from (cx0, cy0)."""
-    w, h = light.shape[0] // 16, light.shape[1] // 16
-    return {(cx0 + i, cy0 + j): light[16 * i:16 * i + 16, 16 * j:16 * j + 16]
-            for i in range(w) for j in range(h)}
 
 
 def _sun_on_screen(vp, camera, light_dir, w, h, fov):

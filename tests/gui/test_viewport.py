@@ -125,7 +125,7 @@ def test_time_of_day_changes_the_sky(run):
 
 def _cli(world, size, hours=12.0):
     """The CLI's renderer from the job's camera, on a standalone EGL context."""
-    from voxel_addon.core.world import World
+    from voxel_addon.world import World
     from voxel_addon.render import Camera, Settings, source
     from voxel_addon.render.pipeline import Renderer
     s = Settings(distance=4, light_radius=4, fov=CAM[5])
@@ -163,7 +163,7 @@ def test_camera_view_shows_what_the_cli_renders(run, world):
 def test_ortho_top_view_shows_the_rivers_where_the_world_has_water(run, world):
     """Orthographic top view: pixels over columns whose top block is water are blue."""
     from voxel_addon.core.blocks import REGISTRY
-    from voxel_addon.core.world import World
+    from voxel_addon.world import World
     st = run["steps"]["ortho"]
     (ax, ay), (bx, _), (_, cy) = st["corners"][0], st["corners"][1], st["corners"][2]
     w = World.open(world, readonly=True, loader=False)

@@ -25,6 +25,8 @@ OUT, WORLD = Path(ARGS[0]), ARGS[1]
 ONLY = ARGS[2].split(",") if len(ARGS) > 2 else None
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
+for _p in filter(None, [os.environ.get("VOXEL_BLENDER_SITE")]):  # wheels for Blender's Python
+    sys.path.insert(0, _p)
 bpy.context.preferences.view.show_splash = False
 
 RESULT: dict = {"steps": {}}

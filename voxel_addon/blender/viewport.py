@@ -86,115 +86,48 @@ def problem(context) -> str | None:
 
 
 # ---------------------------------------------------------------------- camera
-class ViewCamera:
-    """A render camera from Blender's view and window matrices (perspective or
-    orthographic, off-centre for camera view), duck-typed like render.Camera.
-
-    The pipeline draws with the window's x/y rows but its own near/far (Blender's
-    clip range spoils the G-buffer's depth precision); the composite converts depth."""
-
-    def __init__(self, view, window):
-        self.V = np.array(view, np.float64)
-        self.W = np.array(window, np.float64)
-        self.ortho = abs(self.W[3, 3] - 1.0) < 1e-6
-        inv = np.linalg.inv(self.V)
-        self.x, self.y, self.z = (float(v) for v in inv[:3, 3])
-        f = -inv[:3, 2]
-        self.yaw = math.degrees(math.atan2(f[1], f[0]))
-        self.pitch = math.degrees(math.asin(max(-1.0, min(1.0, f[2]))))
-        self.fov = 70.0 if self.ortho else math.degrees(2 * math.atan(1.0 / self.W[1, 1]))
-        self.aspect = 1.0
-        if self.ortho:
-            self.near = -1.0
-        else:  # Blender's near as given, but not so close it eats the depth buffer
-            n = self.W[2, 3] / (self.W[2, 2] - 1.0)
-            self.near = max(float(n), 0.05)
-        self.far = 600.0
-
-    @property
-    def pos(self):
-        return np.array([self.x, self.y, self.z])
-
-    def proj(self):
-        P = self.W.copy()
-        n, f = (-self.far, self.far) if self.ortho else (self.near, self.far)
-        if self.ortho:
-            P[2, :] = (0.0, 0.0, -2 / (f - n), -(f + n) / (f - n))
-        else:
-            P[2, 2], P[2, 3] = (f + n) / (n - f), 2 * f * n / (n - f)
-        return P
-
-    def matrices(self):
-        vp = self.proj() @ self.V
-        return vp, np.linalg.inv(vp)
-
-    def corners(self, far=None):
-        """The view's 8 world corners from the eye's plane (ortho) or near plane
-        (perspective) to view depth `far`."""
-        P = self.proj()
-        ip, iv = np.linalg.inv(P), np.linalg.inv(self.V)
-        out = []
-        n0 = 0.0 if self.ortho else self.near
-        f0 = self.far if far is None else far
-        lo, hi = (-self.far, self.far) if self.ortho else (self.near, self.far)
-        for depth in (n0, f0):
-            t = (depth - lo) / (hi - lo)
-            for i, j in ((-1, -1), (1, -1), (-1, 1), (1, 1)):
-                a = ip @ (i, j, -1.0, 1.0)
-                b = ip @ (i, j, 1.0, 1.0)
-                p = a[:3] / a[3] + (b[:3] / b[3] - a[:3] / a[3]) * t
-                w = iv @ (*p, 1.0)
-                out.append(tuple(float(v) for v in w[:3]))
-        return out
+def view_camera(view, window, far: float):
+    """render.Camera for Blender's region matrices with the window's x/y rows but
+    our own near/far: Blender's clip range (0.01..1000 by default) would spoil the
+    G-buffer's depth precision; the composite converts depth to Blender's projection."""
+    from ..render import Camera
+    P = np.array(window, np.float64)
+    if abs(P[3, 3] - 1.0) < 1e-6:  # orthographic: the eye's plane is arbitrary, look both ways
+        n, f = -far, far
+        P[2, :] = (0.0, 0.0, -2 / (f - n), -(f + n) / (f - n))
+    else:
+        n = max(float(P[2, 3] / (P[2, 2] - 1.0)), 0.05)
+        P[2, 2], P[2, 3] = (far + n) / (n - far), 2 * far * n / (n - far)
+    return Camera.from_matrices(np.array(view, np.float64), P)
 
 
 # ---------------------------------------------------------------------- CPU side
 class _Feed:
-    """The chunks of one world to show, shared by every GL context: a Stream when
-    the world layer has one (nearest first, in the background), else the whole
-    area around the view read at once when the view enters another chunk."""
+    """The chunks of one world to show, shared by every GL context: payloads from a
+    world.Stream (nearest first, made in its background thread)."""
 
     def __init__(self, path, world, distance):
+        from ..world import Stream
         self.path, self.world, self.distance = path, world, distance
-        self.chunks: dict = {}   # key -> payload (.key, .mesh, .light, .version)
-        self.gone: set = set()
-        self.area = None         # fallback: render.source.Area and its serial
-        self.serial = 0
-        self.centre = None
-        try:
-            from ..world.stream import Stream
-        except ImportError:
-            self.stream = None
-        else:
-            self.stream = Stream(world, distance)
+        self.chunks: dict = {}   # key -> Payload (.key, .mesh, .light, .version)
+        self.stream = Stream(world, distance)
 
     def update(self, x, y, direction, budget):
         """Take in what is ready; returns whether more is on its way."""
-        if self.stream is not None:
-            self.stream.set_view(x, y, direction)
-            ready, gone = self.stream.drain(budget)
-            for p in ready:
-                self.chunks[p.key] = p
-            for k in gone:
-                self.chunks.pop(k, None)
-            self.gone.update(gone)
-            wanted, _, drawn = self.stream.counts
-            STATUS["wanted"] = wanted
-            return len(self.chunks) < wanted
-        from ..render import source
-        c = (math.floor(x) >> 4, math.floor(y) >> 4)
-        if c != self.centre:
-            self.centre = c
-            self.area = source.world_area(self.world, x, y, self.distance,
-                                          min(8, self.distance))
-            self.serial += 1
-        STATUS["wanted"] = (2 * self.distance + 1) ** 2
-        return False
+        self.stream.set_view(x, y, direction)
+        ready, gone = self.stream.drain(budget)
+        for p in ready:
+            self.chunks[p.key] = p
+        for k in gone:
+            self.chunks.pop(k, None)
+        if self.stream.error is not None:
+            raise self.stream.error
+        wanted = self.stream.counts[0]
+        STATUS["wanted"] = wanted
+        return len(self.chunks) < wanted
 
     def close(self):
-        if self.stream is not None:
-            self.stream.close()
-            self.stream = None
+        self.stream.close()
         self.chunks.clear()
 
 
@@ -207,8 +140,6 @@ def _feed_for(scene):
         if _feed is not None:
             _feed.close()
         _feed = _Feed(scene.voxel.path, world, vv.distance)
-        for g in _gpus.values():
-            g.reset_chunks()
     return _feed
 
 
@@ -231,23 +162,16 @@ class _Gpu:
         self.native = native
         self.r = Renderer(self.ctx, Settings())
         self.versions: dict = {}
-        self.serial = None
+        self.feed = None
         self._comp: dict = {}
         self._vao: dict = {}
-
-    def reset_chunks(self):
-        self.versions.clear()
-        self.serial = None
 
     def sync(self, feed) -> int:
         """Upload what changed in the feed; returns the number of chunks drawn."""
         r = self.r
-        if feed.stream is None:
-            if feed.serial != self.serial and feed.area is not None:
-                a = feed.area
-                r.set_area(a.blocks, a.light, a.cx0, a.cy0, ring=True, light_at=a.light_at)
-                self.serial = feed.serial
-            return STATUS["wanted"] if self.serial is not None else 0
+        if self.feed is not feed:  # another world or distance: nothing of ours stays
+            self.feed = feed
+            self.versions = {k: None for k in self.versions}
         gone = [k for k in self.versions if k not in feed.chunks]
         if gone:
             r.remove_chunks(gone)
@@ -350,15 +274,13 @@ def _frame(context, scene, vv):
         st.view, st.changed = view, now
     moving = now - st.changed < STILL_S
     draft = vv.quality == "draft" or (vv.quality == "auto" and moving)
-    cam = ViewCamera(rv3d.view_matrix, rv3d.window_matrix)
-    fwd = (-cam.V[2, 0], -cam.V[2, 1])
-    feed = _feed_for(scene)
-    loading = feed.update(cam.x, cam.y, fwd, BUDGET_S)
-    native = _native()
     s = settings_of(vv, draft)
-    s.fov = min(150.0, max(10.0, cam.fov))
-    if cam.ortho:
-        s.godrays = False
+    cam = view_camera(rv3d.view_matrix, rv3d.window_matrix, s.distance * 16 * 1.5 + 256.0)
+    if not cam.ortho:
+        s.fov = min(150.0, max(10.0, cam.fov))
+    feed = _feed_for(scene)
+    loading = feed.update(cam.x, cam.y, cam.forward, BUDGET_S)
+    native = _native()
     host_vp = np.array(rv3d.perspective_matrix, np.float64)
     hours = hours_of(scene)
     t_py = time.perf_counter() - t0

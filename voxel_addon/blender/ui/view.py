@@ -36,7 +36,7 @@ VoxelViewSettings = type("VoxelViewSettings", (bpy.types.PropertyGroup,), {"__an
     "hours": FloatProperty(name="Time of Day", default=12.0, min=0.0, max=24.0, update=_redraw,
                            description="Hours (0 midnight, 12 noon); animatable"),
     "follow_timeline": BoolProperty(name="Follow Timeline", default=False, update=_redraw,
-                                    description="The day cycle follows the current frame"),
+                                    description="The day cycle follows the current frame (Time of Day at the first frame)"),
     "frames_per_day": IntProperty(name="Frames per Day", default=240, min=1, update=_redraw,
                                   description="Frames of one day when following the timeline"),
     "quality": EnumProperty(name="Quality", default="auto", update=_redraw, items=[
@@ -56,10 +56,12 @@ VoxelViewSettings = type("VoxelViewSettings", (bpy.types.PropertyGroup,), {"__an
 
 
 def hours_of(scene) -> float:
-    """The view's time of day: the property, or the frame when following the timeline."""
+    """The view's time of day: the property, or when following the timeline the
+    property at the scene's first frame plus a day per frames_per_day frames."""
     v = scene.voxel_view
     if v.follow_timeline:
-        return (scene.frame_current / v.frames_per_day * 24.0 + v.hours) % 24.0
+        days = (scene.frame_current - scene.frame_start) / v.frames_per_day
+        return (v.hours + 24.0 * days) % 24.0
     return v.hours
 
 
@@ -148,6 +150,7 @@ class VOXEL_PT_view(bpy.types.Panel):
         col.prop(v, "quality")
         col.separator()
         col.operator(VOXEL_OT_render_view.bl_idname, icon="RENDER_STILL")
+        col.operator("voxel.render_animation", icon="RENDER_ANIMATION")
 
 
 class VOXEL_PT_view_effects(bpy.types.Panel):

@@ -22,6 +22,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / ".blender" / "site"))  # moderngl for the voxel view (Python 3.13)
 
 import bpy  # noqa: E402
 from mathutils import Quaternion, Vector  # noqa: E402
@@ -355,6 +356,111 @@ def case_interleave(w):
             break
 
 
+def xshot(name):
+    """The X screen (what a person sees) as OUT/name.png, and as an (H, W, 3) array."""
+    import subprocess
+    import numpy as np
+    path = OUT / f"{name}.png"
+    subprocess.run(f"xwd -root -silent | xwdtopnm 2>/dev/null | pnmtopng > {path}",
+                   shell=True, check=True)
+    img = bpy.data.images.load(str(path))
+    px = np.empty(img.size[0] * img.size[1] * 4, np.float32)
+    img.pixels.foreach_get(px)
+    h, w = img.size[1], img.size[0]
+    bpy.data.images.remove(img)
+    return (px.reshape(h, w, 4)[::-1, :, :3] * 255).round()   # top row first
+
+
+def screen_xy(at):
+    """Region pixel -> screenshot pixel (x, y from the top)."""
+    win, _, region, _ = view3d()
+    return region.x + at[0], win.height - (region.y + at[1])
+
+
+def wait_frames(n=2, timeout=120.0):
+    from voxel_addon.blender import viewport
+    t0 = time.time()
+    start = viewport.STATUS["frames"]
+    while time.time() - t0 < timeout:
+        view3d()[1].tag_redraw()
+        s = viewport.STATUS
+        if s["frames"] >= start + n and s["drawn"] >= s["wanted"] > 0 and s["quality"] == "full":
+            return
+        if s["error"]:
+            raise RuntimeError(s["error"])
+        yield 2
+    raise RuntimeError(f"timed out waiting for frames: {viewport.STATUS}")
+
+
+def case_pixels(w):
+    """The voxel view shows a click; Ctrl+Z / Ctrl+Shift+Z give the pictures back; a
+    fast drag paints every cell on its way."""
+    import numpy as np
+    from voxel_addon.blender import viewport
+    sc = bpy.context.scene
+    sc.voxel_edit.block = "stone"
+    set_view(True, dist=20.0)
+    _, _, _, space = view3d()
+    space.overlay.show_overlays = False
+    vv = sc.voxel_view
+    vv.distance, vv.hours, vv.quality = 3, 12.0, "full"
+    vv.show = True
+    bpy.ops.ed.undo_push(message="show the voxel view")  # as ticking Show in the panel does
+    yield from wait_frames(3)
+    rng = random.Random(8)
+    at, cell = good_pixel(rng, TOP, margin=0.3)
+    corner = (5, 5)
+    move(corner)
+    yield from wait_frames()
+    before = xshot("px_before")
+    yield from click(at)
+    move(corner)
+    yield from wait_frames()
+    after = xshot("px_after")
+    sx, sy = screen_xy(at)
+    win = (slice(sy - 3, sy + 4), slice(sx - 3, sx + 4))
+    d = np.abs(after - before)
+    check("pixels_click_shows_the_block", d[win].mean() > 20, d[win].mean())
+    check("pixels_cell_placed", file_block(*cell) == "stone", file_block(*cell))
+    yield from key("Z", ctrl=True)
+    move(corner)
+    yield from wait_frames()
+    undone = xshot("px_undo")
+    e = np.abs(undone - before)
+    check("pixels_ctrl_z_restores_the_picture", e.mean() < 0.5 and np.percentile(e, 99.9) < 8,
+          (e.mean(), np.percentile(e, 99.9)))
+    yield from key("Z", ctrl=True, shift=True)
+    move(corner)
+    yield from wait_frames()
+    redone = xshot("px_redo")
+    e = np.abs(redone - after)
+    check("pixels_ctrl_shift_z_shows_it_again", e.mean() < 0.5 and np.percentile(e, 99.9) < 8,
+          (e.mean(), np.percentile(e, 99.9)))
+    # a fast drag: every move event queued at once (Blender merges them), no cell missed
+    _, _, region, _ = view3d()
+    y = region.height // 2 + 37
+    xs = list(range(region.width // 2 - 250, region.width // 2 + 250, 25))
+    cells = sorted({surface_cell(x, y, TOP)[0] for x in range(xs[0], xs[-1] + 1)})
+    cells = [c for c in cells if file_block(*c) in ("air", None)]
+    step = bpy.context.scene.voxel_edit.step
+    snap = file_snapshot()
+    move((xs[0], y))
+    yield 2
+    t0 = time.perf_counter()
+    ev("LEFTMOUSE", "PRESS", at=(xs[0], y))
+    for x in xs[1:]:
+        move((x, y))
+    ev("LEFTMOUSE", "RELEASE", at=(xs[-1], y))
+    while bpy.context.scene.voxel_edit.step == step and time.perf_counter() - t0 < 30:
+        yield 0.02
+    got = diff(snap, file_snapshot())
+    check("paint_fast_drag_drops_nothing", len(cells) > 8 and set(cells) <= set(got),
+          (len(cells), len(got)))
+    check("paint_one_stroke", bpy.context.scene.voxel_edit.step == step + 1)
+    yield from wait_frames()
+    xshot("px_paint")
+
+
 def case_kill(w):
     """A stroke, then SIGKILL at once: the file must hold it (the test reads it)."""
     set_view(True, dist=30.0)
@@ -380,7 +486,7 @@ def warm_up(case):
     yield from case
 
 
-CASES = {"click": case_click, "drag": case_drag, "blocked": case_blocked,
+CASES = {"pixels": case_pixels, "click": case_click, "drag": case_drag, "blocked": case_blocked,
          "interleave": case_interleave, "kill": case_kill}
 
 

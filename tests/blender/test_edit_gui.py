@@ -58,7 +58,7 @@ def _ok(p, res):
     assert "Traceback" not in p.stdout + p.stderr, (p.stdout + p.stderr)[-3000:]
 
 
-@pytest.mark.parametrize("case", ["click", "drag", "blocked", "interleave"])
+@pytest.mark.parametrize("case", ["click", "drag", "blocked", "interleave", "pixels"])
 def test_tool(display, tmp_path, case):
     p, res = run_case(display, tmp_path, case)
     _ok(p, res)

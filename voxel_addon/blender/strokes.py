@@ -24,11 +24,20 @@ import os
 
 
 # ---- the world side: world/edit.py does the work -----------------------------
+STATS = {"edits": 0, "voxels": 0, "ms": 0.0, "last_ms": 0.0}  # the edit path's own time
+
+
 def apply(world, changes):
     """Set `changes` ((x, y, z, block[, data]) tuples) in one transaction, relit and
     remeshed; returns (payloads for the viewport, world.edit.Record)."""
+    import time
     from ..world import edit
-    return edit.edit(world, list(changes))
+    t = time.perf_counter()
+    out = edit.edit(world, list(changes))
+    ms = (time.perf_counter() - t) * 1e3
+    STATS.update(edits=STATS["edits"] + 1, voxels=STATS["voxels"] + len(out[1].voxels),
+                 ms=STATS["ms"] + ms, last_ms=ms)
+    return out
 
 
 def undo(world, rec) -> list:

@@ -7,6 +7,7 @@ import bpy
 from bpy.props import BoolProperty, EnumProperty, IntProperty, IntVectorProperty, StringProperty
 
 TOOL = "voxel.edit_tool"
+PAINT_STEP_PX = 4  # a drag is sampled at least this densely along the mouse's path
 SHAPE_ITEMS = [("CUBE", "Cube", "A cube of size³ blocks"),
                ("SPHERE", "Sphere", "A ball of diameter size")]
 
@@ -142,9 +143,10 @@ class VOXEL_OT_edit_stroke(bpy.types.Operator):
                 n = strokes.stroke(context, _changes(brush.box(a, cell), self.bid))
                 return {"FINISHED"} if n else {"CANCELLED"}
             self.rec = strokes.empty()
+            self.xy = (event.mouse_region_x, event.mouse_region_y)
             self.placed: set = set()
             self.last = None
-            self._paint(context, cell)
+            self._paint(context, [cell])
         except VoxelError as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
@@ -157,14 +159,19 @@ class VOXEL_OT_edit_stroke(bpy.types.Operator):
         chunk.check_z(cell[2])
         return cell
 
-    def _paint(self, context, cell):
+    def _paint(self, context, centres):
+        """One world edit for the brushes at every new centre (a drag's samples since
+        the last event are batched: one relight and remesh for all of them)."""
         from .. import strokes
         from ...core import brush
-        if cell == self.last:
-            return
-        self.last = cell
         s = context.scene.voxel_edit
-        cells = brush.cells(cell, s.size, s.shape)
+        cells: dict = {}
+        for c in centres:
+            if c != self.last:
+                self.last = c
+                cells.update(dict.fromkeys(brush.cells(c, s.size, s.shape)))
+        if not cells:
+            return
         payloads, rec = strokes.apply(self.world, _changes(cells, self.bid))
         self.rec = strokes.merge(self.rec, rec)
         if self.mode == "PLACE":  # paint along the surface, not up a tower of our own
@@ -172,14 +179,25 @@ class VOXEL_OT_edit_stroke(bpy.types.Operator):
         strokes.show(payloads)
 
     def modal(self, context, event):
+        from .. import pick
         from ...core.errors import VoxelError
         if event.type in {"MOUSEMOVE", "INBETWEEN_MOUSEMOVE"}:
-            t = _target(context, self.world, event, self.placed)
-            if t.hit is not None:
-                try:
-                    self._paint(context, self._cell(t.hit))
-                except VoxelError:
-                    pass  # off the world's top or bottom mid-drag: skip that sample
+            # Blender merges fast mouse moves: walk the segment since the last sample
+            # in steps of a few pixels so a quick drag leaves no gap.
+            x1, y1 = event.mouse_region_x, event.mouse_region_y
+            x0, y0 = self.xy
+            n = max(1, int(max(abs(x1 - x0), abs(y1 - y0)) / PAINT_STEP_PX))
+            centres = []
+            for i in range(1, n + 1):
+                co = (x0 + (x1 - x0) * i / n, y0 + (y1 - y0) * i / n)
+                t = pick.target(context, self.world, co, self.placed)
+                if t.hit is not None:
+                    try:
+                        centres.append(self._cell(t.hit))
+                    except VoxelError:
+                        pass  # off the world's top or bottom mid-drag: skip that sample
+            self._paint(context, centres)
+            self.xy = (x1, y1)
             return {"RUNNING_MODAL"}
         if (event.type == "LEFTMOUSE" and event.value == "RELEASE") or \
                 event.type in {"ESC", "RIGHTMOUSE"}:

@@ -269,11 +269,34 @@ def case_drag(w):
     yield 2
     got = diff(before, file_snapshot())
     check("drag_paints_the_row", got == cells, f"{len(got)} cells vs {len(cells)}")
-    check("drag_is_one_stroke", sc.voxel_edit.step == step + 1 or
-          (sc.voxel_edit.step != step and len(got) > 1), (step, sc.voxel_edit.step))
+    check("drag_recorded", sc.voxel_edit.step != step, (step, sc.voxel_edit.step))
     shot("drag")
     yield from key("Z", ctrl=True)
     check("drag_one_ctrl_z_undoes_it_all", diff(before, file_snapshot()) == [])
+    # box mode: one corner, then the opposite one; Shift clears the box it spans
+    sc = bpy.context.scene
+    sc.voxel_edit.box = True
+    rng = random.Random(2)
+    a, ca = good_pixel(rng, TOP)
+    b, cb = good_pixel(rng, TOP)
+    while abs(ca[0] - cb[0]) > 6 or abs(ca[1] - cb[1]) > 6 or ca == cb:
+        b, cb = good_pixel(rng, TOP)
+    box = sorted((x, y, TOP + 1) for x in range(min(ca[0], cb[0]), max(ca[0], cb[0]) + 1)
+                 for y in range(min(ca[1], cb[1]), max(ca[1], cb[1]) + 1))
+    before, step = file_snapshot(), sc.voxel_edit.step
+    yield from click(a)
+    check("box_first_corner_changes_nothing", diff(before, file_snapshot()) == [])
+    yield from click(b)
+    check("box_fills", diff(before, file_snapshot()) == box, (len(box), diff(before, file_snapshot())[:4]))
+    shot("box")
+    yield from key("Z", ctrl=True)
+    check("box_one_ctrl_z_undoes_it", diff(before, file_snapshot()) == [])
+    yield from key("Z", ctrl=True, shift=True)
+    check("box_ctrl_shift_z_redoes_it", diff(before, file_snapshot()) == box)
+    yield from click(a, shift=True)
+    yield from click(b, shift=True)
+    check("box_shift_clears", diff(before, file_snapshot()) == [], diff(before, file_snapshot())[:4])
+    bpy.context.scene.voxel_edit.box = False
 
 
 def case_blocked(w):
@@ -302,6 +325,12 @@ def case_blocked(w):
           sc.voxel_edit.step == step)
     shot("blocked")
     bpy.data.objects.remove(bpy.data.objects["Cube"])
+    # far away, where no chunk is loaded
+    set_view(True, loc=(5000.0, 5000.0, None), dist=30.0)
+    yield 3
+    yield from click(centre)
+    check("unloaded_click_changes_nothing", diff(before, file_snapshot()) == [] and
+          sc.voxel_edit.step == step)
 
 
 def case_interleave(w):
@@ -413,6 +442,14 @@ def case_pixels(w):
     move(corner)
     yield from wait_frames()
     before = xshot("px_before")
+    # hovering outlines the face under the mouse (white lines, over the terrain)
+    move(at)
+    yield from wait_frames()
+    hover = xshot("px_hover")
+    sx, sy = screen_xy(at)
+    near = (slice(sy - 40, sy + 41), slice(sx - 40, sx + 41))
+    white = ((hover[near] > 215).all(-1) & ~(before[near] > 215).all(-1)).sum()
+    check("hover_outlines_the_face", white > 40, white)
     yield from click(at)
     move(corner)
     yield from wait_frames()
@@ -456,7 +493,7 @@ def case_pixels(w):
     got = diff(snap, file_snapshot())
     check("paint_fast_drag_drops_nothing", len(cells) > 8 and set(cells) <= set(got),
           (len(cells), len(got)))
-    check("paint_one_stroke", bpy.context.scene.voxel_edit.step == step + 1)
+    check("paint_recorded", bpy.context.scene.voxel_edit.step != step)
     yield from wait_frames()
     xshot("px_paint")
 

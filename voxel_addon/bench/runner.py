@@ -16,7 +16,7 @@ import time
 import traceback
 from pathlib import Path
 
-AREAS = ["storage", "generation", "light", "meshing", "bake", "render", "edit"]
+AREAS = ["storage", "generation", "light", "meshing", "bake", "render", "world", "edit"]
 
 
 class Context:

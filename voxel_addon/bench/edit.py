@@ -1,5 +1,5 @@
 """Edit bench (issue 13): the Voxel Edit tool in the real Blender GUI under Xvfb at
-1280x720 on llvmpipe, driven by simulated events (edit_job.py), the voxel view shown.
+1280x720 on llvmpipe, driven by simulated events (tools/edit_bench_job.py), the voxel view shown.
 
 Rows: click -> the first voxel frame drawn after it (median, p90), the stroke path's
 own time per click (world edit: relight, remesh, one transaction), the frame time
@@ -16,7 +16,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-JOB = Path(__file__).with_name("edit_job.py")
+JOB = ROOT / "tools" / "edit_bench_job.py"  # bpy code: runs inside Blender, outside the package
 
 
 def run(ctx):

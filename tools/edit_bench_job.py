@@ -1,7 +1,7 @@
-"""Blender side of bench/edit.py: runs in the real Blender GUI under Xvfb with
+"""Blender side of voxel_addon/bench/edit.py: runs in the real Blender GUI under Xvfb with
 --enable-event-simulate.
 
-    blender --factory-startup --enable-event-simulate -P edit_job.py -- OUT CLICKS
+    blender --factory-startup --enable-event-simulate -P tools/edit_bench_job.py -- OUT CLICKS
 
 A flat world seen from the top (orthographic), the voxel view shown, the Voxel Edit
 tool active; frame end times come from the view's OVERLAYS hook.
@@ -20,7 +20,7 @@ import bpy
 
 ARGS = sys.argv[sys.argv.index("--") + 1:]
 OUT, CLICKS = Path(ARGS[0]), int(ARGS[1])
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[1]
 for p in (os.environ.get("VOXEL_BLENDER_SITE"), str(ROOT / ".blender" / "site"), str(ROOT)):
     if p and p not in sys.path:
         sys.path.insert(0, p)

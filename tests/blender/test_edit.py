@@ -163,3 +163,21 @@ def test_register_twice_leaves_no_handler(bpy):
         voxel_addon.register()
         voxel_addon.unregister()
     assert [len(h) for h in (bpy.app.handlers.undo_post, bpy.app.handlers.redo_post)] == before
+
+
+def test_hover_outline_geometry(bpy, addon):
+    from voxel_addon.blender.ui.edit import outline
+    from voxel_addon.core.ray import Hit
+    top = Hit("hit", (5, 6, 10), (0, 0, 1), 3.0, 1)
+    pts = outline(top)
+    assert len(pts) == 8
+    assert all(p[2] == pytest.approx(11.004) for p in pts)
+    assert {(p[0], p[1]) for p in pts} == {(5, 6), (6, 6), (6, 7), (5, 7)}
+    side = Hit("hit", (5, 6, 10), (-1, 0, 0), 3.0, 1)
+    assert all(p[0] == pytest.approx(4.996) for p in outline(side))
+    # a size-3 brush covers the 3x3 cells around the hovered one; size 2 grows to +x +y
+    assert {(p[0], p[1]) for p in outline(top, size=3)} == {(4, 5), (7, 5), (7, 8), (4, 8)}
+    assert {(p[0], p[1]) for p in outline(top, size=2)} == {(5, 6), (7, 6), (7, 8), (5, 8)}
+    box = outline(top, corner=(3, 6, 11))   # box mode: from the first corner to the new cell
+    xs, zs = {p[0] for p in box}, {p[2] for p in box}
+    assert len(box) == 24 and xs == {3, 6} and zs == {11, 12}

@@ -235,9 +235,10 @@ class VOXEL_OT_pick_block(bpy.types.Operator):
 
 
 # ---- hover outline ---------------------------------------------------------
-def outline(hit, corner=None):
-    """Line segment end points (pairs) outlining the hovered face, or the box from
-    `corner` to the hovered cell, pushed a little toward the eye so depth tests pass."""
+def outline(hit, corner=None, size: int = 1):
+    """Line segment end points (pairs) outlining the hovered face (grown to the
+    brush's footprint on that face), or the box from `corner` to the hovered cell,
+    pushed a little toward the eye so depth tests pass."""
     if corner is not None:
         c = hit.before if hit.before is not None else hit.cell
         lo = [min(a, b) for a, b in zip(corner, c)]
@@ -250,8 +251,9 @@ def outline(hit, corner=None):
     u, v = [i for i in range(3) if i != ax]
     base = [float(c) for c in hit.cell]
     base[ax] += (1.0 if hit.normal[ax] > 0 else 0.0) + 0.004 * hit.normal[ax]
+    lo, hi = -((size - 1) // 2), size // 2 + 1   # core.brush's extent
     quad = []
-    for du, dv in ((0, 0), (1, 0), (1, 1), (0, 1)):
+    for du, dv in ((lo, lo), (hi, lo), (hi, hi), (lo, hi)):
         p = list(base)
         p[u] += du
         p[v] += dv
@@ -259,13 +261,16 @@ def outline(hit, corner=None):
     return [quad[i] for k in range(4) for i in (k, (k + 1) % 4)]
 
 
-def draw_hover(region_size) -> None:
+def draw_hover(context) -> None:
     import gpu
     from gpu_extras.batch import batch_for_shader
-    if _Hover.hit is None or _Hover.hit.normal is None:
+    if _Hover.hit is None or _Hover.hit.normal is None or context.region is None:
         return
+    s = context.scene.voxel_edit
+    pts = outline(_Hover.hit, _Hover.corner, 1 if s.box else s.size)
+    region_size = (context.region.width, context.region.height)
     sh = gpu.shader.from_builtin("POLYLINE_UNIFORM_COLOR")
-    batch = batch_for_shader(sh, "LINES", {"pos": outline(_Hover.hit, _Hover.corner)})
+    batch = batch_for_shader(sh, "LINES", {"pos": pts})
     gpu.state.depth_test_set("LESS_EQUAL")
     gpu.state.blend_set("ALPHA")
     sh.bind()
@@ -306,7 +311,7 @@ class VOXEL_GT_hover(bpy.types.Gizmo):
     def draw(self, context):
         vv = getattr(context.scene, "voxel_view", None)
         if vv is None or not vv.show:  # else the voxel view's overlay hook draws it
-            draw_hover((context.region.width, context.region.height))
+            draw_hover(context)
 
 
 class VOXEL_GGT_hover(bpy.types.GizmoGroup):
@@ -358,8 +363,8 @@ SCENE_PROPS = {"voxel_edit": VoxelEditSettings}
 def _overlay(context):
     """Drawn by the voxel view right after its frame (voxel depth in the buffer)."""
     tool = context.workspace.tools.from_space_view3d_mode(context.mode, create=False)
-    if tool is not None and tool.idname == TOOL and context.region is not None:
-        draw_hover((context.region.width, context.region.height))
+    if tool is not None and tool.idname == TOOL:
+        draw_hover(context)
 
 
 def register():

@@ -92,6 +92,11 @@ def available() -> bool:
 BACKENDS = ("opencl", "numpy")  # every kernel's OpenCL twin and its NumPy reference
 
 
+def usable() -> list[str]:
+    """The backends this machine can run, the NumPy reference first (benches, tests)."""
+    return ["numpy"] + (["opencl"] if available() else [])
+
+
 def pick(backend: str | None = None, what: str = "") -> str:
     """The one backend choice of generation, light and meshing: None means OpenCL when
     a device is present, else NumPy; a name is checked (VoxelError for an unknown one,

@@ -31,7 +31,7 @@ def run(ctx):
     n = 6 if ctx.quick else 10
     b, kind = _terrain(n, ctx)
     inner = (n - 2) ** 2
-    backends = ["numpy"] + (["opencl"] if opencl.available() else [])
+    backends = opencl.usable()
     rates = {}
     for be in backends:
         full.region_light(b, be)  # warm-up (kernel build)

@@ -48,7 +48,7 @@ def _wide(n):
 
 def run(ctx):
     areas = {n: scenes.blocks(n) for n in scenes.SCENES}
-    backends = ["numpy"] + (["opencl"] if opencl.available() else [])
+    backends = opencl.usable()
     best = backends[-1]
     reps = 1 if ctx.quick else 3
     land = areas["landscape"]

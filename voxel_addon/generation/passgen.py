@@ -34,11 +34,11 @@ class PassGenerator(Generator):
     def _run(self, keys, want=()):
         if self.backend_used == "opencl":
             if self._runner is None:
-                from .cl_exec import Runner
+                from .cl import Runner
                 self._runner = Runner(self.units)
             return self._runner.run(keys, self.seed32, self.perm, want)
-        from .np_exec import Run
-        return Run(self.units, self.seed32, self.perm).run(keys, want)
+        from .execute import Runner
+        return Runner(self.units).run(keys, self.seed32, self.perm, want)
 
     def _batches(self, keys, want=()):
         keys = [(int(a), int(b)) for a, b in keys]

@@ -39,11 +39,11 @@ def solve(blocks: np.ndarray, backend: str | None = None) -> np.ndarray:
             from . import cl
             out[:, :, z0:z1] = cl.solve_slab(blocks[:, :, z0:z1])
         else:
-            out[:, :, z0:z1] = solve_slab_numpy(blocks[:, :, z0:z1])
+            out[:, :, z0:z1] = solve_slab(blocks[:, :, z0:z1])
     return out
 
 
-def solve_slab_numpy(blocks: np.ndarray) -> np.ndarray:
+def solve_slab(blocks: np.ndarray) -> np.ndarray:
     """Light of a (W, H, Z) slab with open sky right above it and dark air around:
     start values, then flood.py from every voxel that can raise a neighbour."""
     w, h, zs = blocks.shape

@@ -145,9 +145,7 @@ class Renderer:
 
     def _shown(self) -> None:
         """The shown chunks changed: their box (self.area), the light window again."""
-        ks = np.array(list(self.geo.keys), int).reshape(-1, 2)
-        self.area = (tuple(int(v) for v in (*ks.min(0), *(ks.max(0) + 1)))
-                     if len(ks) else None)
+        self.area = self.geo.bounds()
         self._vol_key = None
 
     def _sync_light(self, camera) -> None:
@@ -328,7 +326,7 @@ class Renderer:
             geo.barrier()
         for prog in G.volume:
             self.vol.uniforms(prog)
-        return _Frame(T, G, view, cast if shadows else None, geo)
+        return _Frame(T, G, view, cast if shadows else None, geo, layers, use_oit, ssao, dof)
 
     def submit(self, f: "_Frame") -> None:
         """Run the passes of a prepared frame."""
@@ -485,12 +483,29 @@ class Renderer:
 
 
 class _Frame:
-    """What prepare() made for submit(): targets, passes, batches."""
-    __slots__ = ("T", "G", "view", "cast", "stats")
+    """What prepare() made for submit(): targets, passes, batches, switches. A host
+    that composites the frame itself (blender/viewport) reads `color` (the final RGBA8
+    texture), `depth` (the opaque G-buffer depth, multisampled under MSAA: T["ms"]
+    samples) and `blend_depth` (the nearest transparent surface's depth when peeling
+    drew one, else None; OIT writes no depth)."""
+    __slots__ = ("T", "G", "view", "cast", "stats", "layers", "use_oit", "ssao", "dof")
 
-    def __init__(self, T, G, view, cast, geo):
+    def __init__(self, T, G, view, cast, geo, layers, use_oit, ssao, dof):
         self.T, self.G, self.view, self.cast = T, G, view, cast
+        self.layers, self.use_oit, self.ssao, self.dof = layers, use_oit, ssao, dof
         self.stats = Stats(geo)
+
+    @property
+    def color(self):
+        return self.T["out"]
+
+    @property
+    def depth(self):
+        return self.T["g"]["depth"]
+
+    @property
+    def blend_depth(self):
+        return self.T["peel"][0]["depth"] if self.layers else None
 
 
 class _Graph:

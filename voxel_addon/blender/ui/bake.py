@@ -5,8 +5,6 @@ from __future__ import annotations
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntVectorProperty, StringProperty
 
-from ...meshing import METHODS
-
 
 def _hours_changed(self, context):
     if bpy.data.node_groups.get("Voxel Shade") is not None:
@@ -24,7 +22,7 @@ class VoxelBakeSettings(bpy.types.PropertyGroup):
                              ("chunk", "One per Chunk", "An object per 16×16 chunk")])
     method: EnumProperty(name="Merge", default="greedy",
                          items=[(m, m.replace("_", " ").title(), f"face aggregation: {m}")
-                                for m in METHODS])
+                                for m in ("none", "lines", "squares", "squares_ext", "greedy")])
     instances: BoolProperty(name="Plants as Instances", default=False,
                             description="Plants as instances of one mesh per type")
     hours: FloatProperty(name="Time of Day", default=12.0, min=0.0, max=24.0,

@@ -3,7 +3,9 @@
     python build.py setup       install what is missing (apt when root, .venv, npm tools,
                                 the real Blender application in .blender/)
     python build.py blender [-- ARGS]  run that Blender (Debian trixie's 4.3) with ARGS
-    python build.py test [ARGS] setup, then pytest (ARGS go to pytest)
+    python build.py test [ARGS] setup, then the three test layers: pytest under bpy, the
+                                Blender-facing tests inside the real Blender, the GUI
+                                tests (with ARGS: only pytest under bpy, with ARGS)
     python build.py demo        setup, then generate a world, render a picture, bake a .glb
     python build.py bench [DIR] setup, then `python -m voxel_addon bench --out DIR`
     python build.py extension   setup, then build the Blender extension zip into dist/
@@ -118,10 +120,12 @@ def _app():
 def setup() -> None:
     if sys.version_info < (3, 11):
         sys.exit("Python 3.11 or newer is needed to run build.py")
-    setup_apt()
-    setup_venv()
-    _app().setup()
-    setup_wheels()
+    import time
+    for step in (setup_apt, setup_venv, _app().setup, setup_wheels):
+        t0 = time.monotonic()
+        step()
+        if time.monotonic() - t0 > 2:
+            log(f"{step.__module__}.{step.__name__}: {time.monotonic() - t0:.0f} s")
 
 
 def task_blender(args) -> int:
@@ -131,9 +135,38 @@ def task_blender(args) -> int:
     return subprocess.run([_app().LAUNCHER, *args], cwd=ROOT, env=env()).returncode
 
 
+GUI_TESTS = "tests/gui"
+
+
+def _layers() -> list[tuple[str, list, dict]]:
+    """The three test layers: (name, command, extra environment)."""
+    import tempfile
+    user = tempfile.mkdtemp(prefix="voxel-blender-user-")  # installs start from nothing
+    return [
+        ("pytest under the bpy module", [PY, "-m", "pytest", "tests", f"--ignore={GUI_TESTS}"], {}),
+        ("the Blender-facing tests inside the real Blender",
+         [_app().LAUNCHER, "-b", "--factory-startup", "--python-exit-code", "1",
+          "-P", ROOT / "tests" / "run.py"], {"VOXEL_BLENDER_USER": user}),
+        ("GUI tests (the real Blender under Xvfb)", [PY, "-m", "pytest", GUI_TESTS], {}),
+    ]
+
+
 def task_test(args) -> int:
+    """test [PYTEST_ARGS]: with arguments, pytest under bpy with them; without, all
+    three layers (each runs even when an earlier one failed), timed."""
+    import time
     setup()
-    return subprocess.run([PY, "-m", "pytest", *(args or ["tests"])], cwd=ROOT, env=env()).returncode
+    if args:
+        return subprocess.run([PY, "-m", "pytest", *args], cwd=ROOT, env=env()).returncode
+    results = []
+    for name, cmd, extra in _layers():
+        log(f"layer: {name}")
+        t0 = time.monotonic()
+        code = subprocess.run([str(c) for c in cmd], cwd=ROOT, env={**env(), **extra}).returncode
+        results.append((name, code, time.monotonic() - t0))
+    for name, code, secs in results:
+        log(f"{'ok    ' if code == 0 else 'FAILED'} {secs:6.0f} s  {name}")
+    return next((code for _, code, _ in results if code), 0)
 
 
 def voxel(*args) -> None:

@@ -17,6 +17,7 @@ not help: the libraries carry absolute RUNPATHs).
     .blender/site/        pytest (+ the bundled wheels for 3.13) for tests/run.py
     .blender/user/        BLENDER_USER_RESOURCES, XDG_CONFIG_HOME, XDG_CACHE_HOME
                           (VOXEL_BLENDER_USER points a run at another folder)
+    .blender/mesa-cache/  llvmpipe's compiled shaders, shared by all runs
 """
 from __future__ import annotations
 
@@ -215,6 +216,9 @@ export BLENDER_USER_RESOURCES="$U" XDG_CONFIG_HOME="$U/config" XDG_CACHE_HOME="$
 export LIBGL_DRIVERS_PATH="$R/usr/lib/x86_64-linux-gnu/dri"
 export __EGL_VENDOR_LIBRARY_DIRS="$R/usr/share/glvnd/egl_vendor.d"
 export FONTCONFIG_FILE="$H/fonts.conf"
+# llvmpipe compiles every shader Blender's UI uses (~20 s per start); kept across user
+# folders, a start with fresh preferences takes a few seconds
+export MESA_SHADER_CACHE_DIR="${{MESA_SHADER_CACHE_DIR:-$H/mesa-cache}}"
 export POCL_CACHE_DIR="${{POCL_CACHE_DIR:-$U/cache/pocl}}"
 export PYOPENCL_CACHE_DIR="${{PYOPENCL_CACHE_DIR:-$U/cache/pyopencl}}"
 export VOXEL_BLENDER="{LAUNCHER}"

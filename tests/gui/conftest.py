@@ -30,11 +30,27 @@ def gui(tmp_path):
     return run
 
 
+def _tool():
+    spec = importlib.util.spec_from_file_location("voxel_ext_tool", ROOT / "tools" / "extension.py")
+    tool = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(tool)
+    return tool
+
+
 @pytest.fixture(scope="session")
 def ext_zip(tmp_path_factory):
     """The extension zip without bundled wheels (tools/extension.py, Blender's own
     builder and validator)."""
-    spec = importlib.util.spec_from_file_location("voxel_ext_tool", ROOT / "tools" / "extension.py")
-    tool = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(tool)
-    return tool.build(tmp_path_factory.mktemp("dist"))
+    return _tool().build(tmp_path_factory.mktemp("dist"))
+
+
+WHEELS = ROOT / ".cache" / "wheels" / "linux-x64"  # build.py setup downloads them
+
+
+@pytest.fixture(scope="session")
+def ext_zip_wheels(tmp_path_factory):
+    """The extension zip as `build.py extension` makes it: Linux x64 wheels for
+    Python 3.11 and 3.13 bundled."""
+    if not list(WHEELS.glob("*cp313*.whl")):
+        pytest.skip(f"no wheels in {WHEELS} (run `python build.py setup`)")
+    return _tool().build(tmp_path_factory.mktemp("dist"), WHEELS, platforms=["linux-x64"])

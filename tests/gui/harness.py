@@ -144,6 +144,7 @@ def run_gui(script: Path, out: Path, user: Path, params: dict | None = None,
         with open(log_path, "w") as log:
             bl = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=env, cwd=ROOT,
                                   start_new_session=True)
+            (out / "pids.json").write_text(json.dumps({"blender": bl.pid, "x": xserver.pid}))
             try:
                 bl.wait(timeout=timeout)
             except subprocess.TimeoutExpired:

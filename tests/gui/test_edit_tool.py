@@ -1,5 +1,5 @@
 """The Voxel Edit tool in the real Blender GUI (issue 13): Blender 4.3 under Xvfb with
-simulated events (edit_gui_job.py does the clicking and checks against oracles
+simulated events (edit_job.py does the clicking and checks against oracles
 computed from the view's matrices; this side starts it and reads the results)."""
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-JOB = Path(__file__).with_name("edit_gui_job.py")
+JOB = Path(__file__).with_name("edit_job.py")
 BLENDER = ROOT / ".blender" / "blender"
 SIZE = (1280, 720)
 

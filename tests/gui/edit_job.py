@@ -1,7 +1,7 @@
-"""Run inside the real Blender GUI (Xvfb, --enable-event-simulate) by test_edit_gui.py:
+"""Run inside the real Blender GUI (Xvfb, --enable-event-simulate) by test_edit_tool.py:
 the Voxel Edit tool driven by simulated mouse and key events.
 
-    blender --factory-startup --enable-event-simulate -p 0 0 W H -P edit_gui_job.py -- OUT CASE
+    blender --factory-startup --enable-event-simulate -p 0 0 W H -P edit_job.py -- OUT CASE
 
 Every check compares with an oracle computed here from the view's matrices alone
 (not with core/ray.py): the flat world's top surface is a plane, so the cell a pixel

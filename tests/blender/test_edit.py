@@ -1,8 +1,8 @@
 """The voxel.edit operator and the stroke journal in the bpy module (issue 13).
 
 The bpy module has no window, so it cannot undo: here the handlers are called the way
-Blender calls them after it restored `scene.voxel_edit.step`; tests/gui/test_edit_tool.py (real
-Blender) checks Blender's own Ctrl+Z / Ctrl+Shift+Z."""
+Blender calls them after it restored `scene.voxel_edit.step`; tests/gui/test_edit_tool.py
+(the real Blender GUI) checks Blender's own Ctrl+Z / Ctrl+Shift+Z."""
 from __future__ import annotations
 
 import random

@@ -212,8 +212,17 @@ def case_click(w):
         set_view(ortho, rot=None if ortho else Quaternion(Vector((1, 0.3, 0)).normalized(), 0.6))
         yield 3
         at, cell = good_pixel(rng, TOP)
+        move((200, 200))
+        yield from settle()
+        plain = xshot(f"{name}_plain")
         move((at[0] + 5, at[1] + 5))
-        yield 3
+        yield from settle()
+        # without the voxel view the tool's gizmo draws the outline (over Blender's grid)
+        hover = xshot(f"{name}_hover")
+        sx, sy = screen_xy(at)
+        near = (slice(sy - 60, sy + 61), slice(sx - 60, sx + 61))
+        white = ((hover[near] > 215).all(-1) & ~(plain[near] > 215).all(-1)).sum()
+        check(f"{name}_gizmo_hover_outline", white > 30, white)
         sc = bpy.context.scene   # undo replaces the scene's Python object
         before, step = file_snapshot(), sc.voxel_edit.step
         yield from click(at)
@@ -242,6 +251,13 @@ def case_click(w):
         yield from key("Z", ctrl=True, shift=True)
         check(f"{name}_ctrl_shift_z_reapplies", diff(after, file_snapshot()) == [],
               diff(after, file_snapshot())[:5])
+
+
+def settle():
+    """Let Blender handle the last events and redraw the view twice."""
+    for _ in range(3):
+        view3d()[1].tag_redraw()
+        yield 3
 
 
 def generated_name(x, y, z):
@@ -496,6 +512,28 @@ def case_pixels(w):
     check("paint_recorded", bpy.context.scene.voxel_edit.step != step)
     yield from wait_frames()
     xshot("px_paint")
+    # light follows the edit: a lamp at night lights the ground around it
+    bpy.context.scene.voxel_view.hours = 0.0   # (undo replaced `vv`'s scene)
+    bpy.ops.ed.undo_push(message="night")
+    move(corner)
+    yield from wait_frames()
+    dark = xshot("px_night")
+    at, cell = good_pixel(rng, TOP, margin=0.3)
+    while file_block(*cell) not in ("air", None) or file_block(cell[0], cell[1], TOP) != "grass":
+        at, cell = good_pixel(rng, TOP, margin=0.3)
+    bpy.context.scene.voxel_edit.block = "lamp_yellow"
+    yield from click(at)
+    move(corner)
+    yield from wait_frames()
+    lit = xshot("px_lamp")
+    sx, sy = screen_xy(at)
+    ring = (slice(sy - 90, sy + 91), slice(sx - 90, sx + 91))
+    gain = lit[ring].mean() - dark[ring].mean()
+    _, _, region, _ = view3d()   # light reaches 14 blocks: compare the far edge too
+    ex = region.x + (40 if at[0] > region.width // 2 else region.width - 80)
+    far = (slice(sy - 40, sy + 41), slice(ex, ex + 40))
+    check("lamp_lights_the_ground_around", gain > 8 and abs(lit[far].mean() - dark[far].mean()) < 2,
+          (gain, lit[far].mean() - dark[far].mean()))
 
 
 def case_kill(w):

@@ -173,12 +173,16 @@ def _reconcile(scene) -> None:
     j, target = _journal, scene.voxel_edit.step
     if j is None or j.applied == target:
         return
+    from ..core.errors import VoxelError
     try:
         payloads = j.go(session.world, target)
     except KeyError:  # a step from before this session's history: nothing to replay
         print(f"voxel: undo step {target} is not in this session's history")
         j.nodes.setdefault(target, (None, None, None))
         j.applied = target
+        return
+    except VoxelError as e:  # e.g. the world file was deleted: say so, keep Blender's undo going
+        print(f"voxel: cannot follow undo in the world file: {e}")
         return
     show(payloads)
 

@@ -32,7 +32,9 @@ def cells(center, size: int = 1, shape: str = "CUBE") -> list[tuple[int, int, in
     return out
 
 
-MAX_BOX = 64 ** 3  # a box larger than this is refused: one stroke must stay one quick transaction
+# A larger box is refused: each voxel is relit on its own (~0.5 ms here), so this
+# already takes some seconds.
+MAX_BOX = 32 ** 3
 
 
 def box(a, b) -> list[tuple[int, int, int]]:

@@ -313,6 +313,21 @@ def case_drag(w):
     yield from click(b, shift=True)
     check("box_shift_clears", diff(before, file_snapshot()) == [], diff(before, file_snapshot())[:4])
     bpy.context.scene.voxel_edit.box = False
+    # the operator called as the UI calls it (with undo) is one step of the history
+    win, area, region, _ = view3d()
+    before = file_snapshot()
+    with bpy.context.temp_override(window=win, area=area, region=region):
+        r = bpy.ops.voxel.edit("EXEC_DEFAULT", True, location=(3, 3, TOP + 1), block="glass",
+                               size=3, shape="SPHERE")
+    from voxel_addon.core import brush
+    got = diff(before, file_snapshot())
+    want = sorted(brush.cells((3, 3, TOP + 1), 3, "SPHERE"))   # 27 minus the 8 corners
+    check("operator_with_undo_edits", r == {"FINISHED"} and got == want and len(got) == 19 and
+          file_block(3, 3, TOP + 1) == "glass", (r, len(got)))
+    yield from key("Z", ctrl=True)
+    check("operator_ctrl_z_restores", diff(before, file_snapshot()) == [])
+    yield from key("Z", ctrl=True, shift=True)
+    check("operator_ctrl_shift_z_reapplies", diff(before, file_snapshot()) == got)
 
 
 def case_blocked(w):

@@ -181,3 +181,17 @@ def test_hover_outline_geometry(bpy, addon):
     box = outline(top, corner=(3, 6, 11))   # box mode: from the first corner to the new cell
     xs, zs = {p[0] for p in box}, {p[2] for p in box}
     assert len(box) == 24 and xs == {3, 6} and zs == {11, 12}
+
+
+def test_journal_trim_keeps_what_blender_can_reach():
+    j = strokes.Journal()
+    chain = [j.push(strokes.empty()) for _ in range(50)]
+    j.applied = chain[39]                      # ten undos
+    dead = chain[40:]
+    new = [j.push(strokes.empty()) for _ in range(3)]   # a new branch: the old redo tail is gone
+    j.applied = new[0]                         # two undos on the new branch
+    j.trim(5)
+    assert not set(dead) & set(j.nodes)
+    assert chain[34] not in j.nodes and chain[35] in j.nodes   # five strokes above new[0]
+    assert j.route(new[2]) == [("redo", new[1]), ("redo", new[2])]
+    assert j.route(chain[35]) == [("undo", new[0])] + [("undo", s) for s in chain[39:35:-1]]

@@ -15,8 +15,10 @@ data (which must not change while Blender restores it). A stack of our own besid
 Blender's would fall out of step with it (RetopoFlow #1494); one number inside
 Blender's snapshots cannot.
 
-Each stroke reaches the world file in one transaction before the operator returns,
-so killing Blender right after a stroke loses nothing that was shown.
+Each stroke reaches the world file before the operator returns (a click: one
+transaction; a drag: one per mouse event, so even a drag cut short by a crash keeps
+what was shown), so killing Blender right after a stroke loses nothing. The journal
+forgets what Blender's own history can no longer reach (`Journal.trim`).
 """
 from __future__ import annotations
 
@@ -84,6 +86,25 @@ class Journal:
         self.nodes[s] = (self.applied, path, rec)
         self.applied = s
         return s
+
+    def trim(self, depth: int) -> None:
+        """Forget strokes Blender's history can no longer reach: ancestors more than
+        `depth` strokes above the applied one (its undo stack holds fewer steps), and
+        dead branches (a new step after an undo drops Blender's redo tail, so the
+        only redo path left is the newest child chain)."""
+        keep = self._chain(self.applied)[:depth + 1]
+        kids: dict = {}
+        for s, (parent, _, _) in self.nodes.items():
+            kids.setdefault(parent, []).append(s)
+        s = self.applied
+        while kids.get(s):
+            s = max(kids[s])
+            keep.append(s)
+        keep = set(keep)
+        self.nodes = {s: n for s, n in self.nodes.items() if s in keep}
+        for s, (parent, path, rec) in list(self.nodes.items()):
+            if parent is not None and parent not in keep:
+                self.nodes[s] = (None, path, rec)
 
     def _chain(self, s):
         out = []
@@ -157,8 +178,9 @@ def begin(context):
 def commit(scene, rec) -> None:
     """Record a finished stroke: the scene's step names it (Blender's undo keeps that)."""
     import bpy
-    scene.voxel_edit.step = journal(scene.voxel_edit.step).push(
-        rec, bpy.path.abspath(scene.voxel.path))
+    j = journal(scene.voxel_edit.step)
+    scene.voxel_edit.step = j.push(rec, bpy.path.abspath(scene.voxel.path))
+    j.trim(max(32, bpy.context.preferences.edit.undo_steps) + 8)
 
 
 def show(payloads) -> None:

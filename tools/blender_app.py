@@ -6,7 +6,8 @@ apt with a private state (own sources list, lists, cache and an EMPTY dpkg statu
 apt fetches the whole closure, glibc included) and never touch /etc/apt or the
 system. The downloaded .debs stay in `$XDG_CACHE_HOME/voxel-worlds/apt` (default
 ~/.cache), so another clone of the repository does not fetch them again. Every .deb
-is unpacked with `dpkg -x` into `.blender/root`; trixie's glibc is newer than the
+is unpacked (as `dpkg -x` does) once into `$XDG_CACHE_HOME/voxel-worlds/unpacked`,
+and `.blender/root` is a tree of hard links to it (a copy where they cannot be made); trixie's glibc is newer than the
 system's, so everything starts through trixie's own dynamic loader (`patchelf` does
 not help: the libraries carry absolute RUNPATHs).
 
@@ -114,14 +115,22 @@ def _prepare_state(state: Path) -> None:
 
 
 def _selection(state: Path) -> list[Path]:
-    """The .deb files apt chose (simulated install over the empty status)."""
+    """The .deb files apt chose (simulated install over the empty status). Resolving
+    takes apt seconds of CPU, so the answer is kept for the same lists and packages."""
+    lists = sorted((state / "state" / "lists").glob("*_InRelease"))
+    key = hashlib.sha256(f"{PACKAGES}".encode() + b"".join(f.read_bytes() for f in lists)).hexdigest()
+    memo = state / "selection.txt"
+    if memo.exists():
+        head, *names = memo.read_text().split("\n")
+        if head == key and names:
+            return [state / "cache" / "archives" / n for n in names]
     out = _apt(state, "install", "-s", "--no-install-recommends", *PACKAGES)
-    debs = []
-    for name, ver, arch in re.findall(r"^Inst (\S+) \((\S+) .*\[(\S+)\]\)", out, re.M):
-        debs.append(state / "cache" / "archives" / f"{name}_{ver.replace(':', '%3a')}_{arch}.deb")
-    if not debs:
+    names = [f"{name}_{ver.replace(':', '%3a')}_{arch}.deb"
+             for name, ver, arch in re.findall(r"^Inst (\S+) \((\S+) .*\[(\S+)\]\)", out, re.M)]
+    if not names:
         raise SystemExit("blender: apt selected no packages:\n" + out[-2000:])
-    return debs
+    memo.write_text("\n".join([key, *names]))
+    return [state / "cache" / "archives" / n for n in names]
 
 
 @contextlib.contextmanager
@@ -178,6 +187,31 @@ def _unpack(debs: list[Path], dest: Path) -> None:
     from concurrent.futures import ThreadPoolExecutor
     with ThreadPoolExecutor(os.cpu_count() or 2) as pool:
         list(pool.map(one, debs))
+
+
+def _link_unpacked(key: str, debs: list[Path], dest: Path) -> bool:
+    """dest as hard links to the unpacked tree kept next to the .debs (unpacked there
+    once): another clone gets its Blender in seconds. False when the cache is on
+    another file system (the caller unpacks into dest itself)."""
+    cache = cache_dir().parent / "unpacked"
+    tree = cache / key
+    with _locked(cache / "lock"):
+        if not (tree / ".complete").exists():
+            for old in cache.glob("*"):
+                if old.is_dir():
+                    shutil.rmtree(old)  # an older package set: only one tree is kept
+            tmp = cache / f"{key}.tmp"
+            shutil.rmtree(tmp, ignore_errors=True)
+            log(f"unpacking {len(debs)} packages into {tree}")
+            _unpack(debs, tmp)
+            (tmp / ".complete").touch()
+            tmp.rename(tree)
+        r = subprocess.run(["cp", "-al", str(tree), str(dest)], capture_output=True)
+    if r.returncode:
+        shutil.rmtree(dest, ignore_errors=True)
+        return False
+    (dest / ".complete").unlink()
+    return True
 
 
 def _lib_path(root: Path) -> str:
@@ -254,8 +288,9 @@ def setup() -> None:
         HOME.mkdir(exist_ok=True)
         tmp = Path(tempfile.mkdtemp(prefix="root.", dir=HOME))
         shutil.rmtree(tmp)
-        log(f"unpacking {len(debs)} packages into {root}")
-        _unpack(debs, tmp)
+        if not _link_unpacked(hashlib.sha256(want.encode()).hexdigest()[:16], debs, tmp):
+            log(f"unpacking {len(debs)} packages into {root}")
+            _unpack(debs, tmp)
         if root.exists():
             shutil.rmtree(root)
         tmp.rename(root)

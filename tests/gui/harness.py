@@ -62,8 +62,10 @@ def fresh_user(dest: Path) -> Path:
                            capture_output=True, text=True, timeout=120)
         if r.returncode or not (tmp / "config" / "userpref.blend").exists():
             raise GuiError(f"could not save preferences:\n{r.stdout[-2000:]}{r.stderr[-2000:]}")
-        shutil.rmtree(TEMPLATE, ignore_errors=True)
-        tmp.rename(TEMPLATE)
+        try:
+            tmp.rename(TEMPLATE)
+        except OSError:  # another run made it meanwhile
+            shutil.rmtree(tmp, ignore_errors=True)
     dest.mkdir(parents=True, exist_ok=True)
     shutil.copytree(TEMPLATE / "config", dest / "config", dirs_exist_ok=True)
     return dest

@@ -159,8 +159,8 @@ def _apply(world, items):
                 wx, wy = x - x0, y - y0
                 blocks[wx, wy, z] = b
                 box = light.update(blocks, lit, wx, wy, z, old[0])
-                lo = [min(a, b.start) for a, b in zip(lo, box)]
-                hi = [max(a, b.stop) for a, b in zip(hi, box)]
+                lo = [min(v, sl.start) for v, sl in zip(lo, box)]
+                hi = [max(v, sl.stop) for v, sl in zip(hi, box)]
         changed = {C.key_of(x, y) for x, y, _ in last}
         voxels = [v for v in last if first[v] != last[v]]
         if not changed:

@@ -1,7 +1,7 @@
 """Streaming around a moving view point (SPEC F2, thesis §5.2, issue 11 §2).
 
-A background worker keeps every chunk within `distance` (Chebyshev, in chunks) of the
-view chunk generated or loaded, lit and meshed, and queues its Payload. Work goes in
+Background workers keep every chunk within `distance` (Chebyshev, in chunks) of the
+view chunk generated or loaded, lit and meshed, and queue its Payload. Work goes in
 batches: a rectangle of up to `tile` x `tile` chunks (aligned, so neighbouring views
 share them) is generated/loaded with its one-chunk ring in one call, lit in one
 solve and meshed in one build_chunks call; batching is what makes it fast on few
@@ -30,7 +30,7 @@ from collections import deque
 from ..core.errors import VoxelError
 from . import build
 
-NEAR = 6  # chunks: closer than this, work in quarter tiles (first payloads sooner)
+NEAR = 6  # chunks: closer than this, work in half tiles (first payloads sooner)
 
 
 class Stream:
@@ -79,14 +79,31 @@ class Stream:
             old = self._view
             self._view = (cx, cy, d)
             if old is None or old[:2] != (cx, cy):
-                r = self.distance
-                for k in [k for k in self._emitted if max(abs(k[0] - cx), abs(k[1] - cy)) > r]:
-                    del self._emitted[k]
-                    if k in self._drawn:
-                        self._drawn.discard(k)
-                        self._gone.append(k)
+                self._prune()
             self._changes += 1
             self._wake.notify_all()
+
+    def set_distance(self, distance: int) -> None:
+        """Change the view distance (chunks); what falls outside goes as in set_view."""
+        if int(distance) < 0:
+            raise VoxelError(f"view distance must be 0 or more, got {distance}")
+        with self._lock:
+            self.distance = int(distance)
+            self._prune()
+            self._changes += 1
+            self._wake.notify_all()
+
+    def _prune(self) -> None:
+        """Forget payloads of chunks now out of range; drawn ones are reported gone."""
+        if self._view is None:
+            return
+        cx, cy, _ = self._view
+        r = self.distance
+        for k in [k for k in self._emitted if max(abs(k[0] - cx), abs(k[1] - cy)) > r]:
+            del self._emitted[k]
+            if k in self._drawn:
+                self._drawn.discard(k)
+                self._gone.append(k)
 
     def drain(self, budget_s: float = 0.004):
         """(ready payloads, gone keys) since the last call, popping for at most
@@ -139,13 +156,14 @@ class Stream:
                    for k in list(self.world.corrupt))
 
     def offer(self, payloads) -> None:
-        """Queue payloads made elsewhere (edits) for the chunks in range."""
+        """Queue current payloads (the workers', edits') of the chunks in range."""
         with self._lock:
             if self._view is None:
                 return
             cx, cy, _ = self._view
             for p in payloads:
-                if max(abs(p.key[0] - cx), abs(p.key[1] - cy)) <= self.distance:
+                if max(abs(p.key[0] - cx), abs(p.key[1] - cy)) <= self.distance \
+                        and self.world.pver.get(p.key) == p.version:
                     self._emitted[p.key] = p.version
                     self._ready.append(p)
             self._changes += 1
@@ -198,13 +216,13 @@ class Stream:
             job = self._next(cx, cy, d, em, busy)
             if job is not None:
                 with self._lock:  # another worker may have claimed some meanwhile
-                    job = ([k for k in job[0] if k not in self._busy], None)
-                    self._busy.update(job[0])
-                    if not job[0]:
+                    job = [k for k in job if k not in self._busy]
+                    self._busy.update(job)
+                    if not job:
                         continue
             try:
                 if job is not None:
-                    self._do(job[0], backends)
+                    self._do(job, backends)
                 self._maintain(cx, cy)
             except BaseException as e:  # kept for the consumer; the worker goes on
                 self.error = e
@@ -212,7 +230,7 @@ class Stream:
             finally:
                 if job is not None:
                     with self._lock:
-                        self._busy.difference_update(job[0])
+                        self._busy.difference_update(job)
                         self._changes += 1
                         self._wake.notify_all()
             if job is None:
@@ -228,9 +246,10 @@ class Stream:
                 and (x, y) not in busy]
 
     def _next(self, cx, cy, d, em, busy):
-        """The next rectangle to do: the aligned tile holding the most
-        urgent pending chunk, half a tile near the view (first payloads sooner), two
-        far away (less light overhead: the solve's ring); None when all is done."""
+        """The pending keys of the aligned tile holding the most urgent pending chunk,
+        half a tile near the view (first payloads sooner); None when all is done.
+        Larger tiles cut the light solve's ring overhead but the NumPy solve gets
+        slower per chunk beyond ~12 chunks a side (cache): 8 is about the best."""
         pending = self._pending(cx, cy, em, busy)
         if not pending:
             return None
@@ -244,11 +263,9 @@ class Stream:
 
         best = min(pending, key=urgency)
         u = urgency(best)
-        t = max(1, self.tile // 2) if u < NEAR else self.tile if u < 2 * self.tile else 2 * self.tile
+        t = max(1, self.tile // 2) if u < NEAR else self.tile
         tx, ty = best[0] // t, best[1] // t
-        keys = [k for k in pending if k[0] // t == tx and k[1] // t == ty]
-        xs, ys = [k[0] for k in keys], [k[1] for k in keys]
-        return keys, (min(xs), min(ys), max(xs) + 1, max(ys) + 1)
+        return [k for k in pending if k[0] // t == tx and k[1] // t == ty]
 
     def _do(self, keys, backends) -> None:
         world = self.world
@@ -258,18 +275,7 @@ class Stream:
             xs, ys = [k[0] for k in rest], [k[1] for k in rest]
             done += build.light_and_mesh(world, min(xs), min(ys), max(xs) + 1, max(ys) + 1,
                                          backends_=backends)
-        self.offer_own(done)
-
-    def offer_own(self, payloads) -> None:
-        with self._lock:
-            if self._view is None:
-                return
-            cx, cy, _ = self._view
-            for p in payloads:
-                if max(abs(p.key[0] - cx), abs(p.key[1] - cy)) <= self.distance \
-                        and self.world.pver.get(p.key) == p.version:
-                    self._emitted[p.key] = p.version
-                    self._ready.append(p)
+        self.offer(done)
 
     def _maintain(self, cx, cy) -> None:
         """Keep chunks near the view alive (the world's idle unloading), unload far ones."""

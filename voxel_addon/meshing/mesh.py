@@ -43,8 +43,7 @@ def _corners():
 
 CORNERS = _corners()
 NORMALS = np.zeros((12, 3), np.float32)
-for _f in range(6):
-    NORMALS[_f, _f // 2] = 1 if _f % 2 else -1
+NORMALS[np.arange(6), AXIS[:6]] = SIGN[:6]
 NORMALS[6] = np.array([1, -1, 0]) / np.sqrt(2)
 NORMALS[7] = np.array([1, 1, 0]) / np.sqrt(2)
 NORMALS[8:12] = NORMALS[0:4]

@@ -127,7 +127,9 @@ class Geometry:
         hs = {m.region_h for m in meshes.values()}
         if len(hs) > 1 or (self.slot_of and hs != {self.region_h}):
             raise ValueError("all shown chunks must share one region height")
-        if not self.slot_of:
+        if not self.slot_of and hs != {self.region_h}:  # empty: start over at this height
+            self._free()
+            self._reset()
             self.region_h = hs.pop()
             self.nreg = 256 // self.region_h
         self._drop([k for k in meshes if k in self.slot_of])

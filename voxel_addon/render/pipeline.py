@@ -130,7 +130,7 @@ class Renderer:
     def set_meshes(self, meshes: dict) -> None:
         """{(cx, cy): meshing.ChunkMesh} to draw instead of what was shown; the light
         known for chunks that stay is kept (set_light)."""
-        self.geo.remove([k for k in self.geo.keys if k not in meshes])
+        self.remove_chunks([k for k in self.geo.keys if k not in meshes])
         self.geo.update(meshes)
         self._shown()
 
@@ -163,9 +163,9 @@ class Renderer:
         if key == self._vol_key:
             return
         n = 1 if a is None else max(1, min(2 * r + 1, max(a[2] - a[0], a[3] - a[1])))
-        if self.vol.n < n:
+        if self.vol.n < n:  # grown by doubling: a streamed area grows chunk by chunk
             self.vol.release()
-            self.vol = LightVolume(self.ctx, n)
+            self.vol = LightVolume(self.ctx, min(2 * r + 1, max(n, 2 * self.vol.n)))
             self._graphs.clear()
         for x in range(win[0], win[2]):
             for y in range(win[1], win[3]):
@@ -314,7 +314,8 @@ class Renderer:
               cam_fwd=draw_cam._fwd(), ortho=draw_cam.ortho,
               far_dist=camera.far, shadow_eye=(camera.x, camera.y, camera.z),
               # orthographic: no eye to fade from; the map covers the view box
-              shadow_fade=1e9 if camera.ortho else s.shadow_fade, day_ambient=sp["ambient"], day_u=sp["u"],
+              shadow_fade=1e9 if camera.ortho else s.shadow_fade,
+              day_ambient=sp["ambient"], day_u=sp["u"],
               day_direct=sp["direct"], sky_stars=sp["stars"] if sky_on else 0.0,
               sky_light_dir=sp["light_dir"], time=s.time, waving=s.waving,
               godray_strength=s.godray_strength, sun_px=sun_px, sun_radius=sun_r,
@@ -391,7 +392,8 @@ class Renderer:
             layer = full("deferred.frag", {**d, "LAYER": 1}) if layers else None
             G.transparency = Peel(
                 [Pass(c, p["fbo"], block({**g, "PEEL": i + 1}), c.DEPTH_TEST, clear=True,
-                      opaque_depth=gb["depth"], prev_depth=peel[i - 1]["depth"] if i else gb["depth"])
+                      opaque_depth=gb["depth"],
+                      prev_depth=peel[i - 1]["depth"] if i else gb["depth"])
                  for i, p in enumerate(peel[:layers])],
                 [Pass(c, f, layer, clear=True, **gbuf(p))
                  for f, p in zip(T["layer_fbo"][:layers], peel)])

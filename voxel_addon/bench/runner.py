@@ -16,7 +16,7 @@ import time
 import traceback
 from pathlib import Path
 
-AREAS = ["storage", "generation", "light", "meshing", "bake", "render"]
+AREAS = ["storage", "generation", "light", "meshing", "bake", "render", "viewport"]
 
 
 class Context:

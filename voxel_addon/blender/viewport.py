@@ -32,7 +32,7 @@ import numpy as np
 from ..core.errors import VoxelError
 
 # What the panel shows (the last frame of any region).
-STATUS = {"drawn": 0, "wanted": 0, "ms": 0.0, "python_ms": 0.0, "quality": "full",
+STATUS = {"drawn": 0, "wanted": 0, "wanted_shown": 0, "ms": 0.0, "python_ms": 0.0, "quality": "full",
           "error": None, "frames": 0}
 # The last frames: (ms, python_ms, quality, drawn, upload_ms), for the bench.
 FRAMES: deque = deque(maxlen=512)
@@ -309,8 +309,10 @@ def _frame(context, scene, vv):
         g.ctx.finish() if _SYNC else None
     ms = (time.perf_counter() - t0) * 1e3
     q = "draft" if draft else "full"
+    if (drawn, STATUS["wanted"], q) != (STATUS["drawn"], STATUS["wanted_shown"], STATUS["quality"]):
+        _panel_redraw()  # the sidebar shows progress and quality
     STATUS.update(drawn=drawn, ms=ms, python_ms=t_py * 1e3, quality=q,
-                  frames=STATUS["frames"] + 1)
+                  frames=STATUS["frames"] + 1, wanted_shown=STATUS["wanted"])
     FRAMES.append((ms, t_py * 1e3, q, drawn, t_sync * 1e3))
     st.quality = q
     if loading or drawn < STATUS["wanted"]:
@@ -329,6 +331,25 @@ def _want_redraw(after: float):
     if not _timer_on:
         _timer_on = True
         bpy.app.timers.register(_tick, first_interval=after)
+
+
+def _panel_redraw():
+    import bpy
+    if not bpy.app.timers.is_registered(_tick_ui):
+        bpy.app.timers.register(_tick_ui, first_interval=0.01)
+
+
+def _tick_ui():
+    """Redraw the sidebars (not from inside a draw handler: that would loop)."""
+    import bpy
+    wm = bpy.context.window_manager
+    for win in (wm.windows if wm else ()):
+        for area in win.screen.areas:
+            if area.type == "VIEW_3D":
+                for r in area.regions:
+                    if r.type == "UI":
+                        r.tag_redraw()
+    return None
 
 
 def _tick():
@@ -409,7 +430,8 @@ def shutdown() -> None:
     for hs, fn in ((bpy.app.handlers.load_pre, _load_pre), (bpy.app.handlers.load_post, _load_post)):
         while fn in hs:
             hs.remove(fn)
-    if bpy.app.timers.is_registered(_tick):
-        bpy.app.timers.unregister(_tick)
+    for fn in (_tick, _tick_ui):
+        if bpy.app.timers.is_registered(fn):
+            bpy.app.timers.unregister(fn)
     _timer_on = False
     OVERLAYS.clear()

@@ -25,14 +25,17 @@ from __future__ import annotations
 import math
 import time
 import traceback
+from collections import deque
 
 import numpy as np
 
 from ..core.errors import VoxelError
 
 # What the panel shows (the last frame of any region).
-STATUS = {"drawn": 0, "wanted": 0, "ms": 0.0, "python_ms": 0.0, "quality": "full",
+STATUS = {"drawn": 0, "wanted": 0, "wanted_shown": 0, "ms": 0.0, "python_ms": 0.0, "quality": "full",
           "error": None, "frames": 0}
+# The last frames: (ms, python_ms, quality, drawn, upload_ms), for the bench.
+FRAMES: deque = deque(maxlen=512)
 # Callables f(context) run after each voxel frame with Blender's GL state and the
 # voxels' depth in the depth buffer (draw with gpu.state.depth_test_set("LESS_EQUAL")).
 OVERLAYS: list = []
@@ -140,6 +143,7 @@ def _feed_for(scene):
         if _feed is not None:
             _feed.close()
         _feed = _Feed(scene.voxel.path, world, vv.distance)
+        STATUS.update(drawn=0, wanted=0)
     return _feed
 
 
@@ -273,13 +277,15 @@ def _frame(context, scene, vv):
     if view != st.view:
         st.view, st.changed = view, now
     moving = now - st.changed < STILL_S
-    draft = vv.quality == "draft" or (vv.quality == "auto" and moving)
-    s = settings_of(vv, draft)
-    cam = view_camera(rv3d.view_matrix, rv3d.window_matrix, s.distance * 16 * 1.5 + 256.0)
-    if not cam.ortho:
-        s.fov = min(150.0, max(10.0, cam.fov))
+    cam = view_camera(rv3d.view_matrix, rv3d.window_matrix, vv.distance * 16 * 1.5 + 256.0)
     feed = _feed_for(scene)
     loading = feed.update(cam.x, cam.y, cam.forward, BUDGET_S)
+    # draft while moving and while chunks stream in: a full frame holds the GIL for
+    # seconds on software GL and starves the stream's worker thread
+    draft = vv.quality == "draft" or (vv.quality == "auto" and (moving or loading))
+    s = settings_of(vv, draft)
+    if not cam.ortho:
+        s.fov = min(150.0, max(10.0, cam.fov))
     native = _native()
     host_vp = np.array(rv3d.perspective_matrix, np.float64)
     hours = hours_of(scene)
@@ -288,7 +294,9 @@ def _frame(context, scene, vv):
         g = _gpus.get(native)
         if g is None:
             g = _gpus[native] = _Gpu(native)
+        t1 = time.perf_counter()
         drawn = g.sync(feed)
+        t_sync = time.perf_counter() - t1
         g.r.s = s
         vw, vh = host["viewport"][2], host["viewport"][3]
         scale = DRAFT_SCALE if draft else 1.0
@@ -299,22 +307,49 @@ def _frame(context, scene, vv):
         g.r.submit(f)
         g.composite(f, host, host_vp, vv.sky)
         g.ctx.finish() if _SYNC else None
-    STATUS.update(drawn=drawn, ms=(time.perf_counter() - t0) * 1e3, python_ms=t_py * 1e3,
-                  quality="draft" if draft else "full", frames=STATUS["frames"] + 1)
-    st.quality = "draft" if draft else "full"
-    if loading or draft or drawn < STATUS["wanted"]:
-        _want_redraw()
+    ms = (time.perf_counter() - t0) * 1e3
+    q = "draft" if draft else "full"
+    if (drawn, STATUS["wanted"], q) != (STATUS["drawn"], STATUS["wanted_shown"], STATUS["quality"]):
+        _panel_redraw()  # the sidebar shows progress and quality
+    STATUS.update(drawn=drawn, ms=ms, python_ms=t_py * 1e3, quality=q,
+                  frames=STATUS["frames"] + 1, wanted_shown=STATUS["wanted"])
+    FRAMES.append((ms, t_py * 1e3, q, drawn, t_sync * 1e3))
+    st.quality = q
+    if loading or drawn < STATUS["wanted"]:
+        # as long again as the frame took: the worker gets at least half the time
+        _want_redraw(max(0.05, ms / 1e3))
+    elif draft and vv.quality == "auto":  # once the view is still: a full frame
+        _want_redraw(max(0.02, STILL_S - (time.perf_counter() - st.changed)))
 
 
 _SYNC = False  # bench: wait for the GPU so frame times are real
 
 
-def _want_redraw():
+def _want_redraw(after: float):
     global _timer_on
     import bpy
     if not _timer_on:
         _timer_on = True
-        bpy.app.timers.register(_tick, first_interval=0.05)
+        bpy.app.timers.register(_tick, first_interval=after)
+
+
+def _panel_redraw():
+    import bpy
+    if not bpy.app.timers.is_registered(_tick_ui):
+        bpy.app.timers.register(_tick_ui, first_interval=0.01)
+
+
+def _tick_ui():
+    """Redraw the sidebars (not from inside a draw handler: that would loop)."""
+    import bpy
+    wm = bpy.context.window_manager
+    for win in (wm.windows if wm else ()):
+        for area in win.screen.areas:
+            if area.type == "VIEW_3D":
+                for r in area.regions:
+                    if r.type == "UI":
+                        r.tag_redraw()
+    return None
 
 
 def _tick():
@@ -395,7 +430,8 @@ def shutdown() -> None:
     for hs, fn in ((bpy.app.handlers.load_pre, _load_pre), (bpy.app.handlers.load_post, _load_post)):
         while fn in hs:
             hs.remove(fn)
-    if bpy.app.timers.is_registered(_tick):
-        bpy.app.timers.unregister(_tick)
+    for fn in (_tick, _tick_ui):
+        if bpy.app.timers.is_registered(fn):
+            bpy.app.timers.unregister(fn)
     _timer_on = False
     OVERLAYS.clear()

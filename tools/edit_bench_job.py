@@ -27,6 +27,7 @@ for p in (os.environ.get("VOXEL_BLENDER_SITE"), str(ROOT / ".blender" / "site"),
 bpy.context.preferences.view.show_splash = False
 R: dict = {"error": None}
 FRAMES: list = []
+DRAWN: list = []   # (frame end time, {chunk key: version drawn}) per voxel frame
 
 
 def view3d():
@@ -68,7 +69,14 @@ def steps():
         bpy.ops.wm.tool_set_by_id(name="voxel.edit_tool")
     vv = sc.voxel_view
     vv.distance, vv.hours, vv.quality, vv.show = 3, 12.0, "full", True
-    viewport.OVERLAYS.append(lambda ctx: FRAMES.append(time.perf_counter()))
+    def frame_end(ctx):
+        t = time.perf_counter()
+        FRAMES.append(t)
+        vers: dict = {}
+        for g in viewport._gpus.values():
+            vers.update(g.versions)
+        DRAWN.append((t, vers))
+    viewport.OVERLAYS.append(frame_end)
     R["region"] = [region.width, region.height]
     for i in range(8):  # the view fills in; the first click of a new window is lost
         ev("MOUSEMOVE", "NOTHING", (region.width // 2 + i, region.height // 2))
@@ -79,7 +87,11 @@ def steps():
         yield 0.2
     sc.voxel_edit.block = "stone"
     rng = random.Random(1)
-    lat, own = [], []
+    lat, own, gap, first = [], [], [], 0
+
+    def drawn(key):
+        return max((g.versions.get(key, -1) for g in viewport._gpus.values()), default=-1)
+
     for _ in range(CLICKS):
         at = (rng.randrange(region.width // 4, 3 * region.width // 4),
               rng.randrange(region.height // 4, 3 * region.height // 4))
@@ -87,18 +99,30 @@ def steps():
         yield from frames_after(time.perf_counter())
         step = bpy.context.scene.voxel_edit.step
         t0 = time.perf_counter()
-        ev("LEFTMOUSE", "PRESS", at)
-        yield from frames_after(t0)
-        lat.append((min(t for t in FRAMES if t > t0) - t0) * 1e3)
-        own.append(strokes.STATS["last_ms"])
-        ev("LEFTMOUSE", "RELEASE", at)
+        ev("LEFTMOUSE", "PRESS", at)        # the edit happens here
+        yield 0.005
+        ev("LEFTMOUSE", "RELEASE", at)      # the stroke is recorded here
         while bpy.context.scene.voxel_edit.step == step:
-            yield 0.02
+            yield 0.005
+        x, y, _ = strokes._journal.nodes[bpy.context.scene.voxel_edit.step][2].voxels[0]
+        key = (x >> 4, y >> 4)
+        want = w.pver.get(key)
+        while drawn(key) < want:
+            yield 0.005
+        done = strokes.STATS["done"]
+        shown = [t for t, vers in DRAWN if t > t0 and vers.get(key, -1) >= want]
+        after = [t for t, _ in DRAWN if t > done]   # frames that began after the edit
+        first += shown[0] == after[0]
+        lat.append((shown[0] - t0) * 1e3)
+        own.append(strokes.STATS["last_ms"])
+        gap.append((shown[0] - done) * 1e3)
     lat.sort()
     own.sort()
+    gap.sort()
     R.update(clicks=len(lat), click_median_ms=lat[len(lat) // 2],
              click_p90_ms=lat[min(len(lat) - 1, int(len(lat) * 0.9))],
-             stroke_median_ms=own[len(own) // 2], frame_ms=viewport.STATUS["ms"])
+             stroke_median_ms=own[len(own) // 2], frame_ms=viewport.STATUS["ms"],
+             first_frame_shows=first, edit_to_frame_ms=gap[len(gap) // 2])
     # a fast drag: all move events queued at once, as a quick hand gives them
     y = region.height // 2 + 41
     xs = list(range(region.width // 2 - 300, region.width // 2 + 300, 30))

@@ -303,8 +303,9 @@ class VOXEL_GT_hover(bpy.types.Gizmo):
         else:
             msg = t.message
         hit = None if t is None else t.hit
-        if (hit and (hit.cell, hit.normal)) != (_Hover.hit and (_Hover.hit.cell, _Hover.hit.normal)):
-            context.area.tag_redraw()
+        if (hit and (hit.cell, hit.normal)) != (_Hover.hit and (_Hover.hit.cell, _Hover.hit.normal)) \
+                or msg != _Hover.message:
+            context.area.tag_redraw()  # the outline and the tool header's label
         _Hover.hit, _Hover.message = hit, msg
         return -1
 
@@ -353,6 +354,15 @@ class VoxelEditTool(bpy.types.WorkSpaceTool):
         layout.prop(s, "size")
         layout.prop(s, "shape", text="")
         layout.prop(s, "box")
+        # what the mouse points at (updated by the hover gizmo)
+        h = _Hover.hit
+        if h is not None:
+            from ...core.blocks import REGISTRY
+            x, y, z = h.cell
+            layout.label(text=f"{REGISTRY[h.block].name} ({x}, {y}, {z})"
+                         + ("  corner set" if _Hover.corner is not None else ""))
+        elif _Hover.message:
+            layout.label(text=_Hover.message, icon="INFO")
 
 
 CLASSES = [VoxelEditSettings, VOXEL_OT_edit, VOXEL_OT_edit_stroke, VOXEL_OT_pick_block,

@@ -245,6 +245,13 @@ def case_click(w):
         yield from click(at, shift=True)
         check(f"{name}_shift_removes", diff(before, file_snapshot()) == [],
               diff(before, file_snapshot())[:5])
+        if name == "ortho":   # the Remove setting swaps click and Shift-click
+            bpy.context.scene.voxel_edit.remove = True
+            yield from click(at, shift=True)
+            check("remove_setting_shift_places", diff(before, file_snapshot()) == [cell])
+            yield from click(at)
+            check("remove_setting_click_removes", diff(before, file_snapshot()) == [])
+            bpy.context.scene.voxel_edit.remove = False
         # Alt-click picks the terrain block
         sc.voxel_edit.block = "glass"
         want = file_block(cell[0], cell[1], TOP) or generated_name(cell[0], cell[1], TOP)

@@ -50,6 +50,8 @@ class VoxelEditSettings(bpy.types.PropertyGroup):
     block: EnumProperty(name="Block", items=_palette, description="Block placed by a click")
     size: IntProperty(name="Size", default=1, min=1, max=8, description="Brush size in blocks")
     shape: EnumProperty(name="Shape", items=SHAPE_ITEMS, default="CUBE")
+    remove: BoolProperty(name="Remove", default=False,
+                         description="A click removes blocks, Shift-click places them")
     box: BoolProperty(name="Box", default=False,
                       description="Click one corner, then the opposite one: fills (or, with "
                                   "Shift, clears) the box between them")
@@ -69,6 +71,8 @@ class VOXEL_OT_edit(bpy.types.Operator):
     block: StringProperty(name="Block", default="stone", description="Block name; air clears")
     size: IntProperty(name="Size", default=1, min=1, max=8)
     shape: EnumProperty(name="Shape", items=SHAPE_ITEMS, default="CUBE")
+    remove: BoolProperty(name="Remove", default=False,
+                         description="A click removes blocks, Shift-click places them")
     box: BoolProperty(name="Box", default=False, description="Fill the box location..corner")
     corner: IntVectorProperty(name="Corner", size=3)
 
@@ -126,6 +130,8 @@ class VOXEL_OT_edit_stroke(bpy.types.Operator):
         from ...core.blocks import REGISTRY
         from ...core.errors import VoxelError
         s = context.scene.voxel_edit
+        if s.remove:  # the tool setting swaps what a click and a Shift-click do
+            self.mode = "PLACE" if self.mode == "REMOVE" else "REMOVE"
         try:
             self.world = strokes.begin(context)
             self.bid = 0 if self.mode == "REMOVE" else REGISTRY.id(s.block)
@@ -353,6 +359,7 @@ class VoxelEditTool(bpy.types.WorkSpaceTool):
         layout.template_icon_view(s, "block", show_labels=True, scale=1.0, scale_popup=4.0)
         layout.prop(s, "size")
         layout.prop(s, "shape", text="")
+        layout.prop(s, "remove")
         layout.prop(s, "box")
         # what the mouse points at (updated by the hover gizmo)
         h = _Hover.hit

@@ -138,10 +138,9 @@ def task_blender(args) -> int:
 GUI_TESTS = "tests/gui"
 
 
-def _layers() -> list[tuple[str, list, dict]]:
-    """The three test layers: (name, command, extra environment)."""
-    import tempfile
-    user = tempfile.mkdtemp(prefix="voxel-blender-user-")  # installs start from nothing
+def _layers(user: str) -> list[tuple[str, list, dict]]:
+    """The three test layers: (name, command, extra environment); user: an empty
+    folder for the real Blender's preferences and extensions."""
     return [
         ("pytest under the bpy module", [PY, "-m", "pytest", "tests", f"--ignore={GUI_TESTS}"], {}),
         ("the Blender-facing tests inside the real Blender",
@@ -158,12 +157,14 @@ def task_test(args) -> int:
     setup()
     if args:
         return subprocess.run([PY, "-m", "pytest", *args], cwd=ROOT, env=env()).returncode
+    import tempfile
     results = []
-    for name, cmd, extra in _layers():
-        log(f"layer: {name}")
-        t0 = time.monotonic()
-        code = subprocess.run([str(c) for c in cmd], cwd=ROOT, env={**env(), **extra}).returncode
-        results.append((name, code, time.monotonic() - t0))
+    with tempfile.TemporaryDirectory(prefix="voxel-blender-user-") as user:
+        for name, cmd, extra in _layers(user):
+            log(f"layer: {name}")
+            t0 = time.monotonic()
+            code = subprocess.run([str(c) for c in cmd], cwd=ROOT, env={**env(), **extra}).returncode
+            results.append((name, code, time.monotonic() - t0))
     for name, code, secs in results:
         log(f"{'ok    ' if code == 0 else 'FAILED'} {secs:6.0f} s  {name}")
     return next((code for _, code, _ in results if code), 0)

@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import contextlib
 import fcntl
-import glob
 import hashlib
 import os
 import re
@@ -282,6 +281,10 @@ def setup() -> None:
     if installed():
         _write_launchers(root)
         return
+    missing = [t for t in ("apt-get", "dpkg-deb", "tar", "cp") if not shutil.which(t)]
+    if missing:
+        raise SystemExit(f"blender: {', '.join(missing)} not found (set-up needs a Debian "
+                         "system to fetch Debian's Blender)")
     debs = download()
     want = _config() + "\n" + _stamp_of(debs)
     if not (stamp.exists() and stamp.read_text() == want and root.is_dir()):
@@ -298,22 +301,5 @@ def setup() -> None:
     stamp.write_text(want)
 
 
-def version() -> str:
-    r = subprocess.run([str(LAUNCHER), "-b", "--factory-startup", "--version"],
-                       capture_output=True, text=True)
-    return (r.stdout.splitlines() or ["?"])[0]
-
-
 def site_packages() -> Path:
     return HOME / "site"
-
-
-def python() -> Path:
-    return HOME / "python" / "bin" / f"python{PYVER}"
-
-
-def wheel_files(folder: Path, tag: str) -> list[str]:
-    """The wheels of folder usable by CPython tag (e.g. 'cp313') or pure Python."""
-    return [w for w in sorted(glob.glob(str(folder / "*.whl")))
-            if f"-{tag}-" in w or "-py3-none-" in w or "-py2.py3-none-" in w
-            or ("-abi3-" in w and int(re.search(r"-cp3(\d+)-abi3", w).group(1)) <= int(tag[3:]))]

@@ -92,11 +92,11 @@ class Gui:
         self.event(button, "RELEASE", x, y, **mods)
 
     def type(self, text: str):
+        """Type text where the mouse is (key events carrying the characters)."""
         for ch in text:
-            self.window.event_simulate(type="A", value="PRESS", unicode=ch,
-                                       x=self._pos[0], y=self._pos[1])
-            self.window.event_simulate(type="A", value="RELEASE",
-                                       x=self._pos[0], y=self._pos[1])
+            kind = ch.upper() if ch.isascii() and ch.isalpha() else "A"
+            self.event(kind, "PRESS", unicode=ch)
+            self.event(kind, "RELEASE")
 
     # -- what a person sees --
     def redraw(self):

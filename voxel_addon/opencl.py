@@ -61,6 +61,29 @@ def available() -> bool:
         return False
 
 
+BACKENDS = ("opencl", "numpy")  # every kernel's OpenCL twin and its NumPy reference
+
+
+def usable() -> list[str]:
+    """The backends this machine can run, the NumPy reference first (benches, tests)."""
+    return ["numpy"] + (["opencl"] if available() else [])
+
+
+def pick(backend: str | None = None, what: str = "") -> str:
+    """The one backend choice of generation, light and meshing: None means OpenCL when
+    a device is present, else NumPy; a name is checked (VoxelError for an unknown one,
+    or for "opencl" without a device). `what` names the caller in the message."""
+    from .core.errors import VoxelError
+    if backend is None:
+        return "opencl" if available() else "numpy"
+    if backend not in BACKENDS:
+        raise VoxelError(f"unknown {what + ' ' if what else ''}backend {backend!r} "
+                         f"(known: {', '.join(BACKENDS)})")
+    if backend == "opencl" and not available():
+        raise VoxelError("backend opencl asked for, but no OpenCL device is available")
+    return backend
+
+
 def describe() -> str:
     ctx, _, dev = context()
     return f"{dev.platform.name.strip()} / {dev.name.strip()}"

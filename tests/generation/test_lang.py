@@ -140,7 +140,7 @@ def test_lowering_hoists_merges_and_stays_exact(cl_device):
     ops = [e.op for e in L.nodes(u3.roots())]
     assert "perlin2" not in ops            # column-only noise went to a hidden 2D field
     assert ops.count("rand3") == 1         # the repeated rand3 is computed once
-    from voxel_addon.generation.cl_exec import source
+    from voxel_addon.generation.cl import source
     assert "if (" in source(units)         # expensive operands are computed lazily
     keys = [(0, 0), (3, -2)]
     a = Lazy(2, None, "numpy").generate(keys)

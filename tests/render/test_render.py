@@ -296,10 +296,12 @@ def test_rebuilding_targets_and_renderers_raises_no_gl_error(gl):
     r.render(Camera(2, 2, 72, 45, -30), 12.0, SIZE)
     assert glstate.errors() == []
     # the transparent passes get the glow table too (peeling and OIT)
-    progs = [p for plan in r._plans.values() for p in plan["peel"] + [plan["oit"]] if p]
+    progs = [p for G in r._graphs.values() for p in G.transparency.programs()
+             if "glow_scale" in p]
     r.s.transparency = "oit"
     r.render(Camera(2, 2, 72, 45, -30), 12.0, SIZE)
-    progs += [p for plan in r._plans.values() for p in [plan["oit"]] if p]
+    progs += [p for G in r._graphs.values() for p in G.transparency.programs()
+              if "glow_scale" in p]
     assert len(progs) >= 2
     for p in progs:
         assert np.allclose(np.frombuffer(p["glow_scale"].read(), "f4"), r.glow_scale)

@@ -58,8 +58,8 @@ class Part:
         return len(self.material)
 
     def triangles(self) -> np.ndarray:
-        k = 4 * np.arange(self.quads, dtype=np.int32)[:, None]
-        return (k + np.array([[0, 1, 2], [0, 2, 3]], np.int32).reshape(1, 6)).reshape(-1, 3)
+        from ..meshing import quad_indices
+        return quad_indices(self.quads, np.int32).reshape(-1, 3)
 
 
 @dataclass
@@ -101,13 +101,13 @@ def _materials():
     specs: list[MaterialSpec] = []
     index: dict[tuple, int] = {}
     table = np.full((len(REGISTRY), 12), -1, np.int32)
-    side = [0, 1, 2, 3, 4, 5, 0, 0, 0, 1, 2, 3]  # X planes use the side texture
+    from ..meshing.mesh import SIDE  # X planes use the side texture
     codes = {"cube": range(6), "x": (6, 7), "hash": (4, 5, 8, 9, 10, 11)}
     for bid, b in enumerate(REGISTRY.blocks):
         if b.shape == "none":
             continue
         for code in codes[b.shape]:
-            layer = int(REGISTRY.face_texture[bid, side[code]])
+            layer = int(REGISTRY.face_texture[bid, SIDE[code]])
             tex = REGISTRY.texture_names[layer]
             key = (tex, b.render, float(b.glow), b.double_sided)
             if key not in index:

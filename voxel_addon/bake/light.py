@@ -10,11 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.blocks import FACES  # noqa: F401  (face order documented there)
-
-# face code -> (axis, sign); X (6, 7) and # (8..11) planes sample like their side faces
-AXIS = np.array([0, 0, 1, 1, 2, 2, 0, 1, 0, 0, 1, 1], np.int8)
-SIGN = np.array([-1, 1, -1, 1, -1, 1, 1, 1, -1, 1, -1, 1], np.int8)
+# face code -> (axis, sign, tangents): X (6, 7) and # (8..11) planes sample like their sides
+from ..meshing.mesh import AXIS, SIGN, T1, T2
 
 
 def split_uneven(quads, light: np.ndarray, offset) -> np.ndarray:
@@ -45,10 +42,7 @@ def split_uneven(quads, light: np.ndarray, offset) -> np.ndarray:
 
 
 def _tangents(face):
-    axis = AXIS[face]
-    t1 = np.where(axis == 0, 1, 0)  # x-faces: (y, z); y-faces: (x, z); z-faces: (x, y)
-    t2 = np.where(axis == 2, 1, 2)
-    return axis, t1, t2
+    return AXIS[face], T1[face], T2[face]
 
 
 def _grid_points(q):

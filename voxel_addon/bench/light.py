@@ -6,6 +6,8 @@ import time
 
 import numpy as np
 
+from ..core import chunk
+
 
 def _terrain(n, ctx):
     """(16n, 16n, 256) freshly generated terrain: the Overworld if present, else the
@@ -14,9 +16,7 @@ def _terrain(n, ctx):
         from ..generation import make_generator
         gen = make_generator("overworld", 1, backend=None)
         keys = [(cx, cy) for cy in range(n) for cx in range(n)]
-        b = np.zeros((16 * n, 16 * n, 256), np.uint16, order="F")
-        for (cx, cy), a in zip(keys, gen.generate(keys)):
-            b[cx * 16:(cx + 1) * 16, cy * 16:(cy + 1) * 16] = a
+        b = chunk.paste(zip(keys, gen.generate(keys)), 0, 0, n, n)
         return b, "overworld"
     except Exception as e:  # generator not there yet
         ctx.say(f"overworld unavailable ({e}); synthetic terrain")
@@ -31,7 +31,7 @@ def run(ctx):
     n = 6 if ctx.quick else 10
     b, kind = _terrain(n, ctx)
     inner = (n - 2) ** 2
-    backends = ["numpy"] + (["opencl"] if opencl.available() else [])
+    backends = opencl.usable()
     rates = {}
     for be in backends:
         full.region_light(b, be)  # warm-up (kernel build)
@@ -71,7 +71,6 @@ def run(ctx):
     yield ("light_edit_cpu_p90", float(np.percentile(cpu, 90)), "ms", "")
     # Stored vs recomputed: per chunk cost of reading a stored zstd light column.
     import zstandard
-    from ..core import chunk
     chunks = [np.asfortranarray(L[i * 16:(i + 1) * 16, j * 16:(j + 1) * 16])
               for i in range(1, n - 1) for j in range(1, n - 1)]
     blobs = [zstandard.ZstdCompressor(level=3).compress(chunk.to_linear(c)) for c in chunks]

@@ -8,6 +8,7 @@ import time
 import numpy as np
 
 from .. import meshing, opencl
+from ..core import chunk
 from ..core.blocks import REGISTRY, RENDERS
 from ..meshing import scenes
 
@@ -40,15 +41,14 @@ def _wide(n):
     sc = scenes.SCENES["landscape"]
     cx0, cy0 = sc.chunks[:2]
     keys = [(cx, cy) for cy in range(cy0 - 1, cy0 + n + 1) for cx in range(cx0 - 1, cx0 + n + 1)]
-    full = np.zeros((16 * (n + 2), 16 * (n + 2), 256), np.uint16, order="F")
-    for (cx, cy), a in zip(keys, make_generator(scenes.GENERATOR, sc.seed).generate(keys)):
-        full[16 * (cx - cx0 + 1):16 * (cx - cx0 + 2), 16 * (cy - cy0 + 1):16 * (cy - cy0 + 2)] = a
+    full = chunk.paste(zip(keys, make_generator(scenes.GENERATOR, sc.seed).generate(keys)),
+                       cx0 - 1, cy0 - 1, cx0 + n + 1, cy0 + n + 1)
     return np.asfortranarray(full[15:-15, 15:-15])
 
 
 def run(ctx):
     areas = {n: scenes.blocks(n) for n in scenes.SCENES}
-    backends = ["numpy"] + (["opencl"] if opencl.available() else [])
+    backends = opencl.usable()
     best = backends[-1]
     reps = 1 if ctx.quick else 3
     land = areas["landscape"]

@@ -182,19 +182,21 @@ def _distance32(ctx, gl):
     """View distance 32 (65 × 65 chunks): the landscape scene's chunk meshes tiled over
     the whole area (the same geometry a real world would have per chunk), light window
     bounded; measured on a small viewport so llvmpipe's raster time stays short."""
-    from .. import opencl
     from ..meshing import build_chunk
     from ..light import daytime
     from ..render import Camera, Settings, source
     from ..render.pipeline import Renderer
     d = 8 if ctx.quick else 32
     a = source.scene_area("landscape")
-    tiles = [[build_chunk(a.blocks[16 * i:16 * i + 18, 16 * j:16 * j + 18], backend="opencl" if opencl.available() else "numpy")
+    tiles = [[build_chunk(a.blocks[16 * i:16 * i + 18, 16 * j:16 * j + 18], backend=None)
               for j in range(4)] for i in range(4)]
     meshes = {(cx, cy): tiles[cx % 4][cy % 4] for cx in range(-d, d + 1) for cy in range(-d, d + 1)}
     s = Settings(distance=d, msaa=1, waving=False)  # CPU side is measured; keep llvmpipe short
     r = Renderer(gl, s)
+    t0 = time.perf_counter()
     r.set_meshes(meshes)
+    gl.finish()
+    upload_all = (time.perf_counter() - t0) * 1e3
     r.set_light(a.light, a.cx0, a.cy0)  # outside the window: open daylight
     cam = Camera(8, 8, 100, 30, -15)
     hours = daytime.parse_time("10:00")
@@ -231,7 +233,25 @@ def _distance32(ctx, gl):
     for _ in range(reps):
         r.geo.cull(cam.view_proj())
     cull = (time.perf_counter() - t0) / reps * 1e3
-    regions = len(r.geo.origin)
+    regions = int((r.geo.at >= 0).any(0).sum())  # rows with faces in some pass
+    # one chunk replaced (an edit, a streamed chunk arriving) while all the others stay
+    from typing import NamedTuple
+
+    class Chunk(NamedTuple):
+        key: tuple
+        mesh: object
+        light: object
+    ones = []
+    for i in range(21):
+        k = (i % 5 - 2, i // 5 - 2)
+        t0 = time.perf_counter()
+        r.update_chunks([Chunk(k, tiles[(i + 1) % 4][i % 4], None)])
+        gl.finish()
+        ones.append((time.perf_counter() - t0) * 1e3)
+    t0 = time.perf_counter()
+    r.remove_chunks([(cx, cy) for cx in range(-d, d + 1) for cy in (-d, d)])
+    gl.finish()
+    remove_row = (time.perf_counter() - t0) * 1e3
     note = f"distance {d}: {len(meshes)} chunks, {regions} regions before culling"
     yield (f"render_d{d}_python_ms", sorted(pys)[len(pys) // 2], "ms",
            f"CPU outside moderngl, median of {len(pys)} frames, camera moving; {note}")
@@ -251,4 +271,11 @@ def _distance32(ctx, gl):
     yield (f"render_d{d}_frame_ms", ms, "ms", f"160x90, {st['triangles']} tris, "
            f"{st['draw_calls']} draws (llvmpipe)")
     yield (f"render_d{d}_triangles", st["triangles"], "", "per frame")
+    yield (f"render_d{d}_upload_all_ms", upload_all, "ms",
+           f"Renderer.set_meshes of all {len(meshes)} chunks into the empty renderer")
+    yield (f"render_d{d}_update_chunk_ms", sorted(ones)[len(ones) // 2], "ms",
+           f"update_chunks of one chunk with {len(meshes)} shown (median of {len(ones)}): "
+           "nothing else is uploaded again")
+    yield (f"render_d{d}_remove_edge_ms", remove_row, "ms",
+           f"remove_chunks of two edge rows ({2 * (2 * d + 1)} chunks)")
     r.release()

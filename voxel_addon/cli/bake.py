@@ -11,6 +11,7 @@ from .common import add_world, note
 
 
 def add_parser(sub):
+    from ..meshing import METHODS
     p = sub.add_parser("bake", help="bake a block region into a glTF binary (.glb) with bpy")
     add_world(p)
     p.add_argument("--region", type=int, nargs=4, required=True, metavar=("X0", "Y0", "X1", "Y1"),
@@ -18,8 +19,8 @@ def add_parser(sub):
     p.add_argument("--out", type=Path, required=True, metavar="F.glb", help="output .glb")
     p.add_argument("--per", choices=("region", "chunk"), default="region",
                    help="one object for the region (default) or one per chunk")
-    p.add_argument("--method", default="greedy",
-                   help="face aggregation: none, lines, squares, squares_ext, greedy (default)")
+    p.add_argument("--method", default="greedy", choices=METHODS,
+                   help="face aggregation (default greedy)")
     p.add_argument("--instances", action="store_true", help="plants as GPU instances")
     p.add_argument("--time", default="12:00", help="time of day of the exported light (HH:MM)")
     p.add_argument("--blend", type=Path, help="also save the baked scene as this .blend")

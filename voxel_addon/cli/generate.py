@@ -8,6 +8,7 @@ from .common import Progress, add_world, note
 
 
 def add_parser(sub):
+    from ..opencl import BACKENDS
     p = sub.add_parser("generate", help="create or extend a world")
     add_world(p)
     p.add_argument("--seed", type=int, help="world seed (required for a new world)")
@@ -16,7 +17,7 @@ def add_parser(sub):
     p.add_argument("--radius", type=int, default=4,
                    help="chunks around the centre chunk: (2R+1)^2 chunks (default 4)")
     p.add_argument("--generator", help="overworld (default) or flat; new worlds only")
-    p.add_argument("--backend", choices=("opencl", "numpy"),
+    p.add_argument("--backend", choices=BACKENDS,
                    help="generation backend (default: OpenCL when a device is present)")
     return p
 

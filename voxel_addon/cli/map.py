@@ -13,10 +13,11 @@ MAX_CHUNKS = 40000
 
 
 def add_parser(sub):
+    from ..opencl import BACKENDS
     p = sub.add_parser("map", help="top-down image of heights and biomes of the generated area")
     add_world(p)
     p.add_argument("--out", required=True, type=Path, metavar="map.png", help="PNG to write")
-    p.add_argument("--backend", choices=("opencl", "numpy"), help="for the biome panel")
+    p.add_argument("--backend", choices=BACKENDS, help="for the biome panel")
     return p
 
 

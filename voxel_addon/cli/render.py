@@ -7,6 +7,9 @@ from ..core.errors import VoxelError
 
 
 def add_parser(sub):
+    from ..meshing import METHODS
+    from ..meshing.scenes import SCENES
+    from ..render.settings import DEBUG_VIEWS
     p = sub.add_parser("render", help="render a world view to a PNG (headless OpenGL)")
     p.add_argument("--world", type=Path, metavar="W.sqlite", help="world file (.sqlite)")
     p.add_argument("--camera", nargs=5, type=float, metavar=("X", "Y", "Z", "YAW", "PITCH"),
@@ -22,12 +25,11 @@ def add_parser(sub):
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="tune a setting, e.g. godray_strength=2, shadow_size=4096, fov=60, "
                         "shadow_fade=80, ssao_radius=1.5 (repeatable; see render/settings.py)")
-    p.add_argument("--debug-view", default="none",
-                   choices=("none", "albedo", "normal", "depth", "light", "aggregation", "culling"))
-    p.add_argument("--scene", choices=("ocean", "desert", "landscape", "cave"),
+    p.add_argument("--debug-view", default="none", choices=DEBUG_VIEWS)
+    p.add_argument("--scene", choices=tuple(SCENES),
                    help="a reference scene (its terrain, camera and time; --camera/--time override)")
     p.add_argument("--aggregation", default="greedy",
-                   choices=("none", "lines", "squares", "squares_ext", "greedy"),
+                   choices=METHODS,
                    help="meshing method (face aggregation)")
     return p
 

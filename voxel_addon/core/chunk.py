@@ -37,6 +37,26 @@ def to_linear(arr: np.ndarray) -> bytes:
     return np.asarray(arr, dtype="<u2").tobytes(order="F")
 
 
+def paste(pieces, cx0: int, cy0: int, cx1: int, cy1: int, dtype=np.uint16) -> np.ndarray:
+    """The one way to lay chunks side by side: a (16w, 16h, 256) array of chunks
+    [cx0, cx1) x [cy0, cy1) from ((cx, cy), (16, 16, 256) array) pairs; chunks outside
+    are skipped, missing ones stay 0 (air)."""
+    out = empty(dtype, SIZE * (cx1 - cx0), SIZE * (cy1 - cy0))
+    for (cx, cy), a in pieces:
+        if cx0 <= cx < cx1 and cy0 <= cy < cy1:
+            x, y = (cx - cx0) * SIZE, (cy - cy0) * SIZE
+            out[x:x + SIZE, y:y + SIZE] = a
+    return out
+
+
+def cut(area: np.ndarray, cx0: int, cy0: int) -> dict:
+    """paste's inverse: {(cx, cy): (16, 16, 256) view} of an array of whole chunks
+    whose first chunk is (cx0, cy0)."""
+    w, h = area.shape[0] // SIZE, area.shape[1] // SIZE
+    return {(cx0 + i, cy0 + j): area[SIZE * i:SIZE * i + SIZE, SIZE * j:SIZE * j + SIZE]
+            for j in range(h) for i in range(w)}
+
+
 def key_of(x: int, y: int) -> tuple[int, int]:
     """Chunk key holding block column (x, y)."""
     return (x >> 4, y >> 4)

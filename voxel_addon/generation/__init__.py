@@ -26,6 +26,6 @@ def make_generator(name: str, seed: int, params: dict | None = None, backend: st
 
 
 def default_backend() -> str:
-    """"opencl" when an OpenCL device is present, else "numpy"."""
-    from .passgen import default_backend as d
-    return d()
+    """"opencl" when an OpenCL device is present, else "numpy" (opencl.pick)."""
+    from .. import opencl
+    return opencl.pick()

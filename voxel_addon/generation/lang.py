@@ -1,5 +1,5 @@
 """The generator language (thesis code 5.1): passes of expressions, written once in
-Python, run by NumPy (np_exec) and compiled to OpenCL C (cl_exec).
+Python, run by NumPy (execute.py) and compiled to OpenCL C (cl.py).
 
 A `Program` is a list of passes. A 2D pass computes per column values (`out`); a 3D
 pass computes a block id per voxel (`block`) and may write per column values from

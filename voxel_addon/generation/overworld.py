@@ -110,7 +110,7 @@ class OverworldGenerator(PassGenerator):
             p.top(gz)
             depth = gz - z
             # cheap tests first: the OpenCL backend then skips the noise on the right
-            # of & wherever the left is false (see cl_exec), e.g. cavern outside regions
+            # of & wherever the left is false (see cl.py), e.g. cavern outside regions
             cave = (z > 4) & ((depth > 7) | (p.read("open") == 1))
             cave = cave & (perlin3(x / 140, y / 140, z / 90) > 0.18 - 0.1 * float(P["caves"]))
             cave = cave & (octaves(perlin3, (x / 42, y / 42, z / 26), n=2) > 0.26)

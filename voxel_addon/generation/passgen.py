@@ -9,16 +9,10 @@ import numpy as np
 
 from .. import opencl
 from ..core import chunk as C
-from ..core.errors import VoxelError
 from . import noise
 from .base import Generator
 
-BACKENDS = ("opencl", "numpy")
-
-
-def default_backend() -> str:
-    """OpenCL when a device is present, else NumPy."""
-    return "opencl" if opencl.available() else "numpy"
+BACKENDS = opencl.BACKENDS
 
 
 class PassGenerator(Generator):
@@ -27,11 +21,7 @@ class PassGenerator(Generator):
 
     def __init__(self, seed, params=None, backend=None):
         super().__init__(seed, params, backend)
-        if backend not in (None, *BACKENDS):
-            raise VoxelError(f"unknown backend {backend!r} (opencl or numpy)")
-        if backend == "opencl" and not opencl.available():
-            raise VoxelError("backend opencl asked for, but no OpenCL device is available")
-        self.backend_used = backend or default_backend()
+        self.backend_used = opencl.pick(backend, "generation")
         self.backend = self.backend_used
         self.seed32 = noise.seed32(self.seed)
         self.perm = noise.perm_table(self.seed32)
@@ -44,11 +34,11 @@ class PassGenerator(Generator):
     def _run(self, keys, want=()):
         if self.backend_used == "opencl":
             if self._runner is None:
-                from .cl_exec import Runner
+                from .cl import Runner
                 self._runner = Runner(self.units)
             return self._runner.run(keys, self.seed32, self.perm, want)
-        from .np_exec import Run
-        return Run(self.units, self.seed32, self.perm).run(keys, want)
+        from .execute import Runner
+        return Runner(self.units).run(keys, self.seed32, self.perm, want)
 
     def _batches(self, keys, want=()):
         keys = [(int(a), int(b)) for a, b in keys]

@@ -1,4 +1,5 @@
-"""OpenCL backend of the full light solve (gpu/light.cl); twin of full.solve_slab_numpy.
+"""OpenCL backend of the full light solve (gpu/light.cl): the twin of full.solve_slab,
+the NumPy reference.
 
 Directional line sweeps (z, x, y, z, ...) with per-line dirty flags until two sweeps in
 a row change nothing (gpu/light.cl says why that is the fixpoint); z lines only run

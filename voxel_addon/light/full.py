@@ -10,21 +10,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import opencl
 from ..core import chunk
 from ..core.errors import VoxelError
 from . import flood, model
 
-BACKENDS = ("opencl", "numpy")
 TILE = 8  # interior chunks per tile side in region_light (10x10 solved per 8x8 kept)
-
-
-def pick(backend: str | None) -> str:
-    if backend is None:
-        from .. import opencl
-        return "opencl" if opencl.available() else "numpy"
-    if backend not in BACKENDS:
-        raise VoxelError(f"unknown light backend {backend!r} (known: {', '.join(BACKENDS)})")
-    return backend
 
 
 def _check(blocks: np.ndarray) -> np.ndarray:
@@ -44,15 +35,15 @@ def solve(blocks: np.ndarray, backend: str | None = None) -> np.ndarray:
     out[:, :, z1:] = model.SKY
     out[:, :, :z0] = packed[blocks[:, :, :z0]]
     if z1 > z0:
-        if pick(backend) == "opencl":
+        if opencl.pick(backend, "light") == "opencl":
             from . import cl
             out[:, :, z0:z1] = cl.solve_slab(blocks[:, :, z0:z1])
         else:
-            out[:, :, z0:z1] = solve_slab_numpy(blocks[:, :, z0:z1])
+            out[:, :, z0:z1] = solve_slab(blocks[:, :, z0:z1])
     return out
 
 
-def solve_slab_numpy(blocks: np.ndarray) -> np.ndarray:
+def solve_slab(blocks: np.ndarray) -> np.ndarray:
     """Light of a (W, H, Z) slab with open sky right above it and dark air around:
     start values, then flood.py from every voxel that can raise a neighbour."""
     w, h, zs = blocks.shape

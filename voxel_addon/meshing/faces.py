@@ -2,21 +2,21 @@
 
 Everything is batched: a window is cut into tiles (one tile = the whole window for
 `quads`, 16×16 chunks for `vertex.build_chunks`) that are meshed apart in one go.
-The NumPy path here is the reference; `cl.py` runs the same rules in OpenCL.
+This is the NumPy reference; `cl.py` runs the same rules in OpenCL, `run.py` picks
+one of them.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from ..core.blocks import REGISTRY, SHAPES, RENDERS
-from ..core.errors import VoxelError
 from . import aggregate
+from .mesh import SIDE
 
 QUAD = np.dtype([("x", "u2"), ("y", "u2"), ("z", "u2"), ("face", "u1"), ("w", "u2"),
                  ("h", "u2"), ("block", "u2"), ("layer", "u2")])
 METHODS = tuple(aggregate.METHODS)
 BORDERS = ("context", "air")
-BACKENDS = ("numpy", "opencl")
 X_FACES = (6, 7)
 HASH_FACES = (8, 9, 10, 11)
 # Rect columns both backends produce: tile, tile-local x, y, z, face, w, h, block.
@@ -43,21 +43,6 @@ FLAGS = tables()
 _OPAQUE = (FLAGS & 2) != 0
 # Layer granularity of the pieces meshed: the tiled methods need whole 8×8 tiles.
 STEP = {m: 1 if m in ("none", "greedy") else aggregate.TILE for m in METHODS}
-
-
-def check(blocks, border, method, backend, z0, z1):
-    if method not in aggregate.METHODS:
-        raise VoxelError(f"unknown meshing method {method!r} (known: {', '.join(METHODS)})")
-    if border not in BORDERS:
-        raise VoxelError(f"unknown border {border!r} (known: {', '.join(BORDERS)})")
-    if backend not in BACKENDS:
-        raise VoxelError(f"unknown meshing backend {backend!r} (known: {', '.join(BACKENDS)})")
-    if blocks.ndim != 3 or blocks.shape[2] != 256:
-        raise VoxelError(f"block window must be (W, H, 256), got {blocks.shape}")
-    if border == "context" and (blocks.shape[0] < 3 or blocks.shape[1] < 3):
-        raise VoxelError("a window with context needs a one-voxel ring: at least (3, 3, 256)")
-    if not 0 <= z0 < z1 <= 256:
-        raise VoxelError(f"z range {z0}..{z1} is not inside 0..256")
 
 
 def area(blocks, border):
@@ -198,17 +183,10 @@ def shape_rects(P, zk, zl, tile, nxy):
     return out
 
 
-def rects(P, tile, *, method="greedy", backend="numpy", z0=0, z1=256, split=0):
+def rects(P, tile, nxy, method, z0, z1, split):
     """Rect columns (dict of COLS -> int arrays, unordered) of every tile of area P
-    ((W+2, H+2, 256) with ring); tiles are TW×TH, numbered x fastest."""
-    W, H = P.shape[0] - 2, P.shape[1] - 2
-    TW, TH = tile
-    nxy = (W // TW, H // TH)
-    if backend == "opencl":
-        from . import cl
-        got = cl.rects(P, tile, nxy, method, z0, z1, split)
-        if got is not None:
-            return got
+    ((W+2, H+2, 256) with ring); tiles are TW x TH, nxy of them, numbered x fastest.
+    The NumPy reference of cl.rects."""
     return mesh_pieces(P, plan(P, z0, z1, split, STEP[method]), tile, method,
                        lambda za, zb: face_keys(slab(P, za, zb)))
 
@@ -232,9 +210,7 @@ def to_quads(r):
     q = np.empty(len(r["t"]), QUAD)
     for c in COLS[1:]:
         q[c] = r[c]
-    f = r["face"]
-    side = np.where(f < 6, f, np.where(f >= 8, f - 8, 0))
-    q["layer"] = REGISTRY.face_texture[r["block"], side]
+    q["layer"] = REGISTRY.face_texture[r["block"], SIDE[r["face"]]]
     return q
 
 
@@ -245,14 +221,3 @@ def sort_key(r, *extra, xy_bits=16):
                                     (r["x"], xy_bits)]:
         k = (k << np.uint64(bits)) | np.asarray(val).astype(np.uint64)
     return k
-
-
-def quads(blocks, *, border="context", method="greedy", backend="numpy", z0=0, z1=256,
-          split=0):
-    """The quad list of a block window (README.md): dtype QUAD, sorted by (face, z, y, x)."""
-    blocks = np.asarray(blocks)
-    check(blocks, border, method, backend, z0, z1)
-    P = area(blocks, border)
-    r = rects(P, (P.shape[0] - 2, P.shape[1] - 2), method=method, backend=backend,
-              z0=z0, z1=z1, split=split)
-    return to_quads(r)[np.argsort(sort_key(r))]

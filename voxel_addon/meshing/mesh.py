@@ -9,17 +9,26 @@ import numpy as np
 
 from ..core.blocks import REGISTRY
 
+# The face code tables (README): 0..5 cube faces in core.blocks.FACES order
+# (-x +x -y +y -z +z: code = 2 * axis + positive side), 6, 7 the X planes, 8..11 the
+# # planes (the sides 0..3 moved inward). Per code: the axis of its normal and the sign
+# (X planes take +x, +y: they sample light like those sides), its tangent axes t1, t2
+# (axis x: y, z; y: x, z; z: x, y) and the cube side whose texture it shows.
+AXIS = np.array([0, 0, 1, 1, 2, 2, 0, 1, 0, 0, 1, 1], np.int8)
+SIGN = np.array([-1, 1, -1, 1, -1, 1, 1, 1, -1, 1, -1, 1], np.int8)
+T1 = np.array([1, 0, 0], np.int8)[AXIS]
+T2 = np.array([2, 2, 1], np.int8)[AXIS]
+SIDE = np.array([0, 1, 2, 3, 4, 5, 0, 0, 0, 1, 2, 3], np.int8)
+
 # Unit corner offsets (4, 3) per face code, counter-clockwise seen from the front.
 # Cube faces: corners in (t1, t2) units (scaled by w, h); shapes are 1×1.
-_T = {0: (1, 2), 1: (0, 2), 2: (0, 1)}          # tangent axes per face axis
 _CCW = ((0, 0), (1, 0), (1, 1), (0, 1))
 
 
 def _corners():
     c = np.zeros((12, 4, 3), np.float32)         # unit offsets, already oriented
     for f in range(6):
-        a, sign = divmod(f, 2)
-        t1, t2 = _T[a]
+        a, sign, t1, t2 = int(AXIS[f]), int(SIGN[f] > 0), int(T1[f]), int(T2[f])
         # (t1 x t2) points along +a for x and z, along -a for y
         front = (sign == 1) == (a != 1)
         order = _CCW if front else _CCW[::-1]
@@ -34,8 +43,7 @@ def _corners():
 
 CORNERS = _corners()
 NORMALS = np.zeros((12, 3), np.float32)
-for _f in range(6):
-    NORMALS[_f, _f // 2] = 1 if _f % 2 else -1
+NORMALS[np.arange(6), AXIS[:6]] = SIGN[:6]
 NORMALS[6] = np.array([1, -1, 0]) / np.sqrt(2)
 NORMALS[7] = np.array([1, 1, 0]) / np.sqrt(2)
 NORMALS[8:12] = NORMALS[0:4]
@@ -44,6 +52,13 @@ UV_U = np.array([(0, -1, 0), (0, 1, 0), (1, 0, 0), (-1, 0, 0), (1, 0, 0), (1, 0,
                  (1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 1, 0), (1, 0, 0), (-1, 0, 0)], np.float32)
 UV_V = np.array([(0, 0, 1)] * 4 + [(0, -1, 0), (0, 1, 0)] + [(0, 0, 1)] * 6, np.float32)
 INSET = np.array([b.inset for b in REGISTRY.blocks], np.float32) / 16
+
+
+def quad_indices(n: int, dtype=np.uint32) -> np.ndarray:
+    """The one quad -> triangles pattern, for n quads of 4 counter-clockwise vertices:
+    (0,1,2, 0,2,3) + 4k, flat (reshape(-1, 3) for triangles)."""
+    k = 4 * np.arange(n, dtype=dtype)[:, None]
+    return (k + np.array([0, 1, 2, 0, 2, 3], dtype)).ravel()
 
 
 @dataclass
@@ -56,8 +71,7 @@ class Mesh:
     layer: np.ndarray       # (N,) uint16
 
     def triangles(self) -> np.ndarray:
-        k = 4 * np.arange(len(self.face), dtype=np.int32)[:, None]
-        return (k + np.array([0, 1, 2, 0, 2, 3], np.int32)).reshape(-1, 3)
+        return quad_indices(len(self.face), np.int32).reshape(-1, 3)
 
 
 def corner_positions(q, inset=True) -> np.ndarray:
@@ -66,9 +80,7 @@ def corner_positions(q, inset=True) -> np.ndarray:
     f = q["face"].astype(np.intp)
     c = CORNERS[f].copy()
     cube = f < 6
-    a = np.where(cube, f // 2, 0)
-    t1 = np.array([1, 0, 0])[a]
-    t2 = np.array([2, 2, 1])[a]
+    t1, t2 = T1[f], T2[f]
     n = np.arange(len(q))
     c[n, :, t1] *= np.where(cube, q["w"], 1).astype(np.float32)[:, None]
     c[n, :, t2] *= np.where(cube, q["h"], 1).astype(np.float32)[:, None]

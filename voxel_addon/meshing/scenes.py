@@ -13,6 +13,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from ..core import chunk
 from ..core.errors import VoxelError
 
 GENERATOR = "overworld"
@@ -52,10 +53,7 @@ def _area(name: str) -> np.ndarray:
     gen = make_generator(GENERATOR, sc.seed)
     cx0, cy0, cx1, cy1 = sc.chunks
     keys = [(cx, cy) for cy in range(cy0 - 1, cy1 + 1) for cx in range(cx0 - 1, cx1 + 1)]
-    nx, ny = cx1 - cx0 + 2, cy1 - cy0 + 2
-    full = np.zeros((16 * nx, 16 * ny, 256), np.uint16, order="F")
-    for (cx, cy), a in zip(keys, gen.generate(keys)):
-        full[16 * (cx - cx0 + 1):16 * (cx - cx0 + 2), 16 * (cy - cy0 + 1):16 * (cy - cy0 + 2)] = a
+    full = chunk.paste(zip(keys, gen.generate(keys)), cx0 - 1, cy0 - 1, cx1 + 1, cy1 + 1)
     out = np.asfortranarray(full[15:-15, 15:-15])
     out.flags.writeable = False
     return out

@@ -8,8 +8,9 @@ import numpy as np
 
 from ..core.blocks import ANIMATIONS, REGISTRY, RENDERS
 from ..core.errors import VoxelError
-from .faces import area, check, rects, sort_key, to_quads
-from .mesh import CORNERS
+from .faces import area, sort_key, to_quads
+from .run import check, rects
+from .mesh import CORNERS, T1, T2, quad_indices  # noqa: F401  (the index pattern: meshing API)
 
 # Bench (region-height trade-off, cf. table 6.5): 64 builds fastest (one meshing call per
 # region) with the fewest draw ranges and no extra triangles vs 16/32; the thesis chose 64 too.
@@ -34,12 +35,6 @@ def _pass_table():
 PASS_OF = _pass_table()
 
 
-def quad_indices(n: int) -> np.ndarray:
-    """Shared index pattern for n quads of 4 vertices: (0,1,2, 0,2,3) + 4k, uint32."""
-    k = 4 * np.arange(n, dtype=np.uint32)[:, None]
-    return (k + np.array([0, 1, 2, 0, 2, 3], np.uint32)).ravel()
-
-
 def _corner_tables():
     """Integer corner p = (x, y, z) + A*w + B*h + C per face code and corner (the same
     corners as mesh.corner_positions, without the # inset)."""
@@ -47,8 +42,7 @@ def _corner_tables():
     B = np.zeros((12, 4, 3), np.int32)
     C = np.rint(CORNERS).astype(np.int32)
     for f in range(6):
-        a = f // 2
-        t1, t2 = (1, 2) if a == 0 else ((0, 2) if a == 1 else (0, 1))
+        t1, t2 = T1[f], T2[f]
         A[f, :, t1], B[f, :, t2] = C[f, :, t1], C[f, :, t2]
         C[f, :, t1] = C[f, :, t2] = 0
     return A, B, C
@@ -125,7 +119,7 @@ def build_chunks(blocks, origin=(0, 0), *, method="greedy", backend="numpy",
         raise VoxelError(f"build_chunks wants chunks plus a one-voxel ring (16*nx + 2, "
                          f"16*ny + 2, 256), got {blocks.shape}")
     _check_region(region_h)
-    check(blocks, "context", method, backend, 0, 256)
+    backend = check(blocks, "context", method, backend, 0, 256)
     nx, ny = W // 16, H // 16
     r = rects(area(blocks, "context"), (16, 16), method=method, backend=backend, split=region_h)
     region = r["z"] // region_h

@@ -8,7 +8,8 @@ the vertex buffer (first fit in a free list; the buffer grows by copying on the 
 so the other chunks are never uploaded again). Every (region, pass) with faces has
 one indirect command in its pass's command table; a removed chunk's commands become
 empty holes that the next chunk reuses. `at` says where each table row's command of
-each pass is.
+each pass is. Commands reach their chunk's block through the base vertex, so the
+shared index pattern only spans the largest chunk.
 
 All passes share the region table, so a frame culls once per matrix (view, shadow)
 for every pass; per matrix it gathers the commands of the visible rows only (work by
@@ -20,7 +21,8 @@ through an instanced attribute, and the culling runs on the GPU (`gpu_cull`,
 shaders/cull.comp, the twin of camera.visible_boxes): a slot's buffer holds every
 command and a compute pass sets each one's instance count to 1 or 0, so the CPU
 neither culls nor gathers. GL 4.1 (macOS): CPU culling and one draw per visible
-region with the origin as a uniform.
+region with the origin as a uniform (moderngl draws those without a base vertex, so
+there the index pattern spans the whole vertex buffer).
 """
 from __future__ import annotations
 
@@ -90,6 +92,9 @@ class Geometry:
         self._verts = _Free()
         self.vbo = self.ibo = self.obo = self._boxes = None
         self._vbo_q = self._ibo_q = 0  # capacities in quads
+        self._most_q = 0               # quads of the largest chunk shown since the reset
+        self._kxy = np.zeros((0, 2), np.int64)  # slot -> its key
+        self._used = np.zeros(0, bool)
         self._rows_cap = 0             # rows in obo / _boxes
         self.origin = np.zeros((0, 3), np.float32)
         self.boxes = np.zeros((7, 0), np.float32)
@@ -122,7 +127,9 @@ class Geometry:
         hs = {m.region_h for m in meshes.values()}
         if len(hs) > 1 or (self.slot_of and hs != {self.region_h}):
             raise ValueError("all shown chunks must share one region height")
-        if not self.slot_of:
+        if not self.slot_of and hs != {self.region_h}:  # empty: start over at this height
+            self._free()
+            self._reset()
             self.region_h = hs.pop()
             self.nreg = 256 // self.region_h
         self._drop([k for k in meshes if k in self.slot_of])
@@ -135,30 +142,36 @@ class Geometry:
             start = self._verts.take(nq) if nq else 0
             self._slots[s] = [key, start, nq, []]
             self.slot_of[key] = s
-            new.append((s, key, m, start))
+            new.append((s, m, start))
+            self._most_q = max(self._most_q, nq)
         self._grow()
         nreg, h = self.nreg, self.region_h
-        for s, key, m, start in new:
+        slots = np.array([s for s, _, _ in new])
+        self._kxy[slots] = list(meshes)
+        self._used[slots] = True
+        rows = (slots[:, None] * nreg + np.arange(nreg)).ravel()
+        o = self.origin
+        o[rows, 0] = np.repeat(self._kxy[slots, 0] * 16, nreg)
+        o[rows, 1] = np.repeat(self._kxy[slots, 1] * 16, nreg)
+        o[rows, 2] = np.tile(np.arange(nreg) * h, len(slots))
+        # 0.5 slack for waving: vertices move by < 0.1 blocks
+        self.boxes[:, rows] = camera.boxes(o[rows] - 0.5, o[rows] + [16.5, 16.5, h + 0.5])
+        for s, m, start in new:
             if len(m.vertices):
                 self.vbo.write(np.ascontiguousarray(m.vertices, np.uint32), offset=start * _QUAD)
-            rows = s * nreg + np.arange(nreg)
-            self.origin[rows] = np.c_[np.full((nreg, 2), (key[0] * 16, key[1] * 16)),
-                                      np.arange(nreg) * h]
-            # 0.5 slack for waving: vertices move by < 0.1 blocks
-            o = self.origin[rows]
-            self.boxes[:, rows] = camera.boxes(o - 0.5, o + [16.5, 16.5, h + 0.5])
             rng = np.asarray(m.ranges)
             reg, ps = np.nonzero(rng[..., 1])
             cmds = self._slots[s][3]
             for r, p, first, count in zip(reg.tolist(), ps.tolist(),
                                           rng[reg, ps, 0].tolist(), rng[reg, ps, 1].tolist()):
                 c = self._cfree[p].pop() if self._cfree[p] else self._new_cmd(p)
-                # DrawElementsIndirectCommand: count, instances, first index, base vertex,
-                # base instance (= the region table row: its origin and box)
-                self._cmd[p][c] = (count // 4 * 6, 1, (start + first // 4) * 6, 0, s * nreg + r)
+                # DrawElementsIndirectCommand: count, instances, first index (in the
+                # chunk), base vertex (its block), base instance (= the region table
+                # row: its origin and box)
+                self._cmd[p][c] = (count // 4 * 6, 1, first // 4 * 6, 4 * start, s * nreg + r)
                 self._at[p, s * nreg + r] = c
                 cmds.append((p, c))
-            self._write_rows(rows)
+        self._write_rows(rows.min(), rows.max() + 1)
         self._commit()
 
     def remove(self, keys) -> None:
@@ -179,6 +192,7 @@ class Geometry:
                 self._cfree[p].append(c)
             self._at[:, s * self.nreg:(s + 1) * self.nreg] = -1
             self._slots[s] = None
+            self._used[s] = False
             self._free_slots.append(s)
         self._free_slots.sort(reverse=True)  # lowest slot first: full rebuilds stay in order
 
@@ -205,6 +219,11 @@ class Geometry:
             at = np.full((len(PASSES), n), -1, np.int32)
             at[:, :self._at.shape[1]] = self._at
             self.origin, self.boxes, self._at = o, b, at
+            k = np.zeros((n // self.nreg, 2), np.int64)
+            k[:len(self._kxy)] = self._kxy
+            u = np.zeros(n // self.nreg, bool)
+            u[:len(self._used)] = self._used
+            self._kxy, self._used = k, u
         if self.origin.shape[0] > self._rows_cap:
             for buf in (self.obo, self._boxes):
                 if buf is not None:
@@ -213,11 +232,11 @@ class Geometry:
             self.obo = c.buffer(reserve=12 * self._rows_cap)
             if self.indirect_ok:
                 self._boxes = c.buffer(reserve=32 * self._rows_cap)
-            self._write_rows(np.arange(len(self._slots) * self.nreg))
+            self._write_rows(0, len(self._slots) * self.nreg)
             self._vaos_void()
         need = self._verts.end
         if need > self._vbo_q or self.vbo is None:
-            n = max(need, 2 * self._vbo_q, 1024)
+            n = max(need, 2 * self._vbo_q, 1 << 15)
             vbo = c.buffer(reserve=n * _QUAD)
             if self.vbo is not None:
                 if self._vbo_q:
@@ -225,17 +244,24 @@ class Geometry:
                 self.vbo.release()
             self.vbo, self._vbo_q = vbo, n
             self._vaos_void()
-        if self._vbo_q > self._ibo_q:
+        self._index(self._most_q)
+
+    def _index(self, quads: int) -> None:
+        """The shared index pattern for at least `quads` quads: commands index their
+        chunk's block through their base vertex, so the largest chunk is enough; one
+        draw per region without base vertices (GL 4.1) needs the whole buffer."""
+        if quads > self._ibo_q or self.ibo is None:
+            n = max(quads, 2 * self._ibo_q, 1 << 14)
             if self.ibo is not None:
                 self.ibo.release()
-            self.ibo = c.buffer(meshing.quad_indices(self._vbo_q).tobytes())
-            self._ibo_q = self._vbo_q
+            self.ibo = self.ctx.buffer(meshing.quad_indices(n).tobytes())
+            self._ibo_q = n
             self._vaos_void()
 
-    def _write_rows(self, rows) -> None:
-        if not len(rows):
+    def _write_rows(self, a: int, b: int) -> None:
+        """Upload origins and boxes of table rows [a, b)."""
+        if b <= a:
             return
-        a, b = int(rows[0]), int(rows[-1]) + 1  # a slot's rows are one run
         self.obo.write(self.origin[a:b].tobytes(), offset=12 * a)
         if self._boxes is not None:  # centre and half extent per region, vec4-aligned
             x = np.zeros((b - a, 2, 4), np.float32)
@@ -254,12 +280,23 @@ class Geometry:
         off = np.cumsum([0] + self._cused[:-1])
         self.cmd = np.concatenate([c[:n] for c, n in zip(self._cmd, self._cused)])
         self.at = np.where(self._at >= 0, self._at + off[:, None].astype(np.int32), -1)
+        # rows with faces in some pass, and their boxes: what CPU culling tests
+        self.live = np.flatnonzero((self._at >= 0).any(0))
+        self._live_boxes = np.ascontiguousarray(self.boxes[:, self.live])
         self.parts: dict[str, dict] = {}
         for p, name in enumerate(PASSES):
             rows = np.flatnonzero(self._at[p] >= 0)
             if len(rows):
                 self.parts[name] = {"rows": rows, "first": int(off[p]), "n": self._cused[p],
                                     "boxes": self.boxes[:, rows]}
+
+    def bounds(self):
+        """(cx0, cy0, cx1, cy1): the box of the shown chunks, or None."""
+        k = self._kxy[self._used]
+        if not len(k):
+            return None
+        lo, hi = k.min(0), k.max(0) + 1
+        return int(lo[0]), int(lo[1]), int(hi[0]), int(hi[1])
 
     @property
     def quads(self) -> int:
@@ -278,8 +315,9 @@ class Geometry:
         return vao
 
     def cull(self, mvp: np.ndarray) -> np.ndarray:
-        """Region table rows (ascending) whose box may intersect the clip volume."""
-        return np.flatnonzero(camera.visible_boxes(mvp, self.boxes))
+        """Region table rows with faces (ascending) whose box may intersect the clip
+        volume."""
+        return self.live[camera.visible_boxes(mvp, self._live_boxes)]
 
     def batches(self, rows: np.ndarray, names, slot: str = "view") -> dict:
         """{pass name: its batch, or None} of the visible regions among the table rows
@@ -333,8 +371,8 @@ class Geometry:
         if not names:  # nothing shown (or none of these passes): nothing to cull
             return {}
         last = self.bufs.get(slot)
-        data = self.cmd.tobytes()
         if last is None or last[2] != ("gpu", self.gen):
+            data = self.cmd.tobytes()
             buf = last[0] if last is not None else None
             if buf is None or buf.size < len(data):
                 if buf is not None:
@@ -383,9 +421,12 @@ class Geometry:
         else:
             u = prog["region_origin"]  # a program built with UNIFORM_ORIGIN
             cmd = self.cmd[sel]
-            for c, first, row in zip(cmd[:, 0].tolist(), cmd[:, 2].tolist(), cmd[:, 4].tolist()):
+            self._index(self._verts.end)  # no base vertex: indices into the whole buffer
+            vao = self.vao(name, prog)
+            first = cmd[:, 2] + cmd[:, 3] // 4 * 6
+            for c, f, row in zip(cmd[:, 0].tolist(), first.tolist(), cmd[:, 4].tolist()):
                 u.value = tuple(self.origin[row].tolist())
-                vao.render(mode=self.ctx.TRIANGLES, vertices=c, first=first)
+                vao.render(mode=self.ctx.TRIANGLES, vertices=c, first=f)
             calls = len(sel)
         if stats is not None:
             stats.add(tris, calls, shadow, (buf, off, n))

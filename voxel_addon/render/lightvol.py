@@ -62,10 +62,8 @@ class LightVolume:
 
     def upload_area(self, light: np.ndarray, cx0: int, cy0: int) -> None:
         """A (16w, 16h, 256) light array whose first chunk is (cx0, cy0)."""
-        w, h = light.shape[0] // 16, light.shape[1] // 16
-        for i in range(w):
-            for j in range(h):
-                self.upload((cx0 + i, cy0 + j), light[16 * i:16 * i + 16, 16 * j:16 * j + 16])
+        for key, a in chunk.cut(light, cx0, cy0).items():
+            self.upload(key, a)
 
     def set_window(self, cx0: int, cy0: int, cx1: int, cy1: int) -> None:
         """The chunk box whose light is resident (outside it: open daylight)."""

@@ -10,6 +10,8 @@ revealage are explained in shaders/block.frag.
 """
 from __future__ import annotations
 
+from .passes import Pass, Transparency
+
 
 def targets(ctx, size, ms: int, depth) -> dict:
     """Accum (RGBA16F) and revealage (R16F) with the opaque depth attached, sampled
@@ -22,14 +24,24 @@ def targets(ctx, size, ms: int, depth) -> dict:
     return {"accum": acc, "reveal": rev, "fbo": fbo}
 
 
-def draw(r, T: dict, S: dict, P: dict, batch, stats: dict) -> None:
-    """Accumulate the visible blend part (a Geometry batch) and resolve it into the
-    first peel layer's target; r is the Renderer, S its passes, P its programs."""
-    c = r.ctx
-    with S["oit"]:
-        T["oit"]["fbo"].clear(0, 0, 0, 0)  # accum 0, -log(revealage) 0: nothing covers yet
+class OIT(Transparency):
+    """One forward pass accumulates the visible blend part, a fullscreen pass resolves
+    it into the first layer target, which the composite blends as one layer."""
+    layers = 1
+
+    def __init__(self, accumulate: Pass, resolve: Pass):
+        self.accumulate, self.resolve = accumulate, resolve
+
+    def shade(self, geo, view, stats, fullscreen):
+        c = self.accumulate.ctx
+        self.accumulate.bind()  # clears: accum 0, -log(revealage) 0, nothing covers yet
         c.blend_func = c.ONE, c.ONE
-        r.geo.draw(batch, P["oit"], stats)
+        geo.draw(view["blend"], self.accumulate.prog, stats)
         c.blend_func = c.ONE, c.ZERO  # GL's default back
-    with S["oit_resolve"]:
-        r._fullscreen(P["oit_resolve"])
+        self.resolve.run(fullscreen)
+
+    def volume_programs(self):
+        return [self.accumulate.prog]
+
+    def programs(self):
+        return [self.accumulate.prog, self.resolve.prog]

@@ -10,11 +10,13 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..core import chunk
 from ..core.blocks import REGISTRY
 from . import camera as cam
 from . import sky
 from .geometry import Geometry, Stats
 from . import oit
+from .passes import GeometryPass, Pass, Peel
 from .lightvol import LightVolume
 from .frame import BINDING, FrameBlock
 from .programs import UNITS, Programs
@@ -39,8 +41,7 @@ class Renderer:
         self.lights: dict = {}       # (cx, cy) -> its light (or None: open daylight)
         self._vol_key = None         # the light window last made resident
         self._fs: dict = {}          # program -> empty VAO for fullscreen passes
-        self._plans: dict = {}       # switches -> the programs of every pass
-        self._pass = None            # pass -> _Pass, for the current targets
+        self._graphs: dict = {}      # switches -> the frame's passes, for these targets
         # llvmpipe implements anisotropic filtering as an EWA scan (Heckbert) over the
         # whole texel footprint of a pixel, derived from the coordinate differences of
         # the 2x2 quad and not bounded by the maximum anisotropy. Nearly edge-on sliver
@@ -114,23 +115,22 @@ class Renderer:
         light of whole chunks from light_at (default (cx0, cy0)), e.g. (16w, 16h, 256);
         chunks it does not cover get open daylight.
         """
-        from .. import meshing, opencl
-        if backend is None:  # the OpenCL twin builds the same meshes, much faster
-            backend = "opencl" if opencl.available() else "numpy"
+        from .. import meshing
         if not ring:
             pad = np.zeros((blocks.shape[0] + 2, blocks.shape[1] + 2, 256), np.uint16, order="F")
             pad[1:-1, 1:-1] = blocks
             blocks = pad
-        # one batched call for the whole area (meshing README: build_chunks)
+        # one batched call for the whole area (meshing README: build_chunks); backend
+        # None: the OpenCL twin when there is a device (same meshes, much faster)
         meshes = meshing.build_chunks(blocks, (cx0, cy0), method=method, backend=backend)
-        lights = _chunks_of(light, *(light_at or (cx0, cy0)))
+        lights = chunk.cut(light, *(light_at or (cx0, cy0)))
         self.remove_chunks([k for k in self.geo.keys if k not in meshes])
         self.update_chunks(_Chunk(k, m, lights.get(k)) for k, m in meshes.items())
 
     def set_meshes(self, meshes: dict) -> None:
         """{(cx, cy): meshing.ChunkMesh} to draw instead of what was shown; the light
         known for chunks that stay is kept (set_light)."""
-        self.geo.remove([k for k in self.geo.keys if k not in meshes])
+        self.remove_chunks([k for k in self.geo.keys if k not in meshes])
         self.geo.update(meshes)
         self._shown()
 
@@ -138,16 +138,14 @@ class Renderer:
         """Packed light of whole chunks from (cx0, cy0), e.g. (16w, 16h, 256); the
         volume takes the part inside the light window (outside it surfaces get open
         daylight, the fog hides them)."""
-        for k, v in _chunks_of(light, cx0, cy0).items():
+        for k, v in chunk.cut(light, cx0, cy0).items():
             self.lights[k] = v
             self.vol.forget(k)
         self._vol_key = None
 
     def _shown(self) -> None:
         """The shown chunks changed: their box (self.area), the light window again."""
-        ks = np.array(list(self.geo.keys), int).reshape(-1, 2)
-        self.area = (tuple(int(v) for v in (*ks.min(0), *(ks.max(0) + 1)))
-                     if len(ks) else None)
+        self.area = self.geo.bounds()
         self._vol_key = None
 
     def _sync_light(self, camera) -> None:
@@ -165,10 +163,10 @@ class Renderer:
         if key == self._vol_key:
             return
         n = 1 if a is None else max(1, min(2 * r + 1, max(a[2] - a[0], a[3] - a[1])))
-        if self.vol.n < n:
+        if self.vol.n < n:  # grown by doubling: a streamed area grows chunk by chunk
             self.vol.release()
-            self.vol = LightVolume(self.ctx, n)
-            self._pass = None
+            self.vol = LightVolume(self.ctx, min(2 * r + 1, max(n, 2 * self.vol.n)))
+            self._graphs.clear()
         for x in range(win[0], win[2]):
             for y in range(win[1], win[3]):
                 if not self.vol.resident((x, y)):
@@ -234,7 +232,7 @@ class Renderer:
                     rel(v)
             elif hasattr(x, "release"):
                 x.release()
-        self._pass = None
+        self._graphs.clear()
         rel({k: v for k, v in self.targets.items() if k != "key"})
         self.targets = {}
 
@@ -259,17 +257,16 @@ class Renderer:
         """A frame's work that is not drawing, all before the first draw: its values
         into the one uniform block, culling and the batches of every pass (the heavy
         draws leave the calling thread's caches cold; see Geometry.batches). Programs,
-        textures and GL switches of each pass are made once (_plan, _passes) for the
-        settings and targets. One prepared frame at a time: the frame block and the
+        textures and GL switches of each pass are made once (_graph, passes.py) for
+        the switches and targets. One prepared frame at a time: the frame block and the
         command buffers are shared, so submit it before preparing the next."""
         s = self.s
         s.check()
         w, h = size
         # the whole height of the area stays in view; the caller's camera is left alone
         camera = camera.fitted(w / h, s.fov, s.distance * 16 * 1.5 + 256.0)
-        self._sync_light(camera)  # before _passes: it may make a bigger volume
+        self._sync_light(camera)  # before _graph: it may make a bigger volume
         T = self._targets(w, h)
-        S = self._passes(T)
         self.tex.use(UNITS["tex"])  # the arrays stay bound: no pass uses their units
         self.glow.use(UNITS["glow_tex"])
         aniso = max(1.0, min(float(s.anisotropy), self.max_anisotropy))
@@ -296,9 +293,9 @@ class Renderer:
         sun_px, sun_vis, sun_r = _sun_on_screen(vp, draw_cam, sp["light_dir"], w, h, s.fov)
         gods = s.godrays and debug in (0, 6) and sun_vis
         dof = s.dof and debug == 0 and not camera.ortho  # parallel rays: no distance blur
-        P = self._plan((T["ms"], debug, shadows, layers, ssao, gods, dof, s.smooth_mag,
-                        s.msaa_alpha, s.per_sample, s.fog, s.fill_holes, geo.indirect_ok,
-                        use_oit))
+        G = self._graph(T, (T["ms"], debug, shadows, layers, ssao, gods, dof, s.smooth_mag,
+                            s.msaa_alpha, s.per_sample, s.fog, s.fill_holes, geo.indirect_ok,
+                            use_oit))
 
         # the frame's values, for every program at once
         F = self.frame
@@ -307,7 +304,7 @@ class Renderer:
             light_vp, texel, bias = self._shadow_matrix(camera, sp["light_dir"])
             F.set(shadow_vp=light_vp, shadow_mat=_BIAS @ light_vp, shadow_texel=texel,
                   shadow_bias=bias)
-            names = [name for name, _ in P["shadow"]]
+            names = G.shadow.names
             cast = (geo.gpu_batches(light_vp, names, "shadow") if geo.gpu
                     else geo.batches(geo.cull(light_vp), names, "shadow"))
         sky_on = debug in (0, 6)  # debug views show black where there is no surface
@@ -317,7 +314,8 @@ class Renderer:
               cam_fwd=draw_cam._fwd(), ortho=draw_cam.ortho,
               far_dist=camera.far, shadow_eye=(camera.x, camera.y, camera.z),
               # orthographic: no eye to fade from; the map covers the view box
-              shadow_fade=1e9 if camera.ortho else s.shadow_fade, day_ambient=sp["ambient"], day_u=sp["u"],
+              shadow_fade=1e9 if camera.ortho else s.shadow_fade,
+              day_ambient=sp["ambient"], day_u=sp["u"],
               day_direct=sp["direct"], sky_stars=sp["stars"] if sky_on else 0.0,
               sky_light_dir=sp["light_dir"], time=s.time, waving=s.waving,
               godray_strength=s.godray_strength, sun_px=sun_px, sun_radius=sun_r,
@@ -327,149 +325,99 @@ class Renderer:
         F.buf.bind_to_uniform_block(BINDING)
         if geo.gpu:
             geo.barrier()
-        self.vol.uniforms(P["shade"])
-        if layers:
-            self.vol.uniforms(P["layer"])
-        if use_oit:
-            self.vol.uniforms(P["oit"])
-        return _Frame(T, S, P, view, cast if shadows else None, layers, use_oit, ssao, dof, geo)
+        for prog in G.volume:
+            self.vol.uniforms(prog)
+        return _Frame(T, G, view, cast if shadows else None, geo, layers, use_oit, ssao, dof)
 
     def submit(self, f: "_Frame") -> None:
-        """Walk the passes of a prepared frame."""
-        T, S, P, geo, view, layers = f.T, f.S, f.P, self.geo, f.view, f.layers
-        stats = f.stats
-
-        # shadow map: blend casts no shadow (§5.4.1)
+        """Run the passes of a prepared frame."""
+        G, geo, stats, fs = f.G, self.geo, f.stats, self._fullscreen
         if f.cast is not None:  # shadows on: cleared even with no caster in view
-            with S["shadow"]:
-                T["shadow_fbo"].clear(depth=1.0)
-                for name, prog in P["shadow"]:
-                    geo.draw(f.cast.get(name), prog, stats, shadow=True)
-
-        # opaque G-buffer; double-sided plants without face culling
-        with S["g"]:
-            T["g"]["fbo"].clear(0, 0, 0, 0, depth=1.0)
-            for name, prog in P["g"]:
-                if name == "cutout2":
-                    self.ctx.disable(self.ctx.CULL_FACE)
-                geo.draw(view.get(name), prog, stats)
-
-        # transparent layers: depth peeling, no blending, nearest remaining layer each time
-        for i in range(layers):
-            with S["peel"][i]:
-                T["peel"][i]["fbo"].clear(0, 0, 0, 0, depth=1.0)
-                geo.draw(view["blend"], P["peel"][i], stats)
-
-        # deferred light per layer
-        with S["shade"]:
-            T["shaded_fbo"].clear(0, 0, 0, 0)
-            self._fullscreen(P["shade"])
-        for i in range(layers):
-            with S["layer"][i]:
-                T["layer_fbo"][i].clear(0, 0, 0, 0)
-                self._fullscreen(P["layer"])
-        if f.use_oit:  # resolved into layer 0: the composite blends it as one peel layer
-            oit.draw(self, T, S, P, view["blend"], stats)
-
-        if f.ssao:
-            with S["ssao"]:
-                self._fullscreen(P["ssao"])
-            for step, prog in zip(S["ao_blur"], P["ao_blur"]):
-                with step:
-                    self._fullscreen(prog)
-
-        # composite: sky, layers, god rays
-        with S["comp"]:
-            self._fullscreen(P["comp"])
-
-        # distance blur, final
-        if f.dof:
-            for step, prog in zip(S["dof_blur"], P["dof_blur"]):
-                with step:
-                    self._fullscreen(prog)
-        with S["final"]:
-            self._fullscreen(P["final"])
+            G.shadow.draw(geo, f.cast, stats, shadow=True)  # blend casts none (§5.4.1)
+        G.g.draw(geo, f.view, stats)
+        G.transparency.geometry(geo, f.view, stats)
+        G.shade.run(fs)
+        G.transparency.shade(geo, f.view, stats, fs)
+        for p in G.post:  # SSAO and its blur, composite, distance blur, final
+            p.run(fs)
 
     # ------------------------------------------------------------------ helpers
-    def _plan(self, key):
-        """The programs of every pass for one combination of switches (memoised)."""
-        plan = self._plans.get(key)
-        if plan is not None:
-            return plan
+    def _graph(self, T, key) -> "_Graph":
+        """The passes of a frame for these targets and one combination of switches:
+        programs compiled (cached by Programs), targets and textures bound to each pass
+        (memoised until the targets or the light volume change)."""
+        G = self._graphs.get(key)
+        if G is not None:
+            return G
         ms, debug, shadows, layers, ssao, gods, dof, smooth, msaa_alpha, per_sample, fog, \
             fill, indirect, use_oit = key
-        get = self.progs.get
+        c, get = self.ctx, self.progs.get
         cut = {"ALPHA_TEST": 1, "MSAA_ALPHA": msaa_alpha}
         g = {"SAMPLES": ms, "SMOOTH_MAG": smooth, "DEBUG_AGG": debug == 5,
              "UNIFORM_ORIGIN": not indirect}
         d = {"SAMPLES": ms, "PER_SAMPLE": per_sample, "SHADOWS": shadows,
              "FOG": fog and debug == 0, "DEBUG": debug if debug != 6 else 0}
         blocks = [("opaque", {}), ("cutout", cut), ("cutout2", cut)]
-        plan = {
-            "shadow": [(n, get("block.vert", "block.frag", {"SHADOW": 1, "ALPHA_TEST": n != "opaque",
-                                                            "UNIFORM_ORIGIN": not indirect}))
-                       for n, _ in blocks],
-            "g": [(n, get("block.vert", "block.frag", {**g, **x})) for n, x in blocks],
-            "peel": [get("block.vert", "block.frag", {**g, "PEEL": i + 1}) for i in range(layers)],
-            "shade": get("fullscreen.vert", "deferred.frag", {**d, "FILL_HOLES": fill}),
-            "layer": get("fullscreen.vert", "deferred.frag", {**d, "LAYER": 1}) if layers else None,
-            "ssao": get("fullscreen.vert", "ssao.frag") if ssao else None,
-            "ao_blur": [get("fullscreen.vert", "blur.frag", {"VERTICAL": v}) for v in (0, 1)],
-            "comp": get("fullscreen.vert", "composite.frag",
-                        {"LAYERS": 1 if use_oit else layers, "SSAO": ssao, "GODRAYS": gods}),
-            "oit": get("block.vert", "block.frag", {**g, **d, "OIT": 1}) if use_oit else None,
-            "oit_resolve": get("fullscreen.vert", "oit_resolve.frag", {"SAMPLES": ms}),
-            "dof_blur": [get("fullscreen.vert", "blur.frag", {"BILATERAL": 1, "VERTICAL": v})
-                         for v in (0, 1)],
-            "final": get("fullscreen.vert", "final.frag", {"DOF": dof}),
-        }
-        for prog in [p for _, p in plan["g"] + plan["shadow"]] + plan["peel"] + [plan["oit"]]:
-            if prog is not None and "glow_scale" in prog:
+
+        def block(defines):
+            prog = get("block.vert", "block.frag", defines)
+            if "glow_scale" in prog:
                 prog["glow_scale"].write(self.glow_scale.tobytes())
-        self._plans[key] = plan
-        return plan
+            return prog
 
-    def _passes(self, T):
-        """Per pass its framebuffer, GL switches and textures at their units
-        (programs.UNITS); rebuilt with the targets or the light volume. (moderngl's
-        scopes would bind these in one call, but they bind textures with a default
-        sampler object, whose mipmap filter makes our textures incomplete.)"""
-        if self._pass is not None:
-            return self._pass
-        c = self.ctx
-
-        def bound(fbo, flags=0, **tex):
-            return _Pass(c, fbo, flags, [(t, UNITS[k]) for k, t in tex.items()])
+        def full(frag, defines=None):
+            return get("fullscreen.vert", frag, defines)
 
         def gbuf(x):
             return dict(g_depth=x["depth"], g_albedo=x["albedo"], g_normal=x["normal"],
                         shadow_map=T["shadow"], light_vol=self.vol.tex)
 
-        g, peel = T["g"], T["peel"]
         dt_cf = c.DEPTH_TEST | c.CULL_FACE
-        self._pass = {
-            "shadow": bound(T["shadow_fbo"], dt_cf),
-            "g": bound(g["fbo"], dt_cf),
-            "peel": [bound(p["fbo"], c.DEPTH_TEST, opaque_depth=g["depth"],
-                           prev_depth=peel[i - 1]["depth"] if i else g["depth"])
-                     for i, p in enumerate(peel)],
-            "shade": bound(T["shaded_fbo"], **gbuf(g)),
-            "layer": [bound(f, **gbuf(p)) for f, p in zip(T["layer_fbo"], peel)],
-            "ssao": bound(T["ao_fbo"][0], front=T["front"]),
-            "ao_blur": [bound(T["ao_fbo"][1], src=T["ao"]), bound(T["ao_fbo"][0], src=T["ao2"])],
-            "comp": bound(T["comp_fbo"], opaque=T["opaque"], front=T["front"], ao=T["ao"],
-                          **{f"layer{i}": x for i, x in enumerate(T["layers"])}),
-            "dof_blur": [bound(T["blur_fbo"][0], src=T["comp"]),
-                         bound(T["blur_fbo"][1], src=T["blur"])],
-            "final": bound(T["out_fbo"], sharp=T["comp"], blurred=T["blur2"]),
-        }
-        if "oit" in T:
+        gb, peel = T["g"], T["peel"]
+        G = _Graph()
+        G.shadow = GeometryPass(c, T["shadow_fbo"], [
+            (n, block({"SHADOW": 1, "ALPHA_TEST": n != "opaque", "UNIFORM_ORIGIN": not indirect}))
+            for n, _ in blocks], dt_cf)
+        G.g = GeometryPass(c, gb["fbo"], [(n, block({**g, **x})) for n, x in blocks], dt_cf)
+        G.shade = Pass(c, T["shaded_fbo"], full("deferred.frag", {**d, "FILL_HOLES": fill}),
+                       clear=True, **gbuf(gb))
+        if use_oit:  # resolved into layer 0: the composite blends it as one peel layer
             o = T["oit"]
-            self._pass["oit"] = bound(o["fbo"], c.DEPTH_TEST | c.BLEND, shadow_map=T["shadow"],
-                                      light_vol=self.vol.tex)
-            self._pass["oit_resolve"] = bound(T["layer_fbo"][0], accum=o["accum"],
-                                              reveal=o["reveal"])
-        return self._pass
+            G.transparency = oit.OIT(
+                Pass(c, o["fbo"], block({**g, **d, "OIT": 1}), c.DEPTH_TEST | c.BLEND,
+                     clear=True, shadow_map=T["shadow"], light_vol=self.vol.tex),
+                Pass(c, T["layer_fbo"][0], full("oit_resolve.frag", {"SAMPLES": ms}),
+                     accum=o["accum"], reveal=o["reveal"]))
+        else:  # no blending, the nearest remaining layer each time
+            layer = full("deferred.frag", {**d, "LAYER": 1}) if layers else None
+            G.transparency = Peel(
+                [Pass(c, p["fbo"], block({**g, "PEEL": i + 1}), c.DEPTH_TEST, clear=True,
+                      opaque_depth=gb["depth"],
+                      prev_depth=peel[i - 1]["depth"] if i else gb["depth"])
+                 for i, p in enumerate(peel[:layers])],
+                [Pass(c, f, layer, clear=True, **gbuf(p))
+                 for f, p in zip(T["layer_fbo"][:layers], peel)])
+        post = []
+        if ssao:
+            post += [Pass(c, T["ao_fbo"][0], full("ssao.frag"), front=T["front"]),
+                     Pass(c, T["ao_fbo"][1], full("blur.frag", {"VERTICAL": 0}), src=T["ao"]),
+                     Pass(c, T["ao_fbo"][0], full("blur.frag", {"VERTICAL": 1}), src=T["ao2"])]
+        # composite: sky, layers, god rays
+        post.append(Pass(c, T["comp_fbo"], full("composite.frag", {
+            "LAYERS": G.transparency.layers, "SSAO": ssao, "GODRAYS": gods}),
+            opaque=T["opaque"], front=T["front"], ao=T["ao"],
+            **{f"layer{i}": x for i, x in enumerate(T["layers"])}))
+        if dof:  # distance blur
+            post += [Pass(c, T["blur_fbo"][0], full("blur.frag", {"BILATERAL": 1, "VERTICAL": 0}),
+                          src=T["comp"]),
+                     Pass(c, T["blur_fbo"][1], full("blur.frag", {"BILATERAL": 1, "VERTICAL": 1}),
+                          src=T["blur"])]
+        G.final = Pass(c, T["out_fbo"], full("final.frag", {"DOF": dof}),
+                       sharp=T["comp"], blurred=T["blur2"])
+        G.post = post + [G.final]
+        G.volume = [G.shade.prog] + G.transparency.volume_programs()
+        self._graphs[key] = G
+        return G
 
     def _fullscreen(self, prog):
         vao = self._fs.get(prog.glo)
@@ -537,35 +485,43 @@ class Renderer:
 
 
 class _Frame:
-    """What prepare() made for submit(): targets, passes, programs, batches, switches."""
-    __slots__ = ("T", "S", "P", "view", "cast", "layers", "use_oit", "ssao", "dof", "stats")
+    """What prepare() made for submit(): targets, passes, batches, switches. A host
+    that composites the frame itself (blender/viewport) reads `color` (the final RGBA8
+    texture), `depth` (the opaque G-buffer depth, multisampled under MSAA: T["ms"]
+    samples) and `blend_depth` (the nearest transparent surface's depth when peeling
+    drew one, else None; OIT writes no depth)."""
+    __slots__ = ("T", "G", "view", "cast", "stats", "layers", "use_oit", "ssao", "dof")
 
-    def __init__(self, T, S, P, view, cast, layers, use_oit, ssao, dof, geo):
-        self.T, self.S, self.P, self.view, self.cast = T, S, P, view, cast
+    def __init__(self, T, G, view, cast, geo, layers, use_oit, ssao, dof):
+        self.T, self.G, self.view, self.cast = T, G, view, cast
         self.layers, self.use_oit, self.ssao, self.dof = layers, use_oit, ssao, dof
         self.stats = Stats(geo)
 
+    @property
+    def color(self):
+        return self.T["out"]
 
-class _Pass:
-    """A pass's target, GL switches and input textures: `with` binds them."""
-    __slots__ = ("ctx", "fbo", "flags", "tex")
+    @property
+    def depth(self):
+        return self.T["g"]["depth"]
 
-    def __init__(self, ctx, fbo, flags, tex):
-        self.ctx, self.fbo, self.flags, self.tex = ctx, fbo, flags, tex
+    @property
+    def blend_depth(self):
+        return self.T["peel"][0]["depth"] if self.layers else None
 
-    def __enter__(self):
-        self.fbo.use()
-        self.ctx.enable_only(self.flags)
-        for t, unit in self.tex:
-            t.use(unit)
 
-    def __exit__(self, *exc):
-        return False
+class _Graph:
+    """A frame's passes (passes.py) for one set of targets and switches."""
+    __slots__ = ("shadow", "g", "shade", "transparency", "post", "final", "volume")
+
+    def programs(self) -> list:
+        return [p for x in (self.shadow, self.g, self.shade, self.transparency, *self.post)
+                for p in x.programs()]
 
 
 def _top_camera(camera: cam.Camera) -> cam.Camera:
-    return cam.Camera(camera.x, camera.y, 250.0, camera.yaw, -89.9, camera.fov, camera.aspect,
-                      1.0, 400.0)
+    return cam.Camera(camera.x, camera.y, 250.0, camera.yaw, -89.9, camera.fov or 70.0,
+                      camera.aspect, 1.0, 400.0)  # (an orthographic camera has no fov)
 
 
 class _Chunk(NamedTuple):
@@ -573,13 +529,6 @@ class _Chunk(NamedTuple):
     key: tuple
     mesh: object
     light: np.ndarray | None
-
-
-def _chunks_of(light: np.ndarray, cx0: int, cy0: int) -> dict:
-    """{(cx, cy): (16, 16, 256) view} of a light array of whole chunks from (cx0, cy0)."""
-    w, h = light.shape[0] // 16, light.shape[1] // 16
-    return {(cx0 + i, cy0 + j): light[16 * i:16 * i + 16, 16 * j:16 * j + 16]
-            for i in range(w) for j in range(h)}
 
 
 def _sun_on_screen(vp, camera, light_dir, w, h, fov):

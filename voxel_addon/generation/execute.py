@@ -1,4 +1,4 @@
-"""Runs a lang.Program with NumPy: the reference backend.
+"""Runs a lang.Program with NumPy: the reference backend (cl.py is its OpenCL twin).
 
 Values are arrays that broadcast over (chunk, x, y[, z]); a value that depends only
 on x stays (n, W, 1), so column math is not repeated per voxel. Each node is
@@ -16,15 +16,17 @@ F, I = np.float32, np.int32
 DT = {"f": F, "i": I, "b": bool}
 
 
-class Run:
-    """Evaluates the units of one program for one group of chunk origins."""
+class Runner:
+    """Evaluates the units of one program for groups of chunk origins (cl.Runner is
+    its OpenCL twin, with the same calls)."""
 
-    def __init__(self, units: list[Unit], seed32: int, perm: np.ndarray):
-        self.units, self.seed, self.perm = units, seed32, perm
+    def __init__(self, units: list[Unit]):
+        self.units = units
 
-    def run(self, keys, want=()):
+    def run(self, keys, seed32: int, perm: np.ndarray, want=()):
         """Blocks (n, 65536) uint16 in linear order, and the 2D fields named in want
         as (n, 16, 16) [c, x, y] arrays."""
+        self.seed, self.perm = seed32, perm
         org = np.array(keys, np.int64).reshape(-1, 2) * C.SIZE
         self.ox = org[:, 0].astype(I)
         self.oy = org[:, 1].astype(I)

@@ -2,7 +2,7 @@
 and runs it on batches of chunks.
 
 Every node becomes one C statement doing exactly the float32 operation NumPy does
-(np_exec); constants are written as hex floats so no decimal rounding sneaks in.
+(execute.py); constants are written as hex floats so no decimal rounding sneaks in.
 
 Speed on pocl comes from its work-group vectorizer (see gpu/noise.h), so kernels
 have no control flow: no early returns (2D domains are padded, 3D kernels run on a
@@ -258,7 +258,7 @@ def source(units) -> str:
 
 
 class Runner:
-    """A compiled program; `run(keys, seed32, perm)` like np_exec.Run.run."""
+    """A compiled program; the OpenCL twin of execute.Runner (the same calls)."""
 
     def __init__(self, units):
         import pyopencl as cl

@@ -99,6 +99,11 @@ def test_drain_respects_budget_and_counts(world_path):
             assert s.counts == (9, 9, 1)
             rest, _ = s.drain(1.0)
             assert len(rest) == 8 and s.counts == (9, 9, 9)
+            s.set_distance(0)
+            _, gone = s.drain(0.0)
+            assert len(gone) == 8 and (0, 0) not in gone and s.counts == (1, 1, 1)
+            s.set_distance(1)
+            assert s.wait_ready(60) and len(s.drain(1.0)[0]) == 8
             s.set_view(16 * 10, 0)
             _, gone = s.drain(0.0)
             assert sorted(gone) == sorted((x, y) for x in (-1, 0, 1) for y in (-1, 0, 1))
@@ -124,3 +129,27 @@ def test_corrupt_chunk_shown_missing_reported_once(world_path, caplog):
     db = sqlite3.connect(world_path)
     assert db.execute("SELECT blocks FROM chunks WHERE cx=1 AND cy=0").fetchone()[0] == \
         b"\xde\xad\xbe\xef"
+
+
+def test_edits_while_streaming_end_equal_one_shot(world_path):
+    """Edits race the workers (same chunks, any order): what the consumer ends up
+    with (drained payloads, newest version per chunk) equals the one-shot path."""
+    from voxel_addon.world.edit import edit
+    rng = np.random.default_rng(5)
+    got = {}
+    with World.create(world_path, seed=SEED) as w:
+        with Stream(w, 3, tile=4) as s:
+            s.set_view(8, 8, direction=(0, 1))
+            for i in range(25):
+                x, y = int(rng.integers(-40, 56)), int(rng.integers(-40, 56))
+                z = int(rng.integers(60, 110))
+                b = ["air", "glass", "lamp_red", "stone"][i % 4]
+                payloads, _ = edit(w, [(x, y, z, b), (x + 1, y, z, b)])
+                got.update((p.key, p) for p in payloads)   # as a consumer would
+                ready, _ = s.drain(0.004)
+                got.update((p.key, p) for p in ready if p.version >= got.get(p.key, p).version)
+            for k, p in collect(s).items():
+                if p.version >= got.get(k, p).version:
+                    got[k] = p
+    area, meshes = one_shot(world_path, 8, 8, 3)
+    check_equal({k: p for k, p in got.items() if k in meshes}, area, meshes)

@@ -109,3 +109,19 @@ def test_region_blocks_layout(world_path):
         assert r.flags.f_contiguous
         assert r[15, 17, 200] == REGISTRY.id("sand")
         assert (r[:, :, 200] != 0).sum() == 1
+
+
+def test_stored_edits_keep_data_values_both_ways(world_path):
+    """Chunks regenerated on demand and by generate_area get the stored edits the
+    same way, data values included (one place applies them)."""
+    with World.create(world_path, seed=1, generator="flat", loader=False) as w:
+        w.set_block(3, 4, 100, "glass", 7)
+        w.set_block(20, 4, 100, "glass", 9)
+        w.flush()
+        w.recreate(keep_edits=True)
+        assert w.generate_area([(1, 0)]) == 1              # to the file, not resident
+        c = w.chunk_at(0, 0)                               # generated on demand
+        assert c.get(3, 4, 100) == REGISTRY.id("glass") and c.data[3, 4, 100] == 7
+    with World.open(world_path, loader=False) as w:
+        blocks, data = w.file.read_chunk((1, 0))
+        assert blocks[4, 4, 100] == REGISTRY.id("glass") and data[4, 4, 100] == 9

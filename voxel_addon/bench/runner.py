@@ -16,7 +16,7 @@ import time
 import traceback
 from pathlib import Path
 
-AREAS = ["storage", "generation", "light", "meshing", "bake", "render", "viewport"]
+AREAS = ["storage", "generation", "light", "meshing", "bake", "render", "world", "viewport"]
 
 
 class Context:

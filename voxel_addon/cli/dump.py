@@ -28,6 +28,7 @@ def run(args):
     if not args.out.parent.is_dir():
         raise VoxelError(f"folder {args.out.parent} does not exist")
     with World.open(args.world, readonly=True, loader=False) as world:
+        world.chunk_at(cx, cy)  # a damaged chunk is an error here, not air (neighbours: air)
         b3 = world.region_blocks(cx - 1, cy - 1, cx + 2, cy + 2)
     blocks = np.asfortranarray(b3[16:32, 16:32])
     light = chunk_light(b3)

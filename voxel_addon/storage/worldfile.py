@@ -23,11 +23,18 @@ from . import codecs
 FORMAT_VERSION = 1
 APP_ID = 0x564F5857  # "VOXW": marks our files in the SQLite header
 
-SCHEMA = """
+LIGHT_TABLE = """CREATE TABLE IF NOT EXISTS light(cx INTEGER, cy INTEGER, codec TEXT NOT NULL,
+    light BLOB NOT NULL, PRIMARY KEY (cx, cy))"""
+SCHEMA = f"""
 CREATE TABLE IF NOT EXISTS meta(key TEXT PRIMARY KEY, value TEXT);
 CREATE TABLE IF NOT EXISTS block_types(id INTEGER PRIMARY KEY, name TEXT UNIQUE NOT NULL);
 CREATE TABLE IF NOT EXISTS chunks(cx INTEGER, cy INTEGER, codec TEXT NOT NULL,
     blocks BLOB NOT NULL, data BLOB, PRIMARY KEY (cx, cy));
+-- A chunk's final light when it was saved, packed as SPEC 3 in linear order. Derived
+-- data, kept apart from the chunks table of SPEC 3: a row is dropped whenever its
+-- chunk is written without light or a block in its 3x3 changes, and a missing or
+-- damaged one is only computed again (saves the light solve when reloading).
+{LIGHT_TABLE};
 -- The user's own changes, kept apart so a world can be regenerated with them.
 CREATE TABLE IF NOT EXISTS edits(x INTEGER, y INTEGER, z INTEGER, block INTEGER NOT NULL,
     data INTEGER NOT NULL DEFAULT 0, t REAL NOT NULL, PRIMARY KEY (x, y, z));
@@ -68,6 +75,7 @@ class WorldFile:
         if not readonly and _create is None:
             self.db.execute("PRAGMA journal_mode=WAL")
         self._map_ids(file_names)
+        self._light_table(readonly)
 
     # ---- creation and checks -------------------------------------------------
     @classmethod
@@ -124,6 +132,15 @@ class WorldFile:
         self._identity = all(self._to_reg[i] == i for i in file_names) and \
             len(file_names) == len(names)
 
+    def _light_table(self, readonly: bool) -> None:
+        """Files written before the light table get it (empty: light is recomputed)."""
+        self._has_light = self.db.execute("SELECT 1 FROM sqlite_master WHERE type='table' "
+                                          "AND name='light'").fetchone() is not None
+        if not self._has_light and not readonly:
+            with self.transaction():
+                self.db.execute(LIGHT_TABLE)
+            self._has_light = True
+
     # ---- properties -------------------------------------------------------
     @property
     def seed(self) -> int:
@@ -164,11 +181,14 @@ class WorldFile:
             return self.db.execute("SELECT 1 FROM chunks WHERE cx=? AND cy=?",
                                    tuple(key)).fetchone() is not None
 
-    def read_chunk(self, key):
-        """(blocks, data-or-None) in registry ids, or None when the chunk is absent."""
+    def read_chunk(self, key, light: bool = False):
+        """(blocks, data-or-None) in registry ids, or None when the chunk is absent;
+        with light=True (blocks, data, light-or-None)."""
         with self._lock:
             row = self.db.execute("SELECT codec, blocks, data FROM chunks WHERE cx=? AND cy=?",
                                   tuple(key)).fetchone()
+            lrow = self.db.execute("SELECT codec, light FROM light WHERE cx=? AND cy=?",
+                                   tuple(key)).fetchone() if light and self._has_light else None
         if row is None:
             return None
         codec, blob, dblob = row
@@ -184,20 +204,40 @@ class WorldFile:
                 raise CorruptChunk(f"chunk ({key[0]}, {key[1]}) in {self.path} has block ids "
                                    "missing from block_types; it was left untouched")
             blocks = self._to_reg[blocks]
-        return blocks, data
+        if not light:
+            return blocks, data
+        lit = None
+        if lrow is not None:
+            try:
+                lit = C.from_linear(codecs.decode(lrow[0], lrow[1], C.VOLUME * 2)).copy(order="F")
+            except (ValueError, VoxelError):  # derived data: recomputed, never a failure
+                lit = None
+        return blocks, data, lit
 
-    def encode_chunk(self, key, blocks, data=None, codec: str | None = None) -> tuple:
-        """A ready-to-write row; thread-safe, so callers can encode outside locks."""
+    def encode_chunk(self, key, blocks, data=None, codec: str | None = None,
+                     light=None) -> tuple:
+        """A ready-to-write row; thread-safe, so callers can encode outside locks.
+        `light` only when it is the chunk's final light (see the schema)."""
         codec = codec or codecs.default()
         ids = blocks if self._identity else self._to_file[blocks]
         dblob = None if data is None or not data.any() else codecs.encode(codec, C.to_linear(data))
-        return (int(key[0]), int(key[1]), codec, codecs.encode(codec, C.to_linear(ids)), dblob)
+        lblob = None if light is None else codecs.encode(codec, C.to_linear(light))
+        return (int(key[0]), int(key[1]), codec, codecs.encode(codec, C.to_linear(ids)), dblob,
+                lblob)
 
-    def save(self, rows=(), edits=()) -> None:
+    def save(self, rows=(), edits=(), stale_light=()) -> None:
         """Encoded chunk rows (from encode_chunk) and (x, y, z, block, data) edits in
-        registry ids, written in one transaction: after it returns they survive a kill."""
+        registry ids, written in one transaction: after it returns they survive a kill.
+        A row's light (its 6th value) replaces the stored one, None drops it;
+        `stale_light`: keys whose stored light no longer holds (dropped too)."""
         with self.transaction():
-            self.db.executemany("INSERT OR REPLACE INTO chunks VALUES (?, ?, ?, ?, ?)", rows)
+            self.db.executemany("INSERT OR REPLACE INTO chunks VALUES (?, ?, ?, ?, ?)",
+                                [r[:5] for r in rows])
+            self.db.executemany("INSERT OR REPLACE INTO light VALUES (?, ?, ?, ?)",
+                                [r[:3] + r[5:] for r in rows if r[5] is not None])
+            self.db.executemany("DELETE FROM light WHERE cx=? AND cy=?",
+                                [r[:2] for r in rows if r[5] is None]
+                                + [tuple(k) for k in stale_light])
             now = time.time()
             self.db.executemany("INSERT OR REPLACE INTO edits VALUES (?, ?, ?, ?, ?, ?)",
                                 [(x, y, z, int(self._to_file[b]), d, now)
@@ -211,6 +251,7 @@ class WorldFile:
         """Drop every generated chunk (edits stay); used to regenerate a world."""
         self._writable()
         with self.transaction():
+            self.db.execute("DELETE FROM light")
             return self.db.execute("DELETE FROM chunks").rowcount
 
     # ---- edits ------------------------------------------------------------

@@ -2,7 +2,9 @@
 path that streaming (stream.py) and edits (edit.py, for chunks not lit yet) share.
 
 A chunk's light is final only when its 8 neighbours' blocks were known, so a batch
-reads its rectangle plus a one-chunk ring. Blocks are copied under the world's lock
+reads its rectangle plus a one-chunk ring; light saved in the file with a chunk is
+final too (the world nulls it when a block around changes), so a rectangle whose
+chunks all came with light is only meshed. Blocks are copied under the world's lock
 with the tick of each chunk's last block change; the light and meshes are kept only
 for chunks whose 3x3 did not change meanwhile (an edit raced us: done again later).
 """
@@ -21,10 +23,13 @@ CL_LOCK = threading.Lock()
 
 
 def backends() -> tuple[str, str]:
-    """(light, meshing) backends for the world layer: OpenCL where present (faster
-    in batches on this machine: bench world/light/meshing), else the NumPy reference."""
+    """(light, meshing) backends for the world layer. Light: NumPy. Its flood uses
+    less CPU per chunk than the OpenCL sweeps here (1.1-1.5 vs 1.4-2.2 ms per kept
+    chunk on 2 shared cores) and pocl builds the sweep kernels again for every new
+    region shape (~1.5 s each), which streaming's varied rectangles keep hitting.
+    Meshing: OpenCL where present (~10x NumPy), else NumPy."""
     from .. import opencl
-    return ("opencl", "opencl") if opencl.available() else ("numpy", "numpy")
+    return ("numpy", "opencl") if opencl.available() else ("numpy", "numpy")
 
 
 def keys_of(cx0: int, cy0: int, cx1: int, cy1: int) -> list[tuple[int, int]]:
@@ -63,15 +68,20 @@ def light_and_mesh(world, cx0: int, cy0: int, cx1: int, cy1: int, *, backends_=N
     if load:
         world.load(ring)
     blocks, ticks = snapshot(world, cx0 - 1, cy0 - 1, cx1 + 1, cy1 + 1)
+    with world._lock:  # light stored in the file (loaded with the blocks) is final
+        need = any(c is not None and c.light is None
+                   for c in map(world.chunks.get, keys_of(cx0, cy0, cx1, cy1)))
     # one solve for the whole rectangle: its ring is the only overhead
-    lit = _run(lb, light.region_light, blocks, tile=max(cx1 - cx0, cy1 - cy0))
+    lit = _run(lb, light.region_light, blocks, tile=max(cx1 - cx0, cy1 - cy0)) if need else None
     meshes = _run(mb, meshing.build_chunks, blocks[15:-15, 15:-15], (cx0, cy0))
     return store(world, cx0, cy0, cx1, cy1, lit, meshes, ticks)
 
 
 def store(world, cx0, cy0, cx1, cy1, lit, meshes, ticks) -> list[Payload]:
-    """Keep light (an array over the rectangle) and meshes on chunks whose 3x3 is
-    unchanged since `ticks`; returns their new payloads."""
+    """Keep light (an array over the rectangle, or None to keep the chunks' own)
+    and meshes on chunks whose 3x3 is unchanged since `ticks`; returns their new
+    payloads. A chunk lit here for the first time is marked changed, so its light
+    is saved with it (reloading then skips the solve)."""
     out = []
     s = C.SIZE
     with world._lock:
@@ -82,8 +92,13 @@ def store(world, cx0, cy0, cx1, cy1, lit, meshes, ticks) -> list[Payload]:
             if any(world.bver.get((k[0] + i, k[1] + j), 0) != ticks[(k[0] + i, k[1] + j)]
                    for i in (-1, 0, 1) for j in (-1, 0, 1)):
                 continue
-            x, y = (k[0] - cx0) * s, (k[1] - cy0) * s
-            c.light = np.asfortranarray(lit[x:x + s, y:y + s])
+            if lit is not None:
+                if c.light is None and not world.readonly:
+                    c.dirty = True
+                x, y = (k[0] - cx0) * s, (k[1] - cy0) * s
+                c.light = np.asfortranarray(lit[x:x + s, y:y + s])
+            elif c.light is None:
+                continue
             c.mesh = meshes[k]
             v = world.pver[k] = world.tick()
             out.append(Payload(k, c.mesh, c.light, v))

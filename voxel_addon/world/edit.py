@@ -4,8 +4,9 @@ an undo record, write one transaction per stroke.
 `edit(world, changes)`: changes is one (x, y, z, block[, data]) or a list of them
 (a brush stroke); block is a name or an id. Everything is checked before anything
 changes (a VoxelError on one line). Returns (payloads, record): the new Payload of
-every chunk whose light or mesh changed (at most the 3x3 around each change: light
-reaches 14 voxels, a mesh sees its one-voxel ring), and a Record holding the before
+every chunk whose light or mesh really changed (at most the 3x3 around each change:
+light reaches 14 voxels; the chunks holding a changed voxel or a face neighbour of
+one are remeshed and kept only if the mesh differs), and a Record holding the before
 and after (id, data) of every voxel that really changed. `undo(world, record)` and
 `redo(world, record)` apply it back or again the same way and return payloads.
 
@@ -139,8 +140,8 @@ def _apply(world, items):
         lit = _gather(world, x0, y0, x1, y1, "light")
         first: dict = {}
         last: dict = {}
-        lo = [blocks.shape[0], blocks.shape[1]]
-        hi = [0, 0]
+        lo = [blocks.shape[0], blocks.shape[1], C.HEIGHT]  # union of the relit boxes
+        hi = [0, 0, 0]
         for x, y, z, b, d in items:
             c = world.chunks[C.key_of(x, y)]
             lx, ly = x & 15, y & 15
@@ -157,9 +158,9 @@ def _apply(world, items):
             if old[0] != b:
                 wx, wy = x - x0, y - y0
                 blocks[wx, wy, z] = b
-                sx, sy, _ = light.update(blocks, lit, wx, wy, z, old[0])
-                lo = [min(lo[0], sx.start), min(lo[1], sy.start)]
-                hi = [max(hi[0], sx.stop), max(hi[1], sy.stop)]
+                box = light.update(blocks, lit, wx, wy, z, old[0])
+                lo = [min(v, sl.start) for v, sl in zip(lo, box)]
+                hi = [max(v, sl.stop) for v, sl in zip(hi, box)]
         changed = {C.key_of(x, y) for x, y, _ in last}
         voxels = [v for v in last if first[v] != last[v]]
         if not changed:
@@ -177,9 +178,12 @@ def _apply(world, items):
                     if (cx, cy) not in near or c is None:
                         continue
                     i, j = cx * S - x0, cy * S - y0
-                    new = lit[i:i + S, j:j + S]
-                    if not np.array_equal(new, c.light):
-                        c.light = np.asfortranarray(new)
+                    zs = slice(lo[2], hi[2])  # outside the boxes nothing moved
+                    new = lit[i:i + S, j:j + S, zs]
+                    if not np.array_equal(new, c.light[:, :, zs]):
+                        c.light = c.light.copy(order="F")  # payloads out there keep theirs
+                        c.light[:, :, zs] = new
+                        c.dirty = True
                         relit.add((cx, cy))
         # meshes: chunks holding a changed voxel or one of its face neighbours
         remesh = {C.key_of(x + i, y + j) for x, y, _ in last for i, j in
@@ -192,9 +196,10 @@ def _apply(world, items):
         remeshed = set()
         for k in remesh:
             c = world.chunks.get(k)
-            if c is not None and k not in world.corrupt:
-                c.mesh = meshes[k]
-                remeshed.add(k)
+            if c is None or k in world.corrupt or _same(c.mesh, meshes[k]):
+                continue  # e.g. a hidden face stayed hidden: no new payload
+            c.mesh = meshes[k]
+            remeshed.add(k)
         payloads = []
         for k in sorted(relit | remeshed):
             c = world.chunks[k]
@@ -202,11 +207,18 @@ def _apply(world, items):
             payloads.append(Payload(k, c.mesh, c.light, v))
             fresh.pop(k, None)
     rows = [(x, y, z, *last[(x, y, z)]) for x, y, z in last]
-    world.commit(changed, rows)
+    # the changed chunks are written with their new light; relit neighbours' stored
+    # light is dropped now and saved again with them later (marked changed)
+    world.commit(changed, rows, stale_light=relit - changed)
     for s in list(world.streams):
         s.offer(payloads)
     rec = Record(tuple(voxels), tuple(first[v] for v in voxels), tuple(last[v] for v in voxels))
     return sorted(payloads + list(fresh.values())), rec
+
+
+def _same(a, b) -> bool:
+    return a is not None and np.array_equal(a.vertices, b.vertices) and \
+        np.array_equal(a.ranges, b.ranges)
 
 
 def _mesh(meshing, blocks, origin, keys):

@@ -1,7 +1,7 @@
 """Streaming around a moving view point (SPEC F2, thesis §5.2, issue 11 §2).
 
-A background worker keeps every chunk within `distance` (Chebyshev, in chunks) of the
-view chunk generated or loaded, lit and meshed, and queues its Payload. Work goes in
+Background workers keep every chunk within `distance` (Chebyshev, in chunks) of the
+view chunk generated or loaded, lit and meshed, and queue its Payload. Work goes in
 batches: a rectangle of up to `tile` x `tile` chunks (aligned, so neighbouring views
 share them) is generated/loaded with its one-chunk ring in one call, lit in one
 solve and meshed in one build_chunks call; batching is what makes it fast on few
@@ -30,11 +30,12 @@ from collections import deque
 from ..core.errors import VoxelError
 from . import build
 
-NEAR = 6  # chunks: closer than this, work in quarter tiles (first payloads sooner)
+NEAR = 6  # chunks: closer than this, work in half tiles (first payloads sooner)
 
 
 class Stream:
-    def __init__(self, world, distance: int, *, tile: int = 8, margin: int = 2, backends=None):
+    def __init__(self, world, distance: int, *, tile: int = 8, margin: int = 2, backends=None,
+                 workers: int = 2):
         if int(distance) < 0:
             raise VoxelError(f"view distance must be 0 or more, got {distance}")
         if tile < 1:
@@ -44,6 +45,9 @@ class Stream:
         self.tile = int(tile)
         self.margin = int(margin)
         self.backends = backends or build.backends()
+        # Two workers: while one waits on OpenCL (one queue: generation, meshing) the
+        # other lights on the CPU (bench world: stream_view32_s per worker count).
+        self._worker_backends = [self.backends] * max(1, int(workers))
         self.error: BaseException | None = None
         self._lock = threading.Lock()
         self._wake = threading.Condition(self._lock)
@@ -53,10 +57,14 @@ class Stream:
         self._gone: deque = deque()
         self._emitted: dict = {}    # key in range -> version of its queued/drawn payload
         self._drawn: set = set()
+        self._busy: set = set()     # keys a worker is doing now
         self._stop = False
         world.streams.add(self)
-        self._thread = threading.Thread(target=self._run, name="voxel-stream", daemon=True)
-        self._thread.start()
+        self._threads = [threading.Thread(target=self._run, args=(be,), daemon=True,
+                                          name=f"voxel-stream-{i}")
+                         for i, be in enumerate(self._worker_backends)]
+        for t in self._threads:
+            t.start()
 
     # ---- consumer side -----------------------------------------------------
     def set_view(self, x: float, y: float, direction=None) -> None:
@@ -71,31 +79,57 @@ class Stream:
             old = self._view
             self._view = (cx, cy, d)
             if old is None or old[:2] != (cx, cy):
-                r = self.distance
-                for k in [k for k in self._emitted if max(abs(k[0] - cx), abs(k[1] - cy)) > r]:
-                    del self._emitted[k]
-                    if k in self._drawn:
-                        self._drawn.discard(k)
-                        self._gone.append(k)
+                self._prune()
             self._changes += 1
             self._wake.notify_all()
+
+    def set_distance(self, distance: int) -> None:
+        """Change the view distance (chunks); what falls outside goes as in set_view."""
+        if int(distance) < 0:
+            raise VoxelError(f"view distance must be 0 or more, got {distance}")
+        with self._lock:
+            self.distance = int(distance)
+            self._prune()
+            self._changes += 1
+            self._wake.notify_all()
+
+    def _prune(self) -> None:
+        """Forget payloads of chunks now out of range; drawn ones are reported gone."""
+        if self._view is None:
+            return
+        cx, cy, _ = self._view
+        r = self.distance
+        for k in [k for k in self._emitted if max(abs(k[0] - cx), abs(k[1] - cy)) > r]:
+            del self._emitted[k]
+            if k in self._drawn:
+                self._drawn.discard(k)
+                self._gone.append(k)
 
     def drain(self, budget_s: float = 0.004):
         """(ready payloads, gone keys) since the last call, popping for at most
         budget_s. Drained payloads count as drawn (see mark_drawn)."""
+        # No lock here: a lock the worker holds would hand the GIL to it and the
+        # consumer might wait a switch interval (5 ms) to get it back. deque pops,
+        # dict reads and set adds are atomic; a race only drops a stale payload.
         end = time.perf_counter() + budget_s
         out = []
-        pver = self.world.pver
-        with self._lock:
-            gone = list(self._gone)
-            self._gone.clear()
-            while self._ready:
-                p = self._ready.popleft()
-                if self._emitted.get(p.key) == p.version and pver.get(p.key) == p.version:
-                    out.append(p)
-                    self._drawn.add(p.key)
-                if time.perf_counter() >= end:
-                    break
+        pver, emitted, ready = self.world.pver, self._emitted, self._ready
+        gone = []
+        while self._gone:
+            try:
+                gone.append(self._gone.popleft())
+            except IndexError:
+                break
+        while ready:
+            try:
+                p = ready.popleft()
+            except IndexError:
+                break
+            if emitted.get(p.key) == p.version and pver.get(p.key) == p.version:
+                out.append(p)
+                self._drawn.add(p.key)
+            if time.perf_counter() >= end:
+                break
         if out and gone:
             keys = {p.key for p in out}
             gone = [k for k in gone if k not in keys]
@@ -122,13 +156,14 @@ class Stream:
                    for k in list(self.world.corrupt))
 
     def offer(self, payloads) -> None:
-        """Queue payloads made elsewhere (edits) for the chunks in range."""
+        """Queue current payloads (the workers', edits') of the chunks in range."""
         with self._lock:
             if self._view is None:
                 return
             cx, cy, _ = self._view
             for p in payloads:
-                if max(abs(p.key[0] - cx), abs(p.key[1] - cy)) <= self.distance:
+                if max(abs(p.key[0] - cx), abs(p.key[1] - cy)) <= self.distance \
+                        and self.world.pver.get(p.key) == p.version:
                     self._emitted[p.key] = p.version
                     self._ready.append(p)
             self._changes += 1
@@ -151,10 +186,15 @@ class Stream:
         with self._lock:
             self._stop = True
             self._wake.notify_all()
-        if self._thread is not None and self._thread is not threading.current_thread():
-            self._thread.join()
-        self._thread = None
+        for t in self._threads:
+            if t is not threading.current_thread():
+                t.join()
+        self._threads = []
         self.world.streams.discard(self)
+
+    @property
+    def running(self) -> bool:
+        return any(t.is_alive() for t in self._threads)
 
     def __enter__(self):
         return self
@@ -163,7 +203,7 @@ class Stream:
         self.close()
 
     # ---- worker ------------------------------------------------------------
-    def _run(self) -> None:
+    def _run(self, backends) -> None:
         while True:
             with self._lock:
                 while not self._stop and self._view is None:
@@ -172,30 +212,45 @@ class Stream:
                     return
                 cx, cy, d = self._view
                 seen = self._changes
+                em, busy = dict(self._emitted), set(self._busy)
+            job = self._next(cx, cy, d, em, busy)
+            if job is not None:
+                with self._lock:  # another worker may have claimed some meanwhile
+                    job = [k for k in job if k not in self._busy]
+                    self._busy.update(job)
+                    if not job:
+                        continue
             try:
-                job = self._next(cx, cy, d)
                 if job is not None:
-                    self._do(*job)
+                    self._do(job, backends)
                 self._maintain(cx, cy)
             except BaseException as e:  # kept for the consumer; the worker goes on
                 self.error = e
                 job = None
+            finally:
+                if job is not None:
+                    with self._lock:
+                        self._busy.difference_update(job)
+                        self._changes += 1
+                        self._wake.notify_all()
             if job is None:
                 with self._lock:
                     if self._changes == seen and not self._stop:
                         self._wake.wait(0.5)
 
-    def _pending(self, cx, cy):
+    def _pending(self, cx, cy, em, busy):
+        """Keys in range without a current payload, not being done."""
         r, pver, bad = self.distance, self.world.pver, self.world.corrupt
-        with self._lock:
-            em = dict(self._emitted)
         return [(x, y) for y in range(cy - r, cy + r + 1) for x in range(cx - r, cx + r + 1)
-                if em.get((x, y), -1) != pver.get((x, y), -2) and (x, y) not in bad]
+                if em.get((x, y), -1) != pver.get((x, y), -2) and (x, y) not in bad
+                and (x, y) not in busy]
 
-    def _next(self, cx, cy, d):
-        """The next rectangle to do: the aligned tile (or quarter tile near the view)
-        holding the most urgent pending chunk; None when all is done."""
-        pending = self._pending(cx, cy)
+    def _next(self, cx, cy, d, em, busy):
+        """The pending keys of the aligned tile holding the most urgent pending chunk,
+        half a tile near the view (first payloads sooner); None when all is done.
+        Larger tiles cut the light solve's ring overhead but the NumPy solve gets
+        slower per chunk beyond ~12 chunks a side (cache): 8 is about the best."""
+        pending = self._pending(cx, cy, em, busy)
         if not pending:
             return None
 
@@ -207,32 +262,20 @@ class Stream:
             return dist * (1.5 - 0.5 * (vx * d[0] + vy * d[1]) / dist)  # behind: x2
 
         best = min(pending, key=urgency)
-        t = self.tile if urgency(best) >= NEAR else max(1, self.tile // 2)
+        u = urgency(best)
+        t = max(1, self.tile // 2) if u < NEAR else self.tile
         tx, ty = best[0] // t, best[1] // t
-        keys = [k for k in pending if k[0] // t == tx and k[1] // t == ty]
-        xs, ys = [k[0] for k in keys], [k[1] for k in keys]
-        return keys, (min(xs), min(ys), max(xs) + 1, max(ys) + 1)
+        return [k for k in pending if k[0] // t == tx and k[1] // t == ty]
 
-    def _do(self, keys, rect) -> None:
+    def _do(self, keys, backends) -> None:
         world = self.world
         done = [p for p in (build.payload(world, k) for k in keys) if p is not None]
         rest = {k for k in keys} - {p.key for p in done}
         if rest:
             xs, ys = [k[0] for k in rest], [k[1] for k in rest]
             done += build.light_and_mesh(world, min(xs), min(ys), max(xs) + 1, max(ys) + 1,
-                                         backends_=self.backends)
-        self.offer_own(done)
-
-    def offer_own(self, payloads) -> None:
-        with self._lock:
-            if self._view is None:
-                return
-            cx, cy, _ = self._view
-            for p in payloads:
-                if max(abs(p.key[0] - cx), abs(p.key[1] - cy)) <= self.distance \
-                        and self.world.pver.get(p.key) == p.version:
-                    self._emitted[p.key] = p.version
-                    self._ready.append(p)
+                                         backends_=backends)
+        self.offer(done)
 
     def _maintain(self, cx, cy) -> None:
         """Keep chunks near the view alive (the world's idle unloading), unload far ones."""

@@ -51,6 +51,7 @@ class World:
         self._saving: dict[tuple[int, int], tuple] = {}
         self._evictions: dict[tuple[int, int], int] = {}
         self._edits: dict[tuple[int, int, int], tuple[int, int]] = {}  # unsaved user edits
+        self._stale: set = set()  # chunks whose light in the file no longer holds
         self.corrupt: dict[tuple[int, int], str] = {}  # key -> message, reported once
         self.bver: dict[tuple[int, int], int] = {}   # key -> tick of its last block change
         self.pver: dict[tuple[int, int], int] = {}   # key -> version of its newest payload
@@ -149,6 +150,7 @@ class World:
                 for j in (-1, 0, 1):
                     k = (c.key[0] + i, c.key[1] + j)
                     self.pver.pop(k, None)
+                    self._stale.add(k)
                     n = self.chunks.get(k)
                     if n is not None:
                         n.light = n.mesh = None
@@ -212,21 +214,25 @@ class World:
             with self._lock:
                 snap = self._saving.get(key)
             if snap is not None:
-                found[key] = Chunk(key, snap[0].copy(order="F"),
-                                   None if snap[1] is None else snap[1].copy(order="F"))
+                c = found[key] = Chunk(key, snap[0].copy(order="F"),
+                                       None if snap[1] is None else snap[1].copy(order="F"))
+                c.light = snap[2]  # light arrays are replaced, never changed in place
                 continue
             try:
-                got = self.file.read_chunk(key)
+                got = self.file.read_chunk(key, light=True)
             except CorruptChunk as e:
                 self._report_corrupt(key, str(e))
                 continue
             if got is None:
                 to_make.append(key)
             else:
-                found[key] = Chunk(key, *got)
+                c = found[key] = Chunk(key, got[0], got[1])
+                c.light = got[2]
         if to_make:
             with self._gen_lock:
-                arrays = self.generator.generate(to_make)
+                # another thread may have made some while this one waited for the lock
+                to_make = [k for k in to_make if k not in self.chunks]
+                arrays = self.generator.generate(to_make) if to_make else []
             for key, blocks in zip(to_make, arrays):
                 c = Chunk(key, *self.apply_stored_edits(key, blocks))
                 c.dirty = not self.readonly
@@ -286,7 +292,7 @@ class World:
                     continue
                 self._evictions[k] = self._evictions.get(k, 0) + 1
                 if c.dirty and not self.readonly:
-                    self._saving[k] = (c.blocks, c.data)
+                    self._saving[k] = (c.blocks, c.data, c.light)
         self.flush(only=keys)
         return len(keys)
 
@@ -296,63 +302,49 @@ class World:
         if self.readonly:
             return
         with self._flush_lock:
-            self._flush(only)
+            self._write(only)
 
-    def _flush(self, only=None) -> None:
+    def commit(self, keys, edits, stale_light=()) -> None:
+        """Write chunks `keys` (if changed), `edits` ((x, y, z, block, data) rows) and
+        what is pending in one transaction; other changed chunks stay for later.
+        `stale_light`: chunks whose stored light no longer holds."""
+        if self.readonly:
+            return
+        with self._flush_lock:
+            with self._lock:
+                self._stale.update(stale_light)
+            self._write(keys, edits)
+
+    def _write(self, keys, extra=()) -> None:
         # Snapshots go into _saving before the write so a chunk evicted and reloaded
         # while this write is in flight is rebuilt from them, not from the stale file.
+        # A chunk's light is written with it: in memory it is final or None.
         with self._lock:
-            for k in self.chunks if only is None else [k for k in only if k in self.chunks]:
+            for k in self.chunks if keys is None else [k for k in keys if k in self.chunks]:
                 c = self.chunks[k]
                 if c.dirty:
                     self._saving[k] = (c.blocks.copy(order="F"),
-                                       None if c.data is None else c.data.copy(order="F"))
+                                       None if c.data is None else c.data.copy(order="F"),
+                                       c.light)
                     c.dirty = False
             saving = dict(self._saving)
             edits = [(x, y, z, b, d) for (x, y, z), (b, d) in self._edits.items()]
+            edits += list(extra)
             self._edits.clear()
+            stale, self._stale = self._stale, set()
         try:
-            rows = [self.file.encode_chunk(k, b, d) for k, (b, d) in saving.items()]
-            self.file.save(rows, edits)
+            rows = [self.file.encode_chunk(k, b, d, light=li) for k, (b, d, li) in saving.items()]
+            self.file.save(rows, edits, [k for k in stale if k not in saving])
         except BaseException:
             with self._lock:  # keep the edits for the next try; snapshots stay in _saving
                 for x, y, z, b, d in edits:
                     self._edits.setdefault((x, y, z), (b, d))
+                self._stale |= stale
             raise
         with self._lock:
             for k, snap in saving.items():
                 if self._saving.get(k) is snap:
                     del self._saving[k]
-
-    def commit(self, keys, edits) -> None:
-        """Write chunks `keys` (if active and changed) and `edits` ((x, y, z, block,
-        data) rows) in one transaction, leaving other changed chunks for later."""
-        if self.readonly:
-            return
-        with self._flush_lock:
-            # As in _flush: the snapshots sit in _saving until the write lands, so an
-            # eviction + reload meanwhile rebuilds from them, not from the stale file.
-            with self._lock:
-                snaps = {}
-                for k in keys:
-                    c = self.chunks.get(k)
-                    if c is not None and c.dirty:
-                        snaps[k] = self._saving[k] = (
-                            c.blocks.copy(order="F"),
-                            None if c.data is None else c.data.copy(order="F"))
-                        c.dirty = False
-            try:
-                self.file.save([self.file.encode_chunk(k, b, d) for k, (b, d) in snaps.items()],
-                               edits)
-            except BaseException:
-                with self._lock:  # the edits stay pending for the next flush
-                    for x, y, z, b, d in edits:
-                        self._edits.setdefault((x, y, z), (b, d))
-                raise
-            with self._lock:
-                for k, snap in snaps.items():
-                    if self._saving.get(k) is snap:
-                        del self._saving[k]
 
     def unload_all(self) -> None:
         with self._lock:

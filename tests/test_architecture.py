@@ -1,0 +1,84 @@
+"""Every module's imports (lazy ones included) keep to the table in ARCHITECTURE.md."""
+from __future__ import annotations
+
+import ast
+import re
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+PKG = ROOT / "voxel_addon"
+
+
+def table() -> dict[str, dict[str, str | None]]:
+    """unit -> {allowed unit: file it is limited to, or None}; a unit is a folder
+    ("world") or a top-level module ("opencl")."""
+    rules = {}
+    for line in (ROOT / "ARCHITECTURE.md").read_text().splitlines():
+        m = re.match(r"\|\s*`voxel_addon/([\w.]+?)(/|\.py)`\s*\|[^|]*\|([^|]*)\|", line)
+        if not m:
+            continue
+        allowed = {}
+        for item in m.group(3).split(","):
+            item = item.strip()
+            if not item or item == "—":
+                continue
+            im = re.fullmatch(r"`?(\w+)`?(?:\s*\((\w+\.py) only\))?", item)
+            assert im, f"ARCHITECTURE.md: cannot read {item!r} in the row of {m.group(1)}"
+            allowed[im.group(1)] = im.group(2)
+        rules[m.group(1)] = allowed
+    return rules
+
+
+def imports(path: Path, text: str | None = None) -> set[str]:
+    """Add-on units imported by one file (absolute or relative, anywhere in it)."""
+    rel = path.relative_to(PKG)
+    pkg = ["voxel_addon", *rel.parts[:-1]]
+    out = set()
+    for node in ast.walk(ast.parse(path.read_text() if text is None else text, str(path))):
+        if isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = pkg[:len(pkg) - node.level + 1]
+                mods = [base + node.module.split(".")] if node.module else \
+                    [base + [a.name] for a in node.names]
+            elif node.module and node.module.split(".")[0] == "voxel_addon":
+                mods = [node.module.split(".")] if "." in node.module else \
+                    [["voxel_addon", a.name] for a in node.names]
+            else:
+                continue
+        elif isinstance(node, ast.Import):
+            mods = [a.name.split(".") for a in node.names if a.name.startswith("voxel_addon.")]
+        else:
+            continue
+        out.update(m[1] for m in mods if len(m) > 1)
+    return out
+
+
+def unit_of(path: Path) -> str:
+    rel = path.relative_to(PKG)
+    return rel.parts[0] if len(rel.parts) > 1 else rel.stem
+
+
+def test_imports_follow_the_table():
+    rules = table()
+    assert {"core", "world", "render", "storage", "opencl"} <= set(rules)
+    bad = []
+    for path in sorted(PKG.rglob("*.py")):
+        unit = unit_of(path)
+        if unit not in rules:
+            bad.append(f"{path.relative_to(ROOT)}: {unit} has no row in ARCHITECTURE.md")
+            continue
+        for dep in sorted(imports(path) - {unit}):
+            if dep not in rules[unit]:
+                bad.append(f"{path.relative_to(ROOT)}: {unit} may not import {dep}")
+            elif rules[unit][dep] not in (None, path.name):
+                bad.append(f"{path.relative_to(ROOT)}: {unit} imports {dep} only in "
+                           f"{rules[unit][dep]}")
+    assert not bad, "\n".join(bad)
+
+
+def test_the_check_can_fail():
+    """The reader sees relative, absolute and lazy imports."""
+    text = ("def f():\n    from ..world import World\n    import voxel_addon.render.camera\n"
+            "from voxel_addon import light\nfrom . import chunk\n")
+    assert imports(PKG / "core" / "probe.py", text) == {"world", "render", "light", "core"}
+    assert "world" not in table()["core"] and table()["cli"]["blender"] == "bake.py"

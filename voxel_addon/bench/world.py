@@ -1,0 +1,134 @@
+"""Bench area `world` (issue 11): streaming a view from an empty and from a generated
+file, the consumer's drain times, resident memory, and edit -> payload latency."""
+from __future__ import annotations
+
+import gc
+import os
+import time
+
+import numpy as np
+
+from ..core import chunk as C
+from ..core.blocks import REGISTRY
+from ..world import Stream, World
+from ..world.edit import edit
+
+SEED = 7
+BUDGET = 0.004  # the consumer's drain budget per call (4 ms)
+
+
+def _load() -> str:
+    return "load average %.1f" % os.getloadavg()[0]
+
+
+def _cpu() -> float:
+    t = os.times()
+    return t.user + t.system
+
+
+def _stream(world, distance, drains=None, workers=2):
+    """Time from set_view to every wanted payload drained; the consumer drains with a
+    4 ms budget every 2 ms and drops the payloads (as an upload would). Returns
+    (stream, wall seconds, process CPU seconds: all threads, pocl's included)."""
+    c0 = _cpu()
+    t0 = time.perf_counter()
+    s = Stream(world, distance, workers=workers)
+    s.set_view(8.0, 8.0, direction=(1.0, 0.3, 0.0))
+    while True:
+        t = time.perf_counter()
+        ready, _ = s.drain(BUDGET)
+        if drains is not None:
+            drains.append(time.perf_counter() - t)
+        del ready
+        if s.error is not None:
+            raise s.error
+        w, r, d = s.counts
+        if d >= w:
+            break
+        time.sleep(0.002)
+    dt = time.perf_counter() - t0
+    return s, dt, _cpu() - c0
+
+
+def _warm(path):
+    """Kernel builds and first launches outside the timings."""
+    with World.create(path, seed=SEED) as w:
+        s, _, _ = _stream(w, 1)
+        s.close()
+
+
+def run(ctx):
+    import psutil
+    far = 12 if ctx.quick else 32
+    near = 8 if ctx.quick else 16
+    _warm(ctx.tmp / "warm.sqlite")
+    note_q = " (quick: smaller distance)" if ctx.quick else ""
+
+    path = ctx.tmp / "world16.sqlite"
+    with World.create(path, seed=SEED) as w:
+        s, dt, cpu = _stream(w, near)
+        s.close()
+    n = (2 * near + 1) ** 2
+    yield ("stream_view16_s", dt, "s", f"{n} chunks generated, lit, meshed from an empty file, "
+           f"{_load()}{note_q}")
+    yield ("stream_view16_cpu_s", cpu, "s", "process CPU time of the same (all threads): the "
+           "work, whatever else runs on the machine")
+
+    path = ctx.tmp / "world32.sqlite"
+    proc = psutil.Process()
+    gc.collect()
+    rss0 = proc.memory_info().rss
+    drains: list = []
+    w = World.create(path, seed=SEED)
+    s, dt, cpu = _stream(w, far, drains)
+    gc.collect()
+    grown = proc.memory_info().rss - rss0
+    voxels = len(w.chunks) * C.VOLUME
+    n = (2 * far + 1) ** 2
+    yield ("stream_view32_s", dt, "s", f"{n} chunks from an empty file, 2 workers, "
+           f"{_load()} (target 10 s){note_q}")
+    yield ("stream_view32_cpu_s", cpu, "s", "process CPU time of the same (all threads)")
+    d = np.array(drains) * 1e3
+    yield ("stream_consumer_max_ms", float(d.max()), "ms",
+           f"longest drain call, 4 ms budget, {len(d)} calls, p99 {np.percentile(d, 99):.2f} ms "
+           f"(target 8 ms), {_load()}")
+    yield ("resident_bytes_per_voxel", grown / voxels, "B/voxel",
+           f"RSS growth / active voxels ({len(w.chunks)} chunks: blocks + final light + "
+           f"meshes kept for edits)")
+
+    # edits near the surface, the stream idle around them
+    rng = np.random.default_rng(3)
+    lamps = [REGISTRY.id(n) for n in ("lamp_red", "lamp_green", "lamp_blue", "glowstone")
+             if n in REGISTRY.names()] or [REGISTRY.id("lamp_red")]
+    solid = [REGISTRY.id(n) for n in ("stone", "glass", "planks", "dirt") if n in REGISTRY.names()]
+    times, cpus = [], []
+    for i in range(40 if ctx.quick else 120):
+        x, y = int(rng.integers(-120, 120)), int(rng.integers(-120, 120))
+        c = w.chunk_at(x >> 4, y >> 4)
+        z = int(np.flatnonzero(c.blocks[x & 15, y & 15])[-1])
+        kind = i % 3
+        change = ((x, y, z, 0) if kind == 0 else
+                  (x, y, z + 1, int(rng.choice(lamps))) if kind == 1 else
+                  (x, y, z + 1, int(rng.choice(solid))))
+        c, t = time.thread_time(), time.perf_counter()
+        payloads, _ = edit(w, change)
+        times.append(time.perf_counter() - t)
+        cpus.append(time.thread_time() - c)
+    s.close()
+    t = np.array(times) * 1e3
+    note = f"{len(t)} single-block edits at the surface (clear, lamp, solid), {_load()}"
+    yield ("edit_to_payload_median_ms", float(np.median(t)), "ms", note + " (target 5 ms)")
+    yield ("edit_to_payload_p90_ms", float(np.percentile(t, 90)), "ms", note + " (target 20 ms)")
+    yield ("edit_to_payload_median_cpu_ms", float(np.median(cpus) * 1e3), "ms",
+           "CPU time of the editing thread (OpenCL meshing's pocl threads not included)")
+    t0 = time.perf_counter()
+    w.close()
+    yield ("world_close_save_s", time.perf_counter() - t0, "s",
+           f"saving the {n}+ generated chunks at close")
+
+    with World.open(path) as w:
+        s, dt, cpu = _stream(w, far)
+        s.close()
+    yield ("stream_reload_view32_s", dt, "s", f"{n} chunks loaded from the file (blocks + stored "
+           f"light), meshed, {_load()} (target 8 s){note_q}")
+    yield ("stream_reload_view32_cpu_s", cpu, "s", "process CPU time of the same (all threads)")

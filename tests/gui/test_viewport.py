@@ -211,3 +211,27 @@ def test_register_unregister_10_times_leaks_nothing(run):
     reg = _region(run["steps"]["unregistered"])
     bg = np.median(reg.reshape(-1, 3), 0)
     assert bg.max() - bg.min() < 6 and (np.abs(reg - bg).max(-1) <= 2).mean() > 0.8
+
+
+def test_quad_view_draws_every_region(run):
+    q = run["steps"]["quad"]
+    assert q["gpus"] == 1 and q["regions"] >= 4 and q["status"]["error"] is None, q
+    img = _img(q)
+    grey = np.array([63, 63, 63])  # Blender's viewport background (theme): nothing drawn
+    for r in q["rects"]:
+        crop = img[r["y"] + 4:r["y"] + r["h"] - 4, r["x"] + 4:r["x"] + r["w"] - 4]
+        assert (np.abs(crop - grey).max(-1) > 12).mean() > 0.9, r
+
+
+def test_without_a_world_the_panel_says_why(run):
+    p = run["steps"]["problem"]
+    assert p["sentence"].startswith("no world open"), p
+    assert p["status"]["error"] is None
+
+
+def test_file_new_removes_the_view_and_it_comes_back(run):
+    n = run["steps"]["newfile"]
+    assert not n["handle"] and not n["feed"] and not n["old_stream_alive"] and n["gpus"] == 0
+    assert n["show"] is False
+    again = n["again"]
+    assert again["drawn"] == again["wanted"] > 0 and again["error"] is None

@@ -101,7 +101,8 @@ CAM = (40.0, -60.0, 110.0, 90.0, -25.0, 50.0)   # x y z yaw pitch, vertical fov
 
 def setup():
     import voxel_addon
-    voxel_addon.register()
+    if not hasattr(bpy.types.Scene, "voxel_view"):
+        voxel_addon.register()
     sc = bpy.context.scene
     sc.voxel.path = WORLD
     vv = sc.voxel_view
@@ -224,6 +225,63 @@ def step_redraws():
                                   "error": viewport.STATUS["error"]}
 
 
+def step_quad():
+    """Quad view: four regions, each its own frame (one GPU object set)."""
+    sc = bpy.context.scene
+    sc.voxel_view.show = True
+    sc.voxel_view.hours = 12.0
+    win, area, sp = view3d()
+    with bpy.context.temp_override(window=win, area=area,
+                                   region=next(r for r in area.regions if r.type == "WINDOW")):
+        bpy.ops.screen.region_quadview()
+    yield from wait_frames(8)
+    yield 0.5
+    regions = [r for r in area.regions if r.type == "WINDOW"]
+    rects = [{"x": r.x, "y": win.height - (r.y + r.height), "w": r.width, "h": r.height}
+             for r in regions]
+    from voxel_addon.blender import viewport
+    RESULT["steps"]["quad"] = {"png": shot("quad"), "rects": rects, "status": status(),
+                               "gpus": len(viewport._gpus), "regions": len(viewport._regions)}
+    with bpy.context.temp_override(window=win, area=area, region=regions[0]):
+        bpy.ops.screen.region_quadview()
+    yield 0.5
+
+
+def step_problem():
+    """No world file: the panel's sentence, no error, Blender's own image."""
+    from voxel_addon.blender import viewport
+    sc = bpy.context.scene
+    sc.voxel_view.show = True
+    sc.voxel.path = str(OUT / "missing.sqlite")
+    yield from settle()
+    RESULT["steps"]["problem"] = {"sentence": viewport.problem(bpy.context),
+                                  "status": status()}
+    sc.voxel.path = WORLD
+    yield from wait_frames(1, full=False)
+
+
+def step_newfile():
+    """File > New while the view shows: handler, stream and GL objects go; the new
+    file draws plain Blender; the old file's view comes back when it is shown again."""
+    from voxel_addon.blender import viewport
+    sc = bpy.context.scene
+    sc.voxel_view.show = True
+    yield from wait_frames(1, full=False)
+    feed = viewport._feed
+    bpy.ops.wm.read_homefile(use_empty=False)
+    yield 0.5
+    yield from settle()
+    RESULT["steps"]["newfile"] = {
+        "handle": viewport._handle is not None, "feed": viewport._feed is not None,
+        "old_stream_alive": feed is not None and feed.stream._thread is not None,
+        "gpus": len(viewport._gpus), "show": bpy.context.scene.voxel_view.show}
+    setup_gen = setup()
+    yield from setup_gen
+    bpy.context.scene.voxel_view.show = True
+    yield from wait_frames(1, full=False)
+    RESULT["steps"]["newfile"]["again"] = status()
+
+
 def step_leak():
     """Unregister / register 10 times with the view shown: no handler, timer,
     thread or renderer is left."""
@@ -302,7 +360,8 @@ def run():
 
 
 STEPS = {"top": step_top, "sky": step_sky, "camera": step_camera, "stream": step_stream,
-         "redraws": step_redraws, "leak": step_leak}
+         "redraws": step_redraws, "quad": step_quad, "problem": step_problem,
+         "newfile": step_newfile, "leak": step_leak}
 _gen = run()
 
 
@@ -314,4 +373,4 @@ def _timer():
 
 
 OUT.mkdir(parents=True, exist_ok=True)
-bpy.app.timers.register(_timer, first_interval=1.0)
+bpy.app.timers.register(_timer, first_interval=1.0, persistent=True)

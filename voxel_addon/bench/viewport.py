@@ -19,7 +19,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-JOB = Path(__file__).with_name("viewport_job.py")
+JOB = Path(__file__).resolve().parents[1] / "blender" / "bench_job.py"  # run by Blender
 
 
 def _blender():

@@ -49,6 +49,7 @@ _handle = None
 _timer_on = False
 _gpus: dict = {}      # native GL context -> _Gpu
 _regions: dict = {}   # region pointer -> _Region
+_lead = None          # the region whose view the stream follows
 _feed = None          # _Feed of the shown world
 
 
@@ -115,9 +116,11 @@ class _Feed:
         self.chunks: dict = {}   # key -> Payload (.key, .mesh, .light, .version)
         self.stream = Stream(world, distance)
 
-    def update(self, x, y, direction, budget):
-        """Take in what is ready; returns whether more is on its way."""
-        self.stream.set_view(x, y, direction)
+    def update(self, at, direction, budget):
+        """Take in what is ready (at: (x, y) of the view point, or None to keep it);
+        returns whether more is on its way."""
+        if at is not None:
+            self.stream.set_view(at[0], at[1], direction)
         ready, gone = self.stream.drain(budget)
         for p in ready:
             self.chunks[p.key] = p
@@ -274,12 +277,21 @@ def _frame(context, scene, vv):
     view = [tuple(r) for r in rv3d.view_matrix]
     st = _regions.setdefault(region.as_pointer(), _Region())
     now = time.perf_counter()
+    global _lead
+    key = region.as_pointer()
     if view != st.view:
+        if st.view is not None or _lead not in _regions:
+            _lead = key  # the region being navigated leads the stream
         st.view, st.changed = view, now
     moving = now - st.changed < STILL_S
     cam = view_camera(rv3d.view_matrix, rv3d.window_matrix, vv.distance * 16 * 1.5 + 256.0)
     feed = _feed_for(scene)
-    loading = feed.update(cam.x, cam.y, cam.forward, BUDGET_S)
+    # the stream follows one region (quad view: the one last navigated): the eye of a
+    # perspective view, the pivot of an orthographic one (its eye is arbitrary)
+    at = None
+    if key == _lead:
+        at = tuple(rv3d.view_location)[:2] if cam.ortho else (cam.x, cam.y)
+    loading = feed.update(at, cam.forward, BUDGET_S)
     # draft while moving and while chunks stream in: a full frame holds the GIL for
     # seconds on software GL and starves the stream's worker thread
     draft = vv.quality == "draft" or (vv.quality == "auto" and (moving or loading))

@@ -1,4 +1,5 @@
-"""Blender side of bench/viewport.py: runs in the real Blender GUI under Xvfb.
+"""Blender side of bench/viewport.py (there it is only a path, never imported): runs
+in the real Blender GUI under Xvfb, started as a script (`__main__`).
 
     blender --factory-startup -P viewport_job.py -- OUT.json WORLD EMPTY_WORLD QUICK
 
@@ -18,13 +19,9 @@ from pathlib import Path
 
 import bpy
 
-ARGS = sys.argv[sys.argv.index("--") + 1:]
-OUT, WORLD, EMPTY, QUICK = Path(ARGS[0]), ARGS[1], ARGS[2], ARGS[3] == "1"
 ROOT = Path(__file__).resolve().parents[2]
-for p in (os.environ.get("VOXEL_BLENDER_SITE"), str(ROOT / ".blender" / "site"), str(ROOT)):
-    if p and p not in sys.path:
-        sys.path.insert(0, p)
-bpy.context.preferences.view.show_splash = False
+OUT = WORLD = EMPTY = None
+QUICK = True
 R: dict = {}
 
 
@@ -135,14 +132,23 @@ def main():
     bpy.ops.wm.quit_blender()
 
 
-_gen = main()
+def start():
+    global OUT, WORLD, EMPTY, QUICK
+    args = sys.argv[sys.argv.index("--") + 1:]
+    OUT, WORLD, EMPTY, QUICK = Path(args[0]), args[1], args[2], args[3] == "1"
+    for p in (os.environ.get("VOXEL_BLENDER_SITE"), str(ROOT / ".blender" / "site"), str(ROOT)):
+        if p and p not in sys.path:
+            sys.path.insert(0, p)
+    bpy.context.preferences.view.show_splash = False
+    gen = main()
+
+    def timer():
+        try:
+            return next(gen)
+        except StopIteration:
+            return None
+    bpy.app.timers.register(timer, first_interval=1.0, persistent=True)
 
 
-def _timer():
-    try:
-        return next(_gen)
-    except StopIteration:
-        return None
-
-
-bpy.app.timers.register(_timer, first_interval=1.0)
+if __name__ == "__main__":
+    start()

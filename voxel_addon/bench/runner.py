@@ -16,7 +16,7 @@ import time
 import traceback
 from pathlib import Path
 
-AREAS = ["storage", "generation", "light", "meshing", "bake", "render", "world"]
+AREAS = ["storage", "generation", "light", "meshing", "bake", "render", "world", "viewport", "edit"]
 
 
 class Context:

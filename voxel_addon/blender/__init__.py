@@ -1,7 +1,9 @@
 """Blender side of the add-on: every module in ui/ exports CLASSES (registered in
 module order, PropertyGroups first within a module) and may export SCENE_PROPS, a
 dict attribute-name -> PropertyGroup class attached to bpy.types.Scene (so settings
-are saved with the .blend). New panels/tools only add a module to ui/."""
+are saved with the .blend), and register()/unregister() for what is not a class
+(tools, handlers), called after its classes and before they go. New panels/tools
+only add a module to ui/."""
 from __future__ import annotations
 
 import importlib
@@ -11,6 +13,7 @@ from . import ui
 
 _registered: list = []
 _scene_props: list[str] = []
+_hooked: list = []
 
 
 def modules():
@@ -29,11 +32,18 @@ def register():
         for attr, group in getattr(m, "SCENE_PROPS", {}).items():
             setattr(bpy.types.Scene, attr, bpy.props.PointerProperty(type=group))
             _scene_props.append(attr)
+    for m in mods:
+        if hasattr(m, "register"):
+            m.register()
+            _hooked.append(m)
 
 
 def unregister():
     import bpy
-    from . import session
+    from . import session, viewport
+    while _hooked:
+        _hooked.pop().unregister()
+    viewport.shutdown()
     session.close_all()
     for attr in reversed(_scene_props):
         if hasattr(bpy.types.Scene, attr):

@@ -1,12 +1,68 @@
-"""View section: render the open world through the pipeline, from the scene camera,
-on Blender's own GL context, into an image datablock (issue 6)."""
+"""View section: the world live in every 3D viewport (scene.voxel_view, issue 12),
+and rendering it from the scene camera (Render Voxel View, Render Animation)."""
 from __future__ import annotations
 
 import math
 
 import bpy
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty
 
 IMAGE = "Voxel View"
+
+
+def _redraw(self, context):
+    from .. import viewport
+    viewport.sync(context)
+
+
+def _effects():
+    """One bool per effect of render.settings (defaults from Settings())."""
+    from ...render.settings import EFFECTS, Settings
+    s = Settings()
+    return {e: BoolProperty(name=e.replace("_", " ").title(), default=getattr(s, e),
+                            update=_redraw) for e in EFFECTS}
+
+
+def _debug_items(self, context):
+    from ...render.settings import DEBUG_VIEWS
+    return [(d, d.title(), f"debug view: {d}") for d in DEBUG_VIEWS]
+
+
+VoxelViewSettings = type("VoxelViewSettings", (bpy.types.PropertyGroup,), {"__annotations__": {
+    "show": BoolProperty(name="Show in Viewport", default=False, update=_redraw,
+                         description="Draw the open world in every 3D viewport of the scene"),
+    "distance": IntProperty(name="Distance", default=8, min=1, max=32, update=_redraw,
+                            description="View distance in chunks (16 blocks)"),
+    "hours": FloatProperty(name="Time of Day", default=12.0, min=0.0, max=24.0, update=_redraw,
+                           description="Hours (0 midnight, 12 noon); animatable"),
+    "follow_timeline": BoolProperty(name="Follow Timeline", default=False, update=_redraw,
+                                    description="The day cycle follows the current frame (Time of Day at the first frame)"),
+    "frames_per_day": IntProperty(name="Frames per Day", default=240, min=1, update=_redraw,
+                                  description="Frames of one day when following the timeline"),
+    "quality": EnumProperty(name="Quality", default="auto", update=_redraw, items=[
+        ("auto", "Auto", "Draft while the view moves, full when it is still"),
+        ("draft", "Draft", "Half resolution, no shadows, SSAO or distance blur"),
+        ("full", "Full", "Every chosen effect at full resolution")]),
+    **_effects(),
+    "msaa": BoolProperty(name="MSAA", default=True, update=_redraw,
+                         description="2x multisampling at full quality"),
+    "transparency": EnumProperty(name="Transparency", default="peel", update=_redraw, items=[
+        ("peel", "Depth Peeling", "Exact, up to 3 layers"),
+        ("oit", "Weighted OIT", "One pass, approximate order")]),
+    "sky": BoolProperty(name="Sky", default=True, update=_redraw,
+                        description="The pipeline's sky where Blender drew nothing"),
+    "debug_view": EnumProperty(name="Debug View", items=_debug_items, update=_redraw),
+}})
+
+
+def hours_of(scene) -> float:
+    """The view's time of day: the property, or when following the timeline the
+    property at the scene's first frame plus a day per frames_per_day frames."""
+    v = scene.voxel_view
+    if v.follow_timeline:
+        days = (scene.frame_current - scene.frame_start) / v.frames_per_day
+        return (v.hours + 24.0 * days) % 24.0
+    return v.hours
 
 
 def camera_of(obj):
@@ -25,12 +81,12 @@ class VOXEL_OT_render_view(bpy.types.Operator):
     bl_idname = "voxel.render_view"
     bl_label = "Render Voxel View"
     bl_description = ("Render the world from the scene camera with the voxel pipeline "
-                      f"into the image '{IMAGE}' (time of day from Bake & Export)")
+                      f"into the image '{IMAGE}' (time of day and effects of the View panel)")
 
     def execute(self, context):
-        from .. import offscreen, session
+        from .. import offscreen, session, viewport
         from ...core.errors import VoxelError
-        from ...render import Settings, source
+        from ...render import source
         sc = context.scene
         try:
             if sc.camera is None or sc.camera.type != "CAMERA":
@@ -39,13 +95,14 @@ class VOXEL_OT_render_view(bpy.types.Operator):
             r = sc.render
             w = max(8, r.resolution_x * r.resolution_percentage // 100)
             h = max(8, r.resolution_y * r.resolution_percentage // 100)
-            s = Settings(fov=fov)
+            s = viewport.settings_of(sc.voxel_view)
+            s.fov = fov
             world = session.world(sc.voxel.path)
             area = source.world_area(world, cam.x, cam.y, s.distance, s.light_radius)
             view = offscreen.View(s)
             try:
                 view.set_area(area)
-                img = view.render(cam, sc.voxel_bake.hours, (w, h))
+                img = view.render(cam, hours_of(sc), (w, h))
             finally:
                 view.release()
         except VoxelError as e:
@@ -71,7 +128,51 @@ class VOXEL_PT_view(bpy.types.Panel):
     bl_order = 20
 
     def draw(self, context):
-        self.layout.operator(VOXEL_OT_render_view.bl_idname, icon="RENDER_STILL")
+        from .. import viewport
+        v = context.scene.voxel_view
+        col = self.layout.column()
+        col.prop(v, "show", icon="HIDE_OFF" if v.show else "HIDE_ON")
+        if v.show:
+            problem = viewport.problem(context)
+            if problem:
+                col.label(text=problem, icon="ERROR")
+            else:
+                st = viewport.STATUS
+                col.label(text=f"chunks {st['drawn']} / {st['wanted']}"
+                          + ("  loading…" if st["drawn"] < st["wanted"] else ""))
+                col.label(text=f"last frame {st['ms']:.0f} ms ({st['quality']})")
+        col.prop(v, "distance")
+        row = col.row(align=True)
+        row.prop(v, "hours")
+        col.prop(v, "follow_timeline")
+        if v.follow_timeline:
+            col.prop(v, "frames_per_day")
+        col.prop(v, "quality")
+        col.separator()
+        col.operator(VOXEL_OT_render_view.bl_idname, icon="RENDER_STILL")
+        col.operator("voxel.render_animation", icon="RENDER_ANIMATION")
 
 
-CLASSES = [VOXEL_OT_render_view, VOXEL_PT_view]
+class VOXEL_PT_view_effects(bpy.types.Panel):
+    bl_idname = "VOXEL_PT_view_effects"
+    bl_label = "Effects"
+    bl_parent_id = "VOXEL_PT_view"
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "Voxel"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        from ...render.settings import EFFECTS
+        v = context.scene.voxel_view
+        col = self.layout.column(align=True)
+        for e in EFFECTS:
+            col.prop(v, e)
+        col.prop(v, "msaa")
+        col.prop(v, "sky")
+        col.prop(v, "transparency")
+        col.prop(v, "debug_view")
+
+
+CLASSES = [VoxelViewSettings, VOXEL_OT_render_view, VOXEL_PT_view, VOXEL_PT_view_effects]
+SCENE_PROPS = {"voxel_view": VoxelViewSettings}

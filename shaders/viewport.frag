@@ -1,0 +1,49 @@
+// The pipeline's frame into Blender's viewport (blender/viewport.py): colour of the
+// final pass, depth converted to Blender's projection so the depth test (LEQUAL,
+// set by the caller) mixes voxels and Blender's objects both ways. Where the
+// pipeline drew no surface the sky goes at the far plane (only where Blender drew
+// nothing), or nothing at all when the sky is off.
+// Defines: SAMPLES (G-buffer), LAYERS (1: the nearest transparent layer hides too).
+#include "include/common.glsl"
+#include "include/frame.glsl"
+
+uniform sampler2D color;       // final pass, display values
+uniform GSAMPLER g_depth;
+#if LAYERS > 0
+uniform GSAMPLER prev_depth;   // first depth-peeling layer
+#endif
+uniform mat4 host_vp;          // Blender's perspective_matrix (window @ view)
+uniform vec2 host_range;       // glDepthRange of Blender's context
+uniform bool host_zero_one;    // glClipControl ZERO_TO_ONE
+uniform bool sky;
+
+in vec2 v_uv;
+out vec4 out_color;
+
+float nearest(ivec2 c) {
+    float d = 1.0;
+    for (int s = 0; s < SAMPLES; s++) {
+        d = min(d, FETCH(g_depth, c, s).r);
+#if LAYERS > 0
+        d = min(d, FETCH(prev_depth, c, s).r);
+#endif
+    }
+    return d;
+}
+
+void main() {
+    ivec2 size = textureSize(g_depth MS_ARG);
+    float d = nearest(clamp(ivec2(v_uv * vec2(size)), ivec2(0), size - 1));
+    float z;
+    if (d >= 1.0) {
+        if (!sky) discard;
+        z = host_range.y;
+    } else {
+        vec4 c = host_vp * vec4(world_pos(inv_vp, v_uv, d), 1.0);
+        float ndc = clamp(c.z / c.w, -1.0, 1.0);
+        float z01 = host_zero_one ? max(ndc, 0.0) : ndc * 0.5 + 0.5;
+        z = mix(host_range.x, host_range.y, z01);
+    }
+    gl_FragDepth = z;
+    out_color = vec4(texture(color, v_uv).rgb, 1.0);
+}

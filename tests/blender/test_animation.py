@@ -1,0 +1,29 @@
+"""Render Voxel Animation (bpy, exec path): one PNG per frame into the output path,
+the camera's keyframes and the day cycle followed."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+JOB = Path(__file__).with_name("anim_job.py")
+
+
+def test_render_animation_writes_each_frame_with_camera_and_day_cycle(bpy, tmp_path):
+    from matplotlib.image import imread
+    r = subprocess.run([sys.executable, str(JOB), str(tmp_path)], capture_output=True,
+                       text=True, timeout=600)
+    assert r.returncode == 0, r.stderr[-3000:]
+    info = json.loads((tmp_path / "anim.json").read_text())
+    assert info == {"result": ["FINISHED"], "files": ["f_0001.png", "f_0002.png", "f_0003.png"],
+                    "frame": 1}
+    imgs = [imread(tmp_path / "frames" / f)[..., :3] for f in info["files"]]
+    assert all(i.shape == (36, 64, 3) for i in imgs)
+    sky = [i[:6].mean((0, 1)) for i in imgs]
+    # noon: a blue sky; 18:00 (sunset) differs; midnight is dark
+    assert sky[0][2] > sky[0][0] and sky[0].mean() > 0.4, sky[0]
+    assert np.abs(sky[1] - sky[0]).max() > 0.05, sky
+    assert sky[2].mean() < sky[0].mean() - 0.3, sky

@@ -1,0 +1,237 @@
+"""The live voxel view in the real Blender's 3D viewport, checked on screenshots of
+the X screen (what a person sees). One Blender session runs every step of
+viewport_job.py; the tests here read its pictures and reports."""
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+JOB = Path(__file__).with_name("viewport_job.py")
+CAM = (40.0, -60.0, 110.0, 90.0, -25.0, 50.0)  # as in viewport_job.py
+
+
+def _launcher():
+    exe = os.environ.get("VOXEL_BLENDER") or str(ROOT / ".blender" / "blender")
+    if not Path(exe).exists():
+        pytest.skip(f"no Blender application at {exe} (python build.py setup)")
+    if not shutil.which("Xvfb") or not shutil.which("xwd"):
+        pytest.skip("no Xvfb/xwd (python build.py setup)")
+    return exe
+
+
+def _run(out: Path, world: Path, steps: str | None = None, timeout=900):
+    """Blender under a private Xvfb screen, the job inside it; never hangs."""
+    exe = _launcher()
+    disp = f":{40 + os.getpid() % 50}"
+    x = subprocess.Popen(["Xvfb", disp, "-screen", "0", "1280x720x24", "-nolisten", "tcp"],
+                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        time.sleep(1.0)
+        env = dict(os.environ, DISPLAY=disp)
+        extra = os.environ.get("VOXEL_BLENDER_SITE")  # wheels for Blender's Python
+        env["PYTHONPATH"] = os.pathsep.join(p for p in (extra, str(ROOT)) if p)
+        args = [exe, "--factory-startup", "--python-use-system-env", "-P", str(JOB), "--",
+                str(out), str(world)] + ([steps] if steps else [])
+        with open(out / "blender.log", "w") as log:
+            p = subprocess.Popen(args, env=env, stdout=log, stderr=subprocess.STDOUT,
+                                 start_new_session=True)
+            try:
+                p.wait(timeout)
+            except subprocess.TimeoutExpired:
+                os.killpg(p.pid, 9)
+                raise
+    finally:
+        x.kill()
+        x.wait()
+    err = out / "error.txt"
+    assert not err.exists(), err.read_text()
+    return json.loads((out / "result.json").read_text())
+
+
+@pytest.fixture(scope="module")
+def world(tmp_path_factory):
+    path = tmp_path_factory.mktemp("world") / "w.sqlite"
+    r = subprocess.run([sys.executable, "-m", "voxel_addon", "generate", "--world", str(path),
+                        "--seed", "2019", "--radius", "12"], cwd=ROOT, capture_output=True,
+                       text=True, env=dict(os.environ, PYTHONPATH=str(ROOT)))
+    assert r.returncode == 0, r.stderr
+    return path
+
+
+@pytest.fixture(scope="module")
+def run(world, tmp_path_factory):
+    out = tmp_path_factory.mktemp("gui")
+    res = _run(out, world)
+    res["log"] = (out / "blender.log").read_text()
+    res["out"] = out
+    return res
+
+
+def _img(step):
+    from matplotlib.image import imread
+    return (imread(step["png"])[..., :3] * 255).round().astype(np.int16)
+
+
+def _region(step):
+    r = step["rect"]
+    return _img(step)[r["y"]:r["y"] + r["h"], r["x"]:r["x"] + r["w"]]
+
+
+def _patch(img, p, k=3):
+    x, y = int(round(p[0])), int(round(p[1]))
+    return img[y - k:y + k + 1, x - k:x + k + 1].reshape(-1, 3)
+
+
+def test_voxels_and_blender_objects_mix_by_depth(run):
+    off, on = run["steps"]["off"], run["steps"]["on"]
+    a, b = _img(off), _img(on)
+    # the cube above the terrain keeps its pixels
+    assert np.abs(_patch(a, on["cube"]) - _patch(b, on["cube"])).max() <= 3
+    # the cube buried under the terrain is shown without the world, hidden with it
+    grey = _patch(a, on["buried"]).mean(0)
+    assert np.ptp(grey) < 10 and grey.mean() > 120, grey  # Blender's lit grey cube
+    assert np.abs(_patch(b, on["buried"]).mean(0) - grey).max() > 30
+    # voxels (terrain or sky) wherever Blender showed its background
+    ra, rb = _region(off), _region(on)
+    bg = np.median(ra.reshape(-1, 3), 0)
+    was_bg = (np.abs(ra - bg).max(-1) <= 2)
+    changed = np.abs(rb - ra).max(-1) > 10
+    assert changed[was_bg].mean() > 0.95, changed[was_bg].mean()
+    green = (rb[..., 1] > rb[..., 0] + 20) & (rb[..., 1] > rb[..., 2])
+    assert green.mean() > 0.2, "grass-covered terrain in view"
+
+
+def test_show_off_gives_back_blenders_image(run):
+    a, b = _region(run["steps"]["off"]), _region(run["steps"]["off_again"])
+    assert (np.abs(a - b).max(-1) <= 2).mean() > 0.999
+
+
+def test_time_of_day_changes_the_sky(run):
+    noon, night = _region(run["steps"]["sky12"]), _region(run["steps"]["sky21"])
+    top_noon, top_night = noon[:60].reshape(-1, 3).mean(0), night[:60].reshape(-1, 3).mean(0)
+    assert top_noon[2] > 150 and top_noon[2] > top_noon[0], top_noon
+    assert top_night.mean() < top_noon.mean() - 80, (top_noon, top_night)
+
+
+def _cli(world, size, hours=12.0):
+    """The CLI's renderer from the job's camera, on a standalone EGL context."""
+    from voxel_addon.world import World
+    from voxel_addon.render import Camera, Settings, source
+    from voxel_addon.render.pipeline import Renderer
+    s = Settings(distance=4, light_radius=4, fov=CAM[5])
+    w = World.open(world, readonly=True, loader=False)
+    try:
+        a = source.world_area(w, CAM[0], CAM[1], s.distance, s.light_radius)
+    finally:
+        w.close()
+    ctx = source.context()
+    try:
+        r = Renderer(ctx, s)
+        r.set_area(a.blocks, a.light, a.cx0, a.cy0, ring=True, light_at=a.light_at)
+        img = r.render(Camera(*CAM[:5]), hours, size)
+        r.release()
+    finally:
+        ctx.release()
+    return img.astype(np.int16)
+
+
+def test_camera_view_shows_what_the_cli_renders(run, world):
+    st = run["steps"]["camera"]
+    xs = [p[0] for p in st["frame"]]
+    ys = [p[1] for p in st["frame"]]
+    x0, x1, y0, y1 = int(min(xs)) + 2, int(max(xs)) - 1, int(min(ys)) + 2, int(max(ys)) - 1
+    shot = _img(st)[y0:y1, x0:x1]
+    ref = _cli(world, (x1 - x0, y1 - y0))
+    d = np.abs(shot - ref)
+    # the same terrain from the same camera: small differences only (the viewport's
+    # frame covers the whole region, so texels and edges fall a little differently)
+    assert d.mean() < 12 and np.percentile(d, 50) < 8, (d.mean(), np.percentile(d, 50))
+    # and not just similar colours: a shifted picture is much further away
+    assert np.abs(shot[:, 20:] - ref[:, :-20]).mean() > d.mean() * 1.3
+
+
+def test_ortho_top_view_shows_the_rivers_where_the_world_has_water(run, world):
+    """Orthographic top view: pixels over columns whose top block is water are blue."""
+    from voxel_addon.core.blocks import REGISTRY
+    from voxel_addon.world import World
+    st = run["steps"]["ortho"]
+    (ax, ay), (bx, _), (_, cy) = st["corners"][0], st["corners"][1], st["corners"][2]
+    w = World.open(world, readonly=True, loader=False)
+    try:
+        blocks = w.region_blocks(0, 0, 3, 3)  # blocks x, y in [0, 48)
+    finally:
+        w.close()
+    solid = blocks != 0
+    top = np.where(solid.any(-1), 255 - np.argmax(solid[..., ::-1], -1), 0)
+    top_block = np.take_along_axis(blocks, top[..., None], -1)[..., 0]
+    water = top_block == REGISTRY.id("water")
+    assert 0.05 < water.mean() < 0.95, water.mean()
+    img = _img(st)
+    hits = []
+    for x in range(2, 46, 2):
+        for y in range(2, 46, 2):
+            px = ax + (bx - ax) * (x + 0.5) / 48
+            py = ay + (cy - ay) * (y + 0.5) / 48
+            c = img[int(py), int(px)]
+            blue = c[2] > c[1] + 15 and c[2] > c[0] + 15
+            hits.append(blue == water[x, y])
+    assert np.mean(hits) > 0.85, np.mean(hits)
+
+
+def test_moving_the_view_streams_new_chunks(run):
+    s0, s1 = run["steps"]["stream0"], run["steps"]["stream1"]
+    assert s1["moved"] and s1["status"]["drawn"] == s1["status"]["wanted"] > 0
+    assert np.abs(_region(s0) - _region(s1)).mean() > 10
+
+
+def test_no_python_error_over_100_redraws(run):
+    r = run["steps"]["redraws"]
+    assert r["frames"] >= 100 and r["error"] is None, r
+    bad = [ln for ln in run["log"].splitlines()
+           if re.search(r"Traceback|Error:|Exception", ln)]
+    assert not bad, bad[:20]
+
+
+def test_register_unregister_10_times_leaks_nothing(run):
+    leak = run["steps"]["leak"]
+    assert leak == {"renderers": 0, "gpus": 0, "feed": False, "handle": False,
+                    "timer": False, "load_pre": 0, "threads": leak["threads"]}, leak
+    assert leak["threads"] <= 0, leak
+    # and nothing of the world is drawn any more
+    reg = _region(run["steps"]["unregistered"])
+    bg = np.median(reg.reshape(-1, 3), 0)
+    assert bg.max() - bg.min() < 6 and (np.abs(reg - bg).max(-1) <= 2).mean() > 0.8
+
+
+def test_quad_view_draws_every_region(run):
+    q = run["steps"]["quad"]
+    assert q["gpus"] == 1 and q["regions"] >= 4 and q["status"]["error"] is None, q
+    img = _img(q)
+    grey = np.array([63, 63, 63])  # Blender's viewport background (theme): nothing drawn
+    for r in q["rects"]:
+        crop = img[r["y"] + 4:r["y"] + r["h"] - 4, r["x"] + 4:r["x"] + r["w"] - 4]
+        assert (np.abs(crop - grey).max(-1) > 12).mean() > 0.9, r
+
+
+def test_without_a_world_the_panel_says_why(run):
+    p = run["steps"]["problem"]
+    assert p["sentence"].startswith("no world open"), p
+    assert p["status"]["error"] is None
+
+
+def test_file_new_removes_the_view_and_it_comes_back(run):
+    n = run["steps"]["newfile"]
+    assert not n["handle"] and not n["feed"] and not n["old_stream_alive"] and n["gpus"] == 0
+    assert n["show"] is False
+    again = n["again"]
+    assert again["drawn"] == again["wanted"] > 0 and again["error"] is None

@@ -1,0 +1,376 @@
+"""Runs inside the real Blender (GUI, under Xvfb): the live voxel view.
+
+    blender --factory-startup -P tests/gui/viewport_job.py -- OUT WORLD [STEPS]
+
+Drives the 3D viewport through timers, one step after the other, and writes
+OUT/<name>.png (screenshots of the X screen: what a person sees), OUT/result.json
+(per step what the view reported) and OUT/error.txt on a Python error. The checks on
+the pictures are made by tests/gui/test_viewport.py.
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+import time
+import traceback
+from pathlib import Path
+
+import bpy
+
+ARGS = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+OUT, WORLD = Path(ARGS[0]), ARGS[1]
+ONLY = ARGS[2].split(",") if len(ARGS) > 2 else None
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))
+for _p in filter(None, [str(ROOT / ".blender" / "site"), os.environ.get("VOXEL_BLENDER_SITE")]):
+    sys.path.insert(0, _p)
+bpy.context.preferences.view.show_splash = False
+
+RESULT: dict = {"steps": {}}
+
+
+def shot(name):
+    """The X screen as OUT/name.png."""
+    path = OUT / f"{name}.png"
+    subprocess.run(f"xwd -root -silent | xwdtopnm 2>/dev/null | pnmtopng > {path}",
+                   shell=True, check=True)
+    return str(path)
+
+
+def view3d():
+    for win in bpy.context.window_manager.windows:
+        for area in win.screen.areas:
+            if area.type == "VIEW_3D":
+                return win, area, area.spaces.active
+    raise RuntimeError("no 3D viewport")
+
+
+def region_rect():
+    """The 3D viewport's WINDOW region in screen pixels (x, y from the top, w, h)."""
+    win, area, _ = view3d()
+    r = next(r for r in area.regions if r.type == "WINDOW")
+    return {"x": r.x, "y": win.height - (r.y + r.height), "w": r.width, "h": r.height}
+
+
+def set_view(loc, rot_euler, dist, persp="PERSP"):
+    from mathutils import Euler
+    _, area, sp = view3d()
+    r3 = sp.region_3d
+    r3.view_perspective = persp
+    r3.view_location = loc
+    r3.view_rotation = Euler([math.radians(a) for a in rot_euler]).to_quaternion()
+    r3.view_distance = dist
+    area.tag_redraw()
+
+
+def status():
+    from voxel_addon.blender import viewport
+    return dict(viewport.STATUS)
+
+
+def wait_frames(n=2, full=True, timeout=120.0):
+    """Generator: redraw until n more frames were drawn, all chunks are in and (full)
+    the last frame was full quality."""
+    from voxel_addon.blender import viewport
+    t0 = time.time()
+    start = viewport.STATUS["frames"]
+    while time.time() - t0 < timeout:
+        _, area, _ = view3d()
+        area.tag_redraw()
+        s = viewport.STATUS
+        if (s["frames"] >= start + n and s["drawn"] >= s["wanted"] > 0
+                and (not full or s["quality"] == "full")):
+            return
+        yield 0.1
+    raise RuntimeError(f"timed out waiting for frames: {viewport.STATUS}")
+
+
+def settle(n=3):
+    """Generator: a few plain redraws (Show off: no voxel frames to count)."""
+    for _ in range(n):
+        view3d()[1].tag_redraw()
+        yield 0.2
+
+
+# ------------------------------------------------------------------ scene
+CAM = (40.0, -60.0, 110.0, 90.0, -25.0, 50.0)   # x y z yaw pitch, vertical fov
+
+
+def setup():
+    import voxel_addon
+    if not hasattr(bpy.types.Scene, "voxel_view"):
+        voxel_addon.register()
+    sc = bpy.context.scene
+    sc.voxel.path = WORLD
+    vv = sc.voxel_view
+    vv.distance = 4
+    vv.hours = 12.0
+    # Blender's default cube: one high in front of the terrain, one buried in it
+    cube = bpy.data.objects.get("Cube")
+    cube.location = (8.0, 8.0, 120.0)
+    cube.scale = (4.0, 4.0, 4.0)
+    buried = cube.copy()
+    buried.name = "Buried"
+    buried.location = (40.0, 24.0, 20.0)
+    sc.collection.objects.link(buried)
+    bpy.data.objects["Light"].hide_set(True)
+    cam = bpy.data.objects["Camera"]
+    x, y, z, yaw, pitch, fov = CAM
+    cam.location = (x, y, z)
+    cam.rotation_euler = (math.radians(90 + pitch), 0.0, math.radians(yaw - 90))
+    cam.data.sensor_fit = "VERTICAL"
+    cam.data.angle_y = math.radians(fov)
+    sc.render.resolution_x, sc.render.resolution_y = 640, 360
+    cam.hide_set(True)
+    _, _, sp = view3d()
+    sp.overlay.show_overlays = False
+    sp.show_gizmo = False
+    sp.clip_end = 1000.0
+    bpy.ops.object.select_all(action="DESELECT")
+    yield 0.5
+
+
+def project(p):
+    """A world point's pixel in the screenshot (x, y from the top-left)."""
+    from bpy_extras.view3d_utils import location_3d_to_region_2d
+    win, area, sp = view3d()
+    r = next(r for r in area.regions if r.type == "WINDOW")
+    q = location_3d_to_region_2d(r, sp.region_3d, p)
+    return None if q is None else (r.x + q.x, win.height - (r.y + q.y))
+
+
+def record(name, **extra):
+    RESULT["steps"][name] = {"png": shot(name), "rect": region_rect(), "status": status(),
+                             "cube": project((8.0, 8.0, 124.0)),
+                             "buried": project((40.0, 24.0, 24.0)), **extra}
+
+
+def step_top():
+    """Perspective from above: Show off / on; the cube in front keeps its pixels,
+    the buried one disappears, voxels wherever the terrain is."""
+    sc = bpy.context.scene
+    set_view((24.0, 16.0, 80.0), (0, 0, 0), 140.0)
+    sc.voxel_view.show = False
+    yield from settle()
+    record("off")
+    sc.voxel_view.show = True
+    yield from wait_frames()
+    record("on")
+    sc.voxel_view.show = False
+    yield from settle()
+    record("off_again")
+
+
+def step_sky():
+    """Looking toward the horizon at noon and at night: the sky changes."""
+    sc = bpy.context.scene
+    sc.voxel_view.show = True
+    set_view((8.0, 8.0, 100.0), (80, 0, -90), 30.0)
+    for h in (12.0, 21.0):
+        sc.voxel_view.hours = h
+        yield from wait_frames()
+        record(f"sky{int(h)}")
+
+
+def step_camera():
+    """Camera view and orthographic top view; the test compares them with the CLI."""
+    sc = bpy.context.scene
+    sc.voxel_view.show = True
+    sc.voxel_view.hours = 12.0
+    _, area, sp = view3d()
+    sp.region_3d.view_perspective = "CAMERA"
+    sp.region_3d.view_camera_zoom = 0.0
+    sp.region_3d.view_camera_offset = (0.0, 0.0)
+    yield from wait_frames()
+    from bpy_extras.view3d_utils import location_3d_to_region_2d
+    cam = sc.camera
+    frame = [cam.matrix_world @ v for v in cam.data.view_frame(scene=sc)]
+    pts = [project(v) for v in frame]
+    record("camera", frame=pts, cam=CAM)
+    set_view((24.0, 24.0, 64.0), (0, 0, 0), 60.0, "ORTHO")
+    yield from wait_frames()
+    corners = [project((x, y, 64.0)) for x, y in ((0, 0), (48, 0), (0, 48), (48, 48))]
+    record("ortho", corners=corners)
+
+
+def step_stream():
+    """Moving the view by 6 chunks brings in new chunks."""
+    from voxel_addon.blender import viewport
+    sc = bpy.context.scene
+    sc.voxel_view.show = True
+    set_view((8.0, 8.0, 80.0), (60, 0, 0), 80.0)
+    yield from wait_frames()
+    before = viewport._feed.centre if viewport._feed.stream is None else sorted(viewport._feed.chunks)
+    record("stream0")
+    set_view((8.0 + 96.0, 8.0, 80.0), (60, 0, 0), 80.0)
+    yield from wait_frames()
+    after = viewport._feed.centre if viewport._feed.stream is None else sorted(viewport._feed.chunks)
+    record("stream1", moved=before != after)
+
+
+def step_redraws():
+    """100 redraws while orbiting (draft) and still; Python errors go to the log."""
+    from voxel_addon.blender import viewport
+    sc = bpy.context.scene
+    sc.voxel_view.show = True
+    n0 = viewport.STATUS["frames"]
+    for i in range(100):
+        set_view((8.0, 8.0, 80.0), (60, 0, 3.6 * i), 80.0)
+        yield 0.0
+    yield from wait_frames()
+    RESULT["steps"]["redraws"] = {"frames": viewport.STATUS["frames"] - n0,
+                                  "error": viewport.STATUS["error"]}
+
+
+def step_quad():
+    """Quad view: four regions, each its own frame (one GPU object set)."""
+    sc = bpy.context.scene
+    sc.voxel_view.show = True
+    sc.voxel_view.hours = 12.0
+    win, area, sp = view3d()
+    with bpy.context.temp_override(window=win, area=area,
+                                   region=next(r for r in area.regions if r.type == "WINDOW")):
+        bpy.ops.screen.region_quadview()
+    yield from wait_frames(8)
+    yield 0.5
+    regions = [r for r in area.regions if r.type == "WINDOW"]
+    rects = [{"x": r.x, "y": win.height - (r.y + r.height), "w": r.width, "h": r.height}
+             for r in regions]
+    from voxel_addon.blender import viewport
+    RESULT["steps"]["quad"] = {"png": shot("quad"), "rects": rects, "status": status(),
+                               "gpus": len(viewport._gpus), "regions": len(viewport._regions)}
+    with bpy.context.temp_override(window=win, area=area, region=regions[0]):
+        bpy.ops.screen.region_quadview()
+    yield 0.5
+
+
+def step_problem():
+    """No world file: the panel's sentence, no error, Blender's own image."""
+    from voxel_addon.blender import viewport
+    sc = bpy.context.scene
+    sc.voxel_view.show = True
+    sc.voxel.path = str(OUT / "missing.sqlite")
+    yield from settle()
+    RESULT["steps"]["problem"] = {"sentence": viewport.problem(bpy.context),
+                                  "status": status()}
+    sc.voxel.path = WORLD
+    yield from wait_frames(1, full=False)
+
+
+def step_newfile():
+    """File > New while the view shows: handler, stream and GL objects go; the new
+    file draws plain Blender; the old file's view comes back when it is shown again."""
+    from voxel_addon.blender import viewport
+    sc = bpy.context.scene
+    sc.voxel_view.show = True
+    yield from wait_frames(1, full=False)
+    feed = viewport._feed
+    bpy.ops.wm.read_homefile(use_empty=False)
+    yield 0.5
+    yield from settle()
+    RESULT["steps"]["newfile"] = {
+        "handle": viewport._handle is not None, "feed": viewport._feed is not None,
+        "old_stream_alive": feed is not None and feed.stream._thread is not None,
+        "gpus": len(viewport._gpus), "show": bpy.context.scene.voxel_view.show}
+    setup_gen = setup()
+    yield from setup_gen
+    bpy.context.scene.voxel_view.show = True
+    yield from wait_frames(1, full=False)
+    RESULT["steps"]["newfile"]["again"] = status()
+
+
+def step_leak():
+    """Unregister / register 10 times with the view shown: no handler, timer,
+    thread or renderer is left."""
+    import gc
+    import threading
+    import voxel_addon
+    from voxel_addon.blender import viewport
+    from voxel_addon.render.pipeline import Renderer
+    sc = bpy.context.scene
+    threads0 = threading.active_count()
+    for i in range(10):
+        voxel_addon.unregister()
+        yield 0.1
+        voxel_addon.register()
+        sc = bpy.context.scene
+        sc.voxel.path = WORLD
+        sc.voxel_view.show = True
+        yield from wait_frames(1, full=False)
+    voxel_addon.unregister()
+    yield 0.2
+    gc.collect()
+    RESULT["steps"]["leak"] = {
+        "renderers": sum(isinstance(o, Renderer) for o in gc.get_objects()),
+        "gpus": len(viewport._gpus), "feed": viewport._feed is not None,
+        "handle": viewport._handle is not None,
+        "timer": bpy.app.timers.is_registered(viewport._tick),
+        "load_pre": sum(getattr(f, "__name__", "") == "_load_pre" for f in bpy.app.handlers.load_pre),
+        "threads": threading.active_count() - threads0}
+    yield from settle()
+    record("unregistered")
+
+
+def step_readme():
+    """The README's picture: a monkey half buried in the terrain, the sidebar's
+    Voxel tab with the View panel, overlays on."""
+    from voxel_addon.blender import session
+    sc = bpy.context.scene
+    vv = sc.voxel_view
+    vv.show, vv.hours, vv.distance = True, 15.0, 6
+    win, area, sp = view3d()
+    sp.overlay.show_overlays = True
+    sp.show_region_ui = True
+    sp.region_3d.view_perspective = "PERSP"
+    w = session.world(WORLD)
+    x, y = 30, 20
+    z = next(z for z in range(255, 0, -1) if w.get_block(x, y, z) != 0)
+    with bpy.context.temp_override(window=win, area=area):
+        bpy.ops.mesh.primitive_monkey_add(size=9.0, location=(x + 0.5, y + 0.5, z + 1.0),
+                                          rotation=(0.3, 0.0, 2.4))
+    bpy.ops.object.shade_smooth()
+    bpy.data.objects["Cube"].hide_set(True)
+    ui = next(r for r in area.regions if r.type == "UI")
+    yield 0.3
+    try:
+        ui.active_panel_category = "Voxel"
+    except (AttributeError, TypeError):
+        pass
+    set_view((x, y, z + 2.0), (62, 0, 130), 34.0)
+    yield from wait_frames(3)
+    yield 0.5  # the sidebar redraws after the frame (a timer)
+    record("readme")
+
+
+def run():
+    try:
+        yield from setup()
+        for name, fn in {**STEPS, "readme": step_readme}.items():
+            if (ONLY is None and name in STEPS) or (ONLY and name in ONLY):
+                yield from fn()
+        RESULT["ok"] = True
+    except Exception:
+        (OUT / "error.txt").write_text(traceback.format_exc())
+        RESULT["ok"] = False
+    (OUT / "result.json").write_text(json.dumps(RESULT, indent=1))
+    bpy.ops.wm.quit_blender()
+
+
+STEPS = {"top": step_top, "sky": step_sky, "camera": step_camera, "stream": step_stream,
+         "redraws": step_redraws, "quad": step_quad, "problem": step_problem,
+         "newfile": step_newfile, "leak": step_leak}
+_gen = run()
+
+
+def _timer():
+    try:
+        return next(_gen)
+    except StopIteration:
+        return None
+
+
+OUT.mkdir(parents=True, exist_ok=True)
+bpy.app.timers.register(_timer, first_interval=1.0, persistent=True)

@@ -1,0 +1,78 @@
+"""Viewport bench (issue 12): the live view in the real Blender GUI under Xvfb at
+1280x720 on llvmpipe (the region is what Blender's default layout leaves of it).
+
+Rows: frame ms still at full quality and in draft (what a redraw costs while the
+view moves), our CPU time per redraw outside GL, the time from ticking Show to
+every chunk of distance 16 drawn (a generated file, and in the full run an empty
+file the stream generates), and the longest redraw and chunk upload while it streams.
+Needs `python build.py setup` (.blender/, Xvfb); without them the area yields
+nothing but a note.
+"""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+JOB = Path(__file__).resolve().parents[1] / "blender" / "bench_job.py"  # run by Blender
+
+
+def _blender():
+    exe = Path(os.environ.get("VOXEL_BLENDER") or ROOT / ".blender" / "blender")
+    if not exe.exists() or not shutil.which("Xvfb"):
+        return None
+    return exe
+
+
+def run(ctx):
+    from ..world import World
+    exe = _blender()
+    if exe is None:
+        yield ("viewport_skipped", 1, "", "no .blender/blender or Xvfb (python build.py setup)")
+        return
+    world, empty = ctx.tmp / "view.sqlite", ctx.tmp / "view_empty.sqlite"
+    ctx.say("generating the distance-16 area (+ ring)")
+    r = subprocess.run([sys.executable, "-m", "voxel_addon", "generate", "--world", str(world),
+                        "--seed", "2019", "--radius", "18"], capture_output=True, text=True,
+                       env=dict(os.environ, PYTHONPATH=str(ROOT)))
+    if r.returncode:
+        raise RuntimeError(r.stderr[-2000:])
+    World.create(empty, seed=2019, generator="overworld").close()
+    out = ctx.tmp / "viewport.json"
+    disp = f":{60 + os.getpid() % 30}"
+    x = subprocess.Popen(["Xvfb", disp, "-screen", "0", "1280x720x24", "-nolisten", "tcp"],
+                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        time.sleep(1.0)
+        env = dict(os.environ, DISPLAY=disp)
+        ctx.say("Blender GUI: frames, draft, show at distance 16")
+        p = subprocess.run([str(exe), "--factory-startup", "-p", "0", "0", "1280", "720",
+                            "-P", str(JOB), "--", str(out), str(world), str(empty),
+                            "1" if ctx.quick else "0"], env=env, capture_output=True,
+                           text=True, timeout=1800)
+    finally:
+        x.kill()
+        x.wait()
+    if not out.exists():
+        raise RuntimeError(f"the Blender job wrote nothing:\n{p.stdout[-2000:]}{p.stderr[-2000:]}")
+    R = json.loads(out.read_text())
+    if not R.get("ok"):
+        raise RuntimeError(R.get("error"))
+    size = "x".join(map(str, R["region"]))
+    yield ("viewport_frame_ms", R["full_ms"], "ms", f"still, full quality, region {size}, distance 8")
+    yield ("viewport_frame_draft_ms", R["draft_ms"], "ms",
+           f"draft (moving): half resolution, no shadows/SSAO/DOF/god rays, MSAA 1, region {size}")
+    yield ("viewport_python_ms", R["python_ms"], "ms", "our CPU time per redraw outside GL (full)")
+    for key in ("generated", "empty"):
+        if f"show16_{key}_s" in R:
+            yield (f"viewport_show_view16_{key}_s", R[f"show16_{key}_s"], "s",
+                   f"tick Show -> all {R['chunks16']} chunks of distance 16 drawn, {key} file")
+            yield (f"viewport_max_redraw_{key}_ms", R[f"max_redraw_{key}_ms"], "ms",
+                   f"longest redraw while streaming ({R[f'frames16_{key}']} redraws), {key} file")
+            yield (f"viewport_max_upload_{key}_ms", R[f"max_upload_{key}_ms"], "ms",
+                   "longest chunk upload within one redraw while streaming")

@@ -1,0 +1,154 @@
+"""Blender side of bench/viewport.py (there it is only a path, never imported): runs
+in the real Blender GUI under Xvfb, started as a script (`__main__`).
+
+    blender --factory-startup -P viewport_job.py -- OUT.json WORLD EMPTY_WORLD QUICK
+
+Frame times come from the draw handler itself (viewport.FRAMES) with the GPU
+finished inside each frame (viewport._SYNC), so they are what a redraw costs.
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import statistics
+import sys
+import time
+import traceback
+from pathlib import Path
+
+import bpy
+
+ROOT = Path(__file__).resolve().parents[2]
+OUT = WORLD = EMPTY = None
+QUICK = True
+R: dict = {}
+
+
+def area():
+    for win in bpy.context.window_manager.windows:
+        for a in win.screen.areas:
+            if a.type == "VIEW_3D":
+                return a
+    raise RuntimeError("no 3D viewport")
+
+
+def look(yaw):
+    from mathutils import Euler
+    r3 = area().spaces.active.region_3d
+    r3.view_perspective = "PERSP"
+    r3.view_location = (8.0, 8.0, 70.0)
+    r3.view_rotation = Euler((math.radians(70), 0, math.radians(yaw))).to_quaternion()
+    r3.view_distance = 40.0
+
+
+def frames(n, timeout=300.0):
+    """Generator: n more redraws of the voxel view (the last frame's entries)."""
+    from voxel_addon.blender import viewport
+    start = viewport.STATUS["frames"]
+    t0 = time.time()
+    while viewport.STATUS["frames"] < start + n:
+        if time.time() - t0 > timeout:
+            raise RuntimeError(f"no frames: {viewport.STATUS}")
+        area().tag_redraw()
+        yield 0.01
+    return list(viewport.FRAMES)[-n:]
+
+
+def all_drawn(timeout):
+    """Generator: redraw until every wanted chunk is drawn; returns the seconds."""
+    from voxel_addon.blender import viewport
+    t0 = time.perf_counter()
+    while True:
+        s = viewport.STATUS
+        n = (2 * bpy.context.scene.voxel_view.distance + 1) ** 2
+        if s["wanted"] == n and s["drawn"] >= s["wanted"]:
+            return time.perf_counter() - t0
+        if s["error"]:
+            raise RuntimeError(s["error"])
+        if time.perf_counter() - t0 > timeout:
+            raise RuntimeError(f"not all drawn after {timeout} s: {s}")
+        area().tag_redraw()
+        yield 0.01
+
+
+def run():
+    import voxel_addon
+    from voxel_addon.blender import viewport
+    voxel_addon.register()
+    sc = bpy.context.scene
+    sp = area().spaces.active
+    sp.overlay.show_overlays = False
+    sp.clip_end = 2000.0
+    vv = sc.voxel_view
+    sc.voxel.path = WORLD
+    vv.distance, vv.hours = 8, 12.0
+    look(30)
+    r = next(r for r in area().regions if r.type == "WINDOW")
+    R["region"] = [r.width, r.height]
+    vv.show = True
+    yield from all_drawn(300)
+    viewport._SYNC = True
+    vv.quality = "full"
+    yield from frames(2)
+    n = 3 if QUICK else 6
+    full = yield from frames(n)
+    R["full_ms"] = min(f[0] for f in full)
+    R["python_ms"] = statistics.median(f[1] for f in full)
+    vv.quality = "draft"
+    yield from frames(2)
+    draft = yield from frames(n)
+    R["draft_ms"] = min(f[0] for f in draft)
+    R["draft_python_ms"] = statistics.median(f[1] for f in draft)
+    vv.quality = "auto"
+    viewport._SYNC = False
+    for key, path in (("generated", WORLD), ("empty", EMPTY)):
+        if QUICK and key == "empty":
+            continue
+        vv.show = False
+        yield 0.2
+        sc.voxel.path = path
+        vv.distance = 16
+        look(30)
+        yield 0.2
+        viewport.FRAMES.clear()
+        vv.show = True
+        R[f"show16_{key}_s"] = yield from all_drawn(600)
+        R[f"max_redraw_{key}_ms"] = max(f[0] for f in viewport.FRAMES)
+        R[f"max_upload_{key}_ms"] = max(f[4] for f in viewport.FRAMES)
+        R[f"frames16_{key}"] = len(viewport.FRAMES)
+        R["chunks16"] = viewport.STATUS["wanted"]
+    voxel_addon.unregister()
+
+
+def main():
+    try:
+        yield from run()
+        R["ok"] = True
+    except Exception:
+        R["ok"] = False
+        R["error"] = traceback.format_exc()
+    OUT.write_text(json.dumps(R, indent=1))
+    bpy.ops.wm.quit_blender()
+
+
+def start():
+    global OUT, WORLD, EMPTY, QUICK
+    args = sys.argv[sys.argv.index("--") + 1:]
+    OUT, WORLD, EMPTY, QUICK = Path(args[0]), args[1], args[2], args[3] == "1"
+    for p in (os.environ.get("VOXEL_BLENDER_SITE"), str(ROOT / ".blender" / "site"), str(ROOT)):
+        if p and p not in sys.path:
+            sys.path.insert(0, p)
+    bpy.context.preferences.view.show_splash = False
+    gen = main()
+
+    def timer():
+        try:
+            return next(gen)
+        except StopIteration:
+            return None
+    bpy.app.timers.register(timer, first_interval=1.0, persistent=True)
+
+
+if __name__ == "__main__":
+    start()

@@ -1,0 +1,140 @@
+"""Render Animation: the scene's frame range from the scene camera through the voxel
+pipeline into scene.render.filepath, one PNG per frame (camera animation and the
+day cycle of the View panel honoured). Invoked from the UI it runs modal (a frame
+per timer tick, progress in the status bar, Esc stops); exec renders all at once
+(scripts, background mode)."""
+from __future__ import annotations
+
+import math
+import os
+
+import bpy
+
+
+class _Job:
+    """The frames left to render, and the View (GPU objects) they share."""
+
+    def __init__(self, scene):
+        from .. import offscreen, session, viewport
+        from ...core.errors import VoxelError
+        if scene.camera is None or scene.camera.type != "CAMERA":
+            raise VoxelError("the scene has no camera")
+        self.scene = scene
+        self.world = session.world(scene.voxel.path)
+        self.settings = viewport.settings_of(scene.voxel_view)
+        self.view = offscreen.View(self.settings)
+        self.frames = list(range(scene.frame_start, scene.frame_end + 1, scene.frame_step))
+        self.done = 0
+        self.centre = None
+        self.paths: list[str] = []
+        self._restore = scene.frame_current
+
+    def step(self) -> bool:
+        """Render the next frame; False when none is left."""
+        from ...render import source
+        from ...textures import png_bytes
+        from .view import camera_of, hours_of
+        import numpy as np
+        if self.done >= len(self.frames):
+            return False
+        sc, f = self.scene, self.frames[self.done]
+        sc.frame_set(f)
+        cam, fov = camera_of(sc.camera)
+        self.settings.fov = fov
+        c = (math.floor(cam.x) >> 4, math.floor(cam.y) >> 4)
+        if c != self.centre:  # the camera entered another chunk: the area around it
+            s = self.settings
+            self.view.set_area(source.world_area(self.world, cam.x, cam.y, s.distance,
+                                                 s.light_radius))
+            self.centre = c
+        r = sc.render
+        w = max(8, r.resolution_x * r.resolution_percentage // 100)
+        h = max(8, r.resolution_y * r.resolution_percentage // 100)
+        img = self.view.render(cam, hours_of(sc), (w, h))
+        path = os.path.splitext(bpy.path.abspath(r.frame_path(frame=f)))[0] + ".png"
+        os.makedirs(os.path.dirname(path) or ".", exist_ok=True)
+        rgba = np.dstack([img, np.full(img.shape[:2], 255, np.uint8)])
+        with open(path, "wb") as fh:
+            fh.write(png_bytes(rgba))
+        self.paths.append(path)
+        self.done += 1
+        return True
+
+    def finish(self):
+        self.view.release()
+        self.scene.frame_set(self._restore)
+
+
+class VOXEL_OT_render_animation(bpy.types.Operator):
+    bl_idname = "voxel.render_animation"
+    bl_label = "Render Voxel Animation"
+    bl_description = ("Render the scene's frame range from the scene camera with the voxel "
+                      "pipeline into the output path (PNG frames; Esc stops)")
+
+    _job = None
+    _timer = None
+
+    def _start(self, context):
+        from ...core.errors import VoxelError
+        try:
+            self._job = _Job(context.scene)
+        except VoxelError as e:
+            self.report({"ERROR"}, str(e))
+            return False
+        return True
+
+    def execute(self, context):
+        from ...core.errors import VoxelError
+        if not self._start(context):
+            return {"CANCELLED"}
+        try:
+            while self._job.step():
+                pass
+        except VoxelError as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        finally:
+            self._job.finish()
+        self.report({"INFO"}, f"rendered {self._job.done} frames")
+        return {"FINISHED"}
+
+    def invoke(self, context, event):
+        if not self._start(context):
+            return {"CANCELLED"}
+        wm = context.window_manager
+        wm.progress_begin(0, len(self._job.frames))
+        self._timer = wm.event_timer_add(0.01, window=context.window)
+        wm.modal_handler_add(self)
+        return {"RUNNING_MODAL"}
+
+    def modal(self, context, event):
+        from ...core.errors import VoxelError
+        if event.type == "ESC":
+            return self._end(context, f"stopped after {self._job.done} frames", {"CANCELLED"})
+        if event.type != "TIMER" or event.timer is not self._timer:
+            return {"PASS_THROUGH"}
+        try:
+            more = self._job.step()
+        except VoxelError as e:
+            self.report({"ERROR"}, str(e))
+            return self._end(context, None, {"CANCELLED"})
+        job = self._job
+        context.window_manager.progress_update(job.done)
+        context.workspace.status_text_set(
+            f"Voxel animation: frame {job.done} / {len(job.frames)} (Esc stops)")
+        if not more:
+            return self._end(context, f"rendered {job.done} frames", {"FINISHED"})
+        return {"RUNNING_MODAL"}
+
+    def _end(self, context, msg, result):
+        wm = context.window_manager
+        wm.event_timer_remove(self._timer)
+        wm.progress_end()
+        context.workspace.status_text_set(None)
+        self._job.finish()
+        if msg:
+            self.report({"INFO"}, msg)
+        return result
+
+
+CLASSES = [VOXEL_OT_render_animation]

@@ -1,0 +1,449 @@
+"""The world live in Blender's 3D viewports (issue 12; thesis §5.3.4–5.5).
+
+A SpaceView3D POST_VIEW draw handler: Blender has drawn its scene and bound the
+overlay framebuffer that holds the viewport's depth. Per redraw and region:
+
+1. the CPU side (`_Feed`, one per world, shared by every window) takes the chunks
+   that became ready within a small time budget;
+2. the GPU side of the current GL context (`_Gpu`: a moderngl context attached to
+   Blender's, a Renderer, the composite program; VAOs and framebuffers are not shared
+   between contexts, so a second window gets its own) uploads what changed and renders
+   the pipeline with the region's own view and window matrices into its targets;
+3. a full-screen pass (shaders/viewport.frag) writes the frame's colour and its depth
+   converted to Blender's projection into Blender's framebuffer with the depth test
+   LEQUAL: Blender's objects in front hide voxels, voxels in front hide objects; the
+   sky only where Blender drew nothing (far plane);
+4. `OVERLAYS` callbacks run with Blender's state back and the voxels' depth in the
+   depth buffer (the edit tool's hover outline draws there with the gpu module).
+
+Everything GL runs inside glstate.kept(): Blender caches its bindings, the pipeline
+wants a fresh context's state. While chunks stream in, or after a draft frame, a timer
+asks for another redraw. shutdown() removes handlers, timer, GL objects and threads.
+"""
+from __future__ import annotations
+
+import math
+import time
+import traceback
+from collections import deque
+
+import numpy as np
+
+from ..core.errors import VoxelError
+
+# What the panel shows (the last frame of any region).
+STATUS = {"drawn": 0, "wanted": 0, "wanted_shown": 0, "ms": 0.0, "python_ms": 0.0, "quality": "full",
+          "error": None, "frames": 0}
+# The last frames: (ms, python_ms, quality, drawn, upload_ms), for the bench.
+FRAMES: deque = deque(maxlen=512)
+# Callables f(context) run after each voxel frame with Blender's GL state and the
+# voxels' depth in the depth buffer (draw with gpu.state.depth_test_set("LESS_EQUAL")).
+OVERLAYS: list = []
+
+DRAFT_SCALE = 0.5    # draft frames render at this fraction of the region's size
+STILL_S = 0.25       # the view is still this long after its last change: full quality
+BUDGET_S = 0.004     # CPU time per redraw for taking in streamed chunks
+MIN_GL = 410
+
+_handle = None
+_timer_on = False
+_gpus: dict = {}      # native GL context -> _Gpu
+_regions: dict = {}   # region pointer -> _Region
+_lead = None          # the region whose view the stream follows
+_feed = None          # _Feed of the shown world
+
+
+# ---------------------------------------------------------------------- settings
+def settings_of(vv, draft: bool = False):
+    """render.Settings from scene.voxel_view; draft drops the expensive passes."""
+    from ..render.settings import EFFECTS, Settings
+    s = Settings(distance=vv.distance, light_radius=min(8, vv.distance))
+    for e in EFFECTS:
+        setattr(s, e, bool(getattr(vv, e)))
+    s.msaa = 2 if vv.msaa else 1
+    s.transparency = vv.transparency
+    s.debug = vv.debug_view or "none"
+    if draft:
+        s.shadows = s.ssao = s.dof = s.godrays = False
+        s.msaa, s.per_sample = 1, False
+        s.peel_layers = min(s.peel_layers, 1)
+    return s
+
+
+def problem(context) -> str | None:
+    """Why the view cannot run here, as one sentence, or None."""
+    import os
+    import bpy
+    import gpu
+    try:
+        b = gpu.platform.backend_type_get()
+    except SystemError:
+        return "the viewport needs Blender's window (no GPU in background mode)"
+    if b != "OPENGL":
+        return f"the voxel view needs the OpenGL backend, not {b} (Preferences > System)"
+    path = context.scene.voxel.path
+    if not path or not os.path.exists(bpy.path.abspath(path)):
+        return "no world open: create or open one in the World panel"
+    if STATUS["error"]:
+        return STATUS["error"]
+    return None
+
+
+# ---------------------------------------------------------------------- camera
+def view_camera(view, window, far: float):
+    """render.Camera for Blender's region matrices with the window's x/y rows but
+    our own near/far: Blender's clip range (0.01..1000 by default) would spoil the
+    G-buffer's depth precision; the composite converts depth to Blender's projection."""
+    from ..render import Camera
+    P = np.array(window, np.float64)
+    if abs(P[3, 3] - 1.0) < 1e-6:  # orthographic: the eye's plane is arbitrary, look both ways
+        n, f = -far, far
+        P[2, :] = (0.0, 0.0, -2 / (f - n), -(f + n) / (f - n))
+    else:
+        n = max(float(P[2, 3] / (P[2, 2] - 1.0)), 0.05)
+        P[2, 2], P[2, 3] = (far + n) / (n - far), 2 * far * n / (n - far)
+    return Camera.from_matrices(np.array(view, np.float64), P)
+
+
+# ---------------------------------------------------------------------- CPU side
+class _Feed:
+    """The chunks of one world to show, shared by every GL context: payloads from a
+    world.Stream (nearest first, made in its background thread)."""
+
+    def __init__(self, path, world, distance):
+        from ..world import Stream
+        self.path, self.world, self.distance = path, world, distance
+        self.chunks: dict = {}   # key -> Payload (.key, .mesh, .light, .version)
+        self.stream = Stream(world, distance)
+
+    def update(self, at, direction, budget):
+        """Take in what is ready (at: (x, y) of the view point, or None to keep it);
+        returns whether more is on its way."""
+        if at is not None:
+            self.stream.set_view(at[0], at[1], direction)
+        ready, gone = self.stream.drain(budget)
+        for p in ready:
+            self.chunks[p.key] = p
+        for k in gone:
+            self.chunks.pop(k, None)
+        if self.stream.error is not None:
+            raise self.stream.error
+        wanted = self.stream.counts[0]
+        STATUS["wanted"] = wanted
+        return len(self.chunks) < wanted
+
+    def close(self):
+        self.stream.close()
+        self.chunks.clear()
+
+
+def _feed_for(scene):
+    global _feed
+    from . import session
+    vv = scene.voxel_view
+    world = session.world(scene.voxel.path)
+    if _feed is None or _feed.world is not world or _feed.distance != vv.distance:
+        if _feed is not None:
+            _feed.close()
+        _feed = _Feed(scene.voxel.path, world, vv.distance)
+        STATUS.update(drawn=0, wanted=0)
+    return _feed
+
+
+# ---------------------------------------------------------------------- GPU side
+class _Gpu:
+    """The GL objects of one GL context: moderngl on Blender's context, a Renderer,
+    the composite program; which chunk versions it has uploaded."""
+
+    def __init__(self, native):
+        import moderngl
+        from _moderngl import DefaultLoader
+        from ..render.pipeline import Renderer
+        from ..render.settings import Settings
+        # create_context() without a loader may take GLX on an EGL Blender (offscreen.py)
+        self.ctx = moderngl.create_context(context=DefaultLoader())
+        if self.ctx.version_code < MIN_GL:
+            v = self.ctx.info.get("GL_VERSION", "?")
+            self.ctx = None
+            raise VoxelError(f"the voxel view needs OpenGL 4.1 or newer (this is {v})")
+        self.native = native
+        self.r = Renderer(self.ctx, Settings())
+        self.versions: dict = {}
+        self.feed = None
+        self._comp: dict = {}
+        self._vao: dict = {}
+
+    def sync(self, feed) -> int:
+        """Upload what changed in the feed; returns the number of chunks drawn."""
+        r = self.r
+        if self.feed is not feed:  # another world or distance: nothing of ours stays
+            self.feed = feed
+            self.versions = {k: None for k in self.versions}
+        gone = [k for k in self.versions if k not in feed.chunks]
+        if gone:
+            r.remove_chunks(gone)
+            for k in gone:
+                del self.versions[k]
+        new = [p for k, p in feed.chunks.items() if self.versions.get(k) != p.version]
+        if new:
+            r.update_chunks(new)
+            for p in new:
+                self.versions[p.key] = p.version
+        return len(self.versions)
+
+    def program(self, samples, layers):
+        key = (samples, layers)
+        p = self._comp.get(key)
+        if p is None:
+            p = self._comp[key] = self.r.progs.get(
+                "fullscreen.vert", "viewport.frag", {"SAMPLES": samples, "LAYERS": layers})
+            for k in ("color", "g_depth", "prev_depth"):
+                if k in p:
+                    p[k].value = {"color": 5, "g_depth": 0, "prev_depth": 9}[k]
+        return p
+
+    def composite(self, f, host, host_vp, sky):
+        """The frame into Blender's framebuffer (bound again here), depth tested."""
+        from ..render import glstate
+        gl = glstate.gl()
+        T = f.T
+        prog = self.program(T["ms"], 1 if f.layers else 0)
+        T["out"].use(5)
+        T["g"]["depth"].use(0)
+        if f.layers:
+            T["peel"][0]["depth"].use(9)
+        prog["host_vp"].write(np.asarray(host_vp, np.float32).T.tobytes())
+        prog["host_range"].value = tuple(host["depth_range"])
+        prog["host_zero_one"].value = bool(host["clip"] and host["clip"][1] == 0x935F)
+        prog["sky"].value = bool(sky)
+        gl.BindFramebuffer(0x8CA9, host["fb"][0])
+        gl.Viewport(*host["viewport"])
+        gl.Enable(0x0B71)       # DEPTH_TEST
+        gl.DepthFunc(0x0203)    # LEQUAL
+        gl.DepthMask(1)
+        vao = self._vao.get(prog.glo)
+        if vao is None:
+            vao = self._vao[prog.glo] = self.ctx.vertex_array(prog, [])
+        vao.render(mode=self.ctx.TRIANGLES, vertices=3)
+
+    def release(self):
+        for v in self._vao.values():
+            v.release()
+        self._vao.clear()
+        self._comp.clear()  # (programs belong to the Renderer's cache)
+        if self.r is not None:
+            self.r.release()
+            self.r = None
+
+
+class _Region:
+    __slots__ = ("view", "changed", "quality")
+
+    def __init__(self):
+        self.view, self.changed, self.quality = None, 0.0, "full"
+
+
+# ---------------------------------------------------------------------- handler
+def _draw():
+    import bpy
+    context = bpy.context
+    scene = context.scene
+    vv = getattr(scene, "voxel_view", None)
+    if vv is None or not vv.show:
+        return
+    if problem(context) and not STATUS["error"]:
+        return
+    try:
+        _frame(context, scene, vv)
+        STATUS["error"] = None
+    except VoxelError as e:
+        STATUS["error"] = str(e)
+    except Exception as e:  # keep drawing Blender; say it once in the panel and console
+        if STATUS["error"] is None:
+            traceback.print_exc()
+        STATUS["error"] = f"voxel view failed: {e}"
+    for fn in list(OVERLAYS):
+        fn(context)
+
+
+def _frame(context, scene, vv):
+    from ..render import glstate
+    from .offscreen import _native
+    from .ui.view import hours_of
+    t0 = time.perf_counter()
+    region, rv3d = context.region, context.region_data
+    if region is None or rv3d is None:
+        return
+    view = [tuple(r) for r in rv3d.view_matrix]
+    st = _regions.setdefault(region.as_pointer(), _Region())
+    now = time.perf_counter()
+    global _lead
+    key = region.as_pointer()
+    if view != st.view:
+        if st.view is not None or _lead not in _regions:
+            _lead = key  # the region being navigated leads the stream
+        st.view, st.changed = view, now
+    moving = now - st.changed < STILL_S
+    cam = view_camera(rv3d.view_matrix, rv3d.window_matrix, vv.distance * 16 * 1.5 + 256.0)
+    feed = _feed_for(scene)
+    # the stream follows one region (quad view: the one last navigated): the eye of a
+    # perspective view, the pivot of an orthographic one (its eye is arbitrary)
+    at = None
+    if key == _lead:
+        at = tuple(rv3d.view_location)[:2] if cam.ortho else (cam.x, cam.y)
+    loading = feed.update(at, cam.forward, BUDGET_S)
+    # draft while moving and while chunks stream in: a full frame holds the GIL for
+    # seconds on software GL and starves the stream's worker thread
+    draft = vv.quality == "draft" or (vv.quality == "auto" and (moving or loading))
+    s = settings_of(vv, draft)
+    if not cam.ortho:
+        s.fov = min(150.0, max(10.0, cam.fov))
+    native = _native()
+    host_vp = np.array(rv3d.perspective_matrix, np.float64)
+    hours = hours_of(scene)
+    t_py = time.perf_counter() - t0
+    with glstate.kept() as host:
+        g = _gpus.get(native)
+        if g is None:
+            g = _gpus[native] = _Gpu(native)
+        t1 = time.perf_counter()
+        drawn = g.sync(feed)
+        t_sync = time.perf_counter() - t1
+        g.r.s = s
+        vw, vh = host["viewport"][2], host["viewport"][3]
+        scale = DRAFT_SCALE if draft else 1.0
+        size = (max(8, int(vw * scale)), max(8, int(vh * scale)))
+        t1 = time.perf_counter()
+        f = g.r.prepare(cam, hours, size)
+        t_py += time.perf_counter() - t1
+        g.r.submit(f)
+        g.composite(f, host, host_vp, vv.sky)
+        g.ctx.finish() if _SYNC else None
+    ms = (time.perf_counter() - t0) * 1e3
+    q = "draft" if draft else "full"
+    if (drawn, STATUS["wanted"], q) != (STATUS["drawn"], STATUS["wanted_shown"], STATUS["quality"]):
+        _panel_redraw()  # the sidebar shows progress and quality
+    STATUS.update(drawn=drawn, ms=ms, python_ms=t_py * 1e3, quality=q,
+                  frames=STATUS["frames"] + 1, wanted_shown=STATUS["wanted"])
+    FRAMES.append((ms, t_py * 1e3, q, drawn, t_sync * 1e3))
+    st.quality = q
+    if loading or drawn < STATUS["wanted"]:
+        # as long again as the frame took: the worker gets at least half the time
+        _want_redraw(max(0.05, ms / 1e3))
+    elif draft and vv.quality == "auto":  # once the view is still: a full frame
+        _want_redraw(max(0.02, STILL_S - (time.perf_counter() - st.changed)))
+
+
+_SYNC = False  # bench: wait for the GPU so frame times are real
+
+
+def _want_redraw(after: float):
+    global _timer_on
+    import bpy
+    if not _timer_on:
+        _timer_on = True
+        bpy.app.timers.register(_tick, first_interval=after)
+
+
+def _panel_redraw():
+    import bpy
+    if not bpy.app.timers.is_registered(_tick_ui):
+        bpy.app.timers.register(_tick_ui, first_interval=0.01)
+
+
+def _tick_ui():
+    """Redraw the sidebars (not from inside a draw handler: that would loop)."""
+    import bpy
+    wm = bpy.context.window_manager
+    for win in (wm.windows if wm else ()):
+        for area in win.screen.areas:
+            if area.type == "VIEW_3D":
+                for r in area.regions:
+                    if r.type == "UI":
+                        r.tag_redraw()
+    return None
+
+
+def _tick():
+    """Redraw while chunks stream in or a region still shows a draft frame."""
+    global _timer_on
+    _timer_on = False
+    _tag_redraw()
+    return None
+
+
+def _tag_redraw():
+    import bpy
+    wm = bpy.context.window_manager
+    for win in (wm.windows if wm else ()):
+        for area in win.screen.areas:
+            if area.type == "VIEW_3D":
+                area.tag_redraw()
+
+
+# ---------------------------------------------------------------------- life cycle
+def sync(context=None) -> None:
+    """Install the draw handler when a scene shows the view; redraw viewports."""
+    global _handle
+    import bpy
+    show = any(getattr(getattr(s, "voxel_view", None), "show", False) for s in bpy.data.scenes)
+    if show and _handle is None:
+        _handle = bpy.types.SpaceView3D.draw_handler_add(_draw, (), "WINDOW", "POST_VIEW")
+        if _load_pre not in bpy.app.handlers.load_pre:
+            bpy.app.handlers.load_pre.append(bpy.app.handlers.persistent(_load_pre))
+    STATUS["error"] = None
+    _tag_redraw()
+
+
+def _load_pre(*_):
+    """File › New / Open: drop the world's chunks and this file's state; the handler
+    comes back when the new file shows the view (load_post)."""
+    import bpy
+    _close_data()
+    if _load_post not in bpy.app.handlers.load_post:
+        bpy.app.handlers.load_post.append(bpy.app.handlers.persistent(_load_post))
+
+
+def _load_post(*_):
+    import bpy
+    if _load_post in bpy.app.handlers.load_post:
+        bpy.app.handlers.load_post.remove(_load_post)
+    sync()
+
+
+def _close_data():
+    global _feed, _handle
+    import bpy
+    from .offscreen import _native
+    if _handle is not None:
+        bpy.types.SpaceView3D.draw_handler_remove(_handle, "WINDOW")
+        _handle = None
+    if _feed is not None:
+        _feed.close()
+        _feed = None
+    _regions.clear()
+    native = _native()
+    for key, g in list(_gpus.items()):
+        # GL names are per context: free them only on their own (a context that is
+        # not current here goes away with its window, and its objects with it)
+        if key == native:
+            from ..render import glstate
+            with glstate.kept():
+                g.release()
+        del _gpus[key]
+    STATUS.update(drawn=0, wanted=0, error=None)
+
+
+def shutdown() -> None:
+    """Unregister: every handler, timer, thread (the stream's) and GL object goes."""
+    global _timer_on
+    import bpy
+    _close_data()
+    for hs, fn in ((bpy.app.handlers.load_pre, _load_pre), (bpy.app.handlers.load_post, _load_post)):
+        while fn in hs:
+            hs.remove(fn)
+    for fn in (_tick, _tick_ui):
+        if bpy.app.timers.is_registered(fn):
+            bpy.app.timers.unregister(fn)
+    _timer_on = False
+    OVERLAYS.clear()

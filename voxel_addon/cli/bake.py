@@ -21,6 +21,10 @@ def add_parser(sub):
     p.add_argument("--method", default="greedy",
                    help="face aggregation: none, lines, squares, squares_ext, greedy (default)")
     p.add_argument("--instances", action="store_true", help="plants as GPU instances")
+    p.add_argument("--light", choices=("atlas", "vertex"), default="atlas",
+                   help="light in a texture on a second UV set, quads stay merged (default), "
+                        "or per vertex (quads split where light varies; for tools that "
+                        "ignore a second UV set)")
     p.add_argument("--time", default="12:00", help="time of day of the exported light (HH:MM)")
     p.add_argument("--blend", type=Path, help="also save the baked scene as this .blend")
     return p
@@ -49,7 +53,7 @@ def run(args):
 
     with World.open(args.world, readonly=True, loader=False) as world:
         bk = bake.bake_world(world, x0, y0, x1, y1, per=args.per, method=args.method,
-                             instances=args.instances, progress=progress)
+                             instances=args.instances, light=args.light, progress=progress)
     try:
         import bpy
     except ImportError as e:

@@ -23,6 +23,11 @@ class VoxelBakeSettings(bpy.types.PropertyGroup):
     method: EnumProperty(name="Merge", default="greedy",
                          items=[(m, m.replace("_", " ").title(), f"face aggregation: {m}")
                                 for m in ("none", "lines", "squares", "squares_ext", "greedy")])
+    light: EnumProperty(name="Light", default="atlas",
+                        items=[("atlas", "Atlas", "Light in a texture on a second UV set; "
+                                "merged quads stay whole"),
+                               ("vertex", "Per Vertex", "Light in colour attributes; quads "
+                                "split where light varies (tools without a second UV set)")])
     instances: BoolProperty(name="Plants as Instances", default=False,
                             description="Plants as instances of one mesh per type")
     hours: FloatProperty(name="Time of Day", default=12.0, min=0.0, max=24.0,
@@ -53,7 +58,7 @@ def _bake(op, context, style):
     try:
         world = session.world(w.path)
         bk = bake.bake_world(world, *_region(s), per=s.per, method=s.method,
-                             instances=s.instances, progress=say)
+                             instances=s.instances, light=s.light, progress=say)
         return BB.build(bk, style=style, hours=s.hours, progress=say), bk
     except VoxelError as e:
         op.report({"ERROR"}, str(e))
@@ -127,6 +132,7 @@ class VOXEL_PT_bake(bpy.types.Panel):
         col.prop(s, "region_max")
         col.prop(s, "per")
         col.prop(s, "method")
+        col.prop(s, "light")
         col.prop(s, "instances")
         col.prop(s, "hours")
         col.operator(VOXEL_OT_bake.bl_idname, icon="MESH_CUBE")

@@ -290,3 +290,18 @@ def test_triangle_ratio_on_the_reference_region(reference_blocks):
     assert atlas.triangles <= 0.30 * naive.triangles
     assert vertex.triangles > 0.9 * naive.triangles  # why the atlas: splitting undoes the merge
     assert atlas.atlas.shape[0] * atlas.atlas.shape[1] <= 1024 * 1024
+
+
+def test_light_in_tiles_equals_one_solve():
+    """The bake solves big regions' light in tiles (short modal steps); with a
+    16-column margin each tile is exact, so the result equals one whole solve."""
+    from voxel_addon.light import solve
+    b = np.zeros((90, 75, 256), np.uint16, order="F")
+    b[:, :, :20] = ID("stone")
+    b[10:80, 10:60, 15:19] = 0                      # a long cave ...
+    b[12, 12, 15] = ID("lamp_red")                  # ... lit at both ends, across tiles
+    b[77, 57, 15] = ID("lamp_blue")
+    b[40:45, 30:33, 19] = 0                          # a shaft to the sky
+    b[50, 20, 20:30] = ID("glass")
+    *_, (whole, frac) = bake.light_tiles(b, tile=24)
+    assert frac == 1.0 and np.array_equal(whole, solve(b))

@@ -154,7 +154,6 @@ def steps(blocks: np.ndarray, origin=(0, 0, 0), *, per: str = "region", method: 
     the Bake: a modal operator runs one step per timer tick and can stop in between.
     per "tile" cuts the region into `tile`×`tile` objects."""
     from .. import meshing
-    from ..light import solve as light_solve
     if per not in ("region", "chunk", "tile"):
         raise VoxelError(f"per must be 'region', 'chunk' or 'tile', not {per!r}")
     if method not in meshing.METHODS:
@@ -172,10 +171,11 @@ def steps(blocks: np.ndarray, origin=(0, 0, 0), *, per: str = "region", method: 
         say(name, frac)
         return name, frac
 
-    yield stage("light", 0.0)
     padded = C.empty(np.uint16, W + 2 * PAD, H + 2 * PAD)
     padded[PAD:PAD + W, PAD:PAD + H] = blocks
-    lit = light_solve(padded, backend)
+    lit = None
+    for lit, frac in light_tiles(padded, backend):
+        yield stage("light", frac)
     mat_table, specs = _materials()
     shape_ids = np.flatnonzero(REGISTRY.shape >= 2)  # x and hash
 
@@ -190,26 +190,29 @@ def steps(blocks: np.ndarray, origin=(0, 0, 0), *, per: str = "region", method: 
             q = q[~np.isin(q["block"], shape_ids)]
         if not len(q):
             continue
+        # the light q samples: its window, one voxel around (sample() unpacks it whole)
+        z0 = max(int(q["z"].min()) - 1, 0)
+        z1 = min(int((q["z"].astype(np.int64) + q["h"]).max()) + 2, C.HEIGHT)
+        near = (lit[PAD + x - 1:PAD + x + w + 1, PAD + y - 1:PAD + y + h + 1, z0:z1], (1, 1, -z0))
         if light == "vertex":
-            q = L.split_uneven(q, lit, (PAD + x, PAD + y, 0))
-        meshed.append((name, q, x, y))
+            q = L.split_uneven(q, *near)
+        meshed.append((name, q, x, y, near))
     texels = faces = None
     if light == "atlas":
         yield stage("atlas", 0.0)
-        pw, ph = zip(*(A.sizes(q) for _, q, _, _ in meshed)) if meshed else ((), ())
+        pw, ph = zip(*(A.sizes(m[1]) for m in meshed)) if meshed else ((), ())
         px, py, AW, AH = A.pack(np.concatenate(pw or [np.zeros(0, np.int64)]),
                                 np.concatenate(ph or [np.zeros(0, np.int64)]))
         texels = np.zeros((AH, AW, 4), np.float32)
         faces = np.full((AH, AW), A.EMPTY, np.uint8)
-        starts = np.cumsum([0] + [len(q) for _, q, _, _ in meshed])
+        starts = np.cumsum([0] + [len(m[1]) for m in meshed])
     parts = []
-    for i, (name, q, x, y) in enumerate(meshed):
+    for i, (name, q, x, y, near) in enumerate(meshed):
         yield stage("parts", i / len(meshed))
-        off = (PAD + x, PAD + y, 0)
-        p = _part(name, q, (ox + x, oy + y, oz), lit, off, mat_table)
+        p = _part(name, q, (ox + x, oy + y, oz), *near, mat_table)
         if texels is not None:
             sl = slice(starts[i], starts[i + 1])
-            A.fill(texels, faces, q, px[sl], py[sl], lit, off)
+            A.fill(texels, faces, q, px[sl], py[sl], *near)
             p.uv2 = A.uvs(q, p.positions - np.asarray((ox + x, oy + y, oz), np.float32),
                           px[sl], py[sl], AW, AH)
         parts.append(p)
@@ -219,8 +222,33 @@ def steps(blocks: np.ndarray, origin=(0, 0, 0), *, per: str = "region", method: 
             xyz = np.argwhere(blocks == bid)
             if len(xyz):
                 plants[REGISTRY.blocks[bid].name] = (xyz + (ox, oy, oz)).astype(np.int32)
-    yield stage("done", 1.0)
+    yield stage("baked", 1.0)
     return Bake((ox, oy, ox + W, oy + H), parts, specs, plants, texels, faces)
+
+
+LIGHT_TILE, REACH = 128, 16  # light travels < 16 voxels: a 16-column margin is exact
+
+
+def light_tiles(blocks, backend=None, tile: int = LIGHT_TILE):
+    """Light of `blocks` solved in tiles of `tile` columns plus a REACH margin (each
+    exact inside, as light.solve is 15 columns in from its edges), so no single step
+    holds the UI for the whole region. Yields (light so far, fraction); the last
+    one is the whole light, equal to light.solve(blocks)."""
+    from ..light import solve as light_solve
+    W, H = blocks.shape[:2]
+    if W <= tile + 2 * REACH and H <= tile + 2 * REACH:
+        yield None, 0.0
+        yield light_solve(blocks, backend), 1.0
+        return
+    out = C.empty(np.uint16, W, H)
+    boxes = [(x, y) for y in range(0, H, tile) for x in range(0, W, tile)]
+    for i, (x, y) in enumerate(boxes):
+        yield out, i / len(boxes)
+        a, b = max(x - REACH, 0), max(y - REACH, 0)
+        part = light_solve(np.asfortranarray(blocks[a:x + tile + REACH, b:y + tile + REACH]),
+                           backend)
+        out[x:x + tile, y:y + tile] = part[x - a:x - a + tile, y - b:y - b + tile]
+    yield out, 1.0
 
 
 def windows(per, ox, oy, W, H, tile=64):

@@ -1,7 +1,8 @@
 """Blender side of the add-on: every module in ui/ exports CLASSES (registered in
 module order, PropertyGroups first within a module) and may export SCENE_PROPS, a
 dict attribute-name -> PropertyGroup class attached to bpy.types.Scene (so settings
-are saved with the .blend). New panels/tools only add a module to ui/."""
+are saved with the .blend), and MENUS, menu class name -> draw function appended to
+that menu (e.g. File › Import). New panels/tools only add a module to ui/."""
 from __future__ import annotations
 
 import importlib
@@ -11,6 +12,7 @@ from . import ui
 
 _registered: list = []
 _scene_props: list[str] = []
+_menus: list = []
 
 
 def modules():
@@ -29,12 +31,19 @@ def register():
         for attr, group in getattr(m, "SCENE_PROPS", {}).items():
             setattr(bpy.types.Scene, attr, bpy.props.PointerProperty(type=group))
             _scene_props.append(attr)
+    for m in mods:
+        for menu, fn in getattr(m, "MENUS", {}).items():
+            getattr(bpy.types, menu).append(fn)
+            _menus.append((menu, fn))
 
 
 def unregister():
     import bpy
     from . import session
     session.close_all()
+    for menu, fn in reversed(_menus):
+        getattr(bpy.types, menu).remove(fn)
+    _menus.clear()
     for attr in reversed(_scene_props):
         if hasattr(bpy.types.Scene, attr):
             delattr(bpy.types.Scene, attr)

@@ -19,7 +19,7 @@ Linear) or, for light="vertex", from colour attributes.
   map: its brightest channel); vertex -> Base Color = texture × the `shade` colour
   attribute (COLOR_0, exact colour). Emissive texture × glow (strength above 1 as
   KHR_materials_emissive_strength); alpha modes written after export (bake.glb).
-""""""
+"""
 from __future__ import annotations
 
 import math

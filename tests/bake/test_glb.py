@@ -65,6 +65,9 @@ def test_glb_validates_and_reimports(bpy, small_world, validate, tmp_path, capfd
         assert "TEXCOORD_1" in attrs and not any(k.startswith("COLOR") for k in attrs)
         used = {doc["materials"][p["material"]]["name"] for p in prims}
         assert all(mats[n]["occlusionTexture"]["texCoord"] == 1 for n in used)
+        for n in used:  # the atlas is sampled without mipmaps (no bleeding between patches)
+            tex = doc["textures"][mats[n]["occlusionTexture"]["index"]]
+            assert doc["samplers"][tex["sampler"]]["minFilter"] == 9729
     else:
         assert attrs >= {"COLOR_0", "TEXCOORD_0"} and "TEXCOORD_1" not in attrs
         assert "COLOR_1" not in attrs  # only the colours the material uses
@@ -180,6 +183,17 @@ def test_cli_bake(small_world, validate, tmp_path):
     assert r.stdout.strip().splitlines() == [str(out)]   # the exporter's log stays off stdout
     rep = validate(out)
     assert rep["issues"]["numErrors"] == 0 and rep["issues"]["numWarnings"] == 0
+    out2 = tmp_path / "cli_vertex.glb"
+    r = subprocess.run([sys.executable, "-m", "voxel_addon", "bake", "--world", str(small_world),
+                        "--region", "-20", "0", "20", "16", "--out", str(out2), "--light", "vertex",
+                        "--per", "tile"], cwd=ROOT, env=env, capture_output=True, text=True,
+                       timeout=300)
+    assert r.returncode == 0, r.stderr[-2000:]
+    from voxel_addon.bake import glb
+    doc, _ = glb.read(out2)
+    assert [m["name"] for m in doc["meshes"]] == ["tile_-20_0"]  # one 64×64 tile
+    attrs = {k for me in doc["meshes"] for p in me["primitives"] for k in p["attributes"]}
+    assert "COLOR_0" in attrs and "TEXCOORD_1" not in attrs
     for bad, msg in ((["--region", "5", "0", "5", "9"], "empty region"),
                      (["--region", "0", "0", "4", "4", "--time", "25:99"], ""),
                      (["--region", "0", "0", "4", "4", "--world", str(tmp_path / "no.sqlite")],

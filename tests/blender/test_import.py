@@ -176,3 +176,18 @@ def test_bake_operators_share_the_job(addon, world_file, tmp_path):
     assert (tmp_path / "o.glb").stat().st_size > 0
     assert _state(bpy) == before  # the export's temporary objects are gone
     assert np.isfinite(s.hours)
+
+
+def test_generate_operator_stores_chunks(addon, world_file):
+    bpy = addon
+    from voxel_addon.blender import session
+    sc = bpy.context.scene
+    sc.voxel.path = str(world_file)
+    s = sc.voxel_bake
+    s.region_min, s.region_max = (-70, 40), (-20, 70)
+    before = _state(bpy)
+    assert bpy.ops.voxel.generate() == {"FINISHED"}
+    keys = set(session.world(str(world_file)).file.chunk_keys())
+    want = {(cx, cy) for cx in range(-5, -1) for cy in range(2, 5)}
+    assert want <= keys
+    assert _state(bpy) == before  # generating adds nothing to the scene

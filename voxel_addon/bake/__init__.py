@@ -226,7 +226,7 @@ def steps(blocks: np.ndarray, origin=(0, 0, 0), *, per: str = "region", method: 
     return Bake((ox, oy, ox + W, oy + H), parts, specs, plants, texels, faces)
 
 
-LIGHT_TILE, REACH = 128, 16  # light travels < 16 voxels: a 16-column margin is exact
+LIGHT_TILE, REACH = 64, 16  # light travels < 16 voxels: a 16-column margin is exact
 
 
 def light_tiles(blocks, backend=None, tile: int = LIGHT_TILE):

@@ -392,7 +392,7 @@ def plants(bk, style, collection, hours) -> list:
 
 def export_glb(path, objects, *, instances: bool = False) -> None:
     """Write `objects` (and nothing else) through Blender's glTF exporter, then the
-    alpha modes of the glTF-style materials (bake.glb.set_alpha)."""
+    alpha modes and atlas samplers (bake.glb.touch_up)."""
     from ..bake import glb
     for ob in bpy.context.view_layer.objects:
         ob.select_set(False)
@@ -403,4 +403,4 @@ def export_glb(path, objects, *, instances: bool = False) -> None:
                               export_apply=True, export_yup=True)
     modes = {m.name: m["voxel_alpha"] for m in bpy.data.materials
              if m.get("voxel_alpha", "OPAQUE") != "OPAQUE"}
-    glb.set_alpha(path, modes)
+    glb.touch_up(path, modes, plain="voxel_shade_")

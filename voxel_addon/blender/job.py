@@ -44,12 +44,13 @@ def region_of_mode(world, mode: str, region=(0, 0, 0, 0), size: int = 64):
 class Job:
     def __init__(self, world, region, *, per="region", method="greedy", instances=False,
                  light="atlas", style="blender", hours=12.0, tile=64, name=None,
-                 generate=True):
+                 generate=True, build=True):
         from .. import bake
         self.world = world
         self.region = bake.check_region(*region)
         self.kw = dict(per=per, method=method, instances=instances, light=light, tile=tile)
-        self.style, self.hours, self.generate = style, hours, generate
+        self.style, self.hours, self.generate, self.build = style, hours, generate, build
+        self.generated = 0
         self.name = name or "Voxel Bake {} {} {} {}".format(*self.region)
         self.objects: list = []
         self.bake = None
@@ -71,7 +72,10 @@ class Job:
                 yield "generate", i / len(rows)
                 keys = [(cx, cy) for cy in rows[i:i + ROWS]
                         for cx in range(x0 >> 4, ((x1 - 1) >> 4) + 1)]
-                self.world.generate_area(keys)
+                self.generated += self.world.generate_area(keys)
+        if not self.build:  # generating only (the chunks go to the world file)
+            yield "done", 1.0
+            return self.objects
         yield "read", 0.0
         blocks = bake.region_of(self.world, x0, y0, x1, y1)
         gen = bake.steps(blocks, origin=(x0, y0, 0), **self.kw)

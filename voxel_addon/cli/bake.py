@@ -16,8 +16,9 @@ def add_parser(sub):
     p.add_argument("--region", type=int, nargs=4, required=True, metavar=("X0", "Y0", "X1", "Y1"),
                    help="half-open block columns [X0,X1) x [Y0,Y1), full height")
     p.add_argument("--out", type=Path, required=True, metavar="F.glb", help="output .glb")
-    p.add_argument("--per", choices=("region", "chunk"), default="region",
-                   help="one object for the region (default) or one per chunk")
+    p.add_argument("--per", choices=("region", "chunk", "tile"), default="region",
+                   help="one object for the region (default), one per chunk, or one per "
+                        "64×64 tile (big regions)")
     p.add_argument("--method", default="greedy",
                    help="face aggregation: none, lines, squares, squares_ext, greedy (default)")
     p.add_argument("--instances", action="store_true", help="plants as GPU instances")

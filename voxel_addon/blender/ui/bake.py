@@ -61,6 +61,29 @@ class VOXEL_OT_bake(ModalJob, bpy.types.Operator):
         return self.start(context)
 
 
+class VOXEL_OT_generate(ModalJob, bpy.types.Operator):
+    bl_idname = "voxel.generate"
+    bl_label = "Generate Region"
+    bl_description = ("Generate and store the region's chunks in the world file, in steps "
+                      "(Esc stops; what is generated stays)")
+
+    def make_job(self, context):
+        from ...core.errors import VoxelError
+        from .. import session
+        s = context.scene.voxel_bake
+        world = session.world(context.scene.voxel.path)
+        if getattr(world, "readonly", False):
+            raise VoxelError("the world file is open read-only")
+        from ..job import Job
+        return Job(world, (*s.region_min, *s.region_max), build=False)
+
+    def invoke(self, context, event):
+        return self.start(context)
+
+    def finish(self, context, job):
+        self.report({"INFO"}, f"generated {job.generated} chunks")
+
+
 class VOXEL_OT_export_glb(ModalJob, bpy.types.Operator):
     bl_idname = "voxel.export_glb"
     bl_label = "Export .glb"
@@ -103,11 +126,13 @@ class VOXEL_PT_bake(bpy.types.Panel):
         col.prop(s, "light")
         col.prop(s, "instances")
         col.prop(s, "hours")
+        col.operator(VOXEL_OT_generate.bl_idname, icon="WORLD")
         col.operator(VOXEL_OT_bake.bl_idname, icon="MESH_CUBE")
         col.separator()
         col.prop(s, "glb_path")
         col.operator(VOXEL_OT_export_glb.bl_idname, icon="EXPORT")
 
 
-CLASSES = [VoxelBakeSettings, VOXEL_OT_bake, VOXEL_OT_export_glb, VOXEL_PT_bake]
+CLASSES = [VoxelBakeSettings, VOXEL_OT_generate, VOXEL_OT_bake, VOXEL_OT_export_glb,
+           VOXEL_PT_bake]
 SCENE_PROPS = {"voxel_bake": VoxelBakeSettings}

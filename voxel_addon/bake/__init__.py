@@ -181,7 +181,7 @@ def steps(blocks: np.ndarray, origin=(0, 0, 0), *, per: str = "region", method: 
 
     ring = padded[PAD - 1:PAD + W + 1, PAD - 1:PAD + H + 1]  # region + 1-voxel air ring
     wins = windows(per, ox, oy, W, H, tile)
-    meshed = []  # (name, quads, x, y)
+    meshed = []  # (name, quads, x, y, (the light near them, its offset))
     for i, (name, x, y, w, h) in enumerate(wins):
         yield stage("mesh", i / len(wins))
         q = meshing.quads(np.asfortranarray(ring[x:x + w + 2, y:y + h + 2]), border="context",

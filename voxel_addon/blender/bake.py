@@ -185,7 +185,8 @@ def light_images(bk, style: str, hours: float = 12.0):
         img.file_format = "PNG"
     img.colorspace_settings.name = "Non-Color"
     img.pixels.foreach_set(np.ascontiguousarray(px, np.float32).ravel())
-    img.pack()
+    if style == "blender":  # kept in the .blend; the glTF copy is encoded by the exporter
+        img.pack()
     return img
 
 

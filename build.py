@@ -1,7 +1,11 @@
 """Task runner for Voxel Worlds (plain Python 3.11, no bpy import).
 
-    python build.py setup       install what is missing (apt when root, .venv, npm tools)
-    python build.py test [ARGS] setup, then pytest (ARGS go to pytest)
+    python build.py setup       install what is missing (apt when root, .venv, npm tools,
+                                the real Blender application in .blender/)
+    python build.py blender [-- ARGS]  run that Blender (Debian trixie's 4.3) with ARGS
+    python build.py test [ARGS] setup, then the three test layers: pytest under bpy, the
+                                Blender-facing tests inside the real Blender, the GUI
+                                tests (with ARGS: only pytest under bpy, with ARGS)
     python build.py demo        setup, then generate a world, render a picture, bake a .glb
     python build.py bench [DIR] setup, then `python -m voxel_addon bench --out DIR`
     python build.py extension   setup, then build the Blender extension zip into dist/
@@ -27,7 +31,8 @@ STAMP = VENV / ".setup-stamp"
 TOOLS = ROOT / ".tools"          # npm tools (git-ignored)
 DEMO = ROOT / "demo_out"         # demo outputs (git-ignored)
 
-APT_PACKAGES = ["libgl1", "libegl1", "libegl-mesa0", "libgl1-mesa-dri", "libgbm1", "binutils"]
+APT_PACKAGES = ["libgl1", "libegl1", "libegl-mesa0", "libgl1-mesa-dri", "libgbm1", "binutils",
+                "xvfb", "x11-apps", "netpbm"]  # the last three: GUI tests (X server, screenshots)
 # Wanted only when the command is missing (a machine may have Node.js from elsewhere).
 APT_FOR_COMMAND = {"node": "nodejs", "npm": "npm"}
 NPM_PACKAGES = ["gltf-validator@2.0.0-dev.3.10"]
@@ -105,16 +110,64 @@ def setup_venv() -> None:
     STAMP.write_text(want)
 
 
+def _app():
+    """tools/blender_app.py: the real Blender application (installed by setup)."""
+    sys.path.insert(0, str(ROOT / "tools"))
+    import blender_app
+    return blender_app
+
+
 def setup() -> None:
     if sys.version_info < (3, 11):
         sys.exit("Python 3.11 or newer is needed to run build.py")
-    setup_apt()
-    setup_venv()
+    import time
+    for step in (setup_apt, setup_venv, _app().setup, setup_wheels):
+        t0 = time.monotonic()
+        step()
+        if time.monotonic() - t0 > 2:
+            log(f"{step.__module__}.{step.__name__}: {time.monotonic() - t0:.0f} s")
+
+
+def task_blender(args) -> int:
+    """blender [-- ARGS]: the real Blender (.blender/blender) with ARGS, in the checkout."""
+    setup()
+    args = args[1:] if args[:1] == ["--"] else args
+    return subprocess.run([_app().LAUNCHER, *args], cwd=ROOT, env=env()).returncode
+
+
+GUI_TESTS = "tests/gui"
+
+
+def _layers(user: str) -> list[tuple[str, list, dict]]:
+    """The three test layers: (name, command, extra environment); user: an empty
+    folder for the real Blender's preferences and extensions."""
+    return [
+        ("pytest under the bpy module", [PY, "-m", "pytest", "tests", f"--ignore={GUI_TESTS}"], {}),
+        ("the Blender-facing tests inside the real Blender",
+         [_app().LAUNCHER, "-b", "--factory-startup", "--python-exit-code", "1",
+          "-P", ROOT / "tests" / "run.py"], {"VOXEL_BLENDER_USER": user}),
+        ("GUI tests (the real Blender under Xvfb)", [PY, "-m", "pytest", GUI_TESTS], {}),
+    ]
 
 
 def task_test(args) -> int:
+    """test [PYTEST_ARGS]: with arguments, pytest under bpy with them; without, all
+    three layers (each runs even when an earlier one failed), timed."""
+    import time
     setup()
-    return subprocess.run([PY, "-m", "pytest", *(args or ["tests"])], cwd=ROOT, env=env()).returncode
+    if args:
+        return subprocess.run([PY, "-m", "pytest", *args], cwd=ROOT, env=env()).returncode
+    import tempfile
+    results = []
+    with tempfile.TemporaryDirectory(prefix="voxel-blender-user-") as user:
+        for name, cmd, extra in _layers(user):
+            log(f"layer: {name}")
+            t0 = time.monotonic()
+            code = subprocess.run([str(c) for c in cmd], cwd=ROOT, env={**env(), **extra}).returncode
+            results.append((name, code, time.monotonic() - t0))
+    for name, code, secs in results:
+        log(f"{'ok    ' if code == 0 else 'FAILED'} {secs:6.0f} s  {name}")
+    return next((code for _, code, _ in results if code), 0)
 
 
 def voxel(*args) -> None:
@@ -158,12 +211,58 @@ def task_bench(args) -> int:
 
 
 # Wheels bundled into the extension (Blender ships numpy): pyopencl with its pocl
-# CPU device, moderngl and zstandard, with their pure-Python dependencies.
+# CPU device, moderngl and zstandard, with their pure-Python dependencies, for the
+# Pythons of the Blenders we support: 3.11 (official 4.2-5.0 builds) and 3.13 (newer
+# builds, Linux distributions' Blender). Blender installs only the matching ones.
 WHEELS = ["pyopencl==2026.1.4", "pocl-binary-distribution==3.0", "pytools", "platformdirs",
           "typing_extensions", "siphash24", "moderngl==5.13.0", "glcontext==3.1.0",
           "zstandard==0.25.0"]
+WHEEL_PYTHONS = ["3.11", "3.13"]
 WHEEL_PLATFORMS = {"linux-x64": ["manylinux_2_17_x86_64", "manylinux2014_x86_64",
                                  "manylinux_2_28_x86_64"]}
+WHEEL_DIR = ROOT / ".cache" / "wheels"
+# Test tools for the real Blender's Python (.blender/site), versions as in requirements.txt;
+# with their dependencies but not numpy (Blender's own must be the one imported).
+BLENDER_TEST_PACKAGES = ["pytest==9.2.0"]
+BLENDER_TEST_NODEPS = ["matplotlib==3.11.2", "contourpy", "cycler", "fonttools", "kiwisolver",
+                       "pillow", "pyparsing", "python-dateutil", "six"]
+
+
+def _pip_for(python: str, tags, *args) -> None:
+    run([PY, "-m", "pip", *args[:1], "-q", "--disable-pip-version-check", "--only-binary=:all:",
+         "--python-version", python, "--implementation", "cp",
+         *[a for t in tags for a in ("--platform", t)], *args[1:]], env=env())
+
+
+def setup_wheels() -> None:
+    """The extension's wheels in .cache/wheels/<platform> (downloaded once), and
+    .blender/site: pytest and the 3.13 wheels for tests run inside the real Blender."""
+    want = hashlib.sha256(f"{WHEELS} {WHEEL_PYTHONS} {WHEEL_PLATFORMS}".encode()).hexdigest()
+    stamp = WHEEL_DIR / ".stamp"
+    if not (stamp.exists() and stamp.read_text() == want):
+        for platform, tags in WHEEL_PLATFORMS.items():
+            dest = WHEEL_DIR / platform
+            shutil.rmtree(dest, ignore_errors=True)  # no stale versions next to new ones
+            dest.mkdir(parents=True)
+            for python in WHEEL_PYTHONS:
+                log(f"pip download wheels for {platform}, Python {python}")
+                _pip_for(python, tags, "download", "--no-deps", "-d", dest, *WHEELS)
+        stamp.write_text(want)
+    app = _app()
+    site = app.site_packages()
+    want_site = hashlib.sha256(f"{want} {BLENDER_TEST_PACKAGES} {BLENDER_TEST_NODEPS} "
+                               f"{app.PYVER}".encode()).hexdigest()
+    if (site / ".stamp").exists() and (site / ".stamp").read_text() == want_site:
+        return
+    shutil.rmtree(site, ignore_errors=True)
+    tags = WHEEL_PLATFORMS["linux-x64"]
+    log(f"pip install pytest, matplotlib and the extension's wheels into {site} "
+        f"(Python {app.PYVER})")
+    _pip_for(app.PYVER, tags, "install", "--target", site, *BLENDER_TEST_PACKAGES)
+    _pip_for(app.PYVER, tags, "install", "--target", site, "--no-deps", *BLENDER_TEST_NODEPS)
+    _pip_for(app.PYVER, tags, "install", "--target", site, "--no-deps", "--no-index",
+             "--find-links", WHEEL_DIR / "linux-x64", *[w.split("=")[0] for w in WHEELS])
+    (site / ".stamp").write_text(want_site)
 
 
 def task_extension(args) -> int:
@@ -171,14 +270,8 @@ def task_extension(args) -> int:
     setup()
     extra = []
     if "--no-wheels" not in args:
-        for platform, tags in WHEEL_PLATFORMS.items():
-            dest = ROOT / ".cache" / "wheels" / platform
-            dest.mkdir(parents=True, exist_ok=True)
-            log(f"pip download wheels for {platform} into {dest}")
-            run([PY, "-m", "pip", "download", "-q", "--disable-pip-version-check", "--no-deps",
-                 "--only-binary=:all:", "--python-version", "3.11", "--implementation", "cp",
-                 *[a for t in tags for a in ("--platform", t)], "-d", dest, *WHEELS], env=env())
-            extra += ["--wheels", dest, "--platform", platform]
+        for platform in WHEEL_PLATFORMS:
+            extra += ["--wheels", WHEEL_DIR / platform, "--platform", platform]
     rest = [a for a in args if a != "--no-wheels"]
     return subprocess.run([PY, ROOT / "tools" / "extension.py", *extra, *rest], cwd=ROOT,
                           env=env()).returncode
@@ -194,7 +287,8 @@ def task_dev(args) -> int:
 
 
 TASKS = {"setup": lambda a: (setup(), 0)[1], "test": task_test, "demo": task_demo,
-         "bench": task_bench, "extension": task_extension, "dev": task_dev}
+         "bench": task_bench, "extension": task_extension, "dev": task_dev,
+         "blender": task_blender}
 
 
 def main(argv) -> int:

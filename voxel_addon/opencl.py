@@ -31,6 +31,33 @@ def _platform_rank(p) -> int:
     return 3
 
 
+def _bundled_pocl_for_host_loader(cl) -> None:
+    """Linux distributions' Blender links its own OpenCL ICD loader (ocl-icd), and
+    pyopencl's calls bind to that one, which never looks next to pyopencl for the pocl
+    its wheel bundles (found only through PYOPENCL_HOME by the wheel's own loader):
+    no platform at all. Name that pocl to the host's loader (OCL_ICD_VENDORS) before
+    the first query; a process without a foreign loader is left alone."""
+    if os.environ.get("OCL_ICD_VENDORS"):
+        return
+    from pathlib import Path
+    libs = Path(cl.__file__).parent / ".libs"
+    pocl = sorted(libs.glob("libpocl*.so*"))
+    try:
+        maps = Path("/proc/self/maps").read_text()
+    except OSError:
+        return
+    loaders = {line.split()[-1] for line in maps.splitlines() if "libOpenCL.so" in line}
+    if not pocl or not loaders or all(p.startswith(str(libs)) for p in loaders):
+        return
+    import hashlib
+    import tempfile
+    key = hashlib.sha1(str(pocl[0]).encode()).hexdigest()[:12]
+    vendors = Path(tempfile.gettempdir()) / f"voxel-icd-{os.getuid()}-{key}"
+    vendors.mkdir(exist_ok=True)
+    (vendors / "pocl.icd").write_text(f"{pocl[0]}\n")
+    os.environ["OCL_ICD_VENDORS"] = str(vendors)
+
+
 @lru_cache(maxsize=1)
 def context():
     """(context, queue, device) of the chosen platform; raises NoOpenCL."""
@@ -38,6 +65,7 @@ def context():
         import pyopencl as cl
     except ImportError as e:  # pragma: no cover - depends on the machine
         raise NoOpenCL(f"pyopencl is not installed ({e})") from None
+    _bundled_pocl_for_host_loader(cl)
     try:
         platforms = sorted(cl.get_platforms(), key=_platform_rank)
     except cl.Error as e:

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import os
 import subprocess
-import sys
 
 import numpy as np
 import pytest
 
+from tests.host import python_cmd
 from voxel_addon import bake
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -189,8 +189,8 @@ def test_blender_objects_carry_light_and_time_of_day(bpy, small_world):
 def test_cli_bake(small_world, validate, tmp_path):
     out = tmp_path / "cli.glb"
     env = dict(os.environ, PYTHONPATH=ROOT)
-    r = subprocess.run([sys.executable, "-m", "voxel_addon", "bake", "--world", str(small_world),
-                        "--region", "0", "0", "16", "16", "--out", str(out), "--time", "22:00"],
+    r = subprocess.run(python_cmd("-m", "voxel_addon", "bake", "--world", str(small_world),
+                        "--region", "0", "0", "16", "16", "--out", str(out), "--time", "22:00"),
                        cwd=ROOT, env=env, capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr[-2000:]
     assert r.stdout.strip().splitlines() == [str(out)]   # the exporter's log stays off stdout
@@ -213,7 +213,7 @@ def test_cli_bake(small_world, validate, tmp_path):
                       "does not exist"),
                      (["--region", "0", "0", "4", "4", "--out", "/proc/no/b.glb"], "cannot create folder")):
         args = ["--world", str(small_world), "--out", str(tmp_path / "b.glb")] + bad
-        r = subprocess.run([sys.executable, "-m", "voxel_addon", "bake", *args], cwd=ROOT,
+        r = subprocess.run(python_cmd("-m", "voxel_addon", "bake", *args), cwd=ROOT,
                            env=env, capture_output=True, text=True, timeout=120)
         assert r.returncode == 2, r.stderr
         assert len(r.stderr.strip().splitlines()) == 1 and msg in r.stderr

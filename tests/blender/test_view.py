@@ -8,13 +8,14 @@ from __future__ import annotations
 
 import json
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from matplotlib.image import imread
+
+from tests.host import python_cmd
 
 JOB = Path(__file__).with_name("view_job.py")
 SCENE, SIZE = "landscape", (160, 90)  # trees, plants, shadows: most passes have work
@@ -26,7 +27,7 @@ MEAN_TOL, P99_TOL = 0.75, 12.0
 
 def _job(out: Path, *extra) -> dict:
     out.mkdir()
-    r = subprocess.run([sys.executable, str(JOB), str(out), SCENE, *map(str, SIZE), *extra],
+    r = subprocess.run(python_cmd(JOB, out, SCENE, *SIZE, *extra),
                        capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stderr[-3000:]
     load = {p.stem: np.load(p) for p in out.glob("*.npy")}
@@ -97,7 +98,7 @@ def test_render_view_operator_draws_the_world_from_the_scene_camera(tmp_path):
     toward the horizon is sky above and lit ground below, in the image datablock."""
     out = tmp_path / "op"
     out.mkdir()
-    r = subprocess.run([sys.executable, str(JOB.with_name("op_job.py")), str(out)],
+    r = subprocess.run(python_cmd(JOB.with_name("op_job.py"), out),
                        capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stderr[-3000:]
     info = json.loads((out / "op.json").read_text())

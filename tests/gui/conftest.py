@@ -1,0 +1,56 @@
+"""Fixtures of the GUI tests (the real Blender under Xvfb, see harness.py)."""
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+from tests.gui import harness
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture
+def gui(tmp_path):
+    """gui(script, **params) -> GuiResult: SCRIPT (a path, or a name under
+    tests/gui/scripts/) run in the real Blender with a fresh user folder."""
+    why = harness.available()
+    if why:
+        pytest.skip(why)
+    user = harness.fresh_user(tmp_path / "user")
+
+    def run(script, timeout=180.0, **params):
+        path = Path(script)
+        if not path.is_absolute():
+            path = Path(__file__).with_name("scripts") / path
+        return harness.run_gui(path, tmp_path / "out", user, params, timeout=timeout)
+
+    run.user = user
+    return run
+
+
+def _tool():
+    spec = importlib.util.spec_from_file_location("voxel_ext_tool", ROOT / "tools" / "extension.py")
+    tool = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(tool)
+    return tool
+
+
+@pytest.fixture(scope="session")
+def ext_zip(tmp_path_factory):
+    """The extension zip without bundled wheels (tools/extension.py, Blender's own
+    builder and validator)."""
+    return _tool().build(tmp_path_factory.mktemp("dist"))
+
+
+WHEELS = ROOT / ".cache" / "wheels" / "linux-x64"  # build.py setup downloads them
+
+
+@pytest.fixture(scope="session")
+def ext_zip_wheels(tmp_path_factory):
+    """The extension zip as `build.py extension` makes it: Linux x64 wheels for
+    Python 3.11 and 3.13 bundled."""
+    if not list(WHEELS.glob("*cp313*.whl")):
+        pytest.skip(f"no wheels in {WHEELS} (run `python build.py setup`)")
+    return _tool().build(tmp_path_factory.mktemp("dist"), WHEELS, platforms=["linux-x64"])

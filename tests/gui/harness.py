@@ -1,0 +1,177 @@
+"""GUI test harness: the real Blender application (not -b) in its own Xvfb X server.
+
+    from tests.gui.harness import run_gui, fresh_user
+    res = run_gui(SCRIPT, out=tmp_path / "out", user=fresh_user(tmp_path / "user"),
+                  params={"zip": str(zip_path)}, timeout=120)
+    res.result          # the script's gui.result (JSON)
+    res.image("open")   # a screenshot, (H, W, 3) uint8, top row first
+    res.shot("open")    # its PNG path
+    res.ys(y)           # window y (origin bottom-left, as Blender gives it) -> image row
+
+SCRIPT is a Python file run inside Blender by runner.py (see its docstring: a
+`run(gui)` generator; `yield` lets Blender handle events and redraw). A script that
+raises fails the test with the Blender-side traceback (GuiError); a run past its time
+limit is killed with its whole process group (Blender and the X server) and fails.
+"""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import subprocess
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+BLENDER = ROOT / ".blender" / "blender"
+RUNNER = Path(__file__).with_name("runner.py")
+TEMPLATE = ROOT / ".blender" / "gui-user"  # preferences without the splash, made once
+SIZE = (1280, 720)
+
+
+class GuiError(AssertionError):
+    pass
+
+
+def available() -> str | None:
+    """None when the harness can run, else why not."""
+    if not BLENDER.exists():
+        return "no .blender/blender (run `python build.py setup`)"
+    for tool in ("Xvfb", "xwd", "xwdtopnm", "pnmtopng"):
+        if not shutil.which(tool):
+            return f"{tool} missing (Debian packages xvfb, x11-apps, netpbm)"
+    return None
+
+
+def _blender_env(user: Path, **extra) -> dict:
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("BLENDER_", "XDG_"))}
+    env.update(VOXEL_BLENDER_USER=str(user), **extra)
+    return env
+
+
+def fresh_user(dest: Path) -> Path:
+    """A new Blender user folder whose preferences have the splash off."""
+    if not (TEMPLATE / "config" / "userpref.blend").exists():
+        tmp = Path(tempfile.mkdtemp(prefix="gui-user.", dir=TEMPLATE.parent))
+        expr = ("import bpy; p = bpy.context.preferences; p.view.show_splash = False; "
+                "p.use_preferences_save = False; bpy.ops.wm.save_userpref()")
+        r = subprocess.run([str(BLENDER), "-b", "--python-expr", expr], env=_blender_env(tmp),
+                           capture_output=True, text=True, timeout=120)
+        if r.returncode or not (tmp / "config" / "userpref.blend").exists():
+            raise GuiError(f"could not save preferences:\n{r.stdout[-2000:]}{r.stderr[-2000:]}")
+        try:
+            tmp.rename(TEMPLATE)
+        except OSError:  # another run made it meanwhile
+            shutil.rmtree(tmp, ignore_errors=True)
+    dest.mkdir(parents=True, exist_ok=True)
+    shutil.copytree(TEMPLATE / "config", dest / "config", dirs_exist_ok=True)
+    return dest
+
+
+@dataclass
+class GuiResult:
+    out: Path
+    result: dict
+    shots: list[str]
+    size: tuple[int, int]
+    version: str
+    log: str = field(repr=False, default="")
+
+    def shot(self, name: str) -> Path:
+        return self.out / f"{name}.png"
+
+    def image(self, name: str):
+        """The screenshot NAME as (H, W, 3) uint8, top row first, cropped to the window."""
+        import numpy as np
+        from matplotlib.image import imread
+        px = imread(self.shot(name))
+        px = (px[..., :3] * 255 + 0.5).astype(np.uint8) if px.dtype != np.uint8 else px[..., :3]
+        return px[:self.size[1], :self.size[0]]
+
+    def ys(self, y: int) -> int:
+        """Image row of window y (Blender's window coordinates start at the bottom)."""
+        return self.size[1] - 1 - int(y)
+
+    def crop(self, name: str, rect):
+        """The pixels of window rectangle [x, y, w, h] (as gui.rect gives it)."""
+        x, y, w, h = rect
+        top = self.size[1] - (y + h)
+        return self.image(name)[top:top + h, x:x + w]
+
+
+def _start_x(size) -> tuple[subprocess.Popen, str]:
+    """Xvfb on a free display (it picks the number and writes it to our pipe)."""
+    r, w = os.pipe()
+    x = subprocess.Popen(["Xvfb", "-displayfd", str(w), "-screen", "0", f"{size[0]}x{size[1]}x24",
+                          "-nolisten", "tcp", "-noreset"], pass_fds=(w,),
+                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                         start_new_session=True)
+    os.close(w)
+    with os.fdopen(r) as f:
+        display = f.readline().strip()
+    if not display:
+        x.kill()
+        raise GuiError("Xvfb did not start")
+    return x, f":{display}"
+
+
+def _kill(p: subprocess.Popen) -> None:
+    if p.poll() is None:
+        try:
+            os.killpg(p.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+    p.wait()
+
+
+def run_gui(script: Path, out: Path, user: Path, params: dict | None = None,
+            timeout: float = 180.0, size=SIZE, args=()) -> GuiResult:
+    """Run SCRIPT in the real Blender under Xvfb; fail with its traceback or on timeout."""
+    why = available()
+    if why:
+        raise GuiError(f"GUI harness unavailable: {why}")
+    out.mkdir(parents=True, exist_ok=True)
+    xserver, display = _start_x(size)
+    log_path = out / "blender.log"
+    try:
+        env = _blender_env(user, DISPLAY=display, VOXEL_GUI_OUT=str(out),
+                           VOXEL_GUI_SCRIPT=str(Path(script).resolve()),
+                           VOXEL_GUI_PARAMS=json.dumps(params or {}))
+        cmd = [str(BLENDER), "--enable-event-simulate", "--no-window-focus",
+               "-p", "0", "0", str(size[0]), str(size[1]), *args, "--python", str(RUNNER)]
+        t0 = time.monotonic()
+        with open(log_path, "w") as log:
+            bl = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=env, cwd=ROOT,
+                                  start_new_session=True)
+            (out / "pids.json").write_text(json.dumps({"blender": bl.pid, "x": xserver.pid}))
+            try:
+                bl.wait(timeout=timeout)
+            except subprocess.TimeoutExpired:
+                _kill(bl)
+                raise GuiError(f"Blender GUI run timed out after {timeout:.0f} s "
+                               f"(killed):\n{_tail(log_path)}") from None
+            finally:
+                _kill(bl)
+        elapsed = time.monotonic() - t0
+    finally:
+        _kill(xserver)
+    res_path = out / "result.json"
+    if not res_path.exists():
+        raise GuiError(f"Blender exited ({bl.returncode}) without a result after "
+                       f"{elapsed:.1f} s:\n{_tail(log_path)}")
+    data = json.loads(res_path.read_text())
+    if not data["ok"]:
+        raise GuiError(f"the script failed inside Blender:\n{data['error']}\n"
+                       f"--- Blender log ---\n{_tail(log_path)}")
+    return GuiResult(out, data["result"], data["shots"], tuple(data["size"]), data["version"],
+                     log_path.read_text(errors="replace"))
+
+
+def _tail(path: Path, n: int = 4000) -> str:
+    try:
+        return path.read_text(errors="replace")[-n:]
+    except OSError:
+        return ""

@@ -1,21 +1,25 @@
 """Bake a block region into Blender-independent mesh arrays + a materials spec (SPEC F10).
 
-    bake_world(world, x0, y0, x1, y1, per="region"|"chunk", method="greedy",
-               instances=False, progress=None) -> Bake
+    bake_world(world, x0, y0, x1, y1, per="region"|"chunk"|"tile", method="greedy",
+               instances=False, light="atlas"|"vertex", progress=None) -> Bake
     bake_blocks(blocks, origin=(x0, y0, 0), ...) -> Bake      # any (W, H, 256) array
+    steps(blocks, origin, ...) -> generator of (stage, fraction) returning the Bake
 
 The region is half-open in block coordinates, full height; voxels outside it count
 as air, so the baked solid is closed. Light is solved for exactly that island (a ring
 of open air around it), so the bake depends only on the region's blocks.
 
-Each `Part` (one per chunk, or one for the whole region) holds quads: 4 vertices
-each, counter-clockwise from the front; `uvs` are in voxel units (tile with REPEAT);
-`light` (4N, 3) block RGB light and `daylight` (4N,) in 0..1, sampled per vertex
-(bake.light). Merged quads whose light is not constant are split into unit quads so
-vertex light is exact per unit face. `Bake.materials` lists one `MaterialSpec` per
-(texture, render mode, glow, sidedness); quads index it through `Part.material`.
-With instances=True, X/# plants are left out of the parts and listed in
-`Bake.plants` (block name -> (n, 3) voxel positions) for instancing.
+Each `Part` (one per region, chunk or tile) holds quads: 4 vertices each,
+counter-clockwise from the front; `uvs` are in voxel units (tile with REPEAT);
+`light` (4N, 3) block RGB light and `daylight` (4N,) in 0..1, sampled per vertex.
+light="atlas" (default) keeps merged quads whole and puts the light in
+`Bake.atlas` (bake.atlas: one texel per unit-grid corner, read through `Part.uv2`);
+light="vertex" splits merged quads whose light is not constant into unit quads
+(bake.light) so the per-vertex light alone is exact, for tools without a second
+UV set. `Bake.materials` lists one `MaterialSpec` per (texture, render mode, glow,
+sidedness); quads index it through `Part.material`. With instances=True, X/#
+plants are left out of the parts and listed in `Bake.plants` (block name -> (n, 3)
+voxel positions) for instancing.
 """
 from __future__ import annotations
 
@@ -26,7 +30,7 @@ import numpy as np
 from ..core import chunk as C
 from ..core.blocks import REGISTRY
 from ..core.errors import VoxelError
-from . import light as L
+from . import atlas as A, light as L
 
 PAD = 16  # air ring around the region for the light solve (any >= 1 keeps it closed)
 
@@ -52,6 +56,7 @@ class Part:
     material: np.ndarray    # (N,) int32 index into Bake.materials
     block: np.ndarray       # (N,) uint16
     face: np.ndarray        # (N,) uint8 meshing face code
+    uv2: np.ndarray | None = None  # (4N, 2) light-atlas UVs (light="atlas")
 
     @property
     def quads(self) -> int:
@@ -68,6 +73,12 @@ class Bake:
     parts: list[Part]
     materials: list[MaterialSpec]
     plants: dict[str, np.ndarray] = field(default_factory=dict)
+    atlas: np.ndarray | None = None   # (AH, AW, 4) float32 light atlas (bake.atlas), or None
+    atlas_face: np.ndarray | None = None  # (AH, AW) uint8 face code per texel
+
+    @property
+    def light(self) -> str:
+        return "vertex" if self.atlas is None else "atlas"
 
     @property
     def triangles(self) -> int:
@@ -119,15 +130,36 @@ def _materials():
     return table, specs
 
 
-def bake_blocks(blocks: np.ndarray, origin=(0, 0, 0), *, per: str = "region",
-                method: str = "greedy", instances: bool = False, backend: str | None = None,
-                progress=None) -> Bake:
+LIGHTS = ("atlas", "vertex")
+
+
+def bake_blocks(blocks: np.ndarray, origin=(0, 0, 0), **kw) -> Bake:
+    """The whole bake at once (steps() run to the end)."""
+    return run(steps(blocks, origin, **kw))
+
+
+def run(gen):
+    """Drive a steps() generator to its end and return its Bake."""
+    while True:
+        try:
+            next(gen)
+        except StopIteration as stop:
+            return stop.value
+
+
+def steps(blocks: np.ndarray, origin=(0, 0, 0), *, per: str = "region", method: str = "greedy",
+          instances: bool = False, light: str = "atlas", backend: str | None = None,
+          progress=None, tile: int = 64):
+    """The bake as a generator of short steps (yields (stage, fraction)) that returns
+    the Bake: a modal operator runs one step per timer tick and can stop in between.
+    per "tile" cuts the region into `tile`×`tile` objects."""
     from .. import meshing
-    from ..light import solve as light_solve
-    if per not in ("region", "chunk"):
-        raise VoxelError(f"per must be 'region' or 'chunk', not {per!r}")
+    if per not in ("region", "chunk", "tile"):
+        raise VoxelError(f"per must be 'region', 'chunk' or 'tile', not {per!r}")
     if method not in meshing.METHODS:
         raise VoxelError(f"unknown meshing method {method!r} (known: {', '.join(meshing.METHODS)})")
+    if light not in LIGHTS:
+        raise VoxelError(f"light must be 'atlas' or 'vertex', not {light!r}")
     blocks = np.asarray(blocks, np.uint16)
     if blocks.ndim != 3 or blocks.shape[2] != C.HEIGHT:
         raise VoxelError(f"blocks must be (W, H, {C.HEIGHT}), got {blocks.shape}")
@@ -135,44 +167,104 @@ def bake_blocks(blocks: np.ndarray, origin=(0, 0, 0), *, per: str = "region",
     ox, oy, oz = map(int, origin)
     say = progress or (lambda *_: None)
 
+    def stage(name, frac):
+        say(name, frac)
+        return name, frac
+
     padded = C.empty(np.uint16, W + 2 * PAD, H + 2 * PAD)
     padded[PAD:PAD + W, PAD:PAD + H] = blocks
-    say("light", 0.0)
-    light = light_solve(padded, backend)
+    lit = None
+    for lit, frac in light_tiles(padded, backend):
+        yield stage("light", frac)
     mat_table, specs = _materials()
     shape_ids = np.flatnonzero(REGISTRY.shape >= 2)  # x and hash
 
-    # windows: (name, x, y, w, h) in region coordinates
-    if per == "region":
-        wins = [(f"voxels_{ox}_{oy}", 0, 0, W, H)]
-    else:
-        wins = []
-        for cy in range(oy >> 4, ((oy + H - 1) >> 4) + 1):
-            for cx in range(ox >> 4, ((ox + W - 1) >> 4) + 1):
-                x, y = max(cx * 16 - ox, 0), max(cy * 16 - oy, 0)
-                wins.append((f"chunk_{cx}_{cy}", x, y, min((cx + 1) * 16 - ox, W) - x,
-                             min((cy + 1) * 16 - oy, H) - y))
     ring = padded[PAD - 1:PAD + W + 1, PAD - 1:PAD + H + 1]  # region + 1-voxel air ring
-    parts = []
+    wins = windows(per, ox, oy, W, H, tile)
+    meshed = []  # (name, quads, x, y, (the light near them, its offset))
     for i, (name, x, y, w, h) in enumerate(wins):
-        say("mesh", i / len(wins))
+        yield stage("mesh", i / len(wins))
         q = meshing.quads(np.asfortranarray(ring[x:x + w + 2, y:y + h + 2]), border="context",
                           method=method, backend=backend or "numpy")
         if instances:
             q = q[~np.isin(q["block"], shape_ids)]
         if not len(q):
             continue
-        q = L.split_uneven(q, light, (PAD + x, PAD + y, 0))
-        parts.append(_part(name, q, (ox + x, oy + y, oz), light, (PAD + x, PAD + y, 0),
-                           mat_table))
+        # the light q samples: its window, one voxel around (sample() unpacks it whole)
+        z0 = max(int(q["z"].min()) - 1, 0)
+        z1 = min(int((q["z"].astype(np.int64) + q["h"]).max()) + 2, C.HEIGHT)
+        near = (lit[PAD + x - 1:PAD + x + w + 1, PAD + y - 1:PAD + y + h + 1, z0:z1], (1, 1, -z0))
+        if light == "vertex":
+            q = L.split_uneven(q, *near)
+        meshed.append((name, q, x, y, near))
+    texels = faces = None
+    if light == "atlas":
+        yield stage("atlas", 0.0)
+        pw, ph = zip(*(A.sizes(m[1]) for m in meshed)) if meshed else ((), ())
+        px, py, AW, AH = A.pack(np.concatenate(pw or [np.zeros(0, np.int64)]),
+                                np.concatenate(ph or [np.zeros(0, np.int64)]))
+        texels = np.zeros((AH, AW, 4), np.float32)
+        faces = np.full((AH, AW), A.EMPTY, np.uint8)
+        starts = np.cumsum([0] + [len(m[1]) for m in meshed])
+    parts = []
+    for i, (name, q, x, y, near) in enumerate(meshed):
+        yield stage("parts", i / len(meshed))
+        p = _part(name, q, (ox + x, oy + y, oz), *near, mat_table)
+        if texels is not None:
+            sl = slice(starts[i], starts[i + 1])
+            A.fill(texels, faces, q, px[sl], py[sl], *near)
+            p.uv2 = A.uvs(q, p.positions - np.asarray((ox + x, oy + y, oz), np.float32),
+                          px[sl], py[sl], AW, AH)
+        parts.append(p)
     plants = {}
     if instances:
         for bid in shape_ids:
             xyz = np.argwhere(blocks == bid)
             if len(xyz):
                 plants[REGISTRY.blocks[bid].name] = (xyz + (ox, oy, oz)).astype(np.int32)
-    say("done", 1.0)
-    return Bake((ox, oy, ox + W, oy + H), parts, specs, plants)
+    yield stage("baked", 1.0)
+    return Bake((ox, oy, ox + W, oy + H), parts, specs, plants, texels, faces)
+
+
+LIGHT_TILE, REACH = 64, 16  # light travels < 16 voxels: a 16-column margin is exact
+
+
+def light_tiles(blocks, backend=None, tile: int = LIGHT_TILE):
+    """Light of `blocks` solved in tiles of `tile` columns plus a REACH margin (each
+    exact inside, as light.solve is 15 columns in from its edges), so no single step
+    holds the UI for the whole region. Yields (light so far, fraction); the last
+    one is the whole light, equal to light.solve(blocks)."""
+    from ..light import solve as light_solve
+    W, H = blocks.shape[:2]
+    if W <= tile + 2 * REACH and H <= tile + 2 * REACH:
+        yield None, 0.0
+        yield light_solve(blocks, backend), 1.0
+        return
+    out = C.empty(np.uint16, W, H)
+    boxes = [(x, y) for y in range(0, H, tile) for x in range(0, W, tile)]
+    for i, (x, y) in enumerate(boxes):
+        yield out, i / len(boxes)
+        a, b = max(x - REACH, 0), max(y - REACH, 0)
+        part = light_solve(np.asfortranarray(blocks[a:x + tile + REACH, b:y + tile + REACH]),
+                           backend)
+        out[x:x + tile, y:y + tile] = part[x - a:x - a + tile, y - b:y - b + tile]
+    yield out, 1.0
+
+
+def windows(per, ox, oy, W, H, tile=64):
+    """(name, x, y, w, h) of every object's window in region coordinates."""
+    if per == "region":
+        return [(f"voxels_{ox}_{oy}", 0, 0, W, H)]
+    if per == "tile":
+        return [(f"tile_{ox + x}_{oy + y}", x, y, min(tile, W - x), min(tile, H - y))
+                for y in range(0, H, tile) for x in range(0, W, tile)]
+    wins = []
+    for cy in range(oy >> 4, ((oy + H - 1) >> 4) + 1):
+        for cx in range(ox >> 4, ((ox + W - 1) >> 4) + 1):
+            x, y = max(cx * 16 - ox, 0), max(cy * 16 - oy, 0)
+            wins.append((f"chunk_{cx}_{cy}", x, y, min((cx + 1) * 16 - ox, W) - x,
+                         min((cy + 1) * 16 - oy, H) - y))
+    return wins
 
 
 def _part(name, q, origin, light, offset, mat_table) -> Part:
@@ -197,6 +289,11 @@ def _part(name, q, origin, light, offset, mat_table) -> Part:
                 np.ascontiguousarray(s[:, 3]),
                 mat_table[np.asarray(m.block), np.asarray(m.face)].astype(np.int32),
                 np.asarray(m.block, np.uint16), np.asarray(m.face, np.uint8))
+
+
+def shade_atlas(bk: Bake, hours: float = 12.0) -> np.ndarray:
+    """(AH, AW, 3) light factor of the atlas at `hours` (as shade() per vertex)."""
+    return A.shade(bk.atlas, bk.atlas_face, hours)
 
 
 def shade(part: Part, hours: float = 12.0) -> np.ndarray:

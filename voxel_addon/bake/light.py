@@ -25,7 +25,7 @@ def split_uneven(quads, light: np.ndarray, offset) -> np.ndarray:
     big = (q["w"] > 1) | (q["h"] > 1)
     if not big.any():
         return q
-    corners, owner = _grid_points(q[big])
+    corners, owner, _, _ = _grid_points(q[big])
     face = q["face"][big][owner]
     n = np.zeros((len(face), 3), np.float32)
     n[np.arange(len(face)), AXIS[face]] = SIGN[face]
@@ -46,7 +46,8 @@ def _tangents(face):
 
 
 def _grid_points(q):
-    """Every unit-grid vertex of every quad (on its plane) and the quad it belongs to."""
+    """Every unit-grid vertex of every quad (on its plane), the quad it belongs to
+    and its grid index (a along t1, b along t2; a runs fastest)."""
     w, h = q["w"].astype(np.int64), q["h"].astype(np.int64)
     cnt = (w + 1) * (h + 1)
     owner = np.repeat(np.arange(len(q)), cnt)
@@ -58,7 +59,7 @@ def _grid_points(q):
     base[r, t1] += a
     base[r, t2] += b
     base[r, axis] += (SIGN[q["face"][owner]] > 0)  # +a faces lie on the far side
-    return base, owner
+    return base, owner, a, b
 
 
 def _unit(q):

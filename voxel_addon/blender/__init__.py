@@ -1,9 +1,10 @@
 """Blender side of the add-on: every module in ui/ exports CLASSES (registered in
 module order, PropertyGroups first within a module) and may export SCENE_PROPS, a
 dict attribute-name -> PropertyGroup class attached to bpy.types.Scene (so settings
-are saved with the .blend), and register()/unregister() for what is not a class
-(tools, handlers), called after its classes and before they go. New panels/tools
-only add a module to ui/."""
+are saved with the .blend), MENUS, menu class name -> draw function appended to
+that menu (e.g. File › Import), and register()/unregister() for what is not a
+class (tools, handlers), called after its classes and before they go. New
+panels/tools only add a module to ui/."""
 from __future__ import annotations
 
 import importlib
@@ -14,6 +15,7 @@ from . import ui
 _registered: list = []
 _scene_props: list[str] = []
 _hooked: list = []
+_menus: list = []
 
 
 def modules():
@@ -36,6 +38,9 @@ def register():
         if hasattr(m, "register"):
             m.register()
             _hooked.append(m)
+        for menu, fn in getattr(m, "MENUS", {}).items():
+            getattr(bpy.types, menu).append(fn)
+            _menus.append((menu, fn))
 
 
 def unregister():
@@ -45,6 +50,9 @@ def unregister():
         _hooked.pop().unregister()
     viewport.shutdown()
     session.close_all()
+    for menu, fn in reversed(_menus):
+        getattr(bpy.types, menu).remove(fn)
+    _menus.clear()
     for attr in reversed(_scene_props):
         if hasattr(bpy.types.Scene, attr):
             delattr(bpy.types.Scene, attr)

@@ -1,18 +1,24 @@
 """Bake results (voxel_addon.bake) -> Blender objects, materials and packed textures.
 
-    objects = build(bake, style="blender"|"gltf", collection=None, hours=12.0)
-    export_glb(path, objects)
+    objects = build(bk, style="blender"|"gltf", collection=None, hours=12.0)
+    build_steps(...)  # the same as a generator of short steps (modal operators)
+    export_glb(path, objects, instances=False)
 
-Materials (one per bake.MaterialSpec): Principled BSDF, Base Color from the block
-texture (Closest, REPEAT), alpha clip (Round) for alpha_test, blended alpha for
-blend, the texture's glow mask as an emission texture for glowing blocks.
+Materials (one per bake.MaterialSpec and light source): Principled BSDF, Base Color
+from the block texture (Closest, REPEAT), alpha clip (Round) for alpha_test, blended
+alpha for blend, the texture's glow mask as an emission texture for glowing blocks.
+The light comes from the bake's light atlas (an image on the "LightUV" UV set,
+Linear) or, for light="vertex", from colour attributes.
 - style "blender": baked light stays live data. Emission = texture × the shared
-  "Voxel Shade" node group, which mixes the `light` (block RGB) and `daylight`
-  colour attributes by the time of day: the group's "Hours" value node (one for all
-  materials; set it with set_hours() or keyframe it) goes from day to night without
-  re-baking. Use a dark world for the thesis's look.
-- style "gltf": what the glTF exporter understands: Base Color = texture × the
-  `shade` colour attribute (light at `hours`, exported as COLOR_0), emissive texture.
+  "Voxel Shade" node group, which mixes block light and daylight by the time of
+  day: the group's "Hours" value node (one for all materials; set it with
+  set_hours() or keyframe it) goes from day to night without re-baking. Use a
+  dark world for the thesis's look.
+- style "gltf": what glTF can carry, with no exporter warning: atlas -> the light
+  factor at `hours` as the occlusion map on TEXCOORD_1 (glTF has no coloured light
+  map: its brightest channel); vertex -> Base Color = texture × the `shade` colour
+  attribute (COLOR_0, exact colour). Emissive texture × glow (strength above 1 as
+  KHR_materials_emissive_strength); alpha modes written after export (bake.glb).
 """
 from __future__ import annotations
 
@@ -83,15 +89,19 @@ def _ramp(tree, fac, keys, x, y):
 
 
 def shade_group() -> bpy.types.ShaderNodeTree:
-    """The shared node group: light factor (eq. 4.1) from the colour attributes and
-    its internal "Hours" value (0..24)."""
+    """The shared node group: light factor (eq. 4.1) from its Light (block RGB) and
+    Daylight inputs (colour attributes or the light atlas) and its internal "Hours"
+    value (0..24)."""
     from ..light import daytime
     g = bpy.data.node_groups.get(GROUP)
     if g is not None:
         return g
     g = bpy.data.node_groups.new(GROUP, "ShaderNodeTree")
     g.interface.new_socket("Shade", in_out="OUTPUT", socket_type="NodeSocketColor")
+    g.interface.new_socket("Light", in_out="INPUT", socket_type="NodeSocketColor")
+    g.interface.new_socket("Daylight", in_out="INPUT", socket_type="NodeSocketColor")
     out = _node(g, "NodeGroupOutput", 1400, 0)
+    gin = _node(g, "NodeGroupInput", 250, 400)
     hours = _node(g, "ShaderNodeValue", -1000, 0, name="Hours", label="Hours")
     hours.outputs[0].default_value = 12.0
     h = hours.outputs[0]
@@ -118,8 +128,7 @@ def shade_group() -> bpy.types.ShaderNodeTree:
     g.links.new(ldir.outputs[0], dot.inputs[1])
     ndl = _math(g, "MAXIMUM", dot.outputs["Value"], 0.0, 250, -300)
     # light.shade (eq. 4.1) with white albedo: light*(1 - u*day) + day*(ambient + ndl*direct)
-    lit = _node(g, "ShaderNodeVertexColor", 250, 300, layer_name="light")
-    day = _node(g, "ShaderNodeVertexColor", 250, 500, layer_name="daylight")
+    lit_rgb, day_rgb = gin.outputs["Light"], gin.outputs["Daylight"]
 
     def mix(op, a, b, x, y, fac=1.0):
         n = _node(g, "ShaderNodeMix", x, y, data_type="RGBA", blend_type=op)
@@ -135,10 +144,10 @@ def shade_group() -> bpy.types.ShaderNodeTree:
     for i in range(3):
         g.links.new(ndl, ndl_rgb.inputs[i])
     sky = mix("ADD", amb, mix("MULTIPLY", direct, ndl_rgb.outputs[0], 550, 0), 700, 300)
-    dayterm = mix("MULTIPLY", day.outputs["Color"], sky, 1000, 400)
-    keep = mix("SUBTRACT", (1, 1, 1, 1), mix("MULTIPLY", u, day.outputs["Color"], 550, -150),
+    dayterm = mix("MULTIPLY", day_rgb, sky, 1000, 400)
+    keep = mix("SUBTRACT", (1, 1, 1, 1), mix("MULTIPLY", u, day_rgb, 550, -150),
                700, -100)
-    art = mix("MULTIPLY", lit.outputs["Color"], keep, 1000, 100)
+    art = mix("MULTIPLY", lit_rgb, keep, 1000, 100)
     total = mix("ADD", dayterm, art, 1200, 200)
     g.links.new(total, out.inputs[0])
     return g
@@ -151,12 +160,55 @@ def set_hours(hours: float) -> None:
 
 # ---------------------------------------------------------------- materials
 
-def material(spec, style: str) -> bpy.types.Material:
-    key = f"voxel_{spec.name}" + ("" if style == "blender" else f"_{style}")
-    m = bpy.data.materials.get(key)
-    if m is not None:
-        return m
-    m = bpy.data.materials.new(key)
+LIGHT_UV = "LightUV"
+GLTF_GROUP = "glTF Material Output"  # the glTF exporter reads Occlusion from this group
+
+
+def light_images(bk, style: str, hours: float = 12.0):
+    """The bake's light atlas as an image (None for light="vertex"): float RGBA
+    (RGB block light, A daylight) for style "blender"; for "gltf" the light factor
+    at `hours` as 8-bit grey (its brightest channel: glTF's occlusion map has one)."""
+    from .. import bake as B
+    if bk.atlas is None:
+        return None
+    x0, y0 = bk.region[:2]
+    H, W = bk.atlas.shape[:2]
+    if style == "blender":
+        img = bpy.data.images.new(f"voxel_light_{x0}_{y0}", W, H, alpha=True, float_buffer=True)
+        img.alpha_mode = "CHANNEL_PACKED"  # A is daylight, not coverage
+        px = bk.atlas
+        img.file_format = "OPEN_EXR"
+    else:
+        img = bpy.data.images.new(f"voxel_shade_{x0}_{y0}", W, H, alpha=False)
+        grey = B.shade_atlas(bk, hours).max(axis=2)
+        px = np.concatenate([np.repeat(grey[..., None], 3, 2), np.ones((H, W, 1), np.float32)], 2)
+        img.file_format = "PNG"
+    img.colorspace_settings.name = "Non-Color"
+    img.pixels.foreach_set(np.ascontiguousarray(px, np.float32).ravel())
+    if style == "blender":  # kept in the .blend; the glTF copy is encoded by the exporter
+        img.pack()
+    return img
+
+
+def gltf_group() -> bpy.types.ShaderNodeTree:
+    """The node group Blender's glTF exporter (and importer) uses for the occlusion map."""
+    g = bpy.data.node_groups.get(GLTF_GROUP)
+    if g is None:
+        g = bpy.data.node_groups.new(GLTF_GROUP, "ShaderNodeTree")
+        s = g.interface.new_socket("Occlusion", in_out="INPUT", socket_type="NodeSocketFloat")
+        s.default_value = 1.0
+    return g
+
+
+def material(spec, style: str, light=None) -> bpy.types.Material:
+    """The material of `spec`; `light` is the bake's light atlas image (light_images)
+    or None when light travels in colour attributes."""
+    key = f"{spec.name}|{style}|{light.name if light is not None else '-'}"
+    for m in bpy.data.materials:
+        if m.get("voxel_key") == key:
+            return m
+    m = bpy.data.materials.new(f"voxel_{spec.name}" + ("" if style == "blender" else f"_{style}"))
+    m["voxel_key"] = key
     if m.node_tree is None:  # before Blender 5 new materials had no tree yet
         m.use_nodes = True
     t = m.node_tree
@@ -169,23 +221,42 @@ def material(spec, style: str) -> bpy.types.Material:
     tex = _node(t, "ShaderNodeTexImage", -450, 100, image=image(spec.texture),
                 interpolation="Closest", extension="REPEAT")
     t.links.new(uv.outputs[0], tex.inputs[0])
+    if light is not None:
+        luv = _node(t, "ShaderNodeUVMap", -700, -350, uv_map=LIGHT_UV)
+        ltex = _node(t, "ShaderNodeTexImage", -450, -350, image=light,
+                     interpolation="Linear", extension="EXTEND")
+        t.links.new(luv.outputs[0], ltex.inputs[0])
     if style == "gltf":
-        attr = _node(t, "ShaderNodeVertexColor", -450, -200, layer_name="shade")
-        mul = _node(t, "ShaderNodeMix", 100, 200, data_type="RGBA", blend_type="MULTIPLY")
-        mul.inputs["Factor"].default_value = 1.0
-        t.links.new(tex.outputs["Color"], mul.inputs[6])
-        t.links.new(attr.outputs["Color"], mul.inputs[7])
-        t.links.new(mul.outputs[2], bsdf.inputs["Base Color"])
+        if light is None:
+            attr = _node(t, "ShaderNodeVertexColor", -450, -200, layer_name="shade")
+            mul = _node(t, "ShaderNodeMix", 100, 200, data_type="RGBA", blend_type="MULTIPLY")
+            mul.inputs["Factor"].default_value = 1.0
+            t.links.new(tex.outputs["Color"], mul.inputs[6])
+            t.links.new(attr.outputs["Color"], mul.inputs[7])
+            t.links.new(mul.outputs[2], bsdf.inputs["Base Color"])
+        else:
+            t.links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
+            sep = _node(t, "ShaderNodeSeparateColor", -150, -350)
+            t.links.new(ltex.outputs["Color"], sep.inputs[0])
+            grp = _node(t, "ShaderNodeGroup", 500, -450, node_tree=gltf_group())
+            t.links.new(sep.outputs[0], grp.inputs["Occlusion"])
     else:
         t.links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
-        grp = _node(t, "ShaderNodeGroup", -450, -250, node_tree=shade_group())
+        grp = _node(t, "ShaderNodeGroup", -150, -250, node_tree=shade_group())
+        if light is None:
+            for i, name in enumerate(("light", "daylight")):
+                attr = _node(t, "ShaderNodeVertexColor", -450, -250 - 150 * i, layer_name=name)
+                t.links.new(attr.outputs["Color"], grp.inputs[i])
+        else:
+            t.links.new(ltex.outputs["Color"], grp.inputs["Light"])
+            t.links.new(ltex.outputs["Alpha"], grp.inputs["Daylight"])
         emi = _node(t, "ShaderNodeMix", 100, -200, data_type="RGBA", blend_type="MULTIPLY")
         emi.inputs["Factor"].default_value = 1.0
         t.links.new(tex.outputs["Color"], emi.inputs[6])
         t.links.new(grp.outputs[0], emi.inputs[7])
         glow_sock = emi.outputs[2]
     if spec.glow > 0:
-        gtex = _node(t, "ShaderNodeTexImage", -450, -500, image=image(spec.texture, "glow"),
+        gtex = _node(t, "ShaderNodeTexImage", -450, -650, image=image(spec.texture, "glow"),
                      interpolation="Closest", extension="REPEAT")
         t.links.new(uv.outputs[0], gtex.inputs[0])
         if style == "gltf":
@@ -200,7 +271,9 @@ def material(spec, style: str) -> bpy.types.Material:
     if style != "gltf":
         t.links.new(glow_sock, bsdf.inputs["Emission Color"])
         bsdf.inputs["Emission Strength"].default_value = 1.0
-    if spec.render == "alpha_test":
+    if style == "gltf":  # export_glb writes alphaMode (see bake.glb: no exporter warning)
+        m["voxel_alpha"] = {"alpha_test": "MASK", "blend": "BLEND"}.get(spec.render, "OPAQUE")
+    elif spec.render == "alpha_test":
         rnd = _math(t, "ROUND", tex.outputs["Alpha"], None, 200, -600)
         t.links.new(rnd, bsdf.inputs["Alpha"])
     elif spec.render == "blend":
@@ -231,10 +304,14 @@ def mesh(part, materials: list, style: str, hours: float = 12.0) -> bpy.types.Me
     me.update(calc_edges=True)
     uv = me.uv_layers.new(name="UVMap")
     uv.data.foreach_set("uv", part.uvs.ravel())
+    if part.uv2 is not None:  # the light lives in the atlas: no colour attributes
+        me.uv_layers.new(name=LIGHT_UV).data.foreach_set("uv", part.uv2.ravel())
+        return me
     one = np.ones((4 * n, 1), np.float32)
-    cols = {"light": part.light, "daylight": np.repeat(part.daylight[:, None], 3, 1)}
-    if style == "gltf":
-        cols = {"shade": B.shade(part, hours), **cols}
+    if style == "gltf":  # only what the material uses (the exporter writes every one)
+        cols = {"shade": B.shade(part, hours)}
+    else:
+        cols = {"light": part.light, "daylight": np.repeat(part.daylight[:, None], 3, 1)}
     for name, rgb in cols.items():
         a = me.color_attributes.new(name, "FLOAT_COLOR", "POINT")
         a.data.foreach_set("color", np.hstack([rgb, one]).ravel())
@@ -247,80 +324,84 @@ def build(bk, *, style: str = "blender", collection=None, hours: float = 12.0,
           progress=None) -> list:
     """Objects for every part of `bk` (a bake.Bake), linked into `collection`
     (default: a new "Voxel Bake" collection in the current scene)."""
+    gen = build_steps(bk, style=style, collection=collection, hours=hours)
+    while True:
+        try:
+            stage, frac = next(gen)
+        except StopIteration as stop:
+            return stop.value
+        if progress:
+            progress(stage, frac)
+
+
+def build_steps(bk, *, style: str = "blender", collection=None, hours: float = 12.0,
+                link: bool = True):
+    """build() as a generator of short steps (yields (stage, fraction), returns the
+    objects). With link=False a new collection is left out of the scene (the caller
+    links it when everything is made, so a cancelled build shows nothing)."""
     if style not in ("blender", "gltf"):
         raise ValueError("style must be 'blender' or 'gltf'")
     if collection is None:
         collection = bpy.data.collections.new("Voxel Bake")
-        bpy.context.scene.collection.children.link(collection)
-    mats = [material(s, style) for s in bk.materials]
+        if link:
+            bpy.context.scene.collection.children.link(collection)
+    light = light_images(bk, style, hours)
+    mats = [material(s, style, light) for s in bk.materials]
     objs = []
     for i, part in enumerate(bk.parts):
-        if progress:
-            progress("objects", i / max(len(bk.parts), 1))
+        yield "objects", i / max(len(bk.parts), 1)
         ob = bpy.data.objects.new(part.name, mesh(part, mats, style, hours))
         collection.objects.link(ob)
         objs.append(ob)
     if bk.plants:
-        objs += plants(bk, mats, style, collection, hours)
+        objs += plants(bk, style, collection, hours)
     if style == "blender":
         set_hours(hours)
     return objs
 
 
-def plants(bk, mats, style, collection, hours) -> list:
-    """Plants as instances: one prototype mesh per plant type (hidden collection) and
-    one point object per type whose Geometry Nodes instance the prototype on every
-    point (the glTF exporter can write them as EXT_mesh_gpu_instancing)."""
+def plants(bk, style, collection, hours) -> list:
+    """Plants as instances: per plant type a point object (one vertex per plant) that
+    instances its prototype child on every vertex (instance_type VERTS; the point
+    object itself is neither drawn nor exported as a mesh). The glTF exporter writes
+    them as EXT_mesh_gpu_instancing."""
     from .. import bake as B
     from ..core.blocks import REGISTRY
-    protos = bpy.data.collections.new("Voxel Plant Prototypes")
-    collection.children.link(protos)
     out = []
     for name, xyz in bk.plants.items():
         one = np.zeros((1, 1, 256), np.uint16)
         one[0, 0, 0] = REGISTRY.id(name)
-        pb = B.bake_blocks(one, per="region")
+        pb = B.bake_blocks(one, per="region", light="vertex")
         pr = pb.parts[0]
         pr.daylight[:] = 1.0  # instances share one mesh: lit as in open sky
         pr.name = f"plant_{name}"
         proto = bpy.data.objects.new(pr.name, mesh(pr, [material(s, style) for s in pb.materials],
                                                    style, hours))
-        protos.objects.link(proto)
         pts = bpy.data.meshes.new(f"plants_{name}")
         pts.vertices.add(len(xyz))
         pts.vertices.foreach_set("co", xyz.astype(np.float32).ravel())
         ob = bpy.data.objects.new(f"plants_{name}", pts)
-        mod = ob.modifiers.new("Instances", "NODES")
-        mod.node_group = _instancer(proto)
+        ob.instance_type = "VERTS"
+        ob.show_instancer_for_render = False
+        ob.show_instancer_for_viewport = False
         collection.objects.link(ob)
-        out.append(ob)
-    protos.hide_render = True
-    protos.hide_viewport = True
+        collection.objects.link(proto)
+        proto.parent = ob
+        out += [ob, proto]
     return out
 
 
-def _instancer(proto) -> bpy.types.GeometryNodeTree:
-    g = bpy.data.node_groups.new(f"Voxel Instances {proto.name}", "GeometryNodeTree")
-    g.interface.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
-    g.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
-    gi = _node(g, "NodeGroupInput", -400, 0)
-    go = _node(g, "NodeGroupOutput", 400, 0)
-    info = _node(g, "GeometryNodeObjectInfo", -400, -200)
-    info.inputs["Object"].default_value = proto
-    inst = _node(g, "GeometryNodeInstanceOnPoints", 100, 0)
-    g.links.new(gi.outputs[0], inst.inputs["Points"])
-    g.links.new(info.outputs["Geometry"], inst.inputs["Instance"])
-    g.links.new(inst.outputs[0], go.inputs[0])
-    return g
-
-
 def export_glb(path, objects, *, instances: bool = False) -> None:
-    """Write `objects` (and nothing else) through Blender's glTF exporter."""
+    """Write `objects` (and nothing else) through Blender's glTF exporter, then the
+    alpha modes and atlas samplers (bake.glb.touch_up)."""
+    from ..bake import glb
     for ob in bpy.context.view_layer.objects:
         ob.select_set(False)
     for ob in objects:
         ob.select_set(True)
     bpy.ops.export_scene.gltf(filepath=str(path), export_format="GLB", use_selection=True,
                               export_vertex_color="MATERIAL", export_gpu_instances=instances,
-                              export_gn_mesh=instances,
                               export_apply=True, export_yup=True)
+    modes = {m.name: m["voxel_alpha"] for m in bpy.data.materials
+             if m.get("voxel_alpha", "OPAQUE") != "OPAQUE"}
+    glb.touch_up(path, modes, plain="voxel_shade_")

@@ -17,11 +17,16 @@ def add_parser(sub):
     p.add_argument("--region", type=int, nargs=4, required=True, metavar=("X0", "Y0", "X1", "Y1"),
                    help="half-open block columns [X0,X1) x [Y0,Y1), full height")
     p.add_argument("--out", type=Path, required=True, metavar="F.glb", help="output .glb")
-    p.add_argument("--per", choices=("region", "chunk"), default="region",
-                   help="one object for the region (default) or one per chunk")
+    p.add_argument("--per", choices=("region", "chunk", "tile"), default="region",
+                   help="one object for the region (default), one per chunk, or one per "
+                        "64×64 tile (big regions)")
     p.add_argument("--method", default="greedy", choices=METHODS,
                    help="face aggregation (default greedy)")
     p.add_argument("--instances", action="store_true", help="plants as GPU instances")
+    p.add_argument("--light", choices=("atlas", "vertex"), default="atlas",
+                   help="light in a texture on a second UV set, quads stay merged (default), "
+                        "or per vertex (quads split where light varies; for tools that "
+                        "ignore a second UV set)")
     p.add_argument("--time", default="12:00", help="time of day of the exported light (HH:MM)")
     p.add_argument("--blend", type=Path, help="also save the baked scene as this .blend")
     return p
@@ -50,7 +55,7 @@ def run(args):
 
     with World.open(args.world, readonly=True, loader=False) as world:
         bk = bake.bake_world(world, x0, y0, x1, y1, per=args.per, method=args.method,
-                             instances=args.instances, progress=progress)
+                             instances=args.instances, light=args.light, progress=progress)
     try:
         import bpy
     except ImportError as e:

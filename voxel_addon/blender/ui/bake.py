@@ -1,9 +1,15 @@
-"""Bake section: region, one object per chunk or per region, plants as instances,
-time of day of the baked light, bake to objects and export .glb (SPEC F9, F10)."""
+"""Bake section: region, one object per region, chunk or tile, light atlas or per
+vertex, plants as instances, time of day of the baked light, bake to objects and
+export .glb (SPEC F9, F10). Both run the import's job (blender/job.py): modal from
+the UI (status bar progress, Esc cancels), at once from scripts."""
 from __future__ import annotations
 
 import bpy
-from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntVectorProperty, StringProperty
+from bpy.props import (BoolProperty, EnumProperty, FloatProperty, IntProperty, IntVectorProperty,
+                       StringProperty)
+
+from ..job import ModalJob
+from .importer import PER, job_for
 
 
 def _hours_changed(self, context):
@@ -17,12 +23,17 @@ class VoxelBakeSettings(bpy.types.PropertyGroup):
                                   description="First block column (X0, Y0), included")
     region_max: IntVectorProperty(name="To", size=2, default=(16, 16),
                                   description="Last block column (X1, Y1), excluded")
-    per: EnumProperty(name="Objects", default="region",
-                      items=[("region", "One per Region", "A single mesh object"),
-                             ("chunk", "One per Chunk", "An object per 16×16 chunk")])
+    per: EnumProperty(name="Objects", default="region", items=PER)
+    tile: IntProperty(name="Tile", default=64, min=16, max=1024,
+                      description="Blocks per side of one object (Objects: Per Tile)")
     method: EnumProperty(name="Merge", default="greedy",
                          items=[(m, m.replace("_", " ").title(), f"face aggregation: {m}")
                                 for m in ("none", "lines", "squares", "squares_ext", "greedy")])
+    light: EnumProperty(name="Light", default="atlas",
+                        items=[("atlas", "Atlas", "Light in a texture on a second UV set; "
+                                "merged quads stay whole"),
+                               ("vertex", "Per Vertex", "Light in colour attributes; quads "
+                                "split where light varies (tools without a second UV set)")])
     instances: BoolProperty(name="Plants as Instances", default=False,
                             description="Plants as instances of one mesh per type")
     hours: FloatProperty(name="Time of Day", default=12.0, min=0.0, max=24.0,
@@ -31,85 +42,68 @@ class VoxelBakeSettings(bpy.types.PropertyGroup):
     glb_path: StringProperty(name="glTF", subtype="FILE_PATH", default="//voxels.glb")
 
 
-def _region(s):
-    return (*s.region_min, *s.region_max)
+def _job(context, style):
+    s = context.scene.voxel_bake
+    return job_for(context.scene.voxel.path, s, region=(*s.region_min, *s.region_max),
+                   style=style)
 
 
-def _progress(context):
-    wm = context.window_manager
-    wm.progress_begin(0, 100)
-
-    def say(stage, frac):
-        wm.progress_update(int(100 * frac))
-    return say, wm.progress_end
-
-
-def _bake(op, context, style):
-    from .. import bake as BB, session
-    from ... import bake
-    from ...core.errors import VoxelError
-    s, w = context.scene.voxel_bake, context.scene.voxel
-    say, end = _progress(context)
-    try:
-        world = session.world(w.path)
-        bk = bake.bake_world(world, *_region(s), per=s.per, method=s.method,
-                             instances=s.instances, progress=say)
-        return BB.build(bk, style=style, hours=s.hours, progress=say), bk
-    except VoxelError as e:
-        op.report({"ERROR"}, str(e))
-        return None, None
-    finally:
-        end()
-
-
-class VOXEL_OT_bake(bpy.types.Operator):
+class VOXEL_OT_bake(ModalJob, bpy.types.Operator):
     bl_idname = "voxel.bake"
     bl_label = "Bake to Objects"
-    bl_description = "Bake the region into mesh objects with textures and light attributes"
+    bl_description = "Bake the region into mesh objects with textures and baked light (Esc cancels)"
     bl_options = {"REGISTER", "UNDO"}
 
-    def execute(self, context):
-        objs, bk = _bake(self, context, "blender")
-        if objs is None:
-            return {"CANCELLED"}
-        self.report({"INFO"}, f"baked {len(objs)} objects, {bk.triangles} triangles")
-        return {"FINISHED"}
+    def make_job(self, context):
+        return _job(context, "blender")
+
+    def invoke(self, context, event):
+        return self.start(context)
 
 
-class VOXEL_OT_export_glb(bpy.types.Operator):
+class VOXEL_OT_generate(ModalJob, bpy.types.Operator):
+    bl_idname = "voxel.generate"
+    bl_label = "Generate Region"
+    bl_description = ("Generate and store the region's chunks in the world file, in steps "
+                      "(Esc stops; what is generated stays)")
+
+    def make_job(self, context):
+        from ...core.errors import VoxelError
+        from .. import session
+        s = context.scene.voxel_bake
+        world = session.world(context.scene.voxel.path)
+        if getattr(world, "readonly", False):
+            raise VoxelError("the world file is open read-only")
+        from ..job import Job
+        return Job(world, (*s.region_min, *s.region_max), build=False)
+
+    def invoke(self, context, event):
+        return self.start(context)
+
+    def finish(self, context, job):
+        self.report({"INFO"}, f"generated {job.generated} chunks")
+
+
+class VOXEL_OT_export_glb(ModalJob, bpy.types.Operator):
     bl_idname = "voxel.export_glb"
     bl_label = "Export .glb"
     bl_description = "Bake the region and export it as glTF binary (light at the time of day)"
 
-    def execute(self, context):
+    def make_job(self, context):
+        return _job(context, "gltf")
+
+    def invoke(self, context, event):
+        return self.start(context)
+
+    def finish(self, context, job):
         from .. import bake as BB
         s = context.scene.voxel_bake
-        objs, _ = _bake(self, context, "gltf")
-        if objs is None:
-            return {"CANCELLED"}
         path = bpy.path.abspath(s.glb_path)
-        coll = objs[0].users_collection[0] if objs else None
         try:
-            BB.export_glb(path, objs, instances=s.instances)
+            BB.export_glb(path, job.objects, instances=s.instances)
         finally:  # the export copy is temporary: the scene keeps only explicit bakes
-            _remove(objs, coll)
+            job.cancel()
         self.report({"INFO"}, f"wrote {path}")
-        return {"FINISHED"}
-
-
-def _remove(objs, coll):
-    meshes = {o.data for o in objs if o.data is not None}
-    for o in objs:
-        bpy.data.objects.remove(o)
-    for m in meshes:
-        if m.users == 0:
-            bpy.data.meshes.remove(m)
-    if coll is not None:
-        for c in list(coll.children):
-            for o in list(c.objects):
-                bpy.data.objects.remove(o)
-            bpy.data.collections.remove(c)
-        bpy.data.collections.remove(coll)
 
 
 class VOXEL_PT_bake(bpy.types.Panel):
@@ -126,14 +120,19 @@ class VOXEL_PT_bake(bpy.types.Panel):
         col.prop(s, "region_min")
         col.prop(s, "region_max")
         col.prop(s, "per")
+        if s.per == "tile":
+            col.prop(s, "tile")
         col.prop(s, "method")
+        col.prop(s, "light")
         col.prop(s, "instances")
         col.prop(s, "hours")
+        col.operator(VOXEL_OT_generate.bl_idname, icon="WORLD")
         col.operator(VOXEL_OT_bake.bl_idname, icon="MESH_CUBE")
         col.separator()
         col.prop(s, "glb_path")
         col.operator(VOXEL_OT_export_glb.bl_idname, icon="EXPORT")
 
 
-CLASSES = [VoxelBakeSettings, VOXEL_OT_bake, VOXEL_OT_export_glb, VOXEL_PT_bake]
+CLASSES = [VoxelBakeSettings, VOXEL_OT_generate, VOXEL_OT_bake, VOXEL_OT_export_glb,
+           VOXEL_PT_bake]
 SCENE_PROPS = {"voxel_bake": VoxelBakeSettings}

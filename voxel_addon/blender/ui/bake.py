@@ -9,7 +9,7 @@ from bpy.props import (BoolProperty, EnumProperty, FloatProperty, IntProperty, I
                        StringProperty)
 
 from ..job import ModalJob
-from .importer import PER, job_for
+from .importer import LIGHT, METHOD_ITEMS, PER, job_for
 
 
 def _hours_changed(self, context):
@@ -26,14 +26,8 @@ class VoxelBakeSettings(bpy.types.PropertyGroup):
     per: EnumProperty(name="Objects", default="region", items=PER)
     tile: IntProperty(name="Tile", default=64, min=16, max=1024,
                       description="Blocks per side of one object (Objects: Per Tile)")
-    method: EnumProperty(name="Merge", default="greedy",
-                         items=[(m, m.replace("_", " ").title(), f"face aggregation: {m}")
-                                for m in ("none", "lines", "squares", "squares_ext", "greedy")])
-    light: EnumProperty(name="Light", default="atlas",
-                        items=[("atlas", "Atlas", "Light in a texture on a second UV set; "
-                                "merged quads stay whole"),
-                               ("vertex", "Per Vertex", "Light in colour attributes; quads "
-                                "split where light varies (tools without a second UV set)")])
+    method: EnumProperty(name="Merge", default="greedy", items=METHOD_ITEMS)
+    light: EnumProperty(name="Light", default="atlas", items=LIGHT)
     instances: BoolProperty(name="Plants as Instances", default=False,
                             description="Plants as instances of one mesh per type")
     hours: FloatProperty(name="Time of Day", default=12.0, min=0.0, max=24.0,

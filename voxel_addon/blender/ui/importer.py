@@ -8,6 +8,7 @@ from bpy.props import (BoolProperty, EnumProperty, FloatProperty, IntProperty,
                        IntVectorProperty, StringProperty)
 from bpy_extras.io_utils import ImportHelper
 
+from ...meshing import METHODS
 from ..job import Job, ModalJob, region_of_mode
 
 MODES = [("region", "Region", "The block columns [X0, X1) × [Y0, Y1) below"),
@@ -16,6 +17,7 @@ MODES = [("region", "Region", "The block columns [X0, X1) × [Y0, Y1) below"),
 PER = [("region", "One Object", "A single mesh object"),
        ("chunk", "Per Chunk", "An object per 16×16 chunk"),
        ("tile", "Per Tile", "An object per Tile × Tile blocks (big regions)")]
+METHOD_ITEMS = [(m, m.replace("_", " ").title(), f"face aggregation: {m}") for m in METHODS]
 LIGHT = [("atlas", "Atlas", "Light in a texture on a second UV set; merged quads stay whole"),
          ("vertex", "Per Vertex", "Light in colour attributes (quads split where it varies)")]
 
@@ -35,9 +37,7 @@ class IMPORT_SCENE_OT_voxel_world(ModalJob, bpy.types.Operator, ImportHelper):
     per: EnumProperty(name="Objects", items=PER, default="chunk")
     tile: IntProperty(name="Tile", default=64, min=16, max=1024)
     light: EnumProperty(name="Light", items=LIGHT, default="atlas")
-    method: EnumProperty(name="Merge", default="greedy",
-                         items=[(m, m.replace("_", " ").title(), f"face aggregation: {m}")
-                                for m in ("none", "lines", "squares", "squares_ext", "greedy")])
+    method: EnumProperty(name="Merge", default="greedy", items=METHOD_ITEMS)
     instances: BoolProperty(name="Plants as Instances", default=False)
     hours: FloatProperty(name="Time of Day", default=12.0, min=0.0, max=24.0)
     modal_run: BoolProperty(default=False, options={"HIDDEN", "SKIP_SAVE"})

@@ -214,13 +214,16 @@ class ModalJob:
             self._end(context)
             self.report({"WARNING"}, "cancelled: nothing was added to the scene")
             return {"CANCELLED"}
-        if event.type != "TIMER" or event.timer is not self._timer:
+        if event.type != "TIMER":  # (any timer: a step is short either way)
             return {"PASS_THROUGH"}
         try:
             done = self._runner.step()
-        except VoxelError as e:
+        except Exception as e:  # noqa: BLE001 - whatever stops the job, clean up first
             self._runner.cancel()
             self._end(context)
+            if not isinstance(e, VoxelError):
+                import traceback
+                traceback.print_exc()
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
         if not done:

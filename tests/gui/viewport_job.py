@@ -273,7 +273,7 @@ def step_newfile():
     yield from settle()
     RESULT["steps"]["newfile"] = {
         "handle": viewport._handle is not None, "feed": viewport._feed is not None,
-        "old_stream_alive": feed is not None and feed.stream._thread is not None,
+        "old_stream_alive": feed is not None and feed.stream.running,
         "gpus": len(viewport._gpus), "show": bpy.context.scene.voxel_view.show}
     setup_gen = setup()
     yield from setup_gen

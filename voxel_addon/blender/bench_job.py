@@ -112,6 +112,7 @@ def run():
         look(30)
         yield 0.2
         viewport.FRAMES.clear()
+        viewport.STATUS.update(drawn=0, wanted=0)  # (the last file's counts until a frame)
         vv.show = True
         R[f"show16_{key}_s"] = yield from all_drawn(600)
         R[f"max_redraw_{key}_ms"] = max(f[0] for f in viewport.FRAMES)

@@ -206,12 +206,12 @@ class _Gpu:
         """The frame into Blender's framebuffer (bound again here), depth tested."""
         from ..render import glstate
         gl = glstate.gl()
-        T = f.T
-        prog = self.program(T["ms"], 1 if f.layers else 0)
-        T["out"].use(5)
-        T["g"]["depth"].use(0)
-        if f.layers:
-            T["peel"][0]["depth"].use(9)
+        blend = f.blend_depth
+        prog = self.program(f.T["ms"], 1 if blend is not None else 0)
+        f.color.use(5)
+        f.depth.use(0)
+        if blend is not None:
+            blend.use(9)
         prog["host_vp"].write(np.asarray(host_vp, np.float32).T.tobytes())
         prog["host_range"].value = tuple(host["depth_range"])
         prog["host_zero_one"].value = bool(host["clip"] and host["clip"][1] == 0x935F)

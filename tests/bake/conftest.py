@@ -51,7 +51,7 @@ def validate():
 def reference_blocks(tmp_path_factory):
     """The bench's 48×48 reference region: Overworld seed 2019, [-24, 24)²."""
     from voxel_addon import bake
-    from voxel_addon.core.world import World
+    from voxel_addon.world import World
     path = tmp_path_factory.mktemp("ref") / "ref.sqlite"
     with World.create(path, seed=2019, generator="overworld", loader=False) as w:
         return bake.region_of(w, -24, -24, 24, 24)

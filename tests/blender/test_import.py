@@ -21,7 +21,7 @@ def addon(bpy):
 
 @pytest.fixture
 def world_file(tmp_path):
-    from voxel_addon.core.world import World
+    from voxel_addon.world import World
     path = tmp_path / "w.sqlite"
     with World.create(path, seed=4, generator="flat", loader=False,
                       params={"layers": [["stone", 3], ["dirt", 1], ["grass", 1]]}) as w:

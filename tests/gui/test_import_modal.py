@@ -4,7 +4,7 @@ from __future__ import annotations
 
 
 def test_import_is_modal_and_esc_cancels(gui, tmp_path):
-    from voxel_addon.core.world import World
+    from voxel_addon.world import World
     path = tmp_path / "w.sqlite"
     n = 80  # a region big enough that its objects take several of the job's ticks
     with World.create(path, seed=2019, generator="overworld", loader=False) as w:

@@ -128,7 +128,7 @@ def child(path, size, glb):
 
     from ..blender import bake as BB
     from ..blender import job as J
-    from ..core.world import World
+    from ..world import World
 
     def rss_mb():
         return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0

@@ -269,7 +269,6 @@ def _draw():
 def _frame(context, scene, vv):
     from ..render import glstate
     from .offscreen import _native
-    from .ui.view import hours_of
     t0 = time.perf_counter()
     region, rv3d = context.region, context.region_data
     if region is None or rv3d is None:
@@ -447,3 +446,13 @@ def shutdown() -> None:
             bpy.app.timers.unregister(fn)
     _timer_on = False
     OVERLAYS.clear()
+
+
+def hours_of(scene) -> float:
+    """The view's time of day: the property, or when following the timeline the
+    property at the scene's first frame plus a day per frames_per_day frames."""
+    v = scene.voxel_view
+    if v.follow_timeline:
+        days = (scene.frame_current - scene.frame_start) / v.frames_per_day
+        return (v.hours + 24.0 * days) % 24.0
+    return v.hours

@@ -33,7 +33,8 @@ class _Job:
         """Render the next frame; False when none is left."""
         from ...render import source
         from ...textures import png_bytes
-        from .view import camera_of, hours_of
+        from ..viewport import hours_of
+        from .view import camera_of
         import numpy as np
         if self.done >= len(self.frames):
             return False

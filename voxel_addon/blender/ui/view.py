@@ -55,16 +55,6 @@ VoxelViewSettings = type("VoxelViewSettings", (bpy.types.PropertyGroup,), {"__an
 }})
 
 
-def hours_of(scene) -> float:
-    """The view's time of day: the property, or when following the timeline the
-    property at the scene's first frame plus a day per frames_per_day frames."""
-    v = scene.voxel_view
-    if v.follow_timeline:
-        days = (scene.frame_current - scene.frame_start) / v.frames_per_day
-        return (v.hours + 24.0 * days) % 24.0
-    return v.hours
-
-
 def camera_of(obj):
     """A render Camera at a Blender camera object (1 block = 1 unit, z up), and its
     vertical field of view in degrees."""
@@ -102,7 +92,7 @@ class VOXEL_OT_render_view(bpy.types.Operator):
             view = offscreen.View(s)
             try:
                 view.set_area(area)
-                img = view.render(cam, hours_of(sc), (w, h))
+                img = view.render(cam, viewport.hours_of(sc), (w, h))
             finally:
                 view.release()
         except VoxelError as e:

@@ -19,6 +19,9 @@ not help: the libraries carry absolute RUNPATHs).
     .blender/user/        BLENDER_USER_RESOURCES, XDG_CONFIG_HOME, XDG_CACHE_HOME
                           (VOXEL_BLENDER_USER points a run at another folder)
     .blender/mesa-cache/  llvmpipe's compiled shaders, shared by all runs
+
+Its end (`xserver`, `start`, `wait`, `run`, `gui_missing`) is the one way tests and
+benches start the Blender GUI under a private Xvfb.
 """
 from __future__ import annotations
 
@@ -28,9 +31,11 @@ import hashlib
 import os
 import re
 import shutil
+import signal
 import subprocess
 import tempfile
 from pathlib import Path
+from typing import NamedTuple
 
 ROOT = Path(__file__).resolve().parent.parent
 HOME = ROOT / ".blender"
@@ -303,3 +308,112 @@ def setup() -> None:
 
 def site_packages() -> Path:
     return HOME / "site"
+
+
+# -- running the GUI: a private X server, Blender in it, killed as a whole ---------------
+# Tests and benches start the application only through these (one place for the
+# flags, the environment, the user folder and the clean-up).
+SIZE = (1280, 720)
+GUI_TOOLS = ("Xvfb", "xwd", "xwdtopnm", "pnmtopng")  # X server and screenshots
+
+
+class TimedOut(RuntimeError):
+    pass
+
+
+def gui_missing() -> str | None:
+    """None when the Blender GUI can run here, else why not (one line)."""
+    if not LAUNCHER.exists():
+        return "no .blender/blender (run `python build.py setup`)"
+    for tool in GUI_TOOLS:
+        if not shutil.which(tool):
+            return f"{tool} missing (Debian packages xvfb, x11-apps, netpbm)"
+    return None
+
+
+def app_env(user: Path | None = None, **extra) -> dict:
+    """The caller's environment without Blender's and XDG variables (the launcher sets
+    its own), VOXEL_BLENDER_USER pointing at USER (None: .blender/user), plus EXTRA."""
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("BLENDER_", "XDG_"))}
+    if user is not None:
+        env["VOXEL_BLENDER_USER"] = str(user)
+    env.update(extra)
+    return env
+
+
+class Screen(NamedTuple):
+    display: str  # ":N"
+    pid: int
+
+
+@contextlib.contextmanager
+def xserver(size=SIZE):
+    """A private Xvfb; it picks a free display itself (-displayfd) so parallel runs
+    never meet. Killed on exit."""
+    r, w = os.pipe()
+    x = subprocess.Popen(["Xvfb", "-displayfd", str(w), "-screen", "0", f"{size[0]}x{size[1]}x24",
+                          "-nolisten", "tcp", "-noreset"], pass_fds=(w,),
+                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                         start_new_session=True)
+    os.close(w)
+    try:
+        with os.fdopen(r) as f:
+            num = f.readline().strip()
+        if not num:
+            raise RuntimeError("Xvfb did not start")
+        yield Screen(f":{num}", x.pid)
+    finally:
+        kill(x)
+
+
+def kill(p: subprocess.Popen) -> None:
+    """SIGKILL to P's whole process group (started in a session of its own: what
+    Blender started dies with it, even after Blender itself exited)."""
+    try:
+        os.killpg(p.pid, signal.SIGKILL)
+    except (ProcessLookupError, PermissionError):
+        pass
+    p.wait()
+
+
+@contextlib.contextmanager
+def start(args, *, display: str, log: Path, user: Path | None = None, size=SIZE,
+          simulate: bool = True, env: dict | None = None):
+    """The Blender window (SIZE, at the screen's corner) on DISPLAY with ARGS after the
+    common flags; stdout and stderr go to LOG. simulate: --enable-event-simulate
+    (events come from the script, X input is ignored). Yields the Popen; its whole
+    process group is killed on exit."""
+    cmd = [str(LAUNCHER), "-p", "0", "0", str(size[0]), str(size[1]),
+           *(["--enable-event-simulate"] if simulate else []), *map(str, args)]
+    with open(log, "w") as f:
+        p = subprocess.Popen(cmd, stdout=f, stderr=subprocess.STDOUT, cwd=ROOT,
+                             env=app_env(user, DISPLAY=display, **(env or {})),
+                             start_new_session=True)
+    try:
+        yield p
+    finally:
+        kill(p)
+
+
+def wait(p: subprocess.Popen, timeout: float, log: Path | None = None) -> int:
+    """P's exit status; past TIMEOUT seconds its process group is killed and TimedOut
+    raised (with the end of LOG)."""
+    try:
+        return p.wait(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        kill(p)
+        raise TimedOut(f"Blender timed out after {timeout:.0f} s (killed):\n"
+                       f"{tail(log) if log else ''}") from None
+
+
+def run(args, *, log: Path, timeout: float, size=SIZE, **kw) -> int:
+    """Blender with ARGS in an X server of its own until it exits (see start, wait)."""
+    with xserver(size) as x, start(args, display=x.display, log=log, size=size, **kw) as p:
+        return wait(p, timeout, log)
+
+
+def tail(path: Path, n: int = 4000) -> str:
+    try:
+        return Path(path).read_text(errors="replace")[-n:]
+    except OSError:
+        return ""

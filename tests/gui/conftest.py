@@ -1,4 +1,5 @@
-"""Fixtures of the GUI tests (the real Blender under Xvfb, see harness.py)."""
+"""Fixtures of the GUI tests (the real Blender under Xvfb, started only through
+tools/blender_app.py; harness.py drives runner.py scripts)."""
 from __future__ import annotations
 
 import importlib.util
@@ -7,17 +8,25 @@ from pathlib import Path
 import pytest
 
 from tests.gui import harness
+from tools import blender_app
 
 ROOT = Path(__file__).resolve().parents[2]
 
 
-@pytest.fixture
-def gui(tmp_path):
-    """gui(script, **params) -> GuiResult: SCRIPT (a path, or a name under
-    tests/gui/scripts/) run in the real Blender with a fresh user folder."""
-    why = harness.available()
+@pytest.fixture(scope="session")
+def app():
+    """tools/blender_app.py, or a skip (a failure in CI) without Blender or Xvfb: the
+    one check every GUI test goes through."""
+    why = blender_app.gui_missing()
     if why:
         pytest.skip(why)
+    return blender_app
+
+
+@pytest.fixture
+def gui(app, tmp_path):
+    """gui(script, **params) -> GuiResult: SCRIPT (a path, or a name under
+    tests/gui/scripts/) run in the real Blender with a fresh user folder."""
     user = harness.fresh_user(tmp_path / "user")
 
     def run(script, timeout=180.0, **params):

@@ -16,40 +16,24 @@ limit is killed with its whole process group (Blender and the X server) and fail
 from __future__ import annotations
 
 import json
-import os
 import shutil
-import signal
 import subprocess
 import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
-BLENDER = ROOT / ".blender" / "blender"
+from tools import blender_app as app
+
+ROOT = app.ROOT
+BLENDER = app.LAUNCHER
 RUNNER = Path(__file__).with_name("runner.py")
 TEMPLATE = ROOT / ".blender" / "gui-user"  # preferences without the splash, made once
-SIZE = (1280, 720)
+SIZE = app.SIZE
 
 
 class GuiError(AssertionError):
     pass
-
-
-def available() -> str | None:
-    """None when the harness can run, else why not."""
-    if not BLENDER.exists():
-        return "no .blender/blender (run `python build.py setup`)"
-    for tool in ("Xvfb", "xwd", "xwdtopnm", "pnmtopng"):
-        if not shutil.which(tool):
-            return f"{tool} missing (Debian packages xvfb, x11-apps, netpbm)"
-    return None
-
-
-def _blender_env(user: Path, **extra) -> dict:
-    env = {k: v for k, v in os.environ.items() if not k.startswith(("BLENDER_", "XDG_"))}
-    env.update(VOXEL_BLENDER_USER=str(user), **extra)
-    return env
 
 
 def fresh_user(dest: Path) -> Path:
@@ -58,7 +42,7 @@ def fresh_user(dest: Path) -> Path:
         tmp = Path(tempfile.mkdtemp(prefix="gui-user.", dir=TEMPLATE.parent))
         expr = ("import bpy; p = bpy.context.preferences; p.view.show_splash = False; "
                 "p.use_preferences_save = False; bpy.ops.wm.save_userpref()")
-        r = subprocess.run([str(BLENDER), "-b", "--python-expr", expr], env=_blender_env(tmp),
+        r = subprocess.run([str(BLENDER), "-b", "--python-expr", expr], env=app.app_env(tmp),
                            capture_output=True, text=True, timeout=120)
         if r.returncode or not (tmp / "config" / "userpref.blend").exists():
             raise GuiError(f"could not save preferences:\n{r.stdout[-2000:]}{r.stderr[-2000:]}")
@@ -102,76 +86,35 @@ class GuiResult:
         return self.image(name)[top:top + h, x:x + w]
 
 
-def _start_x(size) -> tuple[subprocess.Popen, str]:
-    """Xvfb on a free display (it picks the number and writes it to our pipe)."""
-    r, w = os.pipe()
-    x = subprocess.Popen(["Xvfb", "-displayfd", str(w), "-screen", "0", f"{size[0]}x{size[1]}x24",
-                          "-nolisten", "tcp", "-noreset"], pass_fds=(w,),
-                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                         start_new_session=True)
-    os.close(w)
-    with os.fdopen(r) as f:
-        display = f.readline().strip()
-    if not display:
-        x.kill()
-        raise GuiError("Xvfb did not start")
-    return x, f":{display}"
-
-
-def _kill(p: subprocess.Popen) -> None:
-    if p.poll() is None:
-        try:
-            os.killpg(p.pid, signal.SIGKILL)
-        except ProcessLookupError:
-            pass
-    p.wait()
-
-
 def run_gui(script: Path, out: Path, user: Path, params: dict | None = None,
             timeout: float = 180.0, size=SIZE, args=()) -> GuiResult:
     """Run SCRIPT in the real Blender under Xvfb; fail with its traceback or on timeout."""
-    why = available()
+    why = app.gui_missing()
     if why:
         raise GuiError(f"GUI harness unavailable: {why}")
     out.mkdir(parents=True, exist_ok=True)
-    xserver, display = _start_x(size)
     log_path = out / "blender.log"
-    try:
-        env = _blender_env(user, DISPLAY=display, VOXEL_GUI_OUT=str(out),
-                           VOXEL_GUI_SCRIPT=str(Path(script).resolve()),
-                           VOXEL_GUI_PARAMS=json.dumps(params or {}))
-        cmd = [str(BLENDER), "--enable-event-simulate", "--no-window-focus",
-               "-p", "0", "0", str(size[0]), str(size[1]), *args, "--python", str(RUNNER)]
-        t0 = time.monotonic()
-        with open(log_path, "w") as log:
-            bl = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=env, cwd=ROOT,
-                                  start_new_session=True)
-            (out / "pids.json").write_text(json.dumps({"blender": bl.pid, "x": xserver.pid}))
-            try:
-                bl.wait(timeout=timeout)
-            except subprocess.TimeoutExpired:
-                _kill(bl)
-                raise GuiError(f"Blender GUI run timed out after {timeout:.0f} s "
-                               f"(killed):\n{_tail(log_path)}") from None
-            finally:
-                _kill(bl)
-        elapsed = time.monotonic() - t0
-    finally:
-        _kill(xserver)
+    params = {"VOXEL_GUI_OUT": str(out), "VOXEL_GUI_SCRIPT": str(Path(script).resolve()),
+              "VOXEL_GUI_PARAMS": json.dumps(params or {})}
+    t0 = time.monotonic()
+    with app.xserver(size) as x, \
+            app.start(["--no-window-focus", *args, "--python", RUNNER], display=x.display,
+                      log=log_path, user=user, size=size, env=params) as bl:
+        (out / "pids.json").write_text(json.dumps({"blender": bl.pid, "x": x.pid}))
+        try:
+            app.wait(bl, timeout, log_path)
+        except app.TimedOut as e:
+            raise GuiError(f"Blender GUI run timed out after {timeout:.0f} s "
+                           f"(killed):\n{app.tail(log_path)}") from e
+    elapsed = time.monotonic() - t0
     res_path = out / "result.json"
     if not res_path.exists():
         raise GuiError(f"Blender exited ({bl.returncode}) without a result after "
-                       f"{elapsed:.1f} s:\n{_tail(log_path)}")
+                       f"{elapsed:.1f} s:\n{app.tail(log_path)}")
     data = json.loads(res_path.read_text())
     if not data["ok"]:
         raise GuiError(f"the script failed inside Blender:\n{data['error']}\n"
-                       f"--- Blender log ---\n{_tail(log_path)}")
+                       f"--- Blender log ---\n{app.tail(log_path)}")
     return GuiResult(out, data["result"], data["shots"], tuple(data["size"]), data["version"],
                      log_path.read_text(errors="replace"))
 
-
-def _tail(path: Path, n: int = 4000) -> str:
-    try:
-        return path.read_text(errors="replace")[-n:]
-    except OSError:
-        return ""

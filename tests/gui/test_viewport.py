@@ -6,10 +6,8 @@ from __future__ import annotations
 import json
 import os
 import re
-import shutil
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -20,39 +18,10 @@ JOB = Path(__file__).with_name("viewport_job.py")
 CAM = (40.0, -60.0, 110.0, 90.0, -25.0, 50.0)  # as in viewport_job.py
 
 
-def _launcher():
-    exe = os.environ.get("VOXEL_BLENDER") or str(ROOT / ".blender" / "blender")
-    if not Path(exe).exists():
-        pytest.skip(f"no Blender application at {exe} (python build.py setup)")
-    if not shutil.which("Xvfb") or not shutil.which("xwd"):
-        pytest.skip("no Xvfb/xwd (python build.py setup)")
-    return exe
-
-
-def _run(out: Path, world: Path, steps: str | None = None, timeout=900):
+def _run(app, out: Path, world: Path, steps: str | None = None, timeout=900):
     """Blender under a private Xvfb screen, the job inside it; never hangs."""
-    exe = _launcher()
-    disp = f":{40 + os.getpid() % 50}"
-    x = subprocess.Popen(["Xvfb", disp, "-screen", "0", "1280x720x24", "-nolisten", "tcp"],
-                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    try:
-        time.sleep(1.0)
-        env = dict(os.environ, DISPLAY=disp)
-        extra = os.environ.get("VOXEL_BLENDER_SITE")  # wheels for Blender's Python
-        env["PYTHONPATH"] = os.pathsep.join(p for p in (extra, str(ROOT)) if p)
-        args = [exe, "--factory-startup", "--python-use-system-env", "-P", str(JOB), "--",
-                str(out), str(world)] + ([steps] if steps else [])
-        with open(out / "blender.log", "w") as log:
-            p = subprocess.Popen(args, env=env, stdout=log, stderr=subprocess.STDOUT,
-                                 start_new_session=True)
-            try:
-                p.wait(timeout)
-            except subprocess.TimeoutExpired:
-                os.killpg(p.pid, 9)
-                raise
-    finally:
-        x.kill()
-        x.wait()
+    app.run(["--factory-startup", "-P", JOB, "--", out, world, *([steps] if steps else [])],
+            log=out / "blender.log", timeout=timeout, simulate=False)
     err = out / "error.txt"
     assert not err.exists(), err.read_text()
     return json.loads((out / "result.json").read_text())
@@ -69,9 +38,9 @@ def world(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def run(world, tmp_path_factory):
+def run(app, world, tmp_path_factory):
     out = tmp_path_factory.mktemp("gui")
-    res = _run(out, world)
+    res = _run(app, out, world)
     res["log"] = (out / "blender.log").read_text()
     res["out"] = out
     return res

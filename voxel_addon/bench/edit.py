@@ -1,6 +1,6 @@
 """Edit bench (issue 13): the Voxel Edit tool in the real Blender GUI under Xvfb at
-1280x720 on llvmpipe, driven by simulated events (tools/edit_bench_job.py), with the
-voxel view shown.
+1280x720 on llvmpipe, driven by simulated events (tools/edit_bench_job.py, started
+through bench/gui.py), with the voxel view shown.
 
 Rows: click -> the voxel frame that shows the edit (median, p90); stroke done -> that
 frame (and whether it is the next one); the stroke path's own time per click (world
@@ -10,42 +10,19 @@ Needs `python build.py setup` (.blender/, Xvfb); without them the area yields a 
 """
 from __future__ import annotations
 
-import json
-import os
-import shutil
-import subprocess
-import time
-from pathlib import Path
-
-ROOT = Path(__file__).resolve().parents[2]
-JOB = ROOT / "tools" / "edit_bench_job.py"  # bpy code: runs inside Blender, outside the package
+from . import gui
 
 
 def run(ctx):
-    exe = Path(os.environ.get("VOXEL_BLENDER") or ROOT / ".blender" / "blender")
-    if not exe.exists() or not shutil.which("Xvfb"):
-        yield ("edit_skipped", 1, "", "no .blender/blender or Xvfb (python build.py setup)")
+    why = gui.missing()
+    if why:
+        yield ("edit_skipped", 1, "", why)
         return
     out = ctx.tmp / "edit"
     out.mkdir(exist_ok=True)
-    disp = f":{100 + os.getpid() % 30}"
-    x = subprocess.Popen(["Xvfb", disp, "-screen", "0", "1280x720x24", "-nolisten", "tcp"],
-                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    try:
-        time.sleep(1.0)
-        ctx.say("Blender GUI: clicks and a paint drag with the voxel view shown")
-        p = subprocess.run([str(exe), "--factory-startup", "--enable-event-simulate",
-                            "-p", "0", "0", "1280", "720", "-P", str(JOB), "--", str(out),
-                            "6" if ctx.quick else "20"],
-                           env=dict(os.environ, DISPLAY=disp), capture_output=True, text=True,
-                           timeout=1200)
-    finally:
-        x.kill()
-        x.wait()
-    res = out / "edit.json"
-    if not res.exists():
-        raise RuntimeError(f"the Blender job wrote nothing:\n{p.stdout[-2000:]}{p.stderr[-2000:]}")
-    R = json.loads(res.read_text())
+    ctx.say("Blender GUI: clicks and a paint drag with the voxel view shown")
+    R = gui.run_job("edit", [out, "6" if ctx.quick else "20"], out / "edit.json",
+                    out / "blender.log", timeout=1200, simulate=True)
     if R.get("error"):
         raise RuntimeError(R["error"])
     n, size = R["clicks"], "x".join(map(str, R["region"]))

@@ -6,34 +6,25 @@ view moves), our CPU time per redraw outside GL, the time from ticking Show to
 every chunk of distance 16 drawn (a generated file, and in the full run an empty
 file the stream generates), and the longest redraw and chunk upload while it streams.
 Needs `python build.py setup` (.blender/, Xvfb); without them the area yields
-nothing but a note.
+nothing but a note. Blender runs tools/viewport_bench_job.py (through bench/gui.py).
 """
 from __future__ import annotations
 
-import json
 import os
-import shutil
 import subprocess
 import sys
-import time
 from pathlib import Path
 
+from . import gui
+
 ROOT = Path(__file__).resolve().parents[2]
-JOB = Path(__file__).resolve().parents[1] / "blender" / "bench_job.py"  # run by Blender
-
-
-def _blender():
-    exe = Path(os.environ.get("VOXEL_BLENDER") or ROOT / ".blender" / "blender")
-    if not exe.exists() or not shutil.which("Xvfb"):
-        return None
-    return exe
 
 
 def run(ctx):
     from ..world import World
-    exe = _blender()
-    if exe is None:
-        yield ("viewport_skipped", 1, "", "no .blender/blender or Xvfb (python build.py setup)")
+    why = gui.missing()
+    if why:
+        yield ("viewport_skipped", 1, "", why)
         return
     world, empty = ctx.tmp / "view.sqlite", ctx.tmp / "view_empty.sqlite"
     ctx.say("generating the distance-16 area (+ ring)")
@@ -44,23 +35,9 @@ def run(ctx):
         raise RuntimeError(r.stderr[-2000:])
     World.create(empty, seed=2019, generator="overworld").close()
     out = ctx.tmp / "viewport.json"
-    disp = f":{60 + os.getpid() % 30}"
-    x = subprocess.Popen(["Xvfb", disp, "-screen", "0", "1280x720x24", "-nolisten", "tcp"],
-                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    try:
-        time.sleep(1.0)
-        env = dict(os.environ, DISPLAY=disp)
-        ctx.say("Blender GUI: frames, draft, show at distance 16")
-        p = subprocess.run([str(exe), "--factory-startup", "-p", "0", "0", "1280", "720",
-                            "-P", str(JOB), "--", str(out), str(world), str(empty),
-                            "1" if ctx.quick else "0"], env=env, capture_output=True,
-                           text=True, timeout=1800)
-    finally:
-        x.kill()
-        x.wait()
-    if not out.exists():
-        raise RuntimeError(f"the Blender job wrote nothing:\n{p.stdout[-2000:]}{p.stderr[-2000:]}")
-    R = json.loads(out.read_text())
+    ctx.say("Blender GUI: frames, draft, show at distance 16")
+    R = gui.run_job("viewport", [out, world, empty, "1" if ctx.quick else "0"], out,
+                    ctx.tmp / "viewport.log", timeout=1800, simulate=False)
     if not R.get("ok"):
         raise RuntimeError(R.get("error"))
     size = "x".join(map(str, R["region"]))

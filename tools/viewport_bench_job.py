@@ -1,7 +1,7 @@
-"""Blender side of bench/viewport.py (there it is only a path, never imported): runs
-in the real Blender GUI under Xvfb, started as a script (`__main__`).
+"""Blender side of voxel_addon/bench/viewport.py (there it is only a path, never
+imported): runs in the real Blender GUI under Xvfb, started as a script (`__main__`).
 
-    blender --factory-startup -P viewport_job.py -- OUT.json WORLD EMPTY_WORLD QUICK
+    blender --factory-startup -P tools/viewport_bench_job.py -- OUT.json WORLD EMPTY_WORLD QUICK
 
 Frame times come from the draw handler itself (viewport.FRAMES) with the GPU
 finished inside each frame (viewport._SYNC), so they are what a redraw costs.
@@ -19,7 +19,7 @@ from pathlib import Path
 
 import bpy
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[1]
 OUT = WORLD = EMPTY = None
 QUICK = True
 R: dict = {}

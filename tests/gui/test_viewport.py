@@ -40,7 +40,7 @@ def _run(out: Path, world: Path, steps: str | None = None, timeout=900):
         env = dict(os.environ, DISPLAY=disp)
         extra = os.environ.get("VOXEL_BLENDER_SITE")  # wheels for Blender's Python
         env["PYTHONPATH"] = os.pathsep.join(p for p in (extra, str(ROOT)) if p)
-        args = [exe, "--factory-startup", "--python-use-system-env", "-P", str(JOB), "--",
+        args = [exe, "--factory-startup", "--enable-event-simulate", "-P", str(JOB), "--",
                 str(out), str(world)] + ([steps] if steps else [])
         with open(out / "blender.log", "w") as log:
             p = subprocess.Popen(args, env=env, stdout=log, stderr=subprocess.STDOUT,
@@ -235,3 +235,10 @@ def test_file_new_removes_the_view_and_it_comes_back(run):
     assert n["show"] is False
     again = n["again"]
     assert again["drawn"] == again["wanted"] > 0 and again["error"] is None
+
+
+def test_render_animation_from_the_ui_writes_frames_and_esc_stops(run):
+    a = run["steps"]["animation"]
+    assert a["started"] == ["RUNNING_MODAL"], a
+    assert a["files"] == ["f_0001.png", "f_0002.png", "f_0003.png"], a
+    assert 2 <= a["stopped_at"] < 40 and a["after_stop"] == a["stopped_at"], a

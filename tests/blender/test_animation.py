@@ -4,17 +4,18 @@ from __future__ import annotations
 
 import json
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
+
+from tests.host import python_cmd
 
 JOB = Path(__file__).with_name("anim_job.py")
 
 
 def test_render_animation_writes_each_frame_with_camera_and_day_cycle(bpy, tmp_path):
     from matplotlib.image import imread
-    r = subprocess.run([sys.executable, str(JOB), str(tmp_path)], capture_output=True,
+    r = subprocess.run(python_cmd(JOB, tmp_path), capture_output=True,
                        text=True, timeout=600)
     assert r.returncode == 0, r.stderr[-3000:]
     info = json.loads((tmp_path / "anim.json").read_text())

@@ -21,7 +21,7 @@ CAM = (40.0, -60.0, 110.0, 90.0, -25.0, 50.0)  # as in viewport_job.py
 def _run(app, out: Path, world: Path, steps: str | None = None, timeout=900):
     """Blender under a private Xvfb screen, the job inside it; never hangs."""
     app.run(["--factory-startup", "-P", JOB, "--", out, world, *([steps] if steps else [])],
-            log=out / "blender.log", timeout=timeout, simulate=False)
+            log=out / "blender.log", timeout=timeout)
     err = out / "error.txt"
     assert not err.exists(), err.read_text()
     return json.loads((out / "result.json").read_text())
@@ -204,3 +204,10 @@ def test_file_new_removes_the_view_and_it_comes_back(run):
     assert n["show"] is False
     again = n["again"]
     assert again["drawn"] == again["wanted"] > 0 and again["error"] is None
+
+
+def test_render_animation_from_the_ui_writes_frames_and_esc_stops(run):
+    a = run["steps"]["animation"]
+    assert a["started"] == ["RUNNING_MODAL"], a
+    assert a["files"] == ["f_0001.png", "f_0002.png", "f_0003.png"], a
+    assert 2 <= a["stopped_at"] < 40 and a["after_stop"] == a["stopped_at"], a

@@ -282,6 +282,41 @@ def step_newfile():
     RESULT["steps"]["newfile"]["again"] = status()
 
 
+def step_animation():
+    """Render Voxel Animation from the UI (modal): 3 frames written; a second run of
+    40 frames stopped with Esc after a few."""
+    sc = bpy.context.scene
+    sc.voxel_view.hours = 12.0
+    sc.frame_start, sc.frame_end = 1, 3
+    sc.render.resolution_x, sc.render.resolution_y = 64, 36
+    sc.render.filepath = str(OUT / "anim" / "f_")
+    win, area, _ = view3d()
+    reg = next(r for r in area.regions if r.type == "WINDOW")
+    with bpy.context.temp_override(window=win, area=area, region=reg):
+        started = bpy.ops.voxel.render_animation("INVOKE_DEFAULT")
+    t0 = time.time()
+    while len(list((OUT / "anim").glob("*.png"))) < 3 and time.time() - t0 < 60:
+        yield 0.1
+    yield 0.3
+    done = sorted(p.name for p in (OUT / "anim").glob("*.png"))
+    sc.frame_end = 40
+    sc.render.filepath = str(OUT / "anim2" / "f_")
+    with bpy.context.temp_override(window=win, area=area, region=reg):
+        bpy.ops.voxel.render_animation("INVOKE_DEFAULT")
+    while len(list((OUT / "anim2").glob("*.png"))) < 2 and time.time() - t0 < 120:
+        yield 0.05
+    x, y = reg.x + reg.width // 2, reg.y + reg.height // 2
+    win.event_simulate(type="MOUSEMOVE", value="NOTHING", x=x, y=y)
+    win.event_simulate(type="ESC", value="PRESS", x=x, y=y)
+    win.event_simulate(type="ESC", value="RELEASE", x=x, y=y)
+    yield 1.0
+    n = len(list((OUT / "anim2").glob("*.png")))
+    yield 1.0
+    RESULT["steps"]["animation"] = {
+        "started": sorted(started), "files": done, "stopped_at": n,
+        "after_stop": len(list((OUT / "anim2").glob("*.png"))), "frame": sc.frame_current}
+
+
 def step_leak():
     """Unregister / register 10 times with the view shown: no handler, timer,
     thread or renderer is left."""
@@ -361,7 +396,7 @@ def run():
 
 STEPS = {"top": step_top, "sky": step_sky, "camera": step_camera, "stream": step_stream,
          "redraws": step_redraws, "quad": step_quad, "problem": step_problem,
-         "newfile": step_newfile, "leak": step_leak}
+         "newfile": step_newfile, "animation": step_animation, "leak": step_leak}
 _gen = run()
 
 

@@ -112,7 +112,7 @@ class VOXEL_OT_render_animation(bpy.types.Operator):
         from ...core.errors import VoxelError
         if event.type == "ESC":
             return self._end(context, f"stopped after {self._job.done} frames", {"CANCELLED"})
-        if event.type != "TIMER" or event.timer is not self._timer:
+        if event.type != "TIMER":
             return {"PASS_THROUGH"}
         try:
             more = self._job.step()

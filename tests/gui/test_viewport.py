@@ -97,7 +97,7 @@ def _cli(world, size, hours=12.0):
     from voxel_addon.world import World
     from voxel_addon.render import Camera, Settings, source
     from voxel_addon.render.pipeline import Renderer
-    s = Settings(distance=4, light_radius=4, fov=CAM[5])
+    s = Settings(distance=4, light_radius=4, fov=CAM[5], dof=False)  # as the viewport
     w = World.open(world, readonly=True, loader=False)
     try:
         a = source.world_area(w, CAM[0], CAM[1], s.distance, s.light_radius)

@@ -15,11 +15,17 @@ def _redraw(self, context):
     viewport.sync(context)
 
 
+# The viewport is where people build: a distance blur hides what they point at, so it
+# starts off here (the CLI's renders keep Settings' default).
+VIEWPORT_OFF = ("dof",)
+
+
 def _effects():
-    """One bool per effect of render.settings (defaults from Settings())."""
+    """One bool per effect of render.settings (defaults from Settings(), but VIEWPORT_OFF)."""
     from ...render.settings import EFFECTS, Settings
     s = Settings()
-    return {e: BoolProperty(name=e.replace("_", " ").title(), default=getattr(s, e),
+    return {e: BoolProperty(name=e.replace("_", " ").title(),
+                            default=getattr(s, e) and e not in VIEWPORT_OFF,
                             update=_redraw) for e in EFFECTS}
 
 

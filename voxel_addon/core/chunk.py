@@ -93,10 +93,10 @@ class Chunk:
         read since the last compact(); callers may write into one they just set,
         under the world's lock) or, after compact(), as its non-uniform layers only;
         a read then rebuilds the array (same values) and keeps it hot."""
-        if self._light is not None or self._lpack is None:
-            return self._light
-        a = self._light = unpack_layers(*self._lpack)
-        self._lpack = None
+        a = self._light
+        if a is None and self._lpack is not None:
+            # _lpack stays: a compact() racing this read then still finds the light
+            a = self._light = unpack_layers(*self._lpack)
         return a
 
     @light.setter
@@ -106,8 +106,9 @@ class Chunk:
     def compact(self) -> None:
         """Keep the light as its non-uniform layers (open sky above and unlit rock
         below are uniform: ~70 of 256 layers stay). Call with the world's lock held."""
-        if self._light is not None:
-            self._lpack, self._light = pack_layers(self._light), None
+        a = self._light
+        if a is not None:
+            self._lpack, self._light = pack_layers(a), None
 
     @property
     def origin(self) -> tuple[int, int]:

@@ -93,8 +93,8 @@ def run(ctx):
            f"longest drain call, 4 ms budget, {len(d)} calls, p99 {np.percentile(d, 99):.2f} ms "
            f"(target 8 ms), {_load()}")
     yield ("resident_bytes_per_voxel", grown / voxels, "B/voxel",
-           f"RSS growth / active voxels ({len(w.chunks)} chunks: blocks + final light + "
-           f"meshes kept for edits)")
+           f"RSS growth / active voxels ({len(w.chunks)} chunks: blocks + final light "
+           f"(compact: its non-uniform layers) + meshes kept for edits)")
 
     # edits near the surface, the stream idle around them
     rng = np.random.default_rng(3)

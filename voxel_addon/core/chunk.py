@@ -74,18 +74,41 @@ class Chunk:
     `large` maps a small-data index to any Python object (e.g. a chest's contents).
     """
 
-    __slots__ = ("key", "blocks", "data", "large", "light", "mesh", "dirty", "last_use",
-                 "__weakref__")
+    __slots__ = ("key", "blocks", "data", "large", "_light", "_lpack", "mesh", "dirty",
+                 "last_use", "__weakref__")
 
     def __init__(self, key, blocks=None, data=None):
         self.key = tuple(key)
         self.blocks = empty() if blocks is None else blocks
         self.data = data
         self.large: dict[int, object] = {}
-        self.light = None  # final light, filled by the world layer (stream, edit)
+        self._light = self._lpack = None  # final light (see .light), filled by the world layer
         self.mesh = None   # its mesh with the neighbour ring, likewise
         self.dirty = False
         self.last_use = time.monotonic()
+
+    @property
+    def light(self) -> np.ndarray | None:
+        """Final light (16, 16, 256) or None. Kept as a full array ("hot": set or
+        read since the last compact(); callers may write into one they just set,
+        under the world's lock) or, after compact(), as its non-uniform layers only;
+        a read then rebuilds the array (same values) and keeps it hot."""
+        a = self._light
+        if a is None and self._lpack is not None:
+            # _lpack stays: a compact() racing this read then still finds the light
+            a = self._light = unpack_layers(*self._lpack)
+        return a
+
+    @light.setter
+    def light(self, value) -> None:
+        self._light, self._lpack = value, None
+
+    def compact(self) -> None:
+        """Keep the light as its non-uniform layers (open sky above and unlit rock
+        below are uniform: ~70 of 256 layers stay). Call with the world's lock held."""
+        a = self._light
+        if a is not None:
+            self._lpack, self._light = pack_layers(a), None
 
     @property
     def origin(self) -> tuple[int, int]:
@@ -105,7 +128,30 @@ class Chunk:
 
     def nbytes(self) -> int:
         n = self.blocks.nbytes
-        for a in (self.data, self.light):
+        for a in (self.data, self._light, self._lpack and self._lpack[-1]):
             if a is not None:
                 n += a.nbytes
         return n
+
+
+def pack_layers(a: np.ndarray) -> tuple:
+    """(16, 16, 256) array -> (shape, lo, hi, bottom value, top value, a[:, :, lo:hi]):
+    the layers below lo all hold the bottom value, those from hi up the top value."""
+    f = a.reshape(-1, a.shape[2], order="F") if a.flags.f_contiguous \
+        else np.asfortranarray(a).reshape(-1, a.shape[2], order="F")
+    mn, mx = f.min(0), f.max(0)
+    bot, top = mn[0], mn[-1]
+    same = mn == mx
+    odd = np.flatnonzero(~same | (mn != top))
+    hi = int(odd[-1]) + 1 if odd.size else 0
+    odd = np.flatnonzero(~same[:hi] | (mn[:hi] != bot))
+    lo = int(odd[0]) if odd.size else hi
+    return a.shape, lo, hi, bot, top, a[:, :, lo:hi].copy(order="F")
+
+
+def unpack_layers(shape, lo, hi, bot, top, slab) -> np.ndarray:
+    out = np.empty(shape, slab.dtype, order="F")
+    out[:, :, :lo] = bot
+    out[:, :, lo:hi] = slab
+    out[:, :, hi:] = top
+    return out

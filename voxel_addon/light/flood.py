@@ -39,6 +39,7 @@ def flood(f: np.ndarray, cost: np.ndarray, seeds: np.ndarray, shift: int,
     idx = np.asarray(seeds, np.int64)
     sh = np.uint16(shift)
     keep = ~np.uint16(15 << shift)
+    owner = np.empty(f.size, np.int32)
     while idx.size:
         val = ((f[idx] >> sh) & np.uint16(15)).astype(np.int16)
         live = val > 1  # a 1 pushes 0: nothing
@@ -52,8 +53,22 @@ def flood(f: np.ndarray, cost: np.ndarray, seeds: np.ndarray, shift: int,
         n, cand = n[m], cand[m]
         if not n.size:
             break
-        idx, v = _best(n, cand)  # the survivors are the next frontier
-        f[idx] = (f[idx] & keep) | (v.astype(np.uint16) << sh)
+        idx = _raise(f, n, cand, sh, keep, owner)  # the next frontier
+
+
+def _raise(f, n, cand, sh, keep, owner):
+    """Write each target's best candidate into nibble `sh` without sorting: write
+    all (an arbitrary one wins among duplicates), then rewrite those that lost to a
+    better one until none did (values only rise, so this ends). Returns the targets
+    once each (`owner`: int32 scratch as large as f, read only where written)."""
+    a, c = n, cand.astype(np.uint16)
+    while a.size:
+        f[a] = (f[a] & keep) | (c << sh)
+        lost = ((f[a] >> sh) & np.uint16(15)) < c
+        a, c = a[lost], c[lost]
+    i = np.arange(n.size, dtype=np.int32)
+    owner[n] = i
+    return n[owner[n] == i]
 
 
 def _best(n: np.ndarray, cand: np.ndarray):

@@ -278,7 +278,8 @@ class Stream:
         self.offer(done)
 
     def _maintain(self, cx, cy) -> None:
-        """Keep chunks near the view alive (the world's idle unloading), unload far ones."""
+        """Keep chunks near the view alive (the world's idle unloading), unload far
+        ones, keep their light compact."""
         world, keep, now = self.world, self.distance + 1 + self.margin, time.monotonic()
         far = []
         with world._lock:
@@ -287,5 +288,6 @@ class Stream:
                     far.append(k)
                 else:
                     c.last_use = now
+                    c.compact()  # light an edit read or set (see Chunk.light)
         if far:
             world._evict(far)

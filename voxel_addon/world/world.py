@@ -228,6 +228,7 @@ class World:
             else:
                 c = found[key] = Chunk(key, got[0], got[1])
                 c.light = got[2]
+                c.compact()
         if to_make:
             with self._gen_lock:
                 # another thread may have made some while this one waited for the lock

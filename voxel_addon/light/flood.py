@@ -114,13 +114,18 @@ def seeds_lanes(f: np.ndarray, cost: np.ndarray, offs, lo: int, hi: int) -> np.n
     neighbour at +-offs (voxel strides) in that component."""
     m = max(offs)
     assert lo >= m and hi + m <= cost.size
-    v = f.reshape(-1, 4)[lo - m:hi + m].astype(np.int16)
-    c = cost[lo - m:hi + m, None].astype(np.int16)
+    # i raises its neighbour j iff v[i] - c[j] > v[j], i.e. v[i] > w[j] = v[j] + c[j]:
+    # uint8 throughout (a cost above MAX + 1 blocks like 16 does), no int16 copies.
+    v = f.reshape(-1, 4)[lo - m:hi + m]
+    w = np.minimum(cost[lo - m:hi + m], np.uint8(model.MAX + 1))[:, None] + v
     a, b = m, m + hi - lo
     out = np.zeros((hi - lo, 4), bool)
+    t = np.empty_like(out)
     for o in offs:
-        out |= v[a:b] - c[a + o:b + o] > v[a + o:b + o]
-        out |= v[a:b] - c[a - o:b - o] > v[a - o:b - o]
+        np.greater(v[a:b], w[a + o:b + o], out=t)
+        out |= t
+        np.greater(v[a:b], w[a - o:b - o], out=t)
+        out |= t
     return np.flatnonzero(out) + 4 * lo
 
 

@@ -18,6 +18,7 @@ world, so a consumer that only drains sees them as well.
 """
 from __future__ import annotations
 
+import threading
 from typing import NamedTuple
 
 import numpy as np
@@ -29,6 +30,7 @@ from . import build
 from .payload import Payload
 
 S = C.SIZE
+_scratch = threading.local()  # per-thread window buffers (_gather)
 
 
 class Record(NamedTuple):
@@ -104,18 +106,22 @@ def _ensure_lit(world, keys) -> list[Payload]:
 
 def _gather(world, x0, y0, x1, y1, attr):
     """Voxel columns [x0, x1) x [y0, y1) of active chunks' `attr` as one array
-    (zeros where a chunk or its array is missing). Call with the world's lock held."""
-    out = C.empty(width=x1 - x0, depth=y1 - y0)
+    (zeros where a chunk or its array is missing). Call with the world's lock held.
+    The array is this thread's scratch buffer for `attr`, valid until the next call:
+    a fresh 1.3 MB array per edit costs page faults (~0.5 ms in a big process)."""
+    shape = (x1 - x0, y1 - y0, C.HEIGHT)
+    out = getattr(_scratch, attr, None)
+    if out is None or out.shape != shape:
+        out = C.empty(width=x1 - x0, depth=y1 - y0)
+        setattr(_scratch, attr, out)
     for cx in range(x0 >> 4, ((x1 - 1) >> 4) + 1):
         for cy in range(y0 >> 4, ((y1 - 1) >> 4) + 1):
             c = world.chunks.get((cx, cy))
             a = None if c is None else getattr(c, attr)
-            if a is None:
-                continue
             ax0, ay0 = max(x0, cx * S), max(y0, cy * S)
             ax1, ay1 = min(x1, cx * S + S), min(y1, cy * S + S)
-            out[ax0 - x0:ax1 - x0, ay0 - y0:ay1 - y0] = a[ax0 - cx * S:ax1 - cx * S,
-                                                          ay0 - cy * S:ay1 - cy * S]
+            out[ax0 - x0:ax1 - x0, ay0 - y0:ay1 - y0] = 0 if a is None else \
+                a[ax0 - cx * S:ax1 - cx * S, ay0 - cy * S:ay1 - cy * S]
     return out
 
 

@@ -206,3 +206,21 @@ def test_no_payload_when_nothing_visible_changes(world_path):
         payloads, rec = edit(w, (8, 8, 2, c.get(8, 8, 2), 5))   # only its data value
         assert payloads == [] and rec.after == ((c.get(8, 8, 2), 5),)
         assert w.chunk_at(0, 0).data[8, 8, 2] == 5
+
+
+def test_opening_a_deep_shaft_relights_far_below(world_path):
+    """Daylight through an opened cap falls 40 voxels down a shaft: the edit's light
+    window (only the layers an update can touch) must reach that far."""
+    model: dict = {}
+    stone = REGISTRY.id("stone")
+    with World.create(world_path, seed=SEED, loader=False) as w:
+        x, y = 20, 24
+        z = top(w, x, y)
+        shaft = [(x, y, zz, 0) for zz in range(z - 40, z + 1)]
+        edit(w, shaft + [(x, y, z + 1, stone)])  # a capped shaft: dark inside
+        for x_, y_, z_, b in shaft + [(x, y, z + 1, stone)]:
+            model[(x_, y_, z_)] = (b, 0)
+        for b in (0, stone, 0):  # open, close, open the cap alone
+            edit(w, (x, y, z + 1, b))
+            model[(x, y, z + 1)] = (b, 0)
+            assert check_against_full(w, world_path, model, 0, 0, 3, 3) >= 9

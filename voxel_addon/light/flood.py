@@ -129,14 +129,17 @@ def seeds_lanes(f: np.ndarray, cost: np.ndarray, offs, lo: int, hi: int) -> np.n
     neighbour at +-offs (voxel strides) in that component."""
     m = max(offs)
     assert lo >= m and hi + m <= cost.size
-    v = f.reshape(-1, 4)[lo - m:hi + m].astype(np.int16)
-    c = cost[lo - m:hi + m, None].astype(np.int16)
+    # i raises its neighbour j iff v[i] - c[j] > v[j], i.e. v[i] > w[j] = v[j] + c[j]:
+    # uint8 throughout (a cost above MAX + 1 blocks like 16 does), no int16 copies;
+    # some neighbour can be raised iff v[i] > the least w of the six.
+    v = f.reshape(-1, 4)[lo - m:hi + m]
+    w = np.minimum(cost[lo - m:hi + m], np.uint8(model.MAX + 1))[:, None] + v
     a, b = m, m + hi - lo
-    out = np.zeros((hi - lo, 4), bool)
-    for o in offs:
-        out |= v[a:b] - c[a + o:b + o] > v[a + o:b + o]
-        out |= v[a:b] - c[a - o:b - o] > v[a - o:b - o]
-    return np.flatnonzero(out) + 4 * lo
+    low = np.minimum(w[a + offs[0]:b + offs[0]], w[a - offs[0]:b - offs[0]])
+    for o in offs[1:]:  # the neighbour easiest to raise decides
+        np.minimum(low, w[a + o:b + o], out=low)
+        np.minimum(low, w[a - o:b - o], out=low)
+    return np.flatnonzero(v[a:b] > low) + 4 * lo
 
 
 assert model.OPAQUE_COST > model.MAX  # v - OPAQUE_COST < 0: such voxels never rise

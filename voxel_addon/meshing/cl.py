@@ -24,8 +24,13 @@ _bufs: dict = {}
 def _options():
     """Flag tables as 64-bit masks compiled into the kernels (mesh.h FLAG_MASKS): faster
     than table loads; the table path stays for registries of more than 64 blocks."""
-    F = Q.FLAGS.astype(np.uint64)
-    if len(F) > 64 or not MASKS:
+    return _options_for(Q.FLAGS.tobytes(), MASKS)  # per launch: cached, not re-derived
+
+
+@lru_cache(maxsize=8)
+def _options_for(flags: bytes, masks: bool):
+    F = np.frombuffer(flags, Q.FLAGS.dtype).astype(np.uint64)
+    if len(F) > 64 or not masks:
         return ()
 
     def mask(bits):

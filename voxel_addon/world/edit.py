@@ -18,6 +18,7 @@ world, so a consumer that only drains sees them as well.
 """
 from __future__ import annotations
 
+import threading
 from typing import NamedTuple
 
 import numpy as np
@@ -29,6 +30,7 @@ from . import build
 from .payload import Payload
 
 S = C.SIZE
+_scratch = threading.local()  # per-thread window buffers (_gather)
 
 
 class Record(NamedTuple):
@@ -102,21 +104,45 @@ def _ensure_lit(world, keys) -> list[Payload]:
     raise VoxelError("could not light the chunks around the edit (they keep unloading)")
 
 
-def _gather(world, x0, y0, x1, y1, attr):
+def _gather(world, x0, y0, x1, y1, attr, z0=0, z1=C.HEIGHT):
     """Voxel columns [x0, x1) x [y0, y1) of active chunks' `attr` as one array
-    (zeros where a chunk or its array is missing). Call with the world's lock held."""
-    out = C.empty(width=x1 - x0, depth=y1 - y0)
+    (zeros where a chunk or its array is missing). Call with the world's lock held.
+    The array is this thread's scratch buffer for `attr`, valid until the next call:
+    a fresh 1.3 MB array per edit costs page faults (~0.5 ms in a big process).
+    Only layers [z0, z1) are filled; the others hold stale values."""
+    shape = (x1 - x0, y1 - y0, C.HEIGHT)
+    out = getattr(_scratch, attr, None)
+    if out is None or out.shape != shape:
+        out = C.empty(width=x1 - x0, depth=y1 - y0)
+        setattr(_scratch, attr, out)
     for cx in range(x0 >> 4, ((x1 - 1) >> 4) + 1):
         for cy in range(y0 >> 4, ((y1 - 1) >> 4) + 1):
             c = world.chunks.get((cx, cy))
             a = None if c is None else getattr(c, attr)
-            if a is None:
-                continue
             ax0, ay0 = max(x0, cx * S), max(y0, cy * S)
             ax1, ay1 = min(x1, cx * S + S), min(y1, cy * S + S)
-            out[ax0 - x0:ax1 - x0, ay0 - y0:ay1 - y0] = a[ax0 - cx * S:ax1 - cx * S,
-                                                          ay0 - cy * S:ay1 - cy * S]
+            out[ax0 - x0:ax1 - x0, ay0 - y0:ay1 - y0, z0:z1] = 0 if a is None else \
+                a[ax0 - cx * S:ax1 - cx * S, ay0 - cy * S:ay1 - cy * S, z0:z1]
     return out
+
+
+def _light_layers(world, items):
+    """Layers [z0, z1) that light.update may read or write for this stroke (call with
+    the lock held). Its box reaches R + 1 above the voxel and R + 1 below the lowest
+    voxel whose daylight changes, which lies above the highest opaque voxel under the
+    column's lowest stroke voxel (daylight is 0 there before and after)."""
+    from ..light import incremental, model
+    opaque = model.tables()[2]
+    low: dict = {}
+    for x, y, z, _, _ in items:
+        low[(x, y)] = min(z, low.get((x, y), z))
+    z0, z1 = C.HEIGHT, 0
+    for (x, y), z in low.items():
+        col = world.chunks[C.key_of(x, y)].blocks[x & 15, y & 15, :z]
+        below = np.flatnonzero(opaque[col])
+        z0 = min(z0, int(below[-1]) if below.size else 0)
+    z1 = max(z for _, _, z, _, _ in items) + incremental.R + 2
+    return max(z0 - incremental.R - 1, 0), min(z1, C.HEIGHT)
 
 
 def _apply(world, items):
@@ -137,7 +163,7 @@ def _apply(world, items):
             payloads, rec = _apply(world, items)
             return sorted({**fresh, **{p.key: p for p in payloads}}.values()), rec
         blocks = _gather(world, x0, y0, x1, y1, "blocks")
-        lit = _gather(world, x0, y0, x1, y1, "light")
+        lit = _gather(world, x0, y0, x1, y1, "light", *_light_layers(world, items))
         first: dict = {}
         last: dict = {}
         lo = [blocks.shape[0], blocks.shape[1], C.HEIGHT]  # union of the relit boxes

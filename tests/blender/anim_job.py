@@ -10,19 +10,15 @@ import math
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from flat_scene import flat_scene  # noqa: E402
 
 
 def main():
     out = Path(sys.argv[1])
     import bpy
     import voxel_addon
-    voxel_addon.register()
-    sc = bpy.context.scene
-    v = sc.voxel
-    v.path, v.seed, v.generator = str(out / "w.sqlite"), 5, "flat"
-    assert bpy.ops.voxel.world_new() == {"FINISHED"}
+    sc = flat_scene(out)
     vv = sc.voxel_view
     vv.follow_timeline, vv.frames_per_day, vv.hours = True, 4, 12.0  # noon, 18:00, midnight
     cam = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))

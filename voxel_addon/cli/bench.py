@@ -5,7 +5,8 @@ from pathlib import Path
 def add_parser(sub):
     p = sub.add_parser("bench", help="measure speed and memory; writes DIR/bench.csv and plots")
     p.add_argument("--out", required=True, type=Path, help="output folder")
-    p.add_argument("--area", action="append", help="only this area (repeatable)")
+    from ..bench.runner import AREAS
+    p.add_argument("--area", action="append", choices=AREAS, help="only this area (repeatable)")
     p.add_argument("--quick", action="store_true", help="smaller sizes, for a smoke run")
     return p
 

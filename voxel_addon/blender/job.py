@@ -78,25 +78,11 @@ class Job:
             return self.objects
         yield "read", 0.0
         blocks = bake.region_of(self.world, x0, y0, x1, y1)
-        gen = bake.steps(blocks, origin=(x0, y0, 0), **self.kw)
-        while True:
-            try:
-                stage, frac = next(gen)
-            except StopIteration as stop:
-                self.bake = stop.value
-                break
-            yield stage, frac
+        self.bake = yield from bake.steps(blocks, origin=(x0, y0, 0), **self.kw)
         del blocks
         self.collection = bpy.data.collections.new(self.name)
-        gen = BB.build_steps(self.bake, style=self.style, collection=self.collection,
-                             hours=self.hours)
-        while True:
-            try:
-                stage, frac = next(gen)
-            except StopIteration as stop:
-                self.objects = stop.value
-                break
-            yield stage, frac
+        self.objects = yield from BB.build_steps(self.bake, style=self.style,
+                                                 collection=self.collection, hours=self.hours)
         bpy.context.scene.collection.children.link(self.collection)  # only when whole
         yield "done", 1.0
         return self.objects

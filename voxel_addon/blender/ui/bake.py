@@ -9,7 +9,7 @@ from bpy.props import (BoolProperty, EnumProperty, FloatProperty, IntProperty, I
                        StringProperty)
 
 from ..job import ModalJob
-from .importer import LIGHT, METHOD_ITEMS, PER, job_for
+from .importer import LIGHT, METHOD_ITEMS, PER, draw_options, job_for
 
 
 def _hours_changed(self, context):
@@ -113,13 +113,7 @@ class VOXEL_PT_bake(bpy.types.Panel):
         col = self.layout.column()
         col.prop(s, "region_min")
         col.prop(s, "region_max")
-        col.prop(s, "per")
-        if s.per == "tile":
-            col.prop(s, "tile")
-        col.prop(s, "method")
-        col.prop(s, "light")
-        col.prop(s, "instances")
-        col.prop(s, "hours")
+        draw_options(col, s)
         col.operator(VOXEL_OT_generate.bl_idname, icon="WORLD")
         col.operator(VOXEL_OT_bake.bl_idname, icon="MESH_CUBE")
         col.separator()

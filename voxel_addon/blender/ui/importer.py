@@ -49,13 +49,7 @@ class IMPORT_SCENE_OT_voxel_world(ModalJob, bpy.types.Operator, ImportHelper):
             col.prop(self, "region")
         elif self.mode == "origin":
             col.prop(self, "size")
-        col.prop(self, "per")
-        if self.per == "tile":
-            col.prop(self, "tile")
-        col.prop(self, "light")
-        col.prop(self, "method")
-        col.prop(self, "instances")
-        col.prop(self, "hours")
+        draw_options(col, self)
 
     def invoke(self, context, event):
         self.modal_run = True
@@ -86,3 +80,15 @@ def menu_import(self, context):
 
 CLASSES = [IMPORT_SCENE_OT_voxel_world]
 MENUS = {"TOPBAR_MT_file_import": menu_import}
+
+
+def draw_options(col, owner) -> None:
+    """The bake options shared by File › Import and the Bake panel (owner: the
+    operator or scene.voxel_bake)."""
+    col.prop(owner, "per")
+    if owner.per == "tile":
+        col.prop(owner, "tile")
+    col.prop(owner, "light")
+    col.prop(owner, "method")
+    col.prop(owner, "instances")
+    col.prop(owner, "hours")

@@ -3,7 +3,9 @@
 // set by the caller) mixes voxels and Blender's objects both ways. Where the
 // pipeline drew no surface the sky goes at the far plane (only where Blender drew
 // nothing), or nothing at all when the sky is off.
-// Defines: SAMPLES (G-buffer), LAYERS (1: the nearest transparent layer hides too).
+// Defines: SAMPLES (G-buffer), LAYERS (1: the nearest transparent layer hides too),
+// KEEP (into the region's kept targets instead: colour with alpha 0 where nothing
+// goes, and the depth as a value; viewport_kept.frag draws them, again while still).
 #include "include/common.glsl"
 #include "include/frame.glsl"
 
@@ -19,6 +21,9 @@ uniform bool sky;
 
 in vec2 v_uv;
 out vec4 out_color;
+#if KEEP
+layout(location = 1) out float out_depth;
+#endif
 
 float nearest(ivec2 c) {
     float d = 1.0;
@@ -36,7 +41,15 @@ void main() {
     float d = nearest(clamp(ivec2(v_uv * vec2(size)), ivec2(0), size - 1));
     float z;
     if (d >= 1.0) {
-        if (!sky) discard;
+        if (!sky) {
+#if KEEP
+            out_color = vec4(0.0);
+            out_depth = 1.0;
+            return;
+#else
+            discard;
+#endif
+        }
         z = host_range.y;
     } else {
         vec4 c = host_vp * vec4(world_pos(inv_vp, v_uv, d), 1.0);
@@ -44,6 +57,10 @@ void main() {
         float z01 = host_zero_one ? max(ndc, 0.0) : ndc * 0.5 + 0.5;
         z = mix(host_range.x, host_range.y, z01);
     }
-    gl_FragDepth = z;
     out_color = vec4(texture(color, v_uv).rgb, 1.0);
+#if KEEP
+    out_depth = z;
+#else
+    gl_FragDepth = z;
+#endif
 }

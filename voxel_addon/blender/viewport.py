@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import astuple
 import traceback
 from collections import deque
 
@@ -33,8 +34,8 @@ from ..core.errors import VoxelError
 
 # What the panel shows (the last frame of any region).
 STATUS = {"drawn": 0, "wanted": 0, "wanted_shown": 0, "ms": 0.0, "python_ms": 0.0, "quality": "full",
-          "error": None, "frames": 0}
-# The last frames: (ms, python_ms, quality, drawn, upload_ms), for the bench.
+          "error": None, "frames": 0, "reused": 0}
+# The last frames: (ms, python_ms, quality, drawn, upload_ms, reused), for the bench.
 FRAMES: deque = deque(maxlen=512)
 # Callables f(context) run after each voxel frame with Blender's GL state and the
 # voxels' depth in the depth buffer (draw with gpu.state.depth_test_set("LESS_EQUAL")).
@@ -44,6 +45,8 @@ DRAFT_SCALE = 0.5    # draft frames render at this fraction of the region's size
 STILL_S = 0.25       # the view is still this long after its last change: full quality
 BUDGET_S = 0.004     # CPU time per redraw for taking in streamed chunks
 MIN_GL = 410
+KEPT_MAX = 8         # kept frames per GL context (one per region; quad view has four)
+REUSE = True         # a still region redraws from its kept frame (off: the pipeline every time)
 
 _handle = None
 _timer_on = False
@@ -172,6 +175,9 @@ class _Gpu:
         self.feed = None
         self._comp: dict = {}
         self._vao: dict = {}
+        self._kept_prog = None
+        self.kept: dict = {}     # region pointer -> _Kept
+        self.gen = 0             # bumped whenever the uploaded chunks change
 
     def sync(self, feed) -> int:
         """Upload what changed in the feed; returns the number of chunks drawn."""
@@ -180,35 +186,36 @@ class _Gpu:
             self.feed = feed
             self.versions = {k: None for k in self.versions}
         gone = [k for k in self.versions if k not in feed.chunks]
+        new = [p for k, p in feed.chunks.items() if self.versions.get(k) != p.version]
+        if gone or new:
+            self.gen += 1
         if gone:
             r.remove_chunks(gone)
             for k in gone:
                 del self.versions[k]
-        new = [p for k, p in feed.chunks.items() if self.versions.get(k) != p.version]
         if new:
             r.update_chunks(new)
             for p in new:
                 self.versions[p.key] = p.version
         return len(self.versions)
 
-    def program(self, samples, layers):
-        key = (samples, layers)
+    def program(self, samples, layers, keep=0):
+        key = (samples, layers, keep)
         p = self._comp.get(key)
         if p is None:
             p = self._comp[key] = self.r.progs.get(
-                "fullscreen.vert", "viewport.frag", {"SAMPLES": samples, "LAYERS": layers})
-            for k in ("color", "g_depth", "prev_depth"):
-                if k in p:
-                    p[k].value = {"color": 5, "g_depth": 0, "prev_depth": 9}[k]
+                "fullscreen.vert", "viewport.frag", {"SAMPLES": samples, "LAYERS": layers, "KEEP": keep})
+            _units(p)
         return p
 
-    def composite(self, f, host, host_vp, sky):
-        """The frame into Blender's framebuffer (bound again here), depth tested."""
+    def composite(self, f, host, host_vp, sky, kept=None):
+        """The frame into Blender's framebuffer (bound again here), depth tested; with
+        `kept` (a region's _Kept) into those targets first and drawn from there."""
         from ..render import glstate
         gl = glstate.gl()
         blend = f.blend_depth
-        prog = self.program(f.T["ms"], 1 if blend is not None else 0)
-        f.color.use(5)
+        prog = self.program(f.T["ms"], 1 if blend is not None else 0, int(kept is not None))
+        f.color.use(_UNIT["color"])
         f.depth.use(0)
         if blend is not None:
             blend.use(9)
@@ -216,17 +223,64 @@ class _Gpu:
         prog["host_range"].value = tuple(host["depth_range"])
         prog["host_zero_one"].value = bool(host["clip"] and host["clip"][1] == 0x935F)
         prog["sky"].value = bool(sky)
+        if kept is None:
+            self._into_host(host)
+            self._vao_of(prog).render(mode=self.ctx.TRIANGLES, vertices=3)
+            return
+        kept.fbo.use()  # (its viewport too)
+        gl.Disable(0x0B71)  # DEPTH_TEST
+        gl.Disable(0x0BE2)  # BLEND
+        self._vao_of(prog).render(mode=self.ctx.TRIANGLES, vertices=3)
+        self.draw_kept(kept, host)
+
+    def draw_kept(self, kept, host):
+        """A region's kept frame into Blender's framebuffer: what composite() wrote
+        there, without the pipeline (needs no frame block nor G-buffer)."""
+        prog = self._kept_prog
+        if prog is None:
+            prog = self._kept_prog = self.r.progs.get("fullscreen.vert", "viewport_kept.frag")
+            _units(prog)
+        kept.color.use(_UNIT["kept_color"])
+        kept.depth.use(_UNIT["kept_depth"])
+        self._into_host(host)
+        self._vao_of(prog).render(mode=self.ctx.TRIANGLES, vertices=3)
+
+    def _into_host(self, host):
+        from ..render import glstate
+        gl = glstate.gl()
         gl.BindFramebuffer(0x8CA9, host["fb"][0])
         gl.Viewport(*host["viewport"])
         gl.Enable(0x0B71)       # DEPTH_TEST
         gl.DepthFunc(0x0203)    # LEQUAL
         gl.DepthMask(1)
+
+    def _vao_of(self, prog):
         vao = self._vao.get(prog.glo)
         if vao is None:
             vao = self._vao[prog.glo] = self.ctx.vertex_array(prog, [])
-        vao.render(mode=self.ctx.TRIANGLES, vertices=3)
+        return vao
+
+    def kept_for(self, region, size):
+        """The kept targets of a region (made or resized; the least recently used go
+        beyond KEPT_MAX: regions of closed areas)."""
+        k = self.kept.pop(region, None)
+        old = [k] if k is not None and k.size != size else []
+        if old:
+            k = None
+        self.kept[region] = k = k or _Kept(self.ctx, size)
+        while len(self.kept) > KEPT_MAX:
+            old.append(self.kept.pop(next(iter(self.kept))))
+        if old:  # moderngl rebinds its last framebuffer after making one: not a released one
+            self.r._idle.use()
+            for x in old:
+                x.release()
+        return k
 
     def release(self):
+        for k in self.kept.values():
+            k.release()
+        self.kept.clear()
+        self._kept_prog = None
         for v in self._vao.values():
             v.release()
         self._vao.clear()
@@ -234,6 +288,36 @@ class _Gpu:
         if self.r is not None:
             self.r.release()
             self.r = None
+
+
+# texture units of the composite passes: among those glstate.kept() saves and restores
+_UNIT = {"color": 1, "g_depth": 0, "prev_depth": 9, "kept_color": 1, "kept_depth": 0}
+
+
+def _units(prog):
+    for k, u in _UNIT.items():
+        if k in prog:
+            prog[k].value = u
+
+
+class _Kept:
+    """A region's last composited frame, at the region's size: colour (alpha 0 where
+    Blender's own picture stays) and depth in Blender's projection. While nothing that
+    changes the picture changed (`look`), a redraw draws these and skips the pipeline."""
+    __slots__ = ("size", "color", "depth", "fbo", "look", "quality")
+
+    def __init__(self, ctx, size):
+        self.size, self.look, self.quality = size, None, "full"
+        self.color = ctx.texture(size, 4)
+        self.depth = ctx.texture(size, 1, dtype="f4")
+        for t in (self.color, self.depth):
+            t.filter = (ctx.NEAREST, ctx.NEAREST)
+        self.fbo = ctx.framebuffer([self.color, self.depth])
+
+    def release(self):
+        for x in (self.fbo, self.color, self.depth):
+            x.release()
+        self.look = None
 
 
 class _Region:
@@ -301,6 +385,7 @@ def _frame(context, scene, vv):
     host_vp = np.array(rv3d.perspective_matrix, np.float64)
     hours = hours_of(scene)
     t_py = time.perf_counter() - t0
+    reused = False
     with glstate.kept() as host:
         g = _gpus.get(native)
         if g is None:
@@ -308,23 +393,37 @@ def _frame(context, scene, vv):
         t1 = time.perf_counter()
         drawn = g.sync(feed)
         t_sync = time.perf_counter() - t1
-        g.r.s = s
         vw, vh = host["viewport"][2], host["viewport"][3]
-        scale = DRAFT_SCALE if draft else 1.0
-        size = (max(8, int(vw * scale)), max(8, int(vh * scale)))
-        t1 = time.perf_counter()
-        f = g.r.prepare(cam, hours, size)
-        t_py += time.perf_counter() - t1
-        g.r.submit(f)
-        g.composite(f, host, host_vp, vv.sky)
+        # everything the picture depends on (Blender's objects are mixed in by depth
+        # on every redraw): the same again, and the kept frame is the frame
+        look = (tuple(view), tuple(map(tuple, rv3d.window_matrix)), (vw, vh), astuple(s), hours,
+                vv.sky, tuple(host["depth_range"]), host["clip"], g.gen)
+        k = g.kept.get(key)
+        if REUSE and k is not None and k.look == look:
+            g.draw_kept(k, host)
+            reused, draft = True, k.quality == "draft"
+        else:
+            g.r.s = s
+            scale = DRAFT_SCALE if draft else 1.0
+            size = (max(8, int(vw * scale)), max(8, int(vh * scale)))
+            t1 = time.perf_counter()
+            f = g.r.prepare(cam, hours, size)
+            t_py += time.perf_counter() - t1
+            g.r.submit(f)
+            # kept only once the view rests: a frame while moving or loading is the last
+            k = g.kept_for(key, (vw, vh)) if REUSE and not (moving or loading) else None
+            g.composite(f, host, host_vp, vv.sky, k)
+            if k is not None:
+                k.look, k.quality = look, "draft" if draft else "full"
         g.ctx.finish() if _SYNC else None
     ms = (time.perf_counter() - t0) * 1e3
     q = "draft" if draft else "full"
     if (drawn, STATUS["wanted"], q) != (STATUS["drawn"], STATUS["wanted_shown"], STATUS["quality"]):
         _panel_redraw()  # the sidebar shows progress and quality
     STATUS.update(drawn=drawn, ms=ms, python_ms=t_py * 1e3, quality=q,
-                  frames=STATUS["frames"] + 1, wanted_shown=STATUS["wanted"])
-    FRAMES.append((ms, t_py * 1e3, q, drawn, t_sync * 1e3))
+                  frames=STATUS["frames"] + 1, wanted_shown=STATUS["wanted"],
+                  reused=STATUS["reused"] + reused)
+    FRAMES.append((ms, t_py * 1e3, q, drawn, t_sync * 1e3, reused))
     st.quality = q
     if loading or drawn < STATUS["wanted"]:
         # as long again as the frame took: the worker gets at least half the time

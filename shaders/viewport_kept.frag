@@ -1,0 +1,16 @@
+// A region's kept frame (viewport.frag with KEEP) into Blender's framebuffer: the
+// same colour and depth the composite would write, depth tested LEQUAL by the
+// caller, so Blender's objects still mix both ways while the pipeline is skipped.
+uniform sampler2D kept_color;  // RGBA8, alpha 0: nothing of ours here
+uniform sampler2D kept_depth;  // R32F, Blender's depth
+in vec2 v_uv;
+out vec4 out_color;
+
+void main() {
+    ivec2 size = textureSize(kept_color, 0);
+    ivec2 c = clamp(ivec2(v_uv * vec2(size)), ivec2(0), size - 1);
+    vec4 col = texelFetch(kept_color, c, 0);
+    if (col.a == 0.0) discard;
+    gl_FragDepth = texelFetch(kept_depth, c, 0).r;
+    out_color = col;
+}

@@ -498,6 +498,18 @@ def case_pixels(w):
     near = (slice(sy - 40, sy + 41), slice(sx - 40, sx + 41))
     white = ((hover[near] > 215).all(-1) & ~(before[near] > 215).all(-1)).sum()
     check("hover_outlines_the_face", white > 40, white)
+    # the view is still: those redraws reused the kept frame (the outline drawn over
+    # it); the pipeline on every redraw gives the same picture
+    check("hover_frame_reused", viewport.FRAMES[-1][5], viewport.FRAMES[-1])
+    viewport.REUSE = False
+    try:
+        yield from wait_frames()
+        fresh = xshot("px_hover_fresh")
+    finally:
+        viewport.REUSE = True
+    check("hover_fresh_frame_not_reused", not viewport.FRAMES[-1][5], viewport.FRAMES[-1])
+    e = np.abs(fresh - hover)
+    check("hover_reused_looks_as_fresh", e.max() <= 2, (e.max(), (e > 2).sum()))
     yield from click(at)
     move(corner)
     yield from wait_frames()

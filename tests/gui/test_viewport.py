@@ -80,6 +80,45 @@ def test_voxels_and_blender_objects_mix_by_depth(run):
     assert green.mean() > 0.2, "grass-covered terrain in view"
 
 
+def test_a_still_view_redraws_from_its_kept_frame(run):
+    st = run["steps"]
+    kept, fresh = st["still_kept"], st["still_fresh"]
+    # redraws of a still view reuse the frame, and look as the pipeline's own
+    assert kept["frames"] >= 3 and kept["fresh"] == 0 and kept["last_reused"], kept
+    assert fresh["fresh"] == fresh["frames"] >= 2 and not fresh["last_reused"], fresh
+    d = np.abs(_region(st["still_kept"]) - _region(st["still_fresh"])).max(-1)
+    # (but for the cube's edges: Blender's own anti-aliasing adds samples while still)
+    r, (x, y) = kept["rect"], kept["cube"]
+    x, y = int(x) - r["x"], int(y) - r["y"]
+    d[max(0, y - 70):y + 70, max(0, x - 70):x + 70] = 0
+    assert d.max() <= 2, (d.max(), (d > 2).mean())
+    # a change makes a new frame (and the redraws after it reuse that one)
+    for name in ("still_edit", "still_unedit", "still_hours", "still_view"):
+        assert st[name]["fresh"] >= 1 and st[name]["last_reused"], (name, st[name])
+    a, b = _img(st["still_kept"]), _img(st["still_edit"])
+    p = st["still_edit"]["block"]
+    assert np.abs(_patch(a, p) - _patch(b, p)).mean() > 20, "the placed blocks show"
+    e = np.abs(_region(st["still_unedit"]) - _region(st["still_kept"]))
+    assert e.mean() < 0.5 and np.percentile(e, 99.9) < 8, "and go again"
+    noon, evening = _region(st["still_kept"]), _region(st["still_hours"])
+    assert np.abs(noon - evening).mean() > 20
+    turned = (np.abs(_region(st["still_view"]) - evening).max(-1) > 5).mean()
+    assert turned > 0.1, turned
+
+
+def test_blender_objects_move_on_a_still_view_without_a_new_frame(run):
+    st = run["steps"]
+    base = _img(st["still_hours"])
+    up, down = st["still_cube"], st["still_buried"]
+    for s in (up, down):
+        assert s["frames"] >= 3 and s["fresh"] == 0, s
+    # the cube moved over the terrain shows (Blender's lit grey), buried it is hidden
+    grey = _patch(_img(up), up["moved"]).mean(0)
+    assert np.ptp(grey) < 10 and grey.mean() > 120, grey
+    assert np.abs(_patch(base, up["moved"]).mean(0) - grey).max() > 30
+    assert np.abs(_patch(_img(down), down["moved"]) - _patch(base, down["moved"])).max() <= 3
+
+
 def test_show_off_gives_back_blenders_image(run):
     a, b = _region(run["steps"]["off"]), _region(run["steps"]["off_again"])
     assert (np.abs(a - b).max(-1) <= 2).mean() > 0.999

@@ -164,6 +164,72 @@ def step_top():
     record("off_again")
 
 
+def _since(n0):
+    """What the frames after frame number n0 did: how many ran the pipeline (fresh),
+    how many there were, whether the last one redrew from the kept frame."""
+    from voxel_addon.blender import viewport
+    k = viewport.STATUS["frames"] - n0
+    fr = list(viewport.FRAMES)[-k:] if k > 0 else []
+    return {"frames": k, "fresh": sum(not f[5] for f in fr), "last_reused": bool(fr and fr[-1][5])}
+
+
+def until_fresh(n0, timeout=120.0):
+    """Generator: redraw until a frame after frame number n0 ran the pipeline, then
+    until the view is full again and a redraw reused that frame."""
+    from voxel_addon.blender import viewport
+    t0 = time.time()
+    while not _since(n0)["fresh"]:
+        if time.time() - t0 > timeout:
+            raise RuntimeError(f"no fresh frame after a change: {viewport.STATUS}")
+        view3d()[1].tag_redraw()
+        yield 0.1
+    yield from wait_frames(2)
+
+
+def step_still():
+    """A still view redraws from its kept frame: the same picture as the pipeline's;
+    an edit, the time of day and a view change make a new frame; Blender's objects
+    moving on a still view keep mixing by depth (no new frame needed)."""
+    from voxel_addon.blender import viewport
+    sc = bpy.context.scene
+    vv = sc.voxel_view
+    vv.show, vv.hours = True, 12.0
+    set_view((24.0, 16.0, 80.0), (0, 0, 0), 140.0)
+    yield from wait_frames()
+    n0 = viewport.STATUS["frames"]
+    yield from wait_frames(3)
+    record("still_kept", **_since(n0))
+    viewport.REUSE = False   # the pipeline and the direct composite on every redraw
+    n0 = viewport.STATUS["frames"]
+    try:
+        yield from wait_frames(2)
+    finally:
+        viewport.REUSE = True
+    record("still_fresh", **_since(n0))
+    block = (24, 40, 110)
+    for name, b in (("still_edit", "stone"), ("still_unedit", "air")):
+        n0 = viewport.STATUS["frames"]
+        assert bpy.ops.voxel.edit(location=block, block=b, size=6) == {"FINISHED"}
+        yield from until_fresh(n0)
+        record(name, **_since(n0), block=project((24.5, 40.5, 113.0)))
+    n0 = viewport.STATUS["frames"]
+    vv.hours = 18.0
+    yield from until_fresh(n0)
+    record("still_hours", **_since(n0))
+    cube = bpy.data.objects["Cube"]
+    for name, z in (("still_cube", 120.0), ("still_buried", 20.0)):
+        n0 = viewport.STATUS["frames"]
+        cube.location = (30.0, 0.0, z)
+        yield from wait_frames(3)
+        record(name, **_since(n0), moved=project((30.0, 0.0, z + 4.0)))
+    cube.location = (8.0, 8.0, 120.0)
+    n0 = viewport.STATUS["frames"]
+    set_view((24.0, 16.0, 80.0), (0, 0, 15), 140.0)
+    yield from until_fresh(n0)
+    record("still_view", **_since(n0))
+    vv.hours = 12.0
+
+
 def step_sky():
     """Looking toward the horizon at noon and at night: the sky changes."""
     sc = bpy.context.scene
@@ -394,7 +460,7 @@ def run():
     bpy.ops.wm.quit_blender()
 
 
-STEPS = {"top": step_top, "sky": step_sky, "camera": step_camera, "stream": step_stream,
+STEPS = {"top": step_top, "still": step_still, "sky": step_sky, "camera": step_camera, "stream": step_stream,
          "redraws": step_redraws, "quad": step_quad, "problem": step_problem,
          "newfile": step_newfile, "animation": step_animation, "leak": step_leak}
 _gen = run()

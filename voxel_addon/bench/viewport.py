@@ -61,6 +61,18 @@ def run(ctx):
         yield ("viewport_memory_baked_mb", R["baked_rss_mb"], "MB", "Blender's RSS growth, baked mesh")
         yield ("viewport_memory_ratio_baked_to_live", R["baked_rss_mb"] / max(R["view_rss_mb"], 1.0),
                "", ">1: the live view needs less memory")
+    if "still_draw_ms" in R:
+        yield ("viewport_redraw_live_still_ms", R["still_draw_ms"], "ms",
+               "whole region redraw of a still view from its kept frame (pipeline skipped)")
+        yield ("viewport_frame_still_ms", R["still_frame_ms"], "ms",
+               "draw handler, redraw from the kept frame (GPU finished)")
+        yield ("viewport_python_still_ms", R["still_python_ms"], "ms",
+               "our CPU time outside GL per redraw from the kept frame")
+        yield ("viewport_frame_keep_ms", R["keep_ms"], "ms",
+               "full frame that is also kept for the redraws after it")
+        if "baked_draw_ms" in R:
+            yield ("viewport_frame_ratio_baked_to_live_still", R["baked_draw_ms"] / R["still_draw_ms"],
+                   "", ">1: a still live view redraws faster than the baked mesh")
     for key in ("generated", "empty"):
         if f"show16_{key}_s" in R:
             yield (f"viewport_show_view16_{key}_s", R[f"show16_{key}_s"], "s",

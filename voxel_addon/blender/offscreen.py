@@ -71,21 +71,29 @@ def check_backend() -> None:
                          "(Preferences > System > GPU Backend)")
 
 
+_current = None  # the platform's "current context" functions, found once
+
+
 def _native():
     """The current native GL context handle (one View stays on one context)."""
-    import ctypes
-    import ctypes.util
-    import sys
-    names = {"win32": ("opengl32", "wglGetCurrentContext"),
-             "darwin": ("/System/Library/Frameworks/OpenGL.framework/OpenGL", "CGLGetCurrentContext")}
-    for lib, fn in ([names[sys.platform]] if sys.platform in names else
-                    [(ctypes.util.find_library("EGL"), "eglGetCurrentContext"),
-                     (ctypes.util.find_library("GL"), "glXGetCurrentContext")]):
-        try:
-            f = getattr(ctypes.CDLL(lib), fn)
-        except (OSError, AttributeError, TypeError):
-            continue
-        f.restype = ctypes.c_void_p
+    global _current
+    if _current is None:  # find_library runs ldconfig: once, not on every redraw
+        import ctypes
+        import ctypes.util
+        import sys
+        names = {"win32": ("opengl32", "wglGetCurrentContext"),
+                 "darwin": ("/System/Library/Frameworks/OpenGL.framework/OpenGL", "CGLGetCurrentContext")}
+        _current = []
+        for lib, fn in ([names[sys.platform]] if sys.platform in names else
+                        [(ctypes.util.find_library("EGL"), "eglGetCurrentContext"),
+                         (ctypes.util.find_library("GL"), "glXGetCurrentContext")]):
+            try:
+                f = getattr(ctypes.CDLL(lib), fn)
+            except (OSError, AttributeError, TypeError):
+                continue
+            f.restype = ctypes.c_void_p
+            _current.append(f)
+    for f in _current:
         h = f()
         if h:
             return h

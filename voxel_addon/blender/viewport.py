@@ -16,6 +16,15 @@ overlay framebuffer that holds the viewport's depth. Per redraw and region:
 4. `OVERLAYS` callbacks run with Blender's state back and the voxels' depth in the
    depth buffer (the edit tool's hover outline draws there with the gpu module).
 
+Blender redraws a region for many reasons while its view rests (hover, gizmos, the
+UI, other areas). Once it rests, the composite goes into the region's kept targets
+(_Kept: colour, depth already in Blender's projection) and from there into Blender's
+framebuffer; a redraw where nothing that shapes the picture changed (`look`: view,
+window, size, settings, time of day, uploaded chunks, Blender's depth setup) draws
+only the kept frame (shaders/viewport_kept.frag): Blender's objects still mix by
+depth on every redraw. (It needs neither the frame's uniform block nor the G-buffer,
+which glstate.reset() unbinds and another region's frame overwrites.)
+
 Everything GL runs inside glstate.kept(): Blender caches its bindings, the pipeline
 wants a fresh context's state. While chunks stream in, or after a draft frame, a timer
 asks for another redraw. shutdown() removes handlers, timer, GL objects and threads.

@@ -70,6 +70,8 @@ def run(ctx):
                "our CPU time outside GL per redraw from the kept frame")
         yield ("viewport_frame_keep_ms", R["keep_ms"], "ms",
                "full frame that is also kept for the redraws after it")
+        yield ("viewport_redraw_blender_only_ms", R["blender_draw_ms"], "ms",
+               "whole region redraw with the view off (Blender's own drawing)")
         if "baked_draw_ms" in R:
             yield ("viewport_frame_ratio_baked_to_live_still", R["baked_draw_ms"] / R["still_draw_ms"],
                    "", ">1: a still live view redraws faster than the baked mesh")

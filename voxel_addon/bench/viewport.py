@@ -72,6 +72,11 @@ def run(ctx):
                "full frame that is also kept for the redraws after it")
         yield ("viewport_redraw_blender_only_ms", R["blender_draw_ms"], "ms",
                "whole region redraw with the view off (Blender's own drawing)")
+        for k, what in (("live", "live view, pipeline every redraw"),
+                        ("still", "live view, still: from the kept frame"),
+                        ("blender", "view off: Blender's own drawing")):
+            yield (f"viewport_redraw_{k}_cpu_ms", R[f"{k}_cpu_ms"], "ms",
+                   f"process CPU per whole region redraw (all threads), {what}")
         if "baked_draw_ms" in R:
             yield ("viewport_frame_ratio_baked_to_live_still", R["baked_draw_ms"] / R["still_draw_ms"],
                    "", ">1: a still live view redraws faster than the baked mesh")

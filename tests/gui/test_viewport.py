@@ -211,3 +211,7 @@ def test_render_animation_from_the_ui_writes_frames_and_esc_stops(run):
     assert a["started"] == ["RUNNING_MODAL"], a
     assert a["files"] == ["f_0001.png", "f_0002.png", "f_0003.png"], a
     assert 2 <= a["stopped_at"] < 40 and a["after_stop"] == a["stopped_at"], a
+    m = a["movie"]  # FFmpeg output: one movie; Esc leaves nothing behind
+    assert m["started"] == ["RUNNING_MODAL"] and m["files"] == ["fly_0001-0004.mp4"], m
+    assert m["tmp"] == [] and m["scenes"] == m["scenes2"] == ["Scene"], m
+    assert m["stopped_with"] >= 2 and m["files2"] == [] and m["tmp2"] == [], m

@@ -315,6 +315,59 @@ def step_animation():
     RESULT["steps"]["animation"] = {
         "started": sorted(started), "files": done, "stopped_at": n,
         "after_stop": len(list((OUT / "anim2").glob("*.png"))), "frame": sc.frame_current}
+    yield from movie_animation(win, area, reg)
+
+
+def _listing(d: Path):
+    return sorted(p.name for p in d.iterdir()) if d.exists() else []
+
+
+def movie_animation(win, area, reg):
+    """The same from the UI with FFmpeg output: 4 frames become one movie; a run of
+    40 frames stopped with Esc leaves no movie, no temporary frames, no extra scene."""
+    import tempfile
+    sc = bpy.context.scene
+    tmp = OUT / "anim_tmp"  # the operator's temporary frames, to see them go
+    tmp.mkdir()
+    tempfile.tempdir = str(tmp)
+    im = sc.render.image_settings
+    if hasattr(im, "media_type"):
+        im.media_type = "VIDEO"
+    im.file_format = "FFMPEG"
+    sc.render.ffmpeg.format, sc.render.ffmpeg.codec = "MPEG4", "H264"
+    sc.frame_end = 4
+    sc.render.filepath = str(OUT / "movie" / "fly_")
+    with bpy.context.temp_override(window=win, area=area, region=reg):
+        started = bpy.ops.voxel.render_animation("INVOKE_DEFAULT")
+    t0 = time.time()
+    while not list((OUT / "movie").glob("*.mp4")) and time.time() - t0 < 60:
+        yield 0.1
+    yield 0.5
+    got = {"started": sorted(started), "files": _listing(OUT / "movie"),
+           "tmp": _listing(tmp), "scenes": sorted(s.name for s in bpy.data.scenes)}
+    sc.frame_end = 40
+    sc.render.filepath = str(OUT / "movie2" / "fly_")
+    with bpy.context.temp_override(window=win, area=area, region=reg):
+        bpy.ops.voxel.render_animation("INVOKE_DEFAULT")
+    d = None
+    while time.time() - t0 < 120:
+        d = next(iter(tmp.iterdir()), None)
+        if d is not None and len(list(d.glob("*.png"))) >= 2:
+            break
+        yield 0.05
+    got["stopped_with"] = len(list(d.glob("*.png"))) if d else 0
+    x, y = reg.x + reg.width // 2, reg.y + reg.height // 2
+    win.event_simulate(type="MOUSEMOVE", value="NOTHING", x=x, y=y)
+    win.event_simulate(type="ESC", value="PRESS", x=x, y=y)
+    win.event_simulate(type="ESC", value="RELEASE", x=x, y=y)
+    yield 1.0
+    got.update(files2=_listing(OUT / "movie2"), tmp2=_listing(tmp),
+               scenes2=sorted(s.name for s in bpy.data.scenes))
+    tempfile.tempdir = None
+    if hasattr(im, "media_type"):
+        im.media_type = "IMAGE"
+    im.file_format = "PNG"
+    RESULT["steps"]["animation"]["movie"] = got
 
 
 def step_leak():

@@ -192,6 +192,28 @@ def test_quad_view_draws_every_region(run):
         assert (np.abs(crop - grey).max(-1) > 12).mean() > 0.9, r
 
 
+def _green(img) -> float:
+    return float(((img[..., 1] > img[..., 0] + 20) & (img[..., 1] > img[..., 2])).mean())
+
+
+def test_a_second_window_shows_voxels_and_closing_it_releases_its_share(run):
+    w = run["steps"]["window1"]
+    assert w["windows"] == 2 and w["windows_drawn"] == 2, w
+    # one GPU set per GL context (Blender 4.3 on X11 draws every window with one)
+    assert w["gpus_open"] == w["contexts"] >= 1, w
+    assert w["regions_open"] >= 2, w
+    r = w["rect2"]  # the second window's 3D viewport, the top view: grass
+    crop = _img({"png": w["png2"]})[r["y"] + r["h"] // 5:r["y"] + 4 * r["h"] // 5,
+                                   r["x"] + r["w"] // 5:r["x"] + 4 * r["w"] // 5]
+    assert _green(crop) > 0.3, _green(crop)
+    # closed: its region is forgotten, one set stays (the first window's), one
+    # Renderer alive, no error, and the first window still draws voxels
+    assert w["windows_closed"] == 1 and w["regions_closed"] == w["regions_open"] - 1, w
+    assert w["gpus_closed"] == 1 and w["renderers"] == 1, w
+    assert w["status"]["error"] is None and w["status"]["drawn"] == w["status"]["wanted"] > 0
+    assert _green(_region(w)) > 0.2, _green(_region(w))
+
+
 def test_without_a_world_the_panel_says_why(run):
     p = run["steps"]["problem"]
     assert p["sentence"].startswith("no world open"), p

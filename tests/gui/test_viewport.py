@@ -236,4 +236,6 @@ def test_render_animation_from_the_ui_writes_frames_and_esc_stops(run):
     m = a["movie"]  # FFmpeg output: one movie; Esc leaves nothing behind
     assert m["started"] == ["RUNNING_MODAL"] and m["files"] == ["fly_0001-0004.mp4"], m
     assert m["tmp"] == [] and m["scenes"] == m["scenes2"] == ["Scene"], m
+    # encoded by Blender's render job, with no render window and the preference back
+    assert m["job"] and m["display"] == "WINDOW" and m["windows"] == 1, m
     assert m["stopped_with"] >= 2 and m["files2"] == [] and m["tmp2"] == [], m

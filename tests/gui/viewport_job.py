@@ -398,10 +398,14 @@ def movie_animation(win, area, reg):
     with bpy.context.temp_override(window=win, area=area, region=reg):
         started = bpy.ops.voxel.render_animation("INVOKE_DEFAULT")
     t0 = time.time()
+    job = False  # the encode ran as Blender's render job (the UI stayed live)
     while not list((OUT / "movie").glob("*.mp4")) and time.time() - t0 < 60:
-        yield 0.1
+        job = job or bpy.app.is_job_running("RENDER")
+        yield 0.02
     yield 0.5
-    got = {"started": sorted(started), "files": _listing(OUT / "movie"),
+    got = {"started": sorted(started), "files": _listing(OUT / "movie"), "job": job,
+           "display": bpy.context.preferences.view.render_display_type,
+           "windows": len(bpy.context.window_manager.windows),
            "tmp": _listing(tmp), "scenes": sorted(s.name for s in bpy.data.scenes)}
     sc.frame_end = 40
     sc.render.filepath = str(OUT / "movie2" / "fly_")

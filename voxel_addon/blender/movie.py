@@ -1,7 +1,10 @@
 """Frames on disk into a video with Blender's own FFmpeg writer: a temporary scene whose
 sequencer holds the frames as one image strip, rendered as an animation with the
 source scene's FFmpeg settings, then removed. Python has no movie-writer API, and the
-sequencer path writes exactly what a user's own Render Animation would."""
+sequencer path writes exactly what a user's own Render Animation would. From the UI
+the encode runs as Blender's render job (`start`, poll `running`), so the window
+stays responsive and Esc stops it (Esc sets Blender's break flag, which the job reads);
+scripts encode blocking (`run`)."""
 from __future__ import annotations
 
 import os
@@ -45,6 +48,7 @@ class Encoder:
         self.dest = dest(scene)
         self.sc = None
         self.out = None
+        self.complete = False
 
     def _scene(self):
         src, (w, h) = self.src.render, self.size
@@ -76,14 +80,55 @@ class Encoder:
         return sc
 
     def run(self) -> str:
-        """Encode (blocking: Blender's writer is one operator call); the movie's path."""
+        """Encode blocking (scripts, background mode); the movie's path."""
         sc = self._scene()
         self.out = bpy.path.abspath(sc.render.frame_path())
         try:
             res = bpy.ops.render.render(animation=True, scene=sc.name)
         except RuntimeError as e:  # the writer's report, e.g. a codec this build lacks
             raise VoxelError(f"the video could not be written: {str(e).strip()}") from None
-        if res != {"FINISHED"} or not os.path.isfile(self.out):
+        if res != {"FINISHED"}:
+            raise VoxelError("the video could not be written")
+        return self._keep()
+
+    def start(self) -> None:
+        """Encode as Blender's render job (UI: Blender stays responsive, its status bar
+        shows the job, Esc stops it); poll `running()`, then `result()`."""
+        sc = self._scene()
+        self.out = bpy.path.abspath(sc.render.frame_path())
+        self.complete = False
+        bpy.app.handlers.render_complete.append(self._completed)
+        view = bpy.context.preferences.view
+        shown = view.render_display_type
+        view.render_display_type = "NONE"  # no render window for the frames we show
+        try:
+            res = bpy.ops.render.render("INVOKE_DEFAULT", animation=True, scene=sc.name)
+        except RuntimeError as e:
+            raise VoxelError(f"the video could not be written: {str(e).strip()}") from None
+        finally:
+            view.render_display_type = shown
+        if "RUNNING_MODAL" not in res:
+            raise VoxelError("the video could not be written")
+
+    def _completed(self, scene, *_):
+        if self.sc is not None and getattr(scene, "name", None) == self.sc.name:
+            self.complete = True
+
+    def running(self) -> bool:
+        return self.sc is not None and bpy.app.is_job_running("RENDER")
+
+    def frame(self) -> int:
+        """The frame the job is at (1-based)."""
+        return self.sc.frame_current if self.sc is not None else 0
+
+    def result(self) -> str:
+        """After the job: the movie's path; VoxelError when it stopped or failed."""
+        if not self.complete:
+            raise VoxelError("the video was stopped or failed before its end: no file written")
+        return self._keep()
+
+    def _keep(self) -> str:
+        if not self.out or not os.path.isfile(self.out):
             raise VoxelError(f"the video could not be written with "
                              f"{self.src.render.ffmpeg.format}/{self.src.render.ffmpeg.codec}")
         os.makedirs(os.path.dirname(self.dest) or ".", exist_ok=True)
@@ -92,6 +137,10 @@ class Encoder:
         return self.dest
 
     def close(self):
+        """Never while the job runs (its thread reads the scene)."""
+        hs = bpy.app.handlers.render_complete
+        while self._completed in hs:
+            hs.remove(self._completed)
         if self.sc is not None:
             bpy.data.scenes.remove(self.sc)
             self.sc = None

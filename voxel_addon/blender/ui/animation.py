@@ -18,7 +18,7 @@ import bpy
 class _Job:
     """The frames left to render, and the View (GPU objects) they share."""
 
-    def __init__(self, scene):
+    def __init__(self, scene, job: bool = False):
         from .. import offscreen, session, viewport
         from ...core.errors import VoxelError
         if scene.camera is None or scene.camera.type != "CAMERA":
@@ -39,6 +39,7 @@ class _Job:
         self._restore = scene.frame_current
         self._tmp = tempfile.mkdtemp(prefix="voxel_anim_") if self.movie else None
         self._enc = None
+        self._job = job  # encode as Blender's render job (modal UI), else blocking
 
     @property
     def encoding(self) -> bool:
@@ -85,10 +86,25 @@ class _Job:
 
     def _encode(self) -> bool:
         from .. import movie
-        self.view.release()  # no GPU objects needed any more
-        self._enc = movie.Encoder(self.scene, self.paths, self.size)
-        self.result = self._enc.run()
+        if self._enc is None:
+            self.view.release()  # no GPU objects needed any more
+            self._enc = movie.Encoder(self.scene, self.paths, self.size)
+            if not self._job:
+                self.result = self._enc.run()
+                return False
+            self._enc.start()
+            return True
+        if self._enc.running():
+            return True
+        self.result = self._enc.result()
         return False
+
+    def busy(self) -> bool:
+        """Blender's render job is encoding (it must end before the scene goes)."""
+        return self._enc is not None and self._enc.running()
+
+    def encoded(self) -> int:
+        return self._enc.frame() if self._enc is not None else 0
 
     def finish(self):
         """Always (done, stopped or failed): GPU objects, the frame, temporary files."""
@@ -114,11 +130,12 @@ class VOXEL_OT_render_animation(bpy.types.Operator):
 
     _job = None
     _timer = None
+    _stop = False  # Esc came while Blender's render job encodes: end once it has
 
-    def _start(self, context):
+    def _start(self, context, modal=False):
         from ...core.errors import VoxelError
         try:
-            self._job = _Job(context.scene)
+            self._job = _Job(context.scene, job=modal)
         except VoxelError as e:
             self.report({"ERROR"}, str(e))
             return False
@@ -140,30 +157,39 @@ class VOXEL_OT_render_animation(bpy.types.Operator):
         return {"FINISHED"}
 
     def invoke(self, context, event):
-        if not self._start(context):
+        if not self._start(context, modal=True):
             return {"CANCELLED"}
         wm = context.window_manager
-        wm.progress_begin(0, len(self._job.frames))
+        n = len(self._job.frames)
+        wm.progress_begin(0, 2 * n if self._job.movie else n)
         self._timer = wm.event_timer_add(0.01, window=context.window)
         wm.modal_handler_add(self)
         return {"RUNNING_MODAL"}
 
     def modal(self, context, event):
         from ...core.errors import VoxelError
+        job = self._job
         if event.type == "ESC":
-            return self._end(context, f"stopped after {self._job.done} frames", {"CANCELLED"})
+            if job.busy():  # the job reads the temporary scene until it ends
+                self._stop = True
+                return {"RUNNING_MODAL"}
+            return self._end(context, f"stopped after {job.done} frames", {"CANCELLED"})
         if event.type != "TIMER":
             return {"PASS_THROUGH"}
+        if self._stop:
+            if job.busy():
+                return {"RUNNING_MODAL"}
+            return self._end(context, "stopped while encoding the video", {"CANCELLED"})
         try:
             more = self._job.step()
         except VoxelError as e:
             self.report({"ERROR"}, str(e))
             return self._end(context, None, {"CANCELLED"})
-        job = self._job
-        context.window_manager.progress_update(job.done)
+        n = len(job.frames)
+        context.window_manager.progress_update(job.done + job.encoded())
         context.workspace.status_text_set(
-            "Voxel animation: encoding the video..." if job.encoding else
-            f"Voxel animation: frame {job.done} / {len(job.frames)} (Esc stops)")
+            f"Voxel animation: encoding frame {job.encoded()} / {n} (Esc stops)"
+            if job.encoding else f"Voxel animation: frame {job.done} / {n} (Esc stops)")
         if not more:
             return self._end(context, job.summary(), {"FINISHED"})
         return {"RUNNING_MODAL"}

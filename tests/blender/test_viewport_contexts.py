@@ -106,7 +106,7 @@ def _names(g) -> dict:
              "buf": (mgl.Buffer,), "vao": (mgl.VertexArray,), "fbo": (mgl.Framebuffer,)}
     out = {k: [] for k in kinds}
     for o in gc.get_objects():
-        for k, types in kinds.items():
-            if isinstance(o, types) and getattr(o, "ctx", None) is g.ctx and o.glo > 0:
+        for k, types in kinds.items():  # type(): isinstance on a removed bpy struct raises
+            if type(o) in types and o.ctx is g.ctx and o.glo > 0:
                 out[k].append(o.glo)
     return out

@@ -245,11 +245,11 @@ class _Gpu:
         free those from the current one."""
         import gc
         import moderngl as mgl
-        shared = (mgl.Texture, mgl.Texture3D, mgl.TextureArray, mgl.TextureCube, mgl.Buffer,
-                  mgl.Program, mgl.ComputeShader, mgl.Renderbuffer, mgl.Sampler)
+        shared = {mgl.Texture, mgl.Texture3D, mgl.TextureArray, mgl.TextureCube, mgl.Buffer,
+                  mgl.Program, mgl.ComputeShader, mgl.Renderbuffer, mgl.Sampler}
         ctx = self.ctx
-        for o in gc.get_objects():
-            if isinstance(o, shared) and getattr(o, "ctx", None) is ctx:
+        for o in gc.get_objects():  # type(), not isinstance: a removed bpy struct raises
+            if type(o) in shared and o.ctx is ctx:
                 o.release()
         self._vao.clear()
         self._comp.clear()

@@ -231,6 +231,28 @@ def test_quad_view_draws_every_region(run):
         assert (np.abs(crop - grey).max(-1) > 12).mean() > 0.9, r
 
 
+def _green(img) -> float:
+    return float(((img[..., 1] > img[..., 0] + 20) & (img[..., 1] > img[..., 2])).mean())
+
+
+def test_a_second_window_shows_voxels_and_closing_it_releases_its_share(run):
+    w = run["steps"]["window1"]
+    assert w["windows"] == 2 and w["windows_drawn"] == 2, w
+    # one GPU set per GL context (Blender 4.3 on X11 draws every window with one)
+    assert w["gpus_open"] == w["contexts"] >= 1, w
+    assert w["regions_open"] >= 2, w
+    r = w["rect2"]  # the second window's 3D viewport, the top view: grass
+    crop = _img({"png": w["png2"]})[r["y"] + r["h"] // 5:r["y"] + 4 * r["h"] // 5,
+                                   r["x"] + r["w"] // 5:r["x"] + 4 * r["w"] // 5]
+    assert _green(crop) > 0.3, _green(crop)
+    # closed: its region is forgotten, one set stays (the first window's), one
+    # Renderer alive, no error, and the first window still draws voxels
+    assert w["windows_closed"] == 1 and w["regions_closed"] == w["regions_open"] - 1, w
+    assert w["gpus_closed"] == 1 and w["renderers"] == 1, w
+    assert w["status"]["error"] is None and w["status"]["drawn"] == w["status"]["wanted"] > 0
+    assert _green(_region(w)) > 0.2, _green(_region(w))
+
+
 def test_without_a_world_the_panel_says_why(run):
     p = run["steps"]["problem"]
     assert p["sentence"].startswith("no world open"), p
@@ -250,3 +272,9 @@ def test_render_animation_from_the_ui_writes_frames_and_esc_stops(run):
     assert a["started"] == ["RUNNING_MODAL"], a
     assert a["files"] == ["f_0001.png", "f_0002.png", "f_0003.png"], a
     assert 2 <= a["stopped_at"] < 40 and a["after_stop"] == a["stopped_at"], a
+    m = a["movie"]  # FFmpeg output: one movie; Esc leaves nothing behind
+    assert m["started"] == ["RUNNING_MODAL"] and m["files"] == ["fly_0001-0004.mp4"], m
+    assert m["tmp"] == [] and m["scenes"] == m["scenes2"] == ["Scene"], m
+    # encoded by Blender's render job, with no render window and the preference back
+    assert m["job"] and m["display"] == "WINDOW" and m["windows"] == 1, m
+    assert m["stopped_with"] >= 2 and m["files2"] == [] and m["tmp2"] == [], m

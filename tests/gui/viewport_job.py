@@ -313,6 +313,64 @@ def step_quad():
     yield 0.5
 
 
+def step_window():
+    """A second main window (another GL context) with a 3D viewport: both windows
+    draw voxels, each context gets its own GPU set; closing the window releases its
+    set (from the first window's next frame) and the first window draws on."""
+    import gc
+    from voxel_addon.blender import viewport
+    from voxel_addon.render.pipeline import Renderer
+    sc = bpy.context.scene
+    sc.voxel_view.show, sc.voxel_view.hours = True, 12.0
+    set_view((24.0, 16.0, 80.0), (0, 0, 0), 140.0)
+    yield from wait_frames()
+    from voxel_addon.blender.offscreen import _native
+    seen = set()  # (window, GL context) pairs that drew a 3D viewport
+
+    def spy():
+        seen.add((bpy.context.window.as_pointer(), _native()))
+    h = bpy.types.SpaceView3D.draw_handler_add(spy, (), "WINDOW", "POST_VIEW")
+    win, area, _ = view3d()
+    with bpy.context.temp_override(window=win, area=area):
+        bpy.ops.wm.window_new()
+    yield 0.5
+    win2 = next(w for w in bpy.context.window_manager.windows if w != win)
+    area2 = max(win2.screen.areas, key=lambda a: a.width * a.height)
+    area2.type = "VIEW_3D"
+    sp2 = area2.spaces.active
+    sp2.overlay.show_overlays, sp2.show_gizmo, sp2.clip_end = False, False, 1000.0
+    r3 = sp2.region_3d
+    r3.view_perspective, r3.view_location, r3.view_distance = "ORTHO", (24.0, 16.0, 64.0), 120.0
+    from mathutils import Quaternion
+    r3.view_rotation = Quaternion()  # straight down
+    for _ in range(40):  # both windows have drawn a full frame
+        area.tag_redraw()
+        area2.tag_redraw()
+        yield 0.25
+        if len(viewport._gpus) >= 2 and viewport.STATUS["quality"] == "full":
+            break
+    yield from wait_frames()
+    area2.tag_redraw()
+    yield 1.0
+    reg2 = next(r for r in area2.regions if r.type == "WINDOW")
+    got = {"png2": shot("window2"), "windows": len(bpy.context.window_manager.windows),
+           "win2": {"x": win2.x, "y": win2.y, "w": win2.width, "h": win2.height},
+           "rect2": {"x": win2.x + reg2.x, "y": win2.y + win2.height - (reg2.y + reg2.height),
+                     "w": reg2.width, "h": reg2.height},
+           "gpus_open": len(viewport._gpus), "regions_open": len(viewport._regions),
+           "contexts": len({c for _, c in seen}), "windows_drawn": len({w for w, _ in seen})}
+    bpy.types.SpaceView3D.draw_handler_remove(h, "WINDOW")
+    with bpy.context.temp_override(window=win2):
+        bpy.ops.wm.window_close()
+    yield 0.5
+    yield from wait_frames()
+    gc.collect()
+    got.update(gpus_closed=len(viewport._gpus), regions_closed=len(viewport._regions),
+               renderers=sum(isinstance(o, Renderer) for o in gc.get_objects()),
+               windows_closed=len(bpy.context.window_manager.windows))
+    record("window1", **got)
+
+
 def step_problem():
     """No world file: the panel's sentence, no error, Blender's own image."""
     from voxel_addon.blender import viewport
@@ -381,6 +439,63 @@ def step_animation():
     RESULT["steps"]["animation"] = {
         "started": sorted(started), "files": done, "stopped_at": n,
         "after_stop": len(list((OUT / "anim2").glob("*.png"))), "frame": sc.frame_current}
+    yield from movie_animation(win, area, reg)
+
+
+def _listing(d: Path):
+    return sorted(p.name for p in d.iterdir()) if d.exists() else []
+
+
+def movie_animation(win, area, reg):
+    """The same from the UI with FFmpeg output: 4 frames become one movie; a run of
+    40 frames stopped with Esc leaves no movie, no temporary frames, no extra scene."""
+    import tempfile
+    sc = bpy.context.scene
+    tmp = OUT / "anim_tmp"  # the operator's temporary frames, to see them go
+    tmp.mkdir()
+    tempfile.tempdir = str(tmp)
+    im = sc.render.image_settings
+    if hasattr(im, "media_type"):
+        im.media_type = "VIDEO"
+    im.file_format = "FFMPEG"
+    sc.render.ffmpeg.format, sc.render.ffmpeg.codec = "MPEG4", "H264"
+    sc.frame_end = 4
+    sc.render.filepath = str(OUT / "movie" / "fly_")
+    with bpy.context.temp_override(window=win, area=area, region=reg):
+        started = bpy.ops.voxel.render_animation("INVOKE_DEFAULT")
+    t0 = time.time()
+    job = False  # the encode ran as Blender's render job (the UI stayed live)
+    while not list((OUT / "movie").glob("*.mp4")) and time.time() - t0 < 60:
+        job = job or bpy.app.is_job_running("RENDER")
+        yield 0.02
+    yield 0.5
+    got = {"started": sorted(started), "files": _listing(OUT / "movie"), "job": job,
+           "display": bpy.context.preferences.view.render_display_type,
+           "windows": len(bpy.context.window_manager.windows),
+           "tmp": _listing(tmp), "scenes": sorted(s.name for s in bpy.data.scenes)}
+    sc.frame_end = 40
+    sc.render.filepath = str(OUT / "movie2" / "fly_")
+    with bpy.context.temp_override(window=win, area=area, region=reg):
+        bpy.ops.voxel.render_animation("INVOKE_DEFAULT")
+    d = None
+    while time.time() - t0 < 120:
+        d = next(iter(tmp.iterdir()), None)
+        if d is not None and len(list(d.glob("*.png"))) >= 2:
+            break
+        yield 0.05
+    got["stopped_with"] = len(list(d.glob("*.png"))) if d else 0
+    x, y = reg.x + reg.width // 2, reg.y + reg.height // 2
+    win.event_simulate(type="MOUSEMOVE", value="NOTHING", x=x, y=y)
+    win.event_simulate(type="ESC", value="PRESS", x=x, y=y)
+    win.event_simulate(type="ESC", value="RELEASE", x=x, y=y)
+    yield 1.0
+    got.update(files2=_listing(OUT / "movie2"), tmp2=_listing(tmp),
+               scenes2=sorted(s.name for s in bpy.data.scenes))
+    tempfile.tempdir = None
+    if hasattr(im, "media_type"):
+        im.media_type = "IMAGE"
+    im.file_format = "PNG"
+    RESULT["steps"]["animation"]["movie"] = got
 
 
 def step_leak():
@@ -460,8 +575,9 @@ def run():
     bpy.ops.wm.quit_blender()
 
 
-STEPS = {"top": step_top, "still": step_still, "sky": step_sky, "camera": step_camera, "stream": step_stream,
-         "redraws": step_redraws, "quad": step_quad, "problem": step_problem,
+STEPS = {"top": step_top, "still": step_still, "sky": step_sky, "camera": step_camera,
+         "stream": step_stream, "redraws": step_redraws, "quad": step_quad, "window": step_window,
+         "problem": step_problem,
          "newfile": step_newfile, "animation": step_animation, "leak": step_leak}
 _gen = run()
 

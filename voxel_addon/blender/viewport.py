@@ -60,6 +60,7 @@ REUSE = True         # a still region redraws from its kept frame (off: the pipe
 _handle = None
 _timer_on = False
 _gpus: dict = {}      # native GL context -> _Gpu
+_windows = frozenset()  # the windows open at the last frame (pointers)
 _regions: dict = {}   # region pointer -> _Region
 _lead = None          # the region whose view the stream follows
 _feed = None          # _Feed of the shown world
@@ -179,6 +180,7 @@ class _Gpu:
             self.ctx = None
             raise VoxelError(f"the voxel view needs OpenGL 4.1 or newer (this is {v})")
         self.native = native
+        self.windows: set = set()  # the windows drawn with this context
         self.r = Renderer(self.ctx, Settings())
         self.versions: dict = {}
         self.feed = None
@@ -298,6 +300,24 @@ class _Gpu:
             self.r.release()
             self.r = None
 
+    def orphan(self):
+        """Forget a set whose GL context is not current (it went with its window, or
+        is another window's): its VAOs, framebuffers and queries are that context's
+        alone (deleting their names here would hit this context's own), while textures,
+        buffers and programs live in the object space all Blender's contexts share:
+        free those from the current one."""
+        import gc
+        import moderngl as mgl
+        shared = {mgl.Texture, mgl.Texture3D, mgl.TextureArray, mgl.TextureCube, mgl.Buffer,
+                  mgl.Program, mgl.ComputeShader, mgl.Renderbuffer, mgl.Sampler}
+        ctx = self.ctx
+        for o in gc.get_objects():  # type(), not isinstance: a removed bpy struct raises
+            if type(o) in shared and o.ctx is ctx:
+                o.release()
+        self._vao.clear()
+        self._comp.clear()
+        self.r = None
+
 
 # texture units of the composite passes: among those glstate.kept() saves and restores
 _UNIT = {"color": 1, "g_depth": 0, "prev_depth": 9, "kept_color": 1, "kept_depth": 0}
@@ -366,6 +386,9 @@ def _frame(context, scene, vv):
     region, rv3d = context.region, context.region_data
     if region is None or rv3d is None:
         return
+    wins = frozenset(w.as_pointer() for w in context.window_manager.windows)
+    if wins != _windows:
+        _prune(context, wins)
     view = [tuple(r) for r in rv3d.view_matrix]
     st = _regions.setdefault(region.as_pointer(), _Region())
     now = time.perf_counter()
@@ -399,6 +422,8 @@ def _frame(context, scene, vv):
         g = _gpus.get(native)
         if g is None:
             g = _gpus[native] = _Gpu(native)
+        if context.window is not None:
+            g.windows.add(context.window.as_pointer())
         t1 = time.perf_counter()
         drawn = g.sync(feed)
         t_sync = time.perf_counter() - t1
@@ -442,6 +467,30 @@ def _frame(context, scene, vv):
 
 
 _SYNC = False  # bench: wait for the GPU so frame times are real
+
+
+def _prune(context, wins):
+    """A window opened or closed: forget the regions that went, and the GPU set of a
+    GL context no open window drew with (one context per window on some platforms:
+    it went with its window; a handle the driver hands out again must not find it)."""
+    from ..render import glstate
+    from .offscreen import _native
+    global _windows
+    _windows = wins
+    live = {r.as_pointer() for w in context.window_manager.windows
+            for a in w.screen.areas for r in a.regions}
+    for k in [k for k in _regions if k not in live]:
+        del _regions[k]
+    native = _native()
+    for key, g in list(_gpus.items()):
+        g.windows &= wins
+        if not g.windows:
+            if key == native:
+                with glstate.kept():
+                    g.release()
+            else:
+                g.orphan()
+            del _gpus[key]
 
 
 def _want_redraw(after: float):
@@ -519,7 +568,7 @@ def _load_post(*_):
 
 
 def _close_data():
-    global _feed, _handle
+    global _feed, _handle, _windows
     import bpy
     from .offscreen import _native
     if _handle is not None:
@@ -529,14 +578,17 @@ def _close_data():
         _feed.close()
         _feed = None
     _regions.clear()
+    _windows = frozenset()
     native = _native()
     for key, g in list(_gpus.items()):
-        # GL names are per context: free them only on their own (a context that is
-        # not current here goes away with its window, and its objects with it)
+        # container objects (VAOs, framebuffers) are per context: free everything
+        # only on its own; another window's context gets its shared objects freed
         if key == native:
             from ..render import glstate
             with glstate.kept():
                 g.release()
+        else:
+            g.orphan()
         del _gpus[key]
     STATUS.update(drawn=0, wanted=0, error=None)
 

@@ -1,4 +1,5 @@
-"""World section: file path, new/open, seed, generator, recreate (SPEC F9)."""
+"""World section: file path, new/open, the new world's seed and generator or the open
+world's, recreate (SPEC F9)."""
 from __future__ import annotations
 
 import bpy
@@ -26,7 +27,7 @@ def _settings(context) -> VoxelWorldSettings:
 class VOXEL_OT_world_new(bpy.types.Operator):
     bl_idname = "voxel.world_new"
     bl_label = "New World"
-    bl_description = "Create a world file with the seed and generator above"
+    bl_description = "Create a world file at the path with the New World seed and generator"
 
     def execute(self, context):
         import os
@@ -95,6 +96,22 @@ class VOXEL_OT_world_recreate(bpy.types.Operator):
         return {"FINISHED"}
 
 
+def lines(s: VoxelWorldSettings) -> list[tuple]:
+    """What the panel shows under New / Open, by the state of the file at s.path:
+    open: its own seed and generator (read-only) and Recreate; missing: the settings
+    New creates it with; there but not open: a hint and Recreate."""
+    import os
+    from .. import session
+    if session.is_open(s.path):
+        w = session.world(s.path)
+        gen = getattr(w.generator, "name", "?")
+        return [("label", "Open", "CHECKMARK"), ("info", "Seed", str(w.seed)),
+                ("info", "Generator", gen.capitalize()), ("recreate",)]
+    if not s.path or not os.path.exists(bpy.path.abspath(s.path)):
+        return [("label", "New World:", "ADD"), ("prop", "seed"), ("prop", "generator")]
+    return [("label", "Not open: Open it, or Show in Viewport", "INFO"), ("recreate",)]
+
+
 class VOXEL_PT_world(bpy.types.Panel):
     bl_idname = "VOXEL_PT_world"
     bl_label = "World"
@@ -104,20 +121,25 @@ class VOXEL_PT_world(bpy.types.Panel):
     bl_order = 0
 
     def draw(self, context):
-        from .. import session
         s = _settings(context)
         col = self.layout.column()
         col.prop(s, "path")
         row = col.row(align=True)
         row.operator(VOXEL_OT_world_new.bl_idname, icon="ADD")
         row.operator(VOXEL_OT_world_open.bl_idname, icon="FILE_FOLDER")
-        col.prop(s, "seed")
-        col.prop(s, "generator")
-        row = col.row(align=True)
-        row.operator(VOXEL_OT_world_recreate.bl_idname, icon="FILE_REFRESH")
-        row.prop(s, "keep_edits")
-        if session.is_open(s.path):
-            col.label(text="open", icon="CHECKMARK")
+        for kind, *a in lines(s):
+            if kind == "label":
+                col.label(text=a[0], icon=a[1])
+            elif kind == "info":  # the open world's own value: text, not a setting
+                row = col.row()
+                row.label(text=a[0])
+                row.label(text=a[1])
+            elif kind == "prop":
+                col.prop(s, a[0])
+            else:
+                row = col.row(align=True)
+                row.operator(VOXEL_OT_world_recreate.bl_idname, icon="FILE_REFRESH")
+                row.prop(s, "keep_edits")
 
 
 CLASSES = [VoxelWorldSettings, VOXEL_OT_world_new, VOXEL_OT_world_open,

@@ -173,6 +173,13 @@ def _arrays(x):
                 yield v
 
 
+def _fields(c, name):
+    """A chunk's stored forms of blocks: the array and/or its packed layers."""
+    if hasattr(c, "_" + name):
+        return (getattr(c, "_" + name), getattr(c, "_bpack", None))
+    return (getattr(c, name),)
+
+
 def accounted(w, viewport) -> dict:
     """MB of what the live view keeps, each array counted once: the world's chunks
     (blocks, light, CPU meshes), payload light held only by the view, the GL objects
@@ -190,7 +197,8 @@ def accounted(w, viewport) -> dict:
 
     chunks = list(w.chunks.values())
     out["world_chunks"] = len(chunks)
-    add("blocks", (c.blocks for c in chunks))
+    # (the fields, not .blocks: a read would unpack packed blocks)
+    add("blocks", (a for c in chunks for x in _fields(c, "blocks") for a in _arrays(x)))
     add("light (world)", (a for c in chunks for x in (c._light, c._lpack) for a in _arrays(x)))
     add("meshes: vertices", (c.mesh.vertices for c in chunks if c.mesh is not None))
     add("meshes: quads", (c.mesh.quads for c in chunks if c.mesh is not None))

@@ -35,3 +35,25 @@ def test_typical_light_keeps_a_slab():
     a[:, :, 40:70] = 0x3000
     p = pack_layers(a)
     assert p[1:3] == (40, 70) and p[-1].shape == (16, 16, 30)
+
+
+def test_cold_blocks_are_kept_packed(monkeypatch):
+    """compact() packs blocks unused for HOT_S; reads give them back exactly and a
+    write after a read survives the next compact."""
+    from voxel_addon.core import chunk as C
+    rng = np.random.default_rng(1)
+    a = C.empty()
+    a[:, :, :60] = 1
+    a[:, :, 60:70] = rng.integers(0, 9, (16, 16, 10))
+    c = Chunk((0, 0), a.copy(order="F"))
+    c.compact()
+    assert c._blocks is not None  # just set: hot, stays an array
+    monkeypatch.setattr(C, "HOT_S", -1.0)
+    c.compact()
+    assert c._blocks is None and c.nbytes() == c._bpack[-1].nbytes < a.nbytes // 10
+    assert np.array_equal(c.blocks, a) and c.blocks.flags.f_contiguous
+    c.set(3, 4, 200, 7)
+    c.compact()
+    assert c.get(3, 4, 200) == 7 and c.blocks[3, 4, 200] == 7
+    a[3, 4, 200] = 7
+    assert np.array_equal(c.blocks, a)

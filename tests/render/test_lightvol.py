@@ -63,3 +63,20 @@ def test_light_window_is_bounded():
     # distance 32: 65 x 65 chunks shown, the light volume holds 17 x 17 around the centre
     assert window((-30, -40, 35, 25), 8) == (-6, -16, 11, 1)
     assert window((0, 0, 4, 4), 8) == (0, 0, 4, 4)
+
+
+def test_packed_light_uploads_the_same_texels(gl):
+    """The viewport keeps chunk light as core.chunk.pack_layers: the volume unpacks it."""
+    from voxel_addon.core.chunk import cut, pack_layers
+    b = scenes.terrain(32, 32, 4)
+    L = light.solve(b)
+    parts = cut(L, 0, 0)
+    vols = [LightVolume(gl, 2), LightVolume(gl, 2)]
+    for k, a in parts.items():
+        vols[0].upload(k, a)
+        vols[1].upload(k, pack_layers(a))
+    got = [np.frombuffer(v.tex.read(), np.uint16) for v in vols]
+    assert got[0].std() > 0 and np.array_equal(got[0], got[1])
+    assert pack_layers(parts[(0, 0)])[-1].nbytes < parts[(0, 0)].nbytes  # it is smaller
+    for v in vols:
+        v.release()

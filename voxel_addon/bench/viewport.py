@@ -5,6 +5,10 @@ Rows: frame ms still at full quality and in draft (what a redraw costs while the
 view moves), our CPU time per redraw outside GL, the time from ticking Show to
 every chunk of distance 16 drawn (a generated file, and in the full run an empty
 file the stream generates), and the longest redraw and chunk upload while it streams.
+compare(): the live view against the same chunks baked into an object that Blender
+draws (Solid, Material Preview), one fresh Blender per side, at distance 16 (8 with
+--quick): redraw, memory and time to the picture as ratios, and what the live view's
+memory is made of.
 Needs `python build.py setup` (.blender/, Xvfb); without them the area yields
 nothing but a note. Blender runs tools/viewport_bench_job.py (through bench/gui.py).
 """
@@ -80,6 +84,7 @@ def run(ctx):
         if "baked_draw_ms" in R:
             yield ("viewport_frame_ratio_baked_to_live_still", R["baked_draw_ms"] / R["still_draw_ms"],
                    "", ">1: a still live view redraws faster than the baked mesh")
+    yield from compare(ctx, world, 8 if ctx.quick else 16)
     for key in ("generated", "empty"):
         if f"show16_{key}_s" in R:
             yield (f"viewport_show_view16_{key}_s", R[f"show16_{key}_s"], "s",
@@ -88,3 +93,90 @@ def run(ctx):
                    f"longest redraw while streaming ({R[f'frames16_{key}']} redraws), {key} file")
             yield (f"viewport_max_upload_{key}_ms", R[f"max_upload_{key}_ms"], "ms",
                    "longest chunk upload within one redraw while streaming")
+
+
+MATERIAL_LIMIT_S = {8: 90.0, 16: 240.0}  # EEVEE's shader compilation on llvmpipe
+
+
+def compare(ctx, world, d):
+    """The live view against the same chunks baked by the user's Bake to Objects and
+    drawn by Blender (Solid, Material Preview), one fresh Blender per side from a copy
+    of the same world file (tools/viewport_compare_bench_job.py): redraw, memory (RSS
+    growth from the same baseline, and peak), time from opening the file to the
+    picture; ratios baked/live (>1: the live view wins). Rows end in _d{d}."""
+    import shutil
+    S = {}
+    for side in ("live", "baked"):
+        ctx.say(f"Blender GUI: {side} side of the comparison at distance {d}")
+        copy = ctx.tmp / f"compare_{side}.sqlite"
+        shutil.copy(world, copy)  # the live side saves the light it made into its copy
+        out = ctx.tmp / f"compare_{side}.json"
+        S[side] = gui.run_job("viewport_compare", [out, side, copy, str(d), str(MATERIAL_LIMIT_S[d])],
+                              out, ctx.tmp / f"compare_{side}.log", timeout=1800, simulate=False)
+        if not S[side].get("ok"):
+            raise RuntimeError(S[side].get("error"))
+    L, B = S["live"], S["baked"]
+    n, sz, t = f"_d{d}", "x".join(map(str, L["region"])), f"distance {d} ({L['chunks']} chunks)"
+    tris = f"{B['triangles']} triangles"
+    mat = (f"not compiled after {B['material_ready_s']:.0f} s (limit): redraws while EEVEE "
+           "still compiles" if B.get("material_timed_out") else
+           f"shaders compiled after {B['material_ready_s']:.1f} s")
+    yield (f"viewport_redraw_live{n}_ms", L["redraw_ms"], "ms",
+           f"region redraw, live view at full quality, {t}, region {sz}")
+    yield (f"viewport_redraw_baked_solid{n}_ms", B["solid_ms"], "ms", f"Solid, one object, {tris}")
+    yield (f"viewport_redraw_baked_material{n}_ms", B["material_ms"], "ms",
+           f"Material Preview ({B['material_engine']}), {mat}")
+    yield (f"viewport_frame_ratio_baked_solid_to_live{n}", B["solid_ms"] / L["redraw_ms"], "",
+           ">1: the live view redraws faster than Solid")
+    yield (f"viewport_frame_ratio_baked_material_to_live{n}", B["material_ms"] / L["redraw_ms"], "",
+           ">1: the live view redraws faster than Material Preview")
+    yield (f"viewport_first_picture_live{n}_s", L["first_picture_s"], "s",
+           f"open the file -> all drawn (OpenCL start {L['first_picture_s'] - L['show_s']:.1f} s, "
+           f"tick Show -> all drawn {L['show_s']:.1f} s)")
+    yield (f"viewport_first_picture_baked{n}_s", B["first_picture_s"], "s",
+           f"open the file -> Bake to Objects ({B['bake_s']:.1f} s) -> first Solid redraw")
+    yield (f"viewport_first_picture_baked_material{n}_s",
+           B["first_picture_s"] + B["material_ready_s"], "s",
+           f"the same, then Material Preview until its shaders are compiled ({mat})")
+    yield (f"viewport_time_ratio_baked_to_live{n}", B["first_picture_s"] / L["first_picture_s"], "",
+           ">1: the live view shows the world sooner (baked: Solid)")
+    yield (f"viewport_memory_live{n}_mb", L["rss_mb"], "MB",
+           "RSS growth after gc from the baseline with the add-on registered (fresh Blender)")
+    yield (f"viewport_memory_baked{n}_mb", B["rss_mb"], "MB", "the same, baked object in Solid")
+    yield (f"viewport_memory_baked_material{n}_mb", B["material_rss_mb"], "MB",
+           f"the same after Material Preview ({mat})")
+    yield (f"viewport_memory_ratio_baked_to_live{n}", B["rss_mb"] / max(L["rss_mb"], 1.0), "",
+           ">1: the live view needs less memory (baked: Solid)")
+    yield (f"viewport_memory_peak_live{n}_mb", L["peak_mb"], "MB", "peak RSS growth (VmHWM)")
+    yield (f"viewport_memory_peak_baked{n}_mb", B["peak_mb"], "MB",
+           "peak RSS growth, bake and Solid (VmHWM)")
+    yield (f"viewport_memory_peak_baked_material{n}_mb", B["material_peak_mb"], "MB",
+           "peak RSS growth, including Material Preview")
+    yield (f"viewport_memory_peak_ratio_baked_to_live{n}", B["peak_mb"] / max(L["peak_mb"], 1.0), "",
+           ">1: the live view's peak is lower (baked: Solid)")
+    yield from breakdown(L, n)
+
+
+def breakdown(L, n):
+    """What the live view's RSS growth is made of: the growth at each step, and the
+    bytes of what it keeps (each array once; GL objects live in RAM on llvmpipe)."""
+    last = 0.0
+    for i, (name, rss, peak) in enumerate(L["steps"]):
+        if name.startswith("(diagnostic)"):
+            yield (f"viewport_memory_live{n}_trimmed_mb", rss, "MB",
+                   "RSS growth after malloc_trim (freed memory glibc had kept)")
+            continue
+        yield (f"viewport_memory_live{n}_step{i + 1}_mb", rss - last, "MB",
+               f"RSS growth of step {i + 1}: {name} (peak so far {peak:.0f} MB)")
+        last = rss
+    parts = {k: v for k, v in L["bytes"].items() if isinstance(v, float)}
+    for k, v in parts.items():
+        slug = "".join(ch if ch.isalnum() else "_" for ch in k.lower()).strip("_")
+        while "__" in slug:
+            slug = slug.replace("__", "_")
+        yield (f"viewport_memory_live{n}_keeps_{slug}_mb", v, "MB",
+               f"kept by the live view: {k}" + (f" ({L['bytes']['world_chunks']} chunks in the world)"
+                                                 if k == "blocks" else ""))
+    yield (f"viewport_memory_live{n}_keeps_other_mb", L["rss_mb"] - sum(parts.values()), "MB",
+           "RSS growth not in the parts above: GL driver (llvmpipe shader code), OpenCL "
+           "(pocl, LLVM), Python modules and objects, allocator slack")

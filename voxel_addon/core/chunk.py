@@ -14,6 +14,7 @@ from .errors import VoxelError
 
 SIZE = 16
 HEIGHT = 256
+HOT_S = 2.0  # seconds unused before compact() packs a chunk's blocks
 VOLUME = SIZE * SIZE * HEIGHT
 SHAPE = (SIZE, SIZE, HEIGHT)
 
@@ -74,8 +75,8 @@ class Chunk:
     `large` maps a small-data index to any Python object (e.g. a chest's contents).
     """
 
-    __slots__ = ("key", "blocks", "data", "large", "_light", "_lpack", "mesh", "dirty",
-                 "last_use", "__weakref__")
+    __slots__ = ("key", "_blocks", "_bpack", "_bhot", "data", "large", "_light", "_lpack",
+                 "mesh", "dirty", "last_use", "__weakref__")
 
     def __init__(self, key, blocks=None, data=None):
         self.key = tuple(key)
@@ -86,6 +87,21 @@ class Chunk:
         self.mesh = None   # its mesh with the neighbour ring, likewise
         self.dirty = False
         self.last_use = time.monotonic()
+
+    @property
+    def blocks(self) -> np.ndarray:
+        """Block ids (16, 16, 256). Like the light, compact() keeps them as their
+        non-uniform layers (air above the terrain: ~30 % stays) once they were not
+        read or set for HOT_S seconds; a read rebuilds the array and keeps it hot."""
+        a = self._blocks
+        if a is None:
+            a = self._blocks = unpack_layers(*self._bpack)  # (_bpack stays, as _lpack)
+            self._bhot = time.monotonic()
+        return a
+
+    @blocks.setter
+    def blocks(self, value) -> None:
+        self._blocks, self._bpack, self._bhot = value, None, time.monotonic()
 
     @property
     def light(self) -> np.ndarray | None:
@@ -105,10 +121,16 @@ class Chunk:
 
     def compact(self) -> None:
         """Keep the light as its non-uniform layers (open sky above and unlit rock
-        below are uniform: ~70 of 256 layers stay). Call with the world's lock held."""
+        below are uniform: ~70 of 256 layers stay), and the blocks so when they are
+        cold (a streamed view holds ~1,200 chunks at distance 16: 150 MB of blocks
+        as arrays). Call with the world's lock held."""
         a = self._light
         if a is not None:
             self._lpack, self._light = pack_layers(a), None
+        b = self._blocks
+        if b is not None and b.shape == (SIZE, SIZE, HEIGHT) \
+                and time.monotonic() - self._bhot > HOT_S:
+            self._bpack, self._blocks = pack_layers(b), None
 
     @property
     def origin(self) -> tuple[int, int]:
@@ -127,8 +149,9 @@ class Chunk:
         self.light = self.mesh = None  # stale now
 
     def nbytes(self) -> int:
-        n = self.blocks.nbytes
-        for a in (self.data, self._light, self._lpack and self._lpack[-1]):
+        n = 0
+        for a in (self._blocks, self._bpack and self._bpack[-1], self.data, self._light,
+                  self._lpack and self._lpack[-1]):
             if a is not None:
                 n += a.nbytes
         return n

@@ -35,11 +35,13 @@ class LightVolume:
         self.lo = (0, 0)
         self.hi = (0, 0)
 
-    def upload(self, key, light: np.ndarray | None) -> None:
+    def upload(self, key, light) -> None:
         """Put one chunk's (16, 16, 256) light into its slot (None: open daylight, as
-        outside the window)."""
+        outside the window; a tuple: core.chunk.pack_layers of it)."""
         global _OPEN
         slot = (key[0] % self.n, key[1] % self.n)
+        if isinstance(light, tuple):
+            light = chunk.unpack_layers(*light)
         if light is None:
             if _OPEN is None:
                 _OPEN = np.full(16 * 16 * chunk.HEIGHT, 0xF000, np.uint16).tobytes()

@@ -38,7 +38,7 @@ class Renderer:
         self.targets: dict = {}
         self.stats: dict = {}
         self.area = None             # (cx0, cy0, cx1, cy1): the box of the shown chunks
-        self.lights: dict = {}       # (cx, cy) -> its light (or None: open daylight)
+        self.lights: dict = {}       # (cx, cy) -> its light (None: open daylight; or packed)
         self._vol_key = None         # the light window last made resident
         self._fs: dict = {}          # program -> empty VAO for fullscreen passes
         self._graphs: dict = {}      # switches -> the frame's passes, for these targets
@@ -80,15 +80,17 @@ class Renderer:
     def update_chunks(self, payloads) -> None:
         """Show or replace chunks, each an object with .key (cx, cy), .mesh (a
         meshing.ChunkMesh built with the chunk's one-voxel ring of neighbours) and
-        .light (its (16, 16, 256) uint16 packed light, or None: open daylight). Only
-        these are uploaded: meshes into free slots of the geometry, light into the
-        volume once the light window (around the camera, prepare) needs it."""
+        .light (its (16, 16, 256) uint16 packed light, None: open daylight, or
+        core.chunk.pack_layers of it: kept so, a third of the memory). Only these are
+        uploaded: meshes into free slots of the geometry, light into the volume once
+        the light window (around the camera, prepare) needs it."""
         meshes = {}
         for p in payloads:
             k = (int(p.key[0]), int(p.key[1]))
             light = p.light
-            if light is not None and np.shape(light) != (16, 16, 256):
-                raise ValueError(f"chunk {k}: light must be (16, 16, 256), got {np.shape(light)}")
+            shape = light[0] if isinstance(light, tuple) else np.shape(light)
+            if light is not None and tuple(shape) != (16, 16, 256):
+                raise ValueError(f"chunk {k}: light must be (16, 16, 256), got {shape}")
             meshes[k] = p.mesh
             self.lights[k] = light
             self.vol.forget(k)
@@ -175,50 +177,67 @@ class Renderer:
         self._vol_key = key
 
     # ------------------------------------------------------------------ targets
-    def _targets(self, w, h):
+    def _targets(self, w, h, need=(3, True, True, True)):
+        """The frame's targets at (w, h): the ones every frame uses, and those of the
+        effects in need (peel layers, SSAO, distance blur, shadows), each made the
+        first time a frame uses it and kept until the size changes (the viewport's
+        defaults leave a third of them unused: ~30 MB at 1057x618 with MSAA 2)."""
         ms = max(1, min(self.s.msaa, self.ctx.max_samples))
         key = (w, h, ms, self.s.shadow_size, self.s.transparency == "oit")
-        if self.targets.get("key") == key:
-            return self.targets
-        self._release_targets()
+        if self.targets.get("key") != key:
+            self._release_targets()
+            self.targets = self._base_targets(w, h, ms, key)
+        self._more_targets(self.targets, *need)
+        return self.targets
+
+    def _tex(self, w, h, comp=4, dtype="f2"):
+        x = self.ctx.texture((w, h), comp, dtype=dtype)
+        x.repeat_x = x.repeat_y = False
+        return x
+
+    def _gbuf(self, w, h, ms):
         c = self.ctx
-        t = {"key": key, "ms": ms}
+        d = c.depth_texture((w, h), samples=ms if ms > 1 else 0)
+        a = c.texture((w, h), 4, samples=ms if ms > 1 else 0)
+        nrm = c.texture((w, h), 4, samples=ms if ms > 1 else 0)
+        return {"depth": d, "albedo": a, "normal": nrm, "fbo": c.framebuffer([a, nrm], d)}
 
-        def gbuf():
-            d = c.depth_texture((w, h), samples=ms if ms > 1 else 0)
-            a = c.texture((w, h), 4, samples=ms if ms > 1 else 0)
-            nrm = c.texture((w, h), 4, samples=ms if ms > 1 else 0)
-            return {"depth": d, "albedo": a, "normal": nrm,
-                    "fbo": c.framebuffer([a, nrm], d)}
-
-        def tex(comp=4, dtype="f2"):
-            x = c.texture((w, h), comp, dtype=dtype)
-            x.repeat_x = x.repeat_y = False
-            return x
-
-        t["g"] = gbuf()
-        t["peel"] = [gbuf() for _ in range(3)]
-        t["opaque"], t["front"] = tex(), tex(4, "f4")
+    def _base_targets(self, w, h, ms, key):
+        c, tex = self.ctx, self._tex
+        t = {"key": key, "ms": ms, "size": (w, h)}
+        t["g"] = self._gbuf(w, h, ms)
+        t["peel"], t["layers"], t["layer_fbo"] = [], [], []
+        t["opaque"], t["front"] = tex(w, h), tex(w, h, 4, "f4")
         t["shaded_fbo"] = c.framebuffer([t["opaque"], t["front"]])
-        t["layers"] = [tex() for _ in range(3)]
-        t["layer_fbo"] = [c.framebuffer([x]) for x in t["layers"]]
-        t["ao"], t["ao2"] = tex(1, "f1"), tex(1, "f1")
-        t["ao_fbo"] = [c.framebuffer([t["ao"]]), c.framebuffer([t["ao2"]])]
-        t["comp"], t["blur"], t["blur2"] = tex(), tex(), tex()
+        t["comp"] = tex(w, h)
         t["comp_fbo"] = c.framebuffer([t["comp"]])
-        t["blur_fbo"] = [c.framebuffer([t["blur"]]), c.framebuffer([t["blur2"]])]
         t["out"] = c.texture((w, h), 4)
         t["out_fbo"] = c.framebuffer([t["out"]])
-        sm = c.depth_texture((self.s.shadow_size,) * 2)
-        sm.compare_func = "<="
-        sm.filter = (0x2601, 0x2601)
-        sm.repeat_x = sm.repeat_y = False
-        t["shadow"], t["shadow_fbo"] = sm, c.framebuffer(depth_attachment=sm)
         if key[-1]:  # only while OIT is chosen: peeling frames never pay for its targets
             t["oit"] = oit.targets(c, (w, h), ms, t["g"]["depth"])
-        self.targets = t
         return t
 
+    def _more_targets(self, t, layers, ssao, dof, shadows):
+        """Add the targets of these effects that t does not have yet."""
+        c, tex, (w, h), ms = self.ctx, self._tex, t["size"], t["ms"]
+        while len(t["peel"]) < layers:
+            t["peel"].append(self._gbuf(w, h, ms))
+        # OIT resolves into layer 0
+        while len(t["layers"]) < max(layers, 1 if t["key"][-1] else 0):
+            t["layers"].append(tex(w, h))
+            t["layer_fbo"].append(c.framebuffer([t["layers"][-1]]))
+        if ssao and "ao" not in t:
+            t["ao"], t["ao2"] = tex(w, h, 1, "f1"), tex(w, h, 1, "f1")
+            t["ao_fbo"] = [c.framebuffer([t["ao"]]), c.framebuffer([t["ao2"]])]
+        if dof and "blur" not in t:
+            t["blur"], t["blur2"] = tex(w, h), tex(w, h)
+            t["blur_fbo"] = [c.framebuffer([t["blur"]]), c.framebuffer([t["blur2"]])]
+        if shadows and "shadow" not in t:
+            sm = c.depth_texture((self.s.shadow_size,) * 2)
+            sm.compare_func = "<="
+            sm.filter = (0x2601, 0x2601)
+            sm.repeat_x = sm.repeat_y = False
+            t["shadow"], t["shadow_fbo"] = sm, c.framebuffer(depth_attachment=sm)
 
     def _release_targets(self):
         # moderngl rebinds its last bound framebuffer after making one: not a released one
@@ -266,7 +285,6 @@ class Renderer:
         # the whole height of the area stays in view; the caller's camera is left alone
         camera = camera.fitted(w / h, s.fov, s.distance * 16 * 1.5 + 256.0)
         self._sync_light(camera)  # before _graph: it may make a bigger volume
-        T = self._targets(w, h)
         self.tex.use(UNITS["tex"])  # the arrays stay bound: no pass uses their units
         self.glow.use(UNITS["glow_tex"])
         aniso = max(1.0, min(float(s.anisotropy), self.max_anisotropy))
@@ -293,6 +311,7 @@ class Renderer:
         sun_px, sun_vis, sun_r = _sun_on_screen(vp, draw_cam, sp["light_dir"], w, h, s.fov)
         gods = s.godrays and debug in (0, 6) and sun_vis
         dof = s.dof and debug == 0 and not camera.ortho  # parallel rays: no distance blur
+        T = self._targets(w, h, (layers, ssao, dof, shadows))
         G = self._graph(T, (T["ms"], debug, shadows, layers, ssao, gods, dof, s.smooth_mag,
                             s.msaa_alpha, s.per_sample, s.fog, s.fill_holes, geo.indirect_ok,
                             use_oit))
@@ -368,16 +387,18 @@ class Renderer:
         def full(frag, defines=None):
             return get("fullscreen.vert", frag, defines)
 
+        sm = {"shadow_map": T["shadow"]} if shadows else {}  # (a target made when used)
+
         def gbuf(x):
             return dict(g_depth=x["depth"], g_albedo=x["albedo"], g_normal=x["normal"],
-                        shadow_map=T["shadow"], light_vol=self.vol.tex)
+                        light_vol=self.vol.tex, **sm)
 
         dt_cf = c.DEPTH_TEST | c.CULL_FACE
         gb, peel = T["g"], T["peel"]
         G = _Graph()
         G.shadow = GeometryPass(c, T["shadow_fbo"], [
             (n, block({"SHADOW": 1, "ALPHA_TEST": n != "opaque", "UNIFORM_ORIGIN": not indirect}))
-            for n, _ in blocks], dt_cf)
+            for n, _ in blocks], dt_cf) if shadows else None
         G.g = GeometryPass(c, gb["fbo"], [(n, block({**g, **x})) for n, x in blocks], dt_cf)
         G.shade = Pass(c, T["shaded_fbo"], full("deferred.frag", {**d, "FILL_HOLES": fill}),
                        clear=True, **gbuf(gb))
@@ -385,7 +406,7 @@ class Renderer:
             o = T["oit"]
             G.transparency = oit.OIT(
                 Pass(c, o["fbo"], block({**g, **d, "OIT": 1}), c.DEPTH_TEST | c.BLEND,
-                     clear=True, shadow_map=T["shadow"], light_vol=self.vol.tex),
+                     clear=True, light_vol=self.vol.tex, **sm),
                 Pass(c, T["layer_fbo"][0], full("oit_resolve.frag", {"SAMPLES": ms}),
                      accum=o["accum"], reveal=o["reveal"]))
         else:  # no blending, the nearest remaining layer each time
@@ -405,7 +426,7 @@ class Renderer:
         # composite: sky, layers, god rays
         post.append(Pass(c, T["comp_fbo"], full("composite.frag", {
             "LAYERS": G.transparency.layers, "SSAO": ssao, "GODRAYS": gods}),
-            opaque=T["opaque"], front=T["front"], ao=T["ao"],
+            opaque=T["opaque"], front=T["front"], **({"ao": T["ao"]} if ssao else {}),
             **{f"layer{i}": x for i, x in enumerate(T["layers"])}))
         if dof:  # distance blur
             post += [Pass(c, T["blur_fbo"][0], full("blur.frag", {"BILATERAL": 1, "VERTICAL": 0}),
@@ -413,7 +434,7 @@ class Renderer:
                      Pass(c, T["blur_fbo"][1], full("blur.frag", {"BILATERAL": 1, "VERTICAL": 1}),
                           src=T["blur"])]
         G.final = Pass(c, T["out_fbo"], full("final.frag", {"DOF": dof}),
-                       sharp=T["comp"], blurred=T["blur2"])
+                       sharp=T["comp"], **({"blurred": T["blur2"]} if dof else {}))
         G.post = post + [G.final]
         G.volume = [G.shade.prog] + G.transparency.volume_programs()
         self._graphs[key] = G
@@ -516,7 +537,7 @@ class _Graph:
 
     def programs(self) -> list:
         return [p for x in (self.shadow, self.g, self.shade, self.transparency, *self.post)
-                for p in x.programs()]
+                if x is not None for p in x.programs()]
 
 
 def _top_camera(camera: cam.Camera) -> cam.Camera:

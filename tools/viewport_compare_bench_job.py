@@ -1,0 +1,333 @@
+"""Blender side of the live-versus-baked comparison in voxel_addon/bench/viewport.py
+(issue 12, Speed): one fresh Blender GUI per side, so both sides grow from the same
+baseline (a process that ran the other side first reuses its freed memory).
+
+    blender --factory-startup -P tools/viewport_compare_bench_job.py -- \
+        OUT.json live|baked WORLD DISTANCE MATERIAL_LIMIT_S
+
+Both sides show the chunks within DISTANCE of the view's chunk, from the moment the
+world file is opened (timed from there: OpenCL, GL and shader start-up are part of
+the time to the first picture on both sides).
+- live: tick Show, redraw until every chunk is drawn; then region redraws at full
+  quality. Memory step by step (RSS after each step) and the bytes of what stays
+  (chunk data on the CPU, GL buffers and textures, which llvmpipe keeps in RAM).
+- baked: the user's Bake to Objects (bpy.ops.voxel.bake, one object, light atlas)
+  of the same chunks, the first Solid redraw, Solid redraws; then Material Preview
+  (EEVEE): redraws until its shaders are compiled, within MATERIAL_LIMIT_S.
+
+Memory is the Blender process's resident set (VmRSS of /proc/self/status, what
+psutil reports; psutil is not in Blender's Python) after gc, as growth from the
+baseline taken once the add-on is registered; the peak is VmHWM, reset at the
+baseline (clear_refs 5).
+"""
+from __future__ import annotations
+
+import gc
+import json
+import math
+import os
+import sys
+import time
+import traceback
+from pathlib import Path
+
+import bpy
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import viewport_bench_job as V  # noqa: E402  (area, look, all_drawn, region_draw_ms)
+
+R: dict = {}
+MB = 1 << 20
+
+
+def mem() -> tuple[float, float]:
+    """(RSS, peak RSS) in MB."""
+    got = {}
+    for line in open("/proc/self/status"):
+        if line.startswith(("VmRSS:", "VmHWM:")):
+            got[line[:5]] = int(line.split()[1]) / 1024.0
+    return got["VmRSS"], got["VmHWM"]
+
+
+def reset_peak() -> bool:
+    try:
+        with open("/proc/self/clear_refs", "w") as f:
+            f.write("5")
+        return True
+    except OSError:
+        return False
+
+
+class Steps:
+    """RSS growth after each named step, from one baseline (after gc)."""
+
+    def __init__(self):
+        gc.collect()
+        self.base = mem()[0]
+        R["peak_reset"] = reset_peak()
+        R["steps"] = []
+
+    def __call__(self, name: str) -> float:
+        gc.collect()
+        rss, peak = mem()
+        R["steps"].append([name, round(rss - self.base, 1), round(peak - self.base, 1)])
+        return rss - self.base
+
+
+def trimmed(step) -> float:
+    """RSS growth once glibc gave back the free memory it keeps (malloc_trim: how
+    much of the growth is freed memory that was not returned, e.g. threads' arenas)."""
+    import ctypes
+    try:
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+    except (OSError, AttributeError):
+        return -1.0
+    return step("(diagnostic) after malloc_trim")
+
+
+def eye_area(d: int):
+    """Block box [x0, x1) x [y0, y1) of the chunks within d of the view's eye chunk."""
+    r3 = V.area().spaces.active.region_3d
+    eye = r3.view_matrix.inverted().translation
+    cx, cy = math.floor(eye.x) >> 4, math.floor(eye.y) >> 4
+    return 16 * (cx - d), 16 * (cy - d), 16 * (cx + d + 1), 16 * (cy + d + 1)
+
+
+def setup(world, d):
+    import voxel_addon
+    voxel_addon.register()
+    sc = bpy.context.scene
+    sp = V.area().spaces.active
+    sp.overlay.show_overlays = False
+    sp.clip_end = 2000.0
+    sc.voxel.path = world
+    sc.voxel_view.distance, sc.voxel_view.hours = d, 12.0
+    V.look(30)
+    r = next(r for r in V.area().regions if r.type == "WINDOW")
+    R["region"] = [r.width, r.height]
+    R["chunks"] = (2 * d + 1) ** 2
+    return sc
+
+
+# ---------------------------------------------------------------------- live
+def live(world, d):
+    from voxel_addon.blender import session, viewport
+    sc = setup(world, d)
+    vv = sc.voxel_view
+    yield 0.5
+    step = Steps()
+    t0 = time.perf_counter()
+    w = session.world(world)
+    step("open the world file")
+    from voxel_addon import opencl
+    from voxel_addon.world import build
+    if build.backends()[1] == "opencl":  # what the stream's first batch does, timed apart
+        import numpy as np
+        from voxel_addon import meshing
+        with build.CL_LOCK:
+            meshing.build_chunks(np.zeros((18, 18, 256), np.uint16, order="F"), backend="opencl")
+    R["opencl"] = opencl.available()
+    step("pyopencl, OpenCL context, meshing programs")
+    t1 = time.perf_counter()
+    vv.quality = "auto"
+    vv.show = True
+    yield from frames_until_gpu(viewport)
+    step("moderngl context, Renderer, first targets (first frame)")
+    yield from V.all_drawn(900)
+    t2 = time.perf_counter()
+    R["first_picture_s"], R["show_s"] = t2 - t0, t2 - t1
+    step(f"all {R['chunks']} chunks streamed and drawn (draft)")
+    viewport._SYNC = True
+    vv.quality = "full"
+    yield from V.frames(2)
+    step("full-quality frames")
+    R["redraw_ms"] = V.region_draw_ms(3)
+    R["rss_mb"] = step("region redraws")
+    R["peak_mb"] = mem()[1] - step.base
+    R["bytes"] = accounted(w, viewport)
+    R["trimmed_mb"] = trimmed(step)
+    viewport._SYNC = False
+    yield 0.1
+
+
+def frames_until_gpu(viewport):
+    """Redraw until the view's GL objects exist (the first frame made them)."""
+    t0 = time.perf_counter()
+    while not viewport._gpus:
+        if viewport.STATUS["error"]:
+            raise RuntimeError(viewport.STATUS["error"])
+        if time.perf_counter() - t0 > 120:
+            raise RuntimeError("no voxel frame in 120 s")
+        V.area().tag_redraw()
+        yield 0.01
+
+
+def _arrays(x):
+    """NumPy arrays reachable from a light value (an array, or packed layers)."""
+    import numpy as np
+    if isinstance(x, np.ndarray):
+        yield x
+    elif isinstance(x, tuple):
+        for v in x:
+            if isinstance(v, np.ndarray):
+                yield v
+
+
+def _fields(c, name):
+    """A chunk's stored forms of blocks: the array and/or its packed layers."""
+    if hasattr(c, "_" + name):
+        return (getattr(c, "_" + name), getattr(c, "_bpack", None))
+    return (getattr(c, name),)
+
+
+def accounted(w, viewport) -> dict:
+    """MB of what the live view keeps, each array counted once: the world's chunks
+    (blocks, light, CPU meshes), payload light held only by the view, the GL objects
+    (bytes that llvmpipe allocates in RAM)."""
+    seen, out = set(), {}
+
+    def add(name, arrays):
+        n = 0
+        for a in arrays:
+            base = a if a.base is None else a.base
+            if id(base) not in seen and hasattr(base, "nbytes"):
+                seen.add(id(base))
+                n += base.nbytes
+        out[name] = out.get(name, 0.0) + n / MB
+
+    chunks = list(w.chunks.values())
+    out["world_chunks"] = len(chunks)
+    # (the fields, not .blocks: a read would unpack packed blocks)
+    add("blocks", (a for c in chunks for x in _fields(c, "blocks") for a in _arrays(x)))
+    add("light (world)", (a for c in chunks for x in (c._light, c._lpack) for a in _arrays(x)))
+    add("meshes: vertices", (c.mesh.vertices for c in chunks if c.mesh is not None))
+    add("meshes: quads", (c.mesh.quads for c in chunks if c.mesh is not None))
+    add("meshes: ranges", (c.mesh.ranges for c in chunks if c.mesh is not None))
+    feed = viewport._feed
+    if feed is not None:
+        ps = list(feed.chunks.values())
+        add("light (view's payloads)", (a for p in ps for a in _arrays(p.light)))
+        add("meshes (view's payloads)", (a for p in ps for a in (p.mesh.vertices, p.mesh.quads)))
+    for g in viewport._gpus.values():
+        r = g.r
+        add("light (renderer)", (a for v in r.lights.values() for a in _arrays(v)))
+        geo = r.geo
+        bufs = [b for b in (geo.vbo, geo.ibo, geo.obo, geo._boxes) if b is not None]
+        bufs += [b[0] for b in geo.bufs.values() if b[0] is not None]
+        out["GL vertex/index/command buffers"] = sum(b.size for b in bufs) / MB
+        out["GL light volume"] = r.vol.tex.width * r.vol.tex.height * r.vol.tex.depth * 2 / MB
+        out["GL render targets"] = _targets_mb(r.targets)
+        out["GL block textures"] = (r.tex.width * r.tex.height * r.tex.layers * 4 * 4 / 3
+                                    + r.glow.width * r.glow.height * r.glow.layers) / MB
+        out["targets key"] = list(r.targets.get("key", ()))
+    return out
+
+
+def _targets_mb(T) -> float:
+    """Bytes of the render targets' textures (per sample), each object once."""
+    import moderngl
+    size = {"f1": 1, "u1": 1, "f2": 2, "u2": 2, "f4": 4, "u4": 4, "i4": 4}
+    seen, n = set(), 0
+
+    def walk(x):
+        nonlocal n
+        if isinstance(x, dict):
+            for v in x.values():
+                walk(v)
+        elif isinstance(x, (list, tuple)):
+            for v in x:
+                walk(v)
+        elif isinstance(x, moderngl.Texture) and x.glo not in seen:
+            seen.add(x.glo)
+            b = 4 if x.depth else x.components * size.get(x.dtype, 4)
+            n += x.width * x.height * b * max(1, x.samples)
+    walk({k: v for k, v in T.items() if k != "key"})
+    return n / MB
+
+
+# ---------------------------------------------------------------------- baked
+def baked(world, d, limit):
+    from voxel_addon.blender import session
+    sc = setup(world, d)
+    yield 0.5
+    step = Steps()
+    t0 = time.perf_counter()
+    session.world(world)
+    step("open the world file")
+    x0, y0, x1, y1 = eye_area(d)
+    b = sc.voxel_bake
+    b.region_min, b.region_max = (x0, y0), (x1, y1)
+    b.per, b.light, b.method = "region", "atlas", "greedy"
+    t1 = time.perf_counter()
+    if bpy.ops.voxel.bake() != {"FINISHED"}:  # Bake to Objects, run at once
+        raise RuntimeError("bake failed")
+    t2 = time.perf_counter()
+    step("Bake to Objects (mesh, materials, light atlas, undo step)")
+    R["first_draw_ms"] = V.region_draw_ms(1)
+    R["first_picture_s"] = time.perf_counter() - t0
+    R["bake_s"] = t2 - t1
+    R["triangles"] = sum(len(o.data.polygons) * 2 for o in bpy.data.objects if o.type == "MESH")
+    step("first Solid redraw (Blender's GPU batches)")
+    R["solid_ms"] = V.region_draw_ms(3)
+    R["rss_mb"] = step("Solid redraws")
+    R["peak_mb"] = mem()[1] - step.base
+    yield 0.1
+    yield from material(limit, step)
+
+
+def material(limit, step):
+    """Material Preview: redraw until EEVEE's shaders are compiled (or the limit)."""
+    shading = V.area().spaces.active.shading
+    t0 = time.perf_counter()
+    shading.type = "MATERIAL"
+    n = 0
+    while True:
+        V.area().tag_redraw()
+        yield 0.05
+        n += 1
+        busy = bpy.app.is_job_running("SHADER_COMPILATION")
+        if not busy and n >= 3:
+            break
+        if time.perf_counter() - t0 > limit:
+            R["material_timed_out"] = True
+            break
+    R["material_ready_s"] = time.perf_counter() - t0
+    R["material_ms"] = V.region_draw_ms(3)
+    R["material_rss_mb"] = step("Material Preview redraws")
+    R["material_peak_mb"] = mem()[1] - step.base
+    R["material_engine"] = bpy.context.scene.render.engine
+    R["trimmed_mb"] = trimmed(step)
+
+
+# ---------------------------------------------------------------------- main
+def main(out, mode, world, d, limit):
+    try:
+        yield from (live(world, d) if mode == "live" else baked(world, d, limit))
+        R["ok"] = True
+    except Exception:
+        R["ok"] = False
+        R["error"] = traceback.format_exc()
+    out.write_text(json.dumps(R, indent=1))
+    bpy.ops.wm.quit_blender()
+
+
+def start():
+    args = sys.argv[sys.argv.index("--") + 1:]
+    out, mode, world, d, limit = Path(args[0]), args[1], args[2], int(args[3]), float(args[4])
+    root = Path(__file__).resolve().parents[1]
+    for p in (os.environ.get("VOXEL_BLENDER_SITE"), str(root / ".blender" / "site"), str(root)):
+        if p and p not in sys.path:
+            sys.path.insert(0, p)
+    bpy.context.preferences.view.show_splash = False
+    gen = main(out, mode, world, d, limit)
+
+    def timer():
+        try:
+            return next(gen)
+        except StopIteration:
+            return None
+    bpy.app.timers.register(timer, first_interval=1.0, persistent=True)
+
+
+if __name__ == "__main__":
+    start()

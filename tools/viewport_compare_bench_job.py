@@ -141,6 +141,15 @@ def live(world, d):
     vv.quality = "full"
     yield from V.frames(2)
     step("full-quality frames")
+    # a still view redraws from its kept frame; the pipeline on every redraw (REUSE
+    # off) is what a redraw costs when something in the picture changed; draft is a
+    # redraw while the view moves
+    viewport.REUSE = False
+    R["redraw_pipeline_ms"] = V.region_draw_ms(3)
+    vv.quality = "draft"
+    R["redraw_draft_ms"] = V.region_draw_ms(3)
+    vv.quality, viewport.REUSE = "full", True
+    yield from V.frames(2)
     R["redraw_ms"] = V.region_draw_ms(3)
     R["rss_mb"] = step("region redraws")
     R["peak_mb"] = mem()[1] - step.base

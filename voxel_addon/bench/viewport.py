@@ -122,12 +122,21 @@ def compare(ctx, world, d):
            "still compiles" if B.get("material_timed_out") else
            f"shaders compiled after {B['material_ready_s']:.1f} s")
     yield (f"viewport_redraw_live{n}_ms", L["redraw_ms"], "ms",
-           f"region redraw, live view at full quality, {t}, region {sz}")
+           f"region redraw of a still live view (full quality, from its kept frame), {t}, "
+           f"region {sz}")
+    yield (f"viewport_redraw_live_pipeline{n}_ms", L["redraw_pipeline_ms"], "ms",
+           "the same with the whole pipeline run on every redraw (something in it changed)")
+    yield (f"viewport_redraw_live_draft{n}_ms", L["redraw_draft_ms"], "ms",
+           "the same in draft quality (what a redraw costs while the view moves)")
     yield (f"viewport_redraw_baked_solid{n}_ms", B["solid_ms"], "ms", f"Solid, one object, {tris}")
     yield (f"viewport_redraw_baked_material{n}_ms", B["material_ms"], "ms",
            f"Material Preview ({B['material_engine']}), {mat}")
     yield (f"viewport_frame_ratio_baked_solid_to_live{n}", B["solid_ms"] / L["redraw_ms"], "",
            ">1: the live view redraws faster than Solid")
+    yield (f"viewport_frame_ratio_baked_solid_to_live_pipeline{n}",
+           B["solid_ms"] / L["redraw_pipeline_ms"], "", ">1: even the full pipeline beats Solid")
+    yield (f"viewport_frame_ratio_baked_solid_to_live_draft{n}", B["solid_ms"] / L["redraw_draft_ms"],
+           "", ">1: a moving live view (draft) redraws faster than Solid")
     yield (f"viewport_frame_ratio_baked_material_to_live{n}", B["material_ms"] / L["redraw_ms"], "",
            ">1: the live view redraws faster than Material Preview")
     yield (f"viewport_first_picture_live{n}_s", L["first_picture_s"], "s",

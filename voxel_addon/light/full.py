@@ -54,8 +54,9 @@ def solve_slab(blocks: np.ndarray) -> np.ndarray:
     inner = (slice(2, -2), slice(1, -1), slice(1, -1))
     cost[inner] = cost_t[bt]
     f = np.zeros(shape, np.uint16)
-    emit = packed[bt]
-    f[inner] = emit
+    em = _emitters(bt, packed)  # flat [z, y, x] indices of the inside
+    pem = _padded(em, h, w, sy, sz)
+    f.reshape(-1)[pem] = packed[bt.reshape(-1)[em]]
     # Daylight column pass, layer by layer from the top (carry 15 above the slab).
     carry = np.full((h, w), model.MAX, np.int16)
     dlo, dhi = zs, 0  # layers with a non-opaque voxel below 15 and a voxel >= 2
@@ -74,8 +75,13 @@ def solve_slab(blocks: np.ndarray) -> np.ndarray:
             break
     f = f.reshape(-1)
     cost = cost.reshape(-1)
-    em = np.flatnonzero(emit) if emit.any() else np.zeros(0, np.int64)
-    em = _padded(em, h, w, sy, sz)
+    em = pem
+    if em.size:
+        # Most emitters are weak ores walled in by stone: an emitter with no
+        # non-opaque face neighbour raises nothing (values only rise, so it never
+        # will), and dropping them here saves the floods a round over all of them.
+        offs = np.array([-1, 1, -sy, sy, -sz, sz], np.int64)
+        em = em[(cost[em[:, None] + offs] != model.OPAQUE_COST).any(axis=1)]
     for k, shift in enumerate(flood.SHIFTS[:3]):
         s = em[((f[em] >> shift) & 15) > 1]
         if s.size:
@@ -84,6 +90,19 @@ def solve_slab(blocks: np.ndarray) -> np.ndarray:
         s = flood.seeds(f, cost, 12, (1, sy), (dlo + 2) * sz, (dhi + 2) * sz)
         flood.flood(f, cost, s, 12, sy, sz)
     return f.reshape(shape)[inner].T
+
+
+def _emitters(bt: np.ndarray, packed: np.ndarray) -> np.ndarray:
+    """Flat indices of the emitting voxels of C-order `bt`: a compare per emitting
+    block id is ~10x cheaper than a table lookup over the whole slab."""
+    ids = np.flatnonzero(packed)
+    flat = bt.reshape(-1)
+    if ids.size > 8:
+        return np.flatnonzero(packed[flat])
+    m = np.zeros(flat.shape, bool)
+    for i in ids.tolist():
+        m |= flat == i
+    return np.flatnonzero(m)
 
 
 def _padded(i: np.ndarray, h: int, w: int, sy: int, sz: int) -> np.ndarray:

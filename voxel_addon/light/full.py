@@ -29,18 +29,25 @@ def solve(blocks: np.ndarray, backend: str | None = None) -> np.ndarray:
     """Light of every voxel of `blocks` ((W, H, 256) uint16) -> same-shape uint16
     packed per SPEC §3, Fortran order. Exact >= 15 columns inside the side edges."""
     blocks = _check(blocks)
+    out = np.empty(blocks.shape, np.uint16, order="F")
+    _solve_into(blocks, out, 0, backend)
+    return out
+
+
+def _solve_into(blocks: np.ndarray, out: np.ndarray, m: int, backend) -> None:
+    """solve(blocks) without its `m`-voxel side margin, written into `out`: a wide
+    region's tiles go straight into the result (no full-size temporary and copy)."""
+    w, h = blocks.shape[0] - m, blocks.shape[1] - m
     z0, z1 = model.slab(blocks)
     _, _, _, _, packed, _ = model.tables()
-    out = chunk.empty(np.uint16, blocks.shape[0], blocks.shape[1])
     out[:, :, z1:] = model.SKY
-    out[:, :, :z0] = packed[blocks[:, :, :z0]]
+    out[:, :, :z0] = packed[blocks[m:w, m:h, :z0]]
     if z1 > z0:
         if opencl.pick(backend, "light") == "opencl":
             from . import cl
-            out[:, :, z0:z1] = cl.solve_slab(blocks[:, :, z0:z1])
+            out[:, :, z0:z1] = cl.solve_slab(blocks[:, :, z0:z1])[m:w, m:h]
         else:
-            out[:, :, z0:z1] = solve_slab(blocks[:, :, z0:z1])
-    return out
+            out[:, :, z0:z1] = solve_slab(blocks[:, :, z0:z1])[m:w, m:h]
 
 
 def solve_slab(blocks: np.ndarray) -> np.ndarray:
@@ -129,12 +136,12 @@ def region_light(blocks: np.ndarray, backend: str | None = None, tile: int = TIL
     if b.shape[0] % s or b.shape[1] % s or b.shape[0] < 3 * s or b.shape[1] < 3 * s:
         raise VoxelError(f"region must be whole chunks, at least 3x3, got {b.shape}")
     n, m = b.shape[0] // s - 2, b.shape[1] // s - 2
-    out = chunk.empty(np.uint16, n * s, m * s)
+    out = np.empty((n * s, m * s, chunk.HEIGHT), np.uint16, order="F")  # tiles cover it
     for i in range(0, n, tile):
         for j in range(0, m, tile):
             ti, tj = min(tile, n - i), min(tile, m - j)
-            sub = b[i * s:(i + ti + 2) * s, j * s:(j + tj + 2) * s]
-            out[i * s:(i + ti) * s, j * s:(j + tj) * s] = solve(sub, backend)[s:-s, s:-s]
+            sub = _check(b[i * s:(i + ti + 2) * s, j * s:(j + tj + 2) * s])
+            _solve_into(sub, out[i * s:(i + ti) * s, j * s:(j + tj) * s], s, backend)
     return out
 
 

@@ -31,6 +31,7 @@ from ..core.errors import VoxelError
 from . import build
 
 NEAR = 6  # chunks: closer than this, work in half tiles (first payloads sooner)
+MAINTAIN_S = 0.25  # seconds between keep-alive/unload/compact sweeps for one view
 
 
 class Stream:
@@ -59,6 +60,7 @@ class Stream:
         self._drawn: set = set()
         self._busy: set = set()     # keys a worker is doing now
         self._stop = False
+        self._kept = (None, 0.0)  # view chunk and time of the last full _maintain
         world.streams.add(self)
         self._threads = [threading.Thread(target=self._run, args=(be,), daemon=True,
                                           name=f"voxel-stream-{i}")
@@ -278,12 +280,24 @@ class Stream:
             xs, ys = [k[0] for k in rest], [k[1] for k in rest]
             done += build.light_and_mesh(world, min(xs), min(ys), max(xs) + 1, max(ys) + 1,
                                          backends_=backends)
+        with world._lock:  # compact now: _maintain's sweep over all chunks is throttled
+            for p in done:
+                c = world.chunks.get(p.key)
+                if c is not None:
+                    c.compact()
         self.offer(done)
 
     def _maintain(self, cx, cy) -> None:
         """Keep chunks near the view alive (the world's idle unloading), unload far
         ones, keep their light compact."""
         world, keep, now = self.world, self.distance + 1 + self.margin, time.monotonic()
+        # a sweep over every chunk after every batch cost as much as a tenth of the
+        # light solve at view 32; idle unloading waits seconds, so a few sweeps a
+        # second (and one whenever the view moved) keep the same guarantees
+        if self._kept[0] == (cx, cy) and now - self._kept[1] < min(MAINTAIN_S,
+                                                                  world.idle_timeout / 4):
+            return
+        self._kept = ((cx, cy), now)
         far = []
         with world._lock:
             for k, c in world.chunks.items():

@@ -104,6 +104,25 @@ def test_solvers_equal_brute_force_on_random_scenes(cl_device, seed):
     assert np.array_equal(solve.solve(b, "opencl"), ref)
 
 
+def test_region_tiles_equal_brute_force_with_walled_in_emitters():
+    """region_light's tiles (written straight into the result, their ring cut off)
+    equal the brute force, with emitters of every strength walled in by stone, next
+    to a single open voxel and out in the open (the solve seeds only emitters with
+    a non-opaque neighbour)."""
+    rng = np.random.default_rng(4)
+    b = _random_scene(rng, 64, 48)
+    rock = b[:, :, 3:20]
+    rock[:] = R.id("stone")
+    lit = [R.id(n) for n in ("ore", "glowing_mushroom", "lamp_red", "lamp_white")]
+    where = rng.random(rock.shape) < 0.08
+    rock[where] = rng.choice(lit, size=int(where.sum()))
+    holes = rng.random(rock.shape) < 0.02  # a few open voxels next to some of them
+    rock[holes] = 0
+    ref = _reference(b)[16:-16, 16:-16]
+    for tile in (1, 2, 8):
+        assert np.array_equal(solve.region_light(b, "numpy", tile=tile), ref), tile
+
+
 def test_incremental_equals_full_every_edit():
     """Every kind of edit (brightening: lamp, digging; darkening: walls, lamp removal),
     including boxes clipped by the array's edges, checked after each edit."""

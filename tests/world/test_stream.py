@@ -153,3 +153,19 @@ def test_edits_while_streaming_end_equal_one_shot(world_path):
                     got[k] = p
     area, meshes = one_shot(world_path, 8, 8, 3)
     check_equal({k: p for k, p in got.items() if k in meshes}, area, meshes)
+
+
+@pytest.mark.parametrize("t", [1, 2, 4, 8])
+def test_tiles_cover_the_range_without_thin_strips(t):
+    """Batches: contiguous tiles that cover the range once, none wider than 2 tiles,
+    and a range end never leaves a strip under half a tile next to a full one."""
+    from voxel_addon.world.stream import _tiling
+    for lo in range(-20, -8):
+        for hi in range(lo, lo + 40):
+            k = np.arange(lo, hi + 1)
+            ids = _tiling(lo, hi, t)(k)
+            assert (np.diff(ids) >= 0).all()  # contiguous, in order
+            _, width = np.unique(ids, return_counts=True)
+            assert width.max() <= 2 * t
+            if len(width) > 1:
+                assert 2 * width.min() >= t, (lo, hi, width)

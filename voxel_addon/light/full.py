@@ -29,18 +29,25 @@ def solve(blocks: np.ndarray, backend: str | None = None) -> np.ndarray:
     """Light of every voxel of `blocks` ((W, H, 256) uint16) -> same-shape uint16
     packed per SPEC §3, Fortran order. Exact >= 15 columns inside the side edges."""
     blocks = _check(blocks)
+    out = np.empty(blocks.shape, np.uint16, order="F")
+    _solve_into(blocks, out, 0, backend)
+    return out
+
+
+def _solve_into(blocks: np.ndarray, out: np.ndarray, m: int, backend) -> None:
+    """solve(blocks) without its `m`-voxel side margin, written into `out`: a wide
+    region's tiles go straight into the result (no full-size temporary and copy)."""
+    w, h = blocks.shape[0] - m, blocks.shape[1] - m
     z0, z1 = model.slab(blocks)
     _, _, _, _, packed, _ = model.tables()
-    out = chunk.empty(np.uint16, blocks.shape[0], blocks.shape[1])
     out[:, :, z1:] = model.SKY
-    out[:, :, :z0] = packed[blocks[:, :, :z0]]
+    out[:, :, :z0] = packed[blocks[m:w, m:h, :z0]]
     if z1 > z0:
         if opencl.pick(backend, "light") == "opencl":
             from . import cl
-            out[:, :, z0:z1] = cl.solve_slab(blocks[:, :, z0:z1])
+            out[:, :, z0:z1] = cl.solve_slab(blocks[:, :, z0:z1])[m:w, m:h]
         else:
-            out[:, :, z0:z1] = solve_slab(blocks[:, :, z0:z1])
-    return out
+            out[:, :, z0:z1] = solve_slab(blocks[:, :, z0:z1])[m:w, m:h]
 
 
 def solve_slab(blocks: np.ndarray) -> np.ndarray:
@@ -54,8 +61,9 @@ def solve_slab(blocks: np.ndarray) -> np.ndarray:
     inner = (slice(2, -2), slice(1, -1), slice(1, -1))
     cost[inner] = cost_t[bt]
     f = np.zeros(shape, np.uint16)
-    emit = packed[bt]
-    f[inner] = emit
+    em = _emitters(bt, packed)  # flat [z, y, x] indices of the inside
+    pem = _padded(em, h, w, sy, sz)
+    f.reshape(-1)[pem] = packed[bt.reshape(-1)[em]]
     # Daylight column pass, layer by layer from the top (carry 15 above the slab).
     carry = np.full((h, w), model.MAX, np.int16)
     dlo, dhi = zs, 0  # layers with a non-opaque voxel below 15 and a voxel >= 2
@@ -74,8 +82,13 @@ def solve_slab(blocks: np.ndarray) -> np.ndarray:
             break
     f = f.reshape(-1)
     cost = cost.reshape(-1)
-    em = np.flatnonzero(emit) if emit.any() else np.zeros(0, np.int64)
-    em = _padded(em, h, w, sy, sz)
+    em = pem
+    if em.size:
+        # Most emitters are weak ores walled in by stone: an emitter with no
+        # non-opaque face neighbour raises nothing (values only rise, so it never
+        # will), and dropping them here saves the floods a round over all of them.
+        offs = np.array([-1, 1, -sy, sy, -sz, sz], np.int64)
+        em = em[(cost[em[:, None] + offs] != model.OPAQUE_COST).any(axis=1)]
     for k, shift in enumerate(flood.SHIFTS[:3]):
         s = em[((f[em] >> shift) & 15) > 1]
         if s.size:
@@ -84,6 +97,19 @@ def solve_slab(blocks: np.ndarray) -> np.ndarray:
         s = flood.seeds(f, cost, 12, (1, sy), (dlo + 2) * sz, (dhi + 2) * sz)
         flood.flood(f, cost, s, 12, sy, sz)
     return f.reshape(shape)[inner].T
+
+
+def _emitters(bt: np.ndarray, packed: np.ndarray) -> np.ndarray:
+    """Flat indices of the emitting voxels of C-order `bt`: a compare per emitting
+    block id is ~10x cheaper than a table lookup over the whole slab."""
+    ids = np.flatnonzero(packed)
+    flat = bt.reshape(-1)
+    if ids.size > 8:
+        return np.flatnonzero(packed[flat])
+    m = np.zeros(flat.shape, bool)
+    for i in ids.tolist():
+        m |= flat == i
+    return np.flatnonzero(m)
 
 
 def _padded(i: np.ndarray, h: int, w: int, sy: int, sz: int) -> np.ndarray:
@@ -110,12 +136,12 @@ def region_light(blocks: np.ndarray, backend: str | None = None, tile: int = TIL
     if b.shape[0] % s or b.shape[1] % s or b.shape[0] < 3 * s or b.shape[1] < 3 * s:
         raise VoxelError(f"region must be whole chunks, at least 3x3, got {b.shape}")
     n, m = b.shape[0] // s - 2, b.shape[1] // s - 2
-    out = chunk.empty(np.uint16, n * s, m * s)
+    out = np.empty((n * s, m * s, chunk.HEIGHT), np.uint16, order="F")  # tiles cover it
     for i in range(0, n, tile):
         for j in range(0, m, tile):
             ti, tj = min(tile, n - i), min(tile, m - j)
-            sub = b[i * s:(i + ti + 2) * s, j * s:(j + tj + 2) * s]
-            out[i * s:(i + ti) * s, j * s:(j + tj) * s] = solve(sub, backend)[s:-s, s:-s]
+            sub = _check(b[i * s:(i + ti + 2) * s, j * s:(j + tj + 2) * s])
+            _solve_into(sub, out[i * s:(i + ti) * s, j * s:(j + tj) * s], s, backend)
     return out
 
 

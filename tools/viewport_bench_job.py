@@ -72,14 +72,6 @@ def all_drawn(timeout):
         yield 0.01
 
 
-def rss() -> float:
-    """Resident memory of this Blender in MB (llvmpipe's GPU memory is process RAM)."""
-    for line in open("/proc/self/status"):
-        if line.startswith("VmRSS:"):
-            return int(line.split()[1]) / 1024.0
-    return 0.0
-
-
 def region_draw_ms(n) -> float:
     """Fastest of n synchronous redraws of the 3D viewport's region (Blender's own
     redraw_timer), GPU work finished (a pixel read back)."""
@@ -144,34 +136,6 @@ def still(sc, vv):
     R["blender_cpu_ms"] = region_draw_cpu_ms(3)
 
 
-def baked(sc, vv):
-    """The alternative a user has today: the same chunks baked into one mesh object
-    drawn by Blender (Solid): time to the first picture, memory, frame time."""
-    import gc
-    import math as m
-    from voxel_addon import bake
-    from voxel_addon.blender import bake as BB, session
-    vv.show = False
-    yield 0.3
-    gc.collect()
-    rss1 = rss()
-    d = vv.distance
-    r3 = area().spaces.active.region_3d
-    eye = r3.view_matrix.inverted().translation
-    cx, cy = m.floor(eye.x) >> 4, m.floor(eye.y) >> 4
-    t0 = time.perf_counter()
-    bk = bake.bake_world(session.world(sc.voxel.path), 16 * (cx - d), 16 * (cy - d),
-                         16 * (cx + d + 1), 16 * (cy + d + 1), per="region", method="greedy")
-    BB.build(bk, style="blender")
-    first = region_draw_ms(1)
-    R["baked_first_picture_s"] = time.perf_counter() - t0
-    R["baked_first_draw_ms"] = first
-    R["baked_draw_ms"] = region_draw_ms(3)
-    R["baked_rss_mb"] = rss() - rss1
-    R["baked_triangles"] = int(bk.triangles)
-    yield 0.1
-
-
 def run():
     import voxel_addon
     from voxel_addon.blender import viewport
@@ -186,7 +150,6 @@ def run():
     look(30)
     r = next(r for r in area().regions if r.type == "WINDOW")
     R["region"] = [r.width, r.height]
-    rss0 = rss()
     vv.show = True
     R["show8_s"] = yield from all_drawn(300)
     viewport._SYNC = True
@@ -205,9 +168,7 @@ def run():
     vv.quality = "full"
     yield from frames(1)
     R["view_draw_ms"] = region_draw_ms(3)
-    R["view_rss_mb"] = rss() - rss0
     yield from still(sc, vv)
-    yield from baked(sc, vv)
     vv.quality = "auto"
     viewport._SYNC, viewport.REUSE = False, True
     for key, path in (("generated", WORLD), ("empty", EMPTY)):

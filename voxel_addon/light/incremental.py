@@ -68,8 +68,8 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
     shape, (gy, gz) = flood.grid((nz, ny, nx))
     f = np.zeros(shape + (4,), np.uint8)  # lanes: all components flood at once
     ox, oy, oz = 1 - (sx.start - ex.start), 1 - (sy.start - ey.start), 2 - (sz.start - ez.start)
-    f[oz:oz + ez.stop - ez.start, oy:oy + ey.stop - ey.start, ox:ox + ex.stop - ex.start] = \
-        model.unpack(light[ex, ey, ez].T)
+    model.unpack(light[ex, ey, ez].T, out=f[oz:oz + ez.stop - ez.start,
+                                           oy:oy + ey.stop - ey.start, ox:ox + ex.stop - ex.start])
     cost = np.full(shape, model.OPAQUE_COST, np.uint8)
     inner = (slice(2, -2), slice(1, -1), slice(1, -1))
     cost[inner] = cost_t[blocks[sx, sy, sz].T]

@@ -92,7 +92,7 @@ def _ensure_lit(world, keys) -> list[Payload]:
     for _ in range(8):  # chunks may be unloaded meanwhile: try again
         with world._lock:
             todo = [k for k in keys if k not in world.corrupt and (
-                world.chunks.get(k) is None or world.chunks[k].light is None
+                world.chunks.get(k) is None or not world.chunks[k].has_light
                 or world.chunks[k].mesh is None)]
         if not todo:
             return out
@@ -107,22 +107,30 @@ def _ensure_lit(world, keys) -> list[Payload]:
 def _gather(world, x0, y0, x1, y1, attr, z0=0, z1=C.HEIGHT):
     """Voxel columns [x0, x1) x [y0, y1) of active chunks' `attr` as one array
     (zeros where a chunk or its array is missing). Call with the world's lock held.
-    The array is this thread's scratch buffer for `attr`, valid until the next call:
-    a fresh 1.3 MB array per edit costs page faults (~0.5 ms in a big process).
-    Only layers [z0, z1) are filled; the others hold stale values."""
-    shape = (x1 - x0, y1 - y0, C.HEIGHT)
-    out = getattr(_scratch, attr, None)
-    if out is None or out.shape != shape:
-        out = C.empty(width=x1 - x0, depth=y1 - y0)
-        setattr(_scratch, attr, out)
+    The array is a view of this thread's scratch buffer for `attr`, valid until the
+    next call: a fresh 1.3 MB array per edit costs page faults (~0.5 ms in a big
+    process). Only layers [z0, z1) are filled; the others hold stale values."""
+    w, h = x1 - x0, y1 - y0
+    buf = getattr(_scratch, attr, None)
+    if buf is None or buf.shape[0] < w or buf.shape[1] < h:
+        n = max(w, h, 0 if buf is None else max(buf.shape[:2]))
+        buf = C.empty(width=n, depth=n)
+        setattr(_scratch, attr, buf)
+    out = buf[:w, :h]
     for cx in range(x0 >> 4, ((x1 - 1) >> 4) + 1):
         for cy in range(y0 >> 4, ((y1 - 1) >> 4) + 1):
             c = world.chunks.get((cx, cy))
-            a = None if c is None else getattr(c, attr)
             ax0, ay0 = max(x0, cx * S), max(y0, cy * S)
             ax1, ay1 = min(x1, cx * S + S), min(y1, cy * S + S)
-            out[ax0 - x0:ax1 - x0, ay0 - y0:ay1 - y0, z0:z1] = 0 if a is None else \
-                a[ax0 - cx * S:ax1 - cx * S, ay0 - cy * S:ay1 - cy * S, z0:z1]
+            dst = out[ax0 - x0:ax1 - x0, ay0 - y0:ay1 - y0, z0:z1]
+            xs, ys = slice(ax0 - cx * S, ax1 - cx * S), slice(ay0 - cy * S, ay1 - cy * S)
+            if c is None:
+                dst[...] = 0
+            elif attr == "light":
+                c.light_into(dst, xs, ys, z0, z1)
+            else:
+                a = getattr(c, attr)
+                dst[...] = 0 if a is None else a[xs, ys, z0:z1]
     return out
 
 
@@ -152,13 +160,18 @@ def _apply(world, items):
     keys = {C.key_of(x, y) for x, y, _, _, _ in items}
     near = _around(keys, 1)
     fresh = {p.key: p for p in _ensure_lit(world, near)}
-    kx0, ky0 = min(k[0] for k in near), min(k[1] for k in near)
-    kx1, ky1 = max(k[0] for k in near) + 1, max(k[1] for k in near) + 1
-    # window: the chunks around the stroke plus one voxel (the outer chunks' mesh ring)
-    x0, y0, x1, y1 = kx0 * S - 1, ky0 * S - 1, kx1 * S + 1, ky1 * S + 1
+    # window: every voxel's relight box with its rim, and the chunks that may be
+    # remeshed (a changed voxel's chunk and face neighbours') with their mesh ring
+    from ..light.incremental import R
+    remesh = {C.key_of(x + i, y + j) for x, y, _, _, _ in items for i, j in
+              ((0, 0), (-1, 0), (1, 0), (0, -1), (0, 1))}
+    x0 = min(min(x for x, _, _, _, _ in items) - R - 1, min(k[0] for k in remesh) * S - 1)
+    y0 = min(min(y for _, y, _, _, _ in items) - R - 1, min(k[1] for k in remesh) * S - 1)
+    x1 = max(max(x for x, _, _, _, _ in items) + R + 2, max(k[0] for k in remesh) * S + S + 1)
+    y1 = max(max(y for _, y, _, _, _ in items) + R + 2, max(k[1] for k in remesh) * S + S + 1)
     with world._lock:
         missing = [k for k in near if k not in world.corrupt and (
-            world.chunks.get(k) is None or world.chunks[k].light is None)]
+            world.chunks.get(k) is None or not world.chunks[k].has_light)]
         if missing:  # unloaded between _ensure_lit and here: rare, start over
             payloads, rec = _apply(world, items)
             return sorted({**fresh, **{p.key: p for p in payloads}}.values()), rec
@@ -166,7 +179,7 @@ def _apply(world, items):
         lit = _gather(world, x0, y0, x1, y1, "light", *_light_layers(world, items))
         first: dict = {}
         last: dict = {}
-        lo = [blocks.shape[0], blocks.shape[1], C.HEIGHT]  # union of the relit boxes
+        lo = [x1 - x0, y1 - y0, C.HEIGHT]  # union of the relit boxes
         hi = [0, 0, 0]
         for x, y, z, b, d in items:
             c = world.chunks[C.key_of(x, y)]
@@ -195,7 +208,7 @@ def _apply(world, items):
         for k in changed:
             world.bver[k] = t
             world.chunks[k].dirty = True
-        # light: only chunks that overlap the relit boxes can differ
+        # light: only the relit boxes can differ (outside them lit holds the old light)
         relit = set()
         if hi[0] > lo[0]:
             for cx in range((lo[0] + x0) >> 4, ((hi[0] + x0 - 1) >> 4) + 1):
@@ -203,12 +216,14 @@ def _apply(world, items):
                     c = world.chunks.get((cx, cy))
                     if (cx, cy) not in near or c is None:
                         continue
-                    i, j = cx * S - x0, cy * S - y0
-                    zs = slice(lo[2], hi[2])  # outside the boxes nothing moved
-                    new = lit[i:i + S, j:j + S, zs]
-                    if not np.array_equal(new, c.light[:, :, zs]):
+                    i0, j0 = max(lo[0], cx * S - x0), max(lo[1], cy * S - y0)
+                    i1, j1 = min(hi[0], cx * S + S - x0), min(hi[1], cy * S + S - y0)
+                    box = (slice(i0 + x0 - cx * S, i1 + x0 - cx * S),
+                           slice(j0 + y0 - cy * S, j1 + y0 - cy * S), slice(lo[2], hi[2]))
+                    new = lit[i0:i1, j0:j1, lo[2]:hi[2]]
+                    if not np.array_equal(new, c.light[box]):
                         c.light = c.light.copy(order="F")  # payloads out there keep theirs
-                        c.light[:, :, zs] = new
+                        c.light[box] = new
                         c.dirty = True
                         relit.add((cx, cy))
         # meshes: chunks holding a changed voxel or one of its face neighbours

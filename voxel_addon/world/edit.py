@@ -40,10 +40,17 @@ class Record(NamedTuple):
     after: tuple[tuple[int, int], ...]
 
 
-def edit(world, changes):
-    """Apply a stroke; returns (payloads, Record)."""
+def edit(world, changes, write: bool = True):
+    """Apply a stroke; returns (payloads, Record). write=False keeps the change in
+    memory (shown, saved by the next `write`, flush or close): the parts of one
+    drag, written together when it ends."""
     items = _check(world, changes)
-    return _apply(world, items)
+    return _apply(world, items, write)
+
+
+def write(world) -> None:
+    """Write what edits with write=False held, in one transaction."""
+    world.commit()
 
 
 def undo(world, record: Record) -> list[Payload]:
@@ -153,7 +160,7 @@ def _light_layers(world, items):
     return max(z0 - incremental.R - 1, 0), min(z1, C.HEIGHT)
 
 
-def _apply(world, items):
+def _apply(world, items, write=True):
     from .. import light, meshing
     if not items:
         return [], Record((), (), ())
@@ -173,7 +180,7 @@ def _apply(world, items):
         missing = [k for k in near if k not in world.corrupt and (
             world.chunks.get(k) is None or not world.chunks[k].has_light)]
         if missing:  # unloaded between _ensure_lit and here: rare, start over
-            payloads, rec = _apply(world, items)
+            payloads, rec = _apply(world, items, write)
             return sorted({**fresh, **{p.key: p for p in payloads}}.values()), rec
         blocks = _gather(world, x0, y0, x1, y1, "blocks")
         lit = _gather(world, x0, y0, x1, y1, "light", *_light_layers(world, items))
@@ -250,9 +257,9 @@ def _apply(world, items):
     rows = [(x, y, z, *last[(x, y, z)]) for x, y, z in last]
     # the changed chunks are written with their new light; relit neighbours' stored
     # light is dropped now and saved again with them later (marked changed)
-    world.commit(changed, rows, stale_light=relit - changed)
     for s in list(world.streams):
         s.offer(payloads)
+    (world.commit if write else world.hold)(changed, rows, stale_light=relit - changed)
     rec = Record(tuple(voxels), tuple(first[v] for v in voxels), tuple(last[v] for v in voxels))
     return sorted(payloads + list(fresh.values())), rec
 

@@ -240,13 +240,23 @@ def _apply(world, items, write=True):
         rx1, ry1 = max(k[0] for k in remesh) + 1, max(k[1] for k in remesh) + 1
         i, j = rx0 * S - 1 - x0, ry0 * S - 1 - y0
         sub = blocks[i:i + (rx1 - rx0) * S + 2, j:j + (ry1 - ry0) * S + 2]
-        meshes = _mesh(meshing, sub, (rx0, ry0), remesh)
+        # only the render regions (64 layers) holding a changed voxel's faces
+        zs = [z for _, _, z in last]
+        r0 = max(min(zs) - 1, 0) // meshing.REGION_H
+        r1 = min(max(zs) + 1, C.HEIGHT - 1) // meshing.REGION_H + 1
+        whole = any(world.chunks.get(k) is not None and world.chunks[k].mesh is None
+                    for k in remesh)
+        regions = None if whole else (r0, r1)
+        meshes = _mesh(meshing, sub, (rx0, ry0), remesh, regions)
         remeshed = set()
         for k in remesh:
             c = world.chunks.get(k)
-            if c is None or k in world.corrupt or _same(c.mesh, meshes[k]):
+            if c is None or k in world.corrupt:
+                continue
+            m = meshes[k] if regions is None else meshing.splice(c.mesh, meshes[k], r0, r1)
+            if _same(c.mesh, m):
                 continue  # e.g. a hidden face stayed hidden: no new payload
-            c.mesh = meshes[k]
+            c.mesh = m
             remeshed.add(k)
         payloads = []
         for k in sorted(relit | remeshed):
@@ -269,12 +279,13 @@ def _same(a, b) -> bool:
         np.array_equal(a.ranges, b.ranges)
 
 
-def _mesh(meshing, blocks, origin, keys):
+def _mesh(meshing, blocks, origin, keys, regions=None):
     """build_chunks on OpenCL when no stream batch holds it, else NumPy (same output)."""
     blocks = np.asfortranarray(blocks)
     if build.backends()[1] == "opencl" and build.CL_LOCK.acquire(blocking=False):
         try:
-            return meshing.build_chunks(blocks, origin, backend="opencl", keys=keys)
+            return meshing.build_chunks(blocks, origin, backend="opencl", keys=keys,
+                                        regions=regions)
         finally:
             build.CL_LOCK.release()
-    return meshing.build_chunks(blocks, origin, backend="numpy", keys=keys)
+    return meshing.build_chunks(blocks, origin, backend="numpy", keys=keys, regions=regions)

@@ -1,8 +1,8 @@
 """Edits (issue 11 §3): set blocks, relight incrementally, remesh what changed, keep
 an undo record, write one transaction per stroke.
 
-`edit(world, changes)`: changes is one (x, y, z, block[, data]) or a list of them
-(a brush stroke); block is a name or an id. Everything is checked before anything
+`edit(world, changes, write=True)`: changes is one (x, y, z, block[, data]) or a
+list of them (a brush stroke); block is a name or an id. Everything is checked before anything
 changes (a VoxelError on one line). Returns (payloads, record): the new Payload of
 every chunk whose light or mesh really changed (at most the 3x3 around each change:
 light reaches 14 voxels; the chunks holding a changed voxel or a face neighbour of
@@ -12,9 +12,16 @@ and after (id, data) of every voxel that really changed. `undo(world, record)` a
 
 Light: the chunks around the stroke must have final light; those that do not (not
 streamed yet) are lit first in one batch (build.light_and_mesh). Then each voxel is
-relit with light.update on a window of the 3x3 chunks around the stroke, which
-equals a full solve (tests). The payloads are also queued on every Stream of the
+relit with light.update on a window holding every voxel's relight box (a darkening
+edit clears and refills only the light that moved), which equals a full solve
+(tests). Meshes: only the render regions (64 layers) around the changed voxels are
+meshed again and spliced in. The payloads are also queued on every Stream of the
 world, so a consumer that only drains sees them as well.
+
+Writing: edit(..., write=True) commits the stroke in one transaction before it
+returns; write=False holds it in memory (shown, but the file unchanged) until
+`write(world)`, the next commit, a flush or close: a drag's parts, one transaction
+when it ends.
 """
 from __future__ import annotations
 
@@ -186,8 +193,7 @@ def _apply(world, items, write=True):
         lit = _gather(world, x0, y0, x1, y1, "light", *_light_layers(world, items))
         first: dict = {}
         last: dict = {}
-        lo = [x1 - x0, y1 - y0, C.HEIGHT]  # union of the relit boxes
-        hi = [0, 0, 0]
+        steps = []  # (x, y, z, new id, old id) of every block change, in order
         for x, y, z, b, d in items:
             c = world.chunks[C.key_of(x, y)]
             lx, ly = x & 15, y & 15
@@ -202,11 +208,7 @@ def _apply(world, items, write=True):
                     c.data = C.empty()
                 c.data[lx, ly, z] = d
             if old[0] != b:
-                wx, wy = x - x0, y - y0
-                blocks[wx, wy, z] = b
-                box = light.update(blocks, lit, wx, wy, z, old[0])
-                lo = [min(v, sl.start) for v, sl in zip(lo, box)]
-                hi = [max(v, sl.stop) for v, sl in zip(hi, box)]
+                steps.append((x, y, z, b, old[0]))
         changed = {C.key_of(x, y) for x, y, _ in last}
         voxels = [v for v in last if first[v] != last[v]]
         if not changed:
@@ -215,6 +217,34 @@ def _apply(world, items, write=True):
         for k in changed:
             world.bver[k] = t
             world.chunks[k].dirty = True
+        # meshes: chunks holding a changed voxel or one of its face neighbours, only
+        # the render regions (64 layers) that hold a changed voxel's faces
+        remesh = {C.key_of(x + i, y + j) for x, y, _ in last for i, j in
+                  ((0, 0), (-1, 0), (1, 0), (0, -1), (0, 1))}
+        rx0, ry0 = min(k[0] for k in remesh), min(k[1] for k in remesh)
+        rx1, ry1 = max(k[0] for k in remesh) + 1, max(k[1] for k in remesh) + 1
+        i, j = rx0 * S - 1 - x0, ry0 * S - 1 - y0
+        sub = np.array(blocks[i:i + (rx1 - rx0) * S + 2, j:j + (ry1 - ry0) * S + 2], order="F")
+        for (x, y, z), (b, _) in last.items():
+            if 0 <= x - x0 - i < sub.shape[0] and 0 <= y - y0 - j < sub.shape[1]:
+                sub[x - x0 - i, y - y0 - j, z] = b
+        zs = [z for _, _, z in last]
+        r0 = max(min(zs) - 1, 0) // meshing.REGION_H
+        r1 = min(max(zs) + 1, C.HEIGHT - 1) // meshing.REGION_H + 1
+        whole = any(world.chunks.get(k) is not None and world.chunks[k].mesh is None
+                    for k in remesh)
+        regions = None if whole else (r0, r1)
+        meshes = _mesh(meshing, sub, (rx0, ry0), remesh, regions)
+        # light: relight voxel by voxel (each update starts from the exact light of
+        # the blocks before it), then keep what changed inside the relit boxes
+        lo = [x1 - x0, y1 - y0, C.HEIGHT]  # union of the relit boxes
+        hi = [0, 0, 0]
+        for x, y, z, b, old in steps:
+            wx, wy = x - x0, y - y0
+            blocks[wx, wy, z] = b
+            box = light.update(blocks, lit, wx, wy, z, old)
+            lo = [min(v, sl.start) for v, sl in zip(lo, box)]
+            hi = [max(v, sl.stop) for v, sl in zip(hi, box)]
         # light: only the relit boxes can differ (outside them lit holds the old light)
         relit = set()
         if hi[0] > lo[0]:
@@ -233,21 +263,6 @@ def _apply(world, items, write=True):
                         c.light[box] = new
                         c.dirty = True
                         relit.add((cx, cy))
-        # meshes: chunks holding a changed voxel or one of its face neighbours
-        remesh = {C.key_of(x + i, y + j) for x, y, _ in last for i, j in
-                  ((0, 0), (-1, 0), (1, 0), (0, -1), (0, 1))}
-        rx0, ry0 = min(k[0] for k in remesh), min(k[1] for k in remesh)
-        rx1, ry1 = max(k[0] for k in remesh) + 1, max(k[1] for k in remesh) + 1
-        i, j = rx0 * S - 1 - x0, ry0 * S - 1 - y0
-        sub = blocks[i:i + (rx1 - rx0) * S + 2, j:j + (ry1 - ry0) * S + 2]
-        # only the render regions (64 layers) holding a changed voxel's faces
-        zs = [z for _, _, z in last]
-        r0 = max(min(zs) - 1, 0) // meshing.REGION_H
-        r1 = min(max(zs) + 1, C.HEIGHT - 1) // meshing.REGION_H + 1
-        whole = any(world.chunks.get(k) is not None and world.chunks[k].mesh is None
-                    for k in remesh)
-        regions = None if whole else (r0, r1)
-        meshes = _mesh(meshing, sub, (rx0, ry0), remesh, regions)
         remeshed = set()
         for k in remesh:
             c = world.chunks.get(k)

@@ -331,6 +331,25 @@ def case_drag(w):
     shot("drag")
     yield from key("Z", ctrl=True)
     check("drag_one_ctrl_z_undoes_it_all", diff(before, file_snapshot()) == [])
+    # a drag ended by Esc keeps what it showed: written when it ends, one undo step
+    y2 = y + 36
+    cells2 = sorted({surface_cell(x, y2, TOP)[0] for x in xs[:12]})
+    move((xs[0], y2))
+    yield 2
+    ev("LEFTMOUSE", "PRESS", at=(xs[0], y2))
+    yield 1
+    for x in xs[1:12]:
+        move((x, y2))
+        yield 1
+    ev("ESC", "PRESS")
+    yield 2
+    ev("ESC", "RELEASE")
+    ev("LEFTMOUSE", "RELEASE", at=(xs[11], y2))
+    yield 2
+    got = diff(before, file_snapshot())
+    check("drag_ended_by_esc_is_written", got == cells2, f"{len(got)} cells vs {len(cells2)}")
+    yield from key("Z", ctrl=True)
+    check("drag_ended_by_esc_one_ctrl_z", diff(before, file_snapshot()) == [])
     # box mode: one corner, then the opposite one; Shift clears the box it spans
     sc = bpy.context.scene
     sc.voxel_edit.box = True

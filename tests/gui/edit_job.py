@@ -277,6 +277,11 @@ def settle():
         yield 3
 
 
+def REG():
+    from voxel_addon.core.blocks import REGISTRY
+    return REGISTRY
+
+
 def generated_name(x, y, z):
     from voxel_addon.core.blocks import REGISTRY
     return REGISTRY[int(generated((x >> 4, y >> 4))[x & 15, y & 15, z])].name
@@ -293,19 +298,58 @@ def case_drag(w):
     before, step = file_snapshot(), sc.voxel_edit.step
     move((xs[0], y))
     yield 2
+    # Count the world file's transactions: COMMITs on the add-on's own connection
+    # (SQLite's statement trace) and, from a second connection, data_version (it
+    # changes when another connection commits).
+    import sqlite3
+    other = sqlite3.connect(sc.voxel.path)
+    version = lambda: other.execute("PRAGMA data_version").fetchone()[0]  # noqa: E731
+    commits = []
+    w.file.db.set_trace_callback(
+        lambda sql: commits.append(sql) if sql.strip().upper().startswith("COMMIT") else None)
+    v0 = version()
     ev("LEFTMOUSE", "PRESS", at=(xs[0], y))
     yield 1
     for x in xs[1:]:
         move((x, y))
         yield 1
+    yield from settle()
+    shown = sorted(c for c in cells if REG()[w.get_block(*c)].name == "lamp_red")
+    mid = diff(before, file_snapshot())
+    check("drag_shown_before_release", shown == cells, f"{len(shown)} of {len(cells)}")
+    check("drag_not_written_before_release", mid == [] and not commits and version() == v0,
+          (len(mid), len(commits), v0, version()))
     ev("LEFTMOUSE", "RELEASE", at=(xs[-1], y))
     yield 2
+    w.file.db.set_trace_callback(None)
     got = diff(before, file_snapshot())
     check("drag_paints_the_row", got == cells, f"{len(got)} cells vs {len(cells)}")
+    check("drag_is_one_transaction", len(commits) == 1 and version() != v0,
+          (len(commits), v0, version()))
+    other.close()
     check("drag_recorded", sc.voxel_edit.step != step, (step, sc.voxel_edit.step))
     shot("drag")
     yield from key("Z", ctrl=True)
     check("drag_one_ctrl_z_undoes_it_all", diff(before, file_snapshot()) == [])
+    # a drag ended by Esc keeps what it showed: written when it ends, one undo step
+    y2 = y + 36
+    cells2 = sorted({surface_cell(x, y2, TOP)[0] for x in xs[:12]})
+    move((xs[0], y2))
+    yield 2
+    ev("LEFTMOUSE", "PRESS", at=(xs[0], y2))
+    yield 1
+    for x in xs[1:12]:
+        move((x, y2))
+        yield 1
+    ev("ESC", "PRESS")
+    yield 2
+    ev("ESC", "RELEASE")
+    ev("LEFTMOUSE", "RELEASE", at=(xs[11], y2))
+    yield 2
+    got = diff(before, file_snapshot())
+    check("drag_ended_by_esc_is_written", got == cells2, f"{len(got)} cells vs {len(cells2)}")
+    yield from key("Z", ctrl=True)
+    check("drag_ended_by_esc_one_ctrl_z", diff(before, file_snapshot()) == [])
     # box mode: one corner, then the opposite one; Shift clears the box it spans
     sc = bpy.context.scene
     sc.voxel_edit.box = True

@@ -137,3 +137,53 @@ def test_incremental_equals_full_every_edit():
         z = int(rng.integers(0, 50))
         update.edit(b, L, x, y, z, int(rng.choice(ids)))
         assert np.array_equal(L, solve.solve(b, "numpy")), f"after edit {k}"
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_incremental_darkening_equals_full(seed):
+    """The light-removal pass: lamps of different colours placed close together (their
+    light overlaps), then removed or swapped for another colour, daylight shafts into a
+    cave closed and reopened, attenuating blocks over lit air; checked after every edit
+    against a full solve, and equal to the brute-force reference at the end."""
+    rng = np.random.default_rng(100 + seed)
+    w, h = 34, 31
+    b = np.zeros((w, h, 256), np.uint16, order="F")
+    b[:, :, :30] = R.id("stone")
+    b[3:w - 3, 3:h - 3, 10:26] = 0  # a cave under a 4-voxel roof
+    shafts = [(int(rng.integers(4, w - 4)), int(rng.integers(4, h - 4))) for _ in range(5)]
+    for x, y in shafts:  # holes in the roof: daylight falls into the cave
+        b[x, y, 26:30] = 0
+    L = solve.solve(b, "numpy")
+    lamps_ = [R.id(n) for n in ("lamp_red", "lamp_green", "lamp_blue", "lamp_white",
+                               "lamp_yellow", "glowing_mushroom", "ore")]
+    dim = [R.id(n) for n in ("water", "leaves", "glass", "stone", "log")]
+    placed = []
+    for k in range(90):
+        kind = k % 5
+        if kind in (0, 1) or not placed:  # a lamp near others (overlapping colours)
+            if placed and rng.random() < 0.7:
+                px, py, pz = placed[int(rng.integers(len(placed)))]
+                x, y = px + int(rng.integers(-3, 4)), py + int(rng.integers(-3, 4))
+                z = min(max(pz + int(rng.integers(-2, 3)), 10), 25)
+            else:
+                x, y, z = int(rng.integers(3, w - 3)), int(rng.integers(3, h - 3)), \
+                    int(rng.integers(10, 26))
+            x, y = min(max(x, 0), w - 1), min(max(y, 0), h - 1)
+            update.edit(b, L, x, y, z, int(rng.choice(lamps_)))
+            placed.append((x, y, z))
+        elif kind == 2:  # remove a lamp, or swap it for another colour
+            x, y, z = placed.pop(int(rng.integers(len(placed))))
+            new = int(rng.choice(lamps_)) if rng.random() < 0.3 else 0
+            update.edit(b, L, x, y, z, new)
+            if new:
+                placed.append((x, y, z))
+        elif kind == 3:  # close or reopen a shaft (at the roof, or lower in the cave)
+            x, y = shafts[int(rng.integers(len(shafts)))]
+            z = int(rng.integers(20, 30))
+            update.edit(b, L, x, y, z, 0 if b[x, y, z] else int(rng.choice(dim)))
+        else:  # a dimming or blocking block next to a lit voxel
+            x, y = int(rng.integers(0, w)), int(rng.integers(0, h))
+            z = int(rng.integers(10, 27))
+            update.edit(b, L, x, y, z, int(rng.choice(dim + [0])))
+        assert np.array_equal(L, solve.solve(b, "numpy")), f"after edit {k} (kind {kind})"
+    assert np.array_equal(L, _reference(b))

@@ -96,3 +96,33 @@ def test_two_sided_mesh_duplicates_plants():
     two = meshing.to_mesh(q, two_sided=True)
     assert len(two.face) == len(one.face) + 2      # flowers: 2 planes; cactus single-sided
     assert np.allclose(two.normals[-4:], -one.normals[4 * np.nonzero(q["block"] == 9)[0][-1]])
+
+
+@pytest.mark.parametrize("backend", ["numpy", "opencl"])
+def test_region_rebuild_spliced_equals_full_build(backend, request):
+    """An edit's remesh: only the render regions around the changed voxel are meshed
+    again (regions=) and spliced into the old mesh; equal to meshing it all again,
+    also at region borders (z 63/64, 127/128) and the world's bottom and top."""
+    if backend == "opencl":
+        request.getfixturevalue("cl_device")
+    from voxel_addon.light import scenes as light_scenes
+    from voxel_addon.meshing import build_chunks, splice
+    R = REGISTRY
+    rng = np.random.default_rng(4)
+    b = light_scenes.terrain(34, 34, 3)
+    ids = [0, R.id("stone"), R.id("glass"), R.id("water"), R.id("leaves"), R.id("lamp_red")]
+    old = build_chunks(np.asfortranarray(b), (0, 0), backend=backend)
+    for t in range(30):
+        x, y = (int(v) for v in rng.integers(1, 33, 2))
+        top = int(np.flatnonzero(b[x, y])[-1])
+        z = int(rng.choice([63, 64, 127, 128, 0, 255])) if t % 5 == 0 else \
+            int(np.clip(top + rng.integers(-3, 3), 1, 254))
+        b[x, y, z] = rng.choice(ids)
+        r0, r1 = max(z - 1, 0) // 64, min(z + 1, 255) // 64 + 1
+        part = build_chunks(np.asfortranarray(b), (0, 0), backend=backend, regions=(r0, r1))
+        full = build_chunks(np.asfortranarray(b), (0, 0), backend=backend)
+        for k, m in full.items():
+            s = splice(old[k], part[k], r0, r1)
+            assert np.array_equal(s.vertices, m.vertices), (t, k, z)
+            assert np.array_equal(s.ranges, m.ranges) and np.array_equal(s.quads, m.quads)
+        old = full

@@ -11,7 +11,7 @@ from voxel_addon.core.blocks import REGISTRY
 from voxel_addon.core.errors import VoxelError
 from voxel_addon.generation import make_generator
 from voxel_addon.world import Stream, World
-from voxel_addon.world.edit import Record, edit, redo, undo
+from voxel_addon.world.edit import Record, edit, redo, undo, write
 
 SEED = 7
 PALETTE = [REGISTRY.id(n) for n in ("air", "stone", "glass", "lamp_red", "lamp_blue",
@@ -88,7 +88,14 @@ def test_random_strokes_with_undo_redo_equal_model_and_full_recompute(world_path
                         c = w.chunk_at(x >> 4, y >> 4)
                         base[(x, y, z)] = (c.get(x & 15, y & 15, z), 0)
                     stroke.append((x, y, z, b, d))
-                payloads, rec = edit(w, stroke)
+                if rng.random() < 0.4:  # a drag: parts held in memory, one write
+                    parts = [edit(w, [ch], write=False) for ch in stroke]
+                    write(w)
+                    payloads = [p for ps, _ in parts for p in ps]
+                    payloads = list({p.key: p for p in payloads}.values())
+                    rec = _merge([r for _, r in parts])
+                else:
+                    payloads, rec = edit(w, stroke)
                 for x, y, z, b, d in stroke:
                     model[(x, y, z)] = (b, d)
                 if rec.voxels:
@@ -114,6 +121,56 @@ def test_random_strokes_with_undo_redo_equal_model_and_full_recompute(world_path
             assert (0 if c.data is None else int(c.data[x & 15, y & 15, z])) == d
         w.load([(x, y) for x in range(-1, 4) for y in range(-1, 4)])
         assert check_against_full(w, world_path, model, -1, -1, 4, 4) >= 9
+
+
+def _merge(recs):
+    first, last = {}, {}
+    for r in recs:
+        for v, b, a in zip(r.voxels, r.before, r.after):
+            first.setdefault(v, b)
+            last[v] = a
+    vs = tuple(v for v in first if first[v] != last[v])
+    return Record(vs, tuple(first[v] for v in vs), tuple(last[v] for v in vs))
+
+
+def test_a_held_stroke_is_written_in_one_transaction(world_path):
+    """Parts edited with write=False change the world at once but not the file (a
+    second connection sees no commit); write() then commits them all in ONE
+    transaction (COMMITs counted by SQLite's statement trace); a stroke left held
+    is written when the world closes."""
+    import sqlite3
+    from voxel_addon.storage import WorldFile
+    lamp, glass = REGISTRY.id("lamp_red"), REGISTRY.id("glass")
+    with World.create(world_path, seed=SEED, loader=False) as w:
+        edit(w, (8, 8, top(w, 8, 8) + 1, "stone"))       # light the area first
+        other = sqlite3.connect(world_path)
+        version = lambda: other.execute("PRAGMA data_version").fetchone()[0]  # noqa: E731
+        v0 = version()
+        commits = []
+        w.file.db.set_trace_callback(
+            lambda sql: commits.append(sql) if sql.strip().upper().startswith("COMMIT") else None)
+        cells = [(x, 3, top(w, x, 3) + 1) for x in range(-6, 22, 2)]  # across 3 chunks
+        for x, y, z in cells:
+            payloads, rec = edit(w, (x, y, z, lamp), write=False)
+            assert payloads and rec.voxels == ((x, y, z),)
+            assert w.get_block(x, y, z) == lamp
+        assert w.held and commits == [] and version() == v0
+        wf = WorldFile(world_path, readonly=True)
+        assert all(wf.read_chunk((x >> 4, y >> 4)) is None or
+                   wf.read_chunk((x >> 4, y >> 4))[0][x & 15, y & 15, z] != lamp
+                   for x, y, z in cells)
+        write(w)
+        assert len(commits) == 1 and version() != v0 and not w.held
+        for x, y, z in cells:
+            assert wf.read_chunk((x >> 4, y >> 4))[0][x & 15, y & 15, z] == lamp
+        wf.close()
+        w.file.db.set_trace_callback(None)
+        other.close()
+        held = (30, 30, top(w, 30, 30) + 1)
+        edit(w, (*held, glass), write=False)             # held when the world closes
+    with World.open(world_path, loader=False) as w:
+        assert w.get_block(*held) == glass
+        assert all(w.get_block(*c) == lamp for c in cells)
 
 
 def test_payloads_only_for_what_changed(world_path):

@@ -15,6 +15,7 @@ from ..world.edit import edit
 
 SEED = 7
 BUDGET = 0.004  # the consumer's drain budget per call (4 ms)
+EDITS_ONLY = "VOXEL_BENCH_EDITS_ONLY"  # set: only the edit rows, on a view-8 world
 
 
 def _load() -> str:
@@ -58,6 +59,9 @@ def _warm(path):
 
 
 def run(ctx):
+    if os.environ.get(EDITS_ONLY):
+        yield from _edits_only(ctx)
+        return
     import psutil
     far = 12 if ctx.quick else 32
     near = 8 if ctx.quick else 16
@@ -96,7 +100,23 @@ def run(ctx):
            f"RSS growth / active voxels ({len(w.chunks)} chunks: blocks + final light "
            f"(compact: its non-uniform layers) + meshes kept for edits)")
 
-    # edits near the surface, the stream idle around them
+    yield from _edits(ctx, w)
+    s.close()
+    t0 = time.perf_counter()
+    w.close()
+    yield ("world_close_save_s", time.perf_counter() - t0, "s",
+           f"saving the {n}+ generated chunks at close")
+
+    with World.open(path) as w:
+        s, dt, cpu = _stream(w, far)
+        s.close()
+    yield ("stream_reload_view32_s", dt, "s", f"{n} chunks loaded from the file (blocks + stored "
+           f"light), meshed, {_load()} (target 8 s){note_q}")
+    yield ("stream_reload_view32_cpu_s", cpu, "s", "process CPU time of the same (all threads)")
+
+
+def _edits(ctx, w):
+    """Single-block edits near the surface (clear, lamp, solid), the stream idle."""
     rng = np.random.default_rng(3)
     lamps = [REGISTRY.id(n) for n in ("lamp_red", "lamp_green", "lamp_blue", "glowstone")
              if n in REGISTRY.names()] or [REGISTRY.id("lamp_red")]
@@ -114,21 +134,19 @@ def run(ctx):
         payloads, _ = edit(w, change)
         times.append(time.perf_counter() - t)
         cpus.append(time.thread_time() - c)
-    s.close()
     t = np.array(times) * 1e3
     note = f"{len(t)} single-block edits at the surface (clear, lamp, solid), {_load()}"
     yield ("edit_to_payload_median_ms", float(np.median(t)), "ms", note + " (target 5 ms)")
     yield ("edit_to_payload_p90_ms", float(np.percentile(t, 90)), "ms", note + " (target 20 ms)")
     yield ("edit_to_payload_median_cpu_ms", float(np.median(cpus) * 1e3), "ms",
            "CPU time of the editing thread (OpenCL meshing's pocl threads not included)")
-    t0 = time.perf_counter()
-    w.close()
-    yield ("world_close_save_s", time.perf_counter() - t0, "s",
-           f"saving the {n}+ generated chunks at close")
 
-    with World.open(path) as w:
-        s, dt, cpu = _stream(w, far)
+
+def _edits_only(ctx):
+    """The edit rows alone (env VOXEL_BENCH_EDITS_ONLY): the same edits on a world
+    streamed to distance 8 (it covers the edited square), the stream kept open idle."""
+    _warm(ctx.tmp / "warm.sqlite")
+    with World.create(ctx.tmp / "edits.sqlite", seed=SEED) as w:
+        s, _, _ = _stream(w, 8)
+        yield from _edits(ctx, w)
         s.close()
-    yield ("stream_reload_view32_s", dt, "s", f"{n} chunks loaded from the file (blocks + stored "
-           f"light), meshed, {_load()} (target 8 s){note_q}")
-    yield ("stream_reload_view32_cpu_s", cpu, "s", "process CPU time of the same (all threads)")

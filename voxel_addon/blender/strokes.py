@@ -15,9 +15,11 @@ data (which must not change while Blender restores it). A stack of our own besid
 Blender's would fall out of step with it (RetopoFlow #1494); one number inside
 Blender's snapshots cannot.
 
-Each stroke reaches the world file before the operator returns (a click: one
-transaction; a drag: one per mouse event, so even a drag cut short by a crash keeps
-what was shown), so killing Blender right after a stroke loses nothing. The journal
+Each stroke reaches the world file in one transaction before the operator returns,
+so killing Blender right after a stroke loses nothing. A drag keeps its parts in
+memory (shown at once) and writes them together when it ends: on release, on Esc or
+right-click, when Blender cancels the operator (the window or file closes) and, at
+the latest, when the world closes. The journal
 forgets what Blender's own history can no longer reach (`Journal.trim`).
 """
 from __future__ import annotations
@@ -26,21 +28,41 @@ import os
 
 
 # ---- the world side: world/edit.py does the work -----------------------------
-STATS = {"edits": 0, "voxels": 0, "ms": 0.0, "last_ms": 0.0, "done": 0.0}  # the edit path's own time
+STATS = {"edits": 0, "voxels": 0, "ms": 0.0, "last_ms": 0.0, "done": 0.0,
+         "stroke_ms": 0.0}  # the stroke path's own time: edits and the write at its end
 
 
-def apply(world, changes):
-    """Set `changes` ((x, y, z, block[, data]) tuples) in one transaction, relit and
-    remeshed; returns (payloads for the viewport, world.edit.Record)."""
+def apply(world, changes, write: bool = True):
+    """Set `changes` ((x, y, z, block[, data]) tuples), relit and remeshed; returns
+    (payloads for the viewport, world.edit.Record). write=True: one transaction now
+    (a whole stroke); False: a part of a drag, written by `finish`."""
     import time
     from ..world import edit
     t = time.perf_counter()
-    out = edit.edit(world, list(changes))
+    out = edit.edit(world, list(changes), write)
     done = time.perf_counter()
     ms = (done - t) * 1e3
     STATS.update(edits=STATS["edits"] + 1, voxels=STATS["voxels"] + len(out[1].voxels),
-                 ms=STATS["ms"] + ms, last_ms=ms, done=done)
+                 ms=STATS["ms"] + ms, done=done, stroke_ms=STATS["stroke_ms"] + ms)
+    if write:
+        _stroke_done()
     return out
+
+
+def finish(world) -> None:
+    """Write a drag's held parts in one transaction (nothing held: nothing to do)."""
+    import time
+    from ..world import edit
+    t = time.perf_counter()
+    if world.held:
+        edit.write(world)
+    ms = (time.perf_counter() - t) * 1e3
+    STATS.update(ms=STATS["ms"] + ms, stroke_ms=STATS["stroke_ms"] + ms)
+    _stroke_done()
+
+
+def _stroke_done():
+    STATS.update(last_ms=STATS["stroke_ms"], stroke_ms=0.0)
 
 
 def undo(world, rec) -> list:

@@ -115,6 +115,24 @@ class Chunk:
             a = self._light = unpack_layers(*self._lpack)
         return a
 
+    @property
+    def has_light(self) -> bool:
+        """Whether final light is known (without rebuilding a compacted one)."""
+        return self._light is not None or self._lpack is not None
+
+    def light_into(self, out: np.ndarray, xs: slice, ys: slice, z0: int, z1: int) -> None:
+        """out[...] = light[xs, ys, z0:z1] without rebuilding a compacted light (a
+        whole chunk for a few of its layers costs more than the copy)."""
+        a = self._light
+        if a is not None or self._lpack is None:
+            out[...] = 0 if a is None else a[xs, ys, z0:z1]
+            return
+        _, lo, hi, bot, top, slab = self._lpack
+        a, b = min(max(lo, z0), z1), max(min(hi, z1), z0)
+        out[:, :, :a - z0] = bot
+        out[:, :, a - z0:b - z0] = slab[xs, ys, a - lo:b - lo]
+        out[:, :, b - z0:] = top
+
     @light.setter
     def light(self, value) -> None:
         self._light, self._lpack = value, None

@@ -7,6 +7,15 @@ changed start value and 14 above p. Everything outside that box is the old (exac
 light, so the box is re-solved from scratch with its 1-voxel rim held fixed: a path
 from outside enters the box through the rim, whose values already account for it.
 
+Otherwise (darkening, e.g. clearing a lamp or closing a daylight shaft) light that
+may have come through the changed voxels is removed first, as in Minecraft's light
+removal: from each changed lane outwards, every neighbour whose value is below the
+value of the voxel it was reached from could owe its light to it and is cleared
+(over-clearing is harmless). What stays is then a lower bound of the new light
+(any remaining value has a path from an unchanged source avoiding cleared voxels).
+The cleared voxels get their start values back and, with the voxels around them,
+seed the flood to the fixpoint. Work follows the light that moved, not the box.
+
 When the edit can only add light (p's cost does not rise and no emission falls, e.g.
 placing a lamp or digging out a block), the new light is >= the old everywhere and is
 the fixpoint reached from max(old light, new start values): the box keeps the old
@@ -59,8 +68,8 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
     shape, (gy, gz) = flood.grid((nz, ny, nx))
     f = np.zeros(shape + (4,), np.uint8)  # lanes: all components flood at once
     ox, oy, oz = 1 - (sx.start - ex.start), 1 - (sy.start - ey.start), 2 - (sz.start - ez.start)
-    f[oz:oz + ez.stop - ez.start, oy:oy + ey.stop - ey.start, ox:ox + ex.stop - ex.start] = \
-        model.unpack(light[ex, ey, ez].T)
+    model.unpack(light[ex, ey, ez].T, out=f[oz:oz + ez.stop - ez.start,
+                                           oy:oy + ey.stop - ey.start, ox:ox + ex.stop - ex.start])
     cost = np.full(shape, model.OPAQUE_COST, np.uint8)
     inner = (slice(2, -2), slice(1, -1), slice(1, -1))
     cost[inner] = cost_t[blocks[sx, sy, sz].T]
@@ -79,15 +88,73 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
         vox = np.concatenate([vox, vox[-1] + np.array([-1, 1, -gy, gy, -gz, gz])])
         seeds = (4 * vox.astype(np.int64)[:, None] + np.arange(4)).ravel()
     else:
-        # Start values of the box: emission and the column pass (carry from the top).
-        top_ = np.flatnonzero(blocks[sx, sy, sz.stop:].any(axis=(0, 1)))
-        top = sz.stop + (int(top_[-1]) + 1 if top_.size else 0)
-        f[inner] = model.start(blocks[sx, sy, sz.start:top].T)[:nz]
-        # inside + rim, not the guard layers
-        seeds = flood.seeds_lanes(f, cost.reshape(-1), (1, gy, gz), gz, cost.size - gz)
+        pz = np.arange(zc, z + 1) - sz.start + 2
+        vox = pz * gz + py * gy + px
+        # the changed lanes: every component of p, daylight of the column below it
+        lanes = np.concatenate([4 * vox[:-1] + 3, 4 * vox[-1] + np.arange(4)])
+        seeds = _remove(f.reshape(-1), cost.reshape(-1), lanes, blocks,
+                        (sx.start, sy.start, sz.start), (gy, gz))
+        # ... and p's neighbours, which may now shine into it (its cost may have dropped)
+        seeds = np.concatenate([seeds, (4 * (vox[-1] + np.array([-1, 1, -gy, gy, -gz, gz]))
+                                        [:, None] + np.arange(4)).ravel()])
     flood.flood_lanes(f.reshape(-1), cost.reshape(-1), seeds, gy, gz)
     light[sx, sy, sz] = model.pack(f[inner]).T
     return sx, sy, sz
+
+
+def _remove(f, cost, lanes, blocks, base, strides):
+    """Clear light that may owe itself to `lanes` (flat lane indices of the padded
+    box `f`, whose start values changed) and restore the start values of what was
+    cleared. Returns the seeds that refill it: the cleared lanes and their
+    neighbours. `base` = array coordinates of the box's first inside voxel."""
+    gy, gz = strides
+    offs = 4 * np.array([-1, 1, -gy, gy, -gz, gz], np.int64)
+    idx = np.asarray(lanes, np.int64)
+    val = f[idx].astype(np.int16)
+    f[idx] = 0
+    out = [idx]
+    live = val > 1  # a 1 lights nothing around it
+    idx, val = idx[live], val[live]
+    while idx.size:
+        n = (idx[:, None] + offs).ravel()
+        v = f[n]
+        m = (v > 0) & (v < np.repeat(val, 6)) & (cost[n >> 2] != model.OPAQUE_COST)
+        n = np.unique(n[m])
+        if not n.size:
+            break
+        val = f[n].astype(np.int16)
+        f[n] = 0
+        out.append(n)
+        idx = n[val > 1]
+        val = val[val > 1]
+    gone = np.unique(np.concatenate(out))
+    f[gone] = _starts(gone, blocks, base, gy, gz)
+    near = (gone[:, None] + offs).ravel()
+    return np.concatenate([gone, near[f[near] > 1]])
+
+
+def _starts(lanes, blocks, base, gy, gz):
+    """Start values (emission, column daylight) of flat lanes of the padded box."""
+    _, att, opaque, emis, _, _ = model.tables()
+    v = lanes >> 2
+    c = lanes & 3
+    x = v % gy - 1 + base[0]
+    y = v // gy % (gz // gy) - 1 + base[1]
+    z = v // gz - 2 + base[2]
+    ids = blocks[x, y, z]
+    out = np.zeros(lanes.size, np.uint8)
+    rgb = c < 3
+    out[rgb] = emis[ids[rgb], c[rgb]]
+    d = ~rgb
+    if d.any():
+        cols, inv = np.unique(x[d] * blocks.shape[1] + y[d], return_inverse=True)
+        z0 = int(z[d].min())
+        col = blocks[cols // blocks.shape[1], cols % blocks.shape[1], z0:]  # (n, zs - z0)
+        a = np.cumsum(att[col[:, ::-1]].astype(np.int16), axis=1)[:, ::-1]
+        blocked = np.maximum.accumulate(opaque[col[:, ::-1]], axis=1)[:, ::-1].astype(bool)
+        day = np.where(blocked, 0, np.clip(model.MAX - a, 0, model.MAX))
+        out[d] = day[inv, z[d] - z0]
+    return out
 
 
 def edit(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, block: int):

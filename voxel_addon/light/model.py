@@ -65,10 +65,18 @@ def pack(lanes: np.ndarray) -> np.ndarray:
     return l16[..., 0] | (l16[..., 1] << 4) | (l16[..., 2] << 8) | (l16[..., 3] << 12)
 
 
-def unpack(light: np.ndarray) -> np.ndarray:
-    """Packed uint16 -> [..., 4] uint8 R,G,B,D."""
+def unpack(light: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """Packed uint16 -> [..., 4] uint8 R,G,B,D (into `out` when given)."""
     light = np.asarray(light, np.uint16)
-    return np.stack([(light >> s) & 0xF for s in (0, 4, 8, 12)], axis=-1).astype(np.uint8)
+    if out is None:
+        out = np.empty(light.shape + (4,), np.uint8)
+    if light.ndim == 0 or light.strides[-1] != 2:
+        light = np.ascontiguousarray(light).reshape(light.shape or (1,))
+    # bytes (R | G << 4, B | D << 4): low nibbles to lanes 0, 2, high to 1, 3
+    b = light.view(np.uint8).reshape(out.shape[:-1] + (2,))
+    np.bitwise_and(b, 15, out=out[..., 0::2])
+    np.right_shift(b, 4, out=out[..., 1::2])
+    return out
 
 
 def slab(blocks: np.ndarray) -> tuple[int, int]:

@@ -108,11 +108,13 @@ def _check_region(region_h):
 
 
 def build_chunks(blocks, origin=(0, 0), *, method="greedy", backend="numpy",
-                 region_h=REGION_H, keys=None) -> dict:
+                 region_h=REGION_H, keys=None, regions=None) -> dict:
     """Viewport data of every chunk of an area in one batch: `blocks` is
     (16*nx + 2, 16*ny + 2, 256), the chunks plus a one-voxel ring of neighbours;
     `origin` = (cx, cy) of its first chunk. Returns {(cx, cy): ChunkMesh}; `keys`
-    optionally limits the result to those chunks (the whole area is still meshed)."""
+    optionally limits the result to those chunks (the whole area is still meshed).
+    `regions` = (r0, r1): mesh only render regions r0..r1-1 (the others come out
+    empty; `splice` puts them into a full mesh)."""
     blocks = np.asarray(blocks)
     W, H = blocks.shape[0] - 2, blocks.shape[1] - 2
     if blocks.ndim != 3 or blocks.shape[2] != 256 or W <= 0 or H <= 0 or W % 16 or H % 16:
@@ -121,7 +123,9 @@ def build_chunks(blocks, origin=(0, 0), *, method="greedy", backend="numpy",
     _check_region(region_h)
     backend = check(blocks, "context", method, backend, 0, 256)
     nx, ny = W // 16, H // 16
-    r = rects(area(blocks, "context"), (16, 16), method=method, backend=backend, split=region_h)
+    r0, r1 = regions or (0, 256 // region_h)
+    r = rects(area(blocks, "context"), (16, 16), method=method, backend=backend, split=region_h,
+              z0=r0 * region_h, z1=r1 * region_h)
     region = r["z"] // region_h
     ps = PASS_OF[r["block"]]
     order = np.argsort(sort_key(r, (region, 8), (ps, 2), xy_bits=5))
@@ -148,6 +152,22 @@ def build_chunks(blocks, origin=(0, 0), *, method="greedy", backend="numpy",
         a, b = qstart[i], qstart[i + 1]
         out[key] = ChunkMesh(verts[4 * a:4 * b], ranges[i], region_h, q[a:b])
     return out
+
+
+def splice(old: ChunkMesh, new: ChunkMesh, r0: int, r1: int) -> ChunkMesh:
+    """`old` with render regions r0..r1-1 taken from `new` (built with regions=(r0, r1)):
+    the same mesh as a full build (regions are meshed independently, vertices are
+    ordered region by region)."""
+    a = int(old.ranges[r0, 0, 0])
+    b = a + int(old.ranges[r0:r1, :, 1].sum())
+    n0, n1 = int(new.ranges[r0, 0, 0]), int(new.ranges[r0, 0, 0] + new.ranges[r0:r1, :, 1].sum())
+    counts = old.ranges[..., 1].copy()
+    counts[r0:r1] = new.ranges[r0:r1, :, 1]
+    flat = counts.reshape(-1)
+    first = (np.cumsum(flat) - flat).reshape(counts.shape)
+    verts = np.concatenate([old.vertices[:a], new.vertices[n0:n1], old.vertices[b:]])
+    quads = np.concatenate([old.quads[:a // 4], new.quads[n0 // 4:n1 // 4], old.quads[b // 4:]])
+    return ChunkMesh(verts, np.stack([first, counts], -1).astype(np.int32), old.region_h, quads)
 
 
 def build_chunk(blocks, method="greedy", backend="numpy", region_h=REGION_H) -> ChunkMesh:

@@ -1,8 +1,8 @@
 """Edits (issue 11 §3): set blocks, relight incrementally, remesh what changed, keep
 an undo record, write one transaction per stroke.
 
-`edit(world, changes)`: changes is one (x, y, z, block[, data]) or a list of them
-(a brush stroke); block is a name or an id. Everything is checked before anything
+`edit(world, changes, write=True)`: changes is one (x, y, z, block[, data]) or a
+list of them (a brush stroke); block is a name or an id. Everything is checked before anything
 changes (a VoxelError on one line). Returns (payloads, record): the new Payload of
 every chunk whose light or mesh really changed (at most the 3x3 around each change:
 light reaches 14 voxels; the chunks holding a changed voxel or a face neighbour of
@@ -12,9 +12,16 @@ and after (id, data) of every voxel that really changed. `undo(world, record)` a
 
 Light: the chunks around the stroke must have final light; those that do not (not
 streamed yet) are lit first in one batch (build.light_and_mesh). Then each voxel is
-relit with light.update on a window of the 3x3 chunks around the stroke, which
-equals a full solve (tests). The payloads are also queued on every Stream of the
+relit with light.update on a window holding every voxel's relight box (a darkening
+edit clears and refills only the light that moved), which equals a full solve
+(tests). Meshes: only the render regions (64 layers) around the changed voxels are
+meshed again and spliced in. The payloads are also queued on every Stream of the
 world, so a consumer that only drains sees them as well.
+
+Writing: edit(..., write=True) commits the stroke in one transaction before it
+returns; write=False holds it in memory (shown, but the file unchanged) until
+`write(world)`, the next commit, a flush or close: a drag's parts, one transaction
+when it ends.
 """
 from __future__ import annotations
 
@@ -40,10 +47,17 @@ class Record(NamedTuple):
     after: tuple[tuple[int, int], ...]
 
 
-def edit(world, changes):
-    """Apply a stroke; returns (payloads, Record)."""
+def edit(world, changes, write: bool = True):
+    """Apply a stroke; returns (payloads, Record). write=False keeps the change in
+    memory (shown, saved by the next `write`, flush or close): the parts of one
+    drag, written together when it ends."""
     items = _check(world, changes)
-    return _apply(world, items)
+    return _apply(world, items, write)
+
+
+def write(world) -> None:
+    """Write what edits with write=False held, in one transaction."""
+    world.commit()
 
 
 def undo(world, record: Record) -> list[Payload]:
@@ -92,7 +106,7 @@ def _ensure_lit(world, keys) -> list[Payload]:
     for _ in range(8):  # chunks may be unloaded meanwhile: try again
         with world._lock:
             todo = [k for k in keys if k not in world.corrupt and (
-                world.chunks.get(k) is None or world.chunks[k].light is None
+                world.chunks.get(k) is None or not world.chunks[k].has_light
                 or world.chunks[k].mesh is None)]
         if not todo:
             return out
@@ -107,22 +121,30 @@ def _ensure_lit(world, keys) -> list[Payload]:
 def _gather(world, x0, y0, x1, y1, attr, z0=0, z1=C.HEIGHT):
     """Voxel columns [x0, x1) x [y0, y1) of active chunks' `attr` as one array
     (zeros where a chunk or its array is missing). Call with the world's lock held.
-    The array is this thread's scratch buffer for `attr`, valid until the next call:
-    a fresh 1.3 MB array per edit costs page faults (~0.5 ms in a big process).
-    Only layers [z0, z1) are filled; the others hold stale values."""
-    shape = (x1 - x0, y1 - y0, C.HEIGHT)
-    out = getattr(_scratch, attr, None)
-    if out is None or out.shape != shape:
-        out = C.empty(width=x1 - x0, depth=y1 - y0)
-        setattr(_scratch, attr, out)
+    The array is a view of this thread's scratch buffer for `attr`, valid until the
+    next call: a fresh 1.3 MB array per edit costs page faults (~0.5 ms in a big
+    process). Only layers [z0, z1) are filled; the others hold stale values."""
+    w, h = x1 - x0, y1 - y0
+    buf = getattr(_scratch, attr, None)
+    if buf is None or buf.shape[0] < w or buf.shape[1] < h:
+        n = max(w, h, 0 if buf is None else max(buf.shape[:2]))
+        buf = C.empty(width=n, depth=n)
+        setattr(_scratch, attr, buf)
+    out = buf[:w, :h]
     for cx in range(x0 >> 4, ((x1 - 1) >> 4) + 1):
         for cy in range(y0 >> 4, ((y1 - 1) >> 4) + 1):
             c = world.chunks.get((cx, cy))
-            a = None if c is None else getattr(c, attr)
             ax0, ay0 = max(x0, cx * S), max(y0, cy * S)
             ax1, ay1 = min(x1, cx * S + S), min(y1, cy * S + S)
-            out[ax0 - x0:ax1 - x0, ay0 - y0:ay1 - y0, z0:z1] = 0 if a is None else \
-                a[ax0 - cx * S:ax1 - cx * S, ay0 - cy * S:ay1 - cy * S, z0:z1]
+            dst = out[ax0 - x0:ax1 - x0, ay0 - y0:ay1 - y0, z0:z1]
+            xs, ys = slice(ax0 - cx * S, ax1 - cx * S), slice(ay0 - cy * S, ay1 - cy * S)
+            if c is None:
+                dst[...] = 0
+            elif attr == "light":
+                c.light_into(dst, xs, ys, z0, z1)
+            else:
+                a = getattr(c, attr)
+                dst[...] = 0 if a is None else a[xs, ys, z0:z1]
     return out
 
 
@@ -145,29 +167,33 @@ def _light_layers(world, items):
     return max(z0 - incremental.R - 1, 0), min(z1, C.HEIGHT)
 
 
-def _apply(world, items):
+def _apply(world, items, write=True):
     from .. import light, meshing
     if not items:
         return [], Record((), (), ())
     keys = {C.key_of(x, y) for x, y, _, _, _ in items}
     near = _around(keys, 1)
     fresh = {p.key: p for p in _ensure_lit(world, near)}
-    kx0, ky0 = min(k[0] for k in near), min(k[1] for k in near)
-    kx1, ky1 = max(k[0] for k in near) + 1, max(k[1] for k in near) + 1
-    # window: the chunks around the stroke plus one voxel (the outer chunks' mesh ring)
-    x0, y0, x1, y1 = kx0 * S - 1, ky0 * S - 1, kx1 * S + 1, ky1 * S + 1
+    # window: every voxel's relight box with its rim, and the chunks that may be
+    # remeshed (a changed voxel's chunk and face neighbours') with their mesh ring
+    from ..light.incremental import R
+    remesh = {C.key_of(x + i, y + j) for x, y, _, _, _ in items for i, j in
+              ((0, 0), (-1, 0), (1, 0), (0, -1), (0, 1))}
+    x0 = min(min(x for x, _, _, _, _ in items) - R - 1, min(k[0] for k in remesh) * S - 1)
+    y0 = min(min(y for _, y, _, _, _ in items) - R - 1, min(k[1] for k in remesh) * S - 1)
+    x1 = max(max(x for x, _, _, _, _ in items) + R + 2, max(k[0] for k in remesh) * S + S + 1)
+    y1 = max(max(y for _, y, _, _, _ in items) + R + 2, max(k[1] for k in remesh) * S + S + 1)
     with world._lock:
         missing = [k for k in near if k not in world.corrupt and (
-            world.chunks.get(k) is None or world.chunks[k].light is None)]
+            world.chunks.get(k) is None or not world.chunks[k].has_light)]
         if missing:  # unloaded between _ensure_lit and here: rare, start over
-            payloads, rec = _apply(world, items)
+            payloads, rec = _apply(world, items, write)
             return sorted({**fresh, **{p.key: p for p in payloads}}.values()), rec
         blocks = _gather(world, x0, y0, x1, y1, "blocks")
         lit = _gather(world, x0, y0, x1, y1, "light", *_light_layers(world, items))
         first: dict = {}
         last: dict = {}
-        lo = [blocks.shape[0], blocks.shape[1], C.HEIGHT]  # union of the relit boxes
-        hi = [0, 0, 0]
+        steps = []  # (x, y, z, new id, old id) of every block change, in order
         for x, y, z, b, d in items:
             c = world.chunks[C.key_of(x, y)]
             lx, ly = x & 15, y & 15
@@ -182,11 +208,7 @@ def _apply(world, items):
                     c.data = C.empty()
                 c.data[lx, ly, z] = d
             if old[0] != b:
-                wx, wy = x - x0, y - y0
-                blocks[wx, wy, z] = b
-                box = light.update(blocks, lit, wx, wy, z, old[0])
-                lo = [min(v, sl.start) for v, sl in zip(lo, box)]
-                hi = [max(v, sl.stop) for v, sl in zip(hi, box)]
+                steps.append((x, y, z, b, old[0]))
         changed = {C.key_of(x, y) for x, y, _ in last}
         voxels = [v for v in last if first[v] != last[v]]
         if not changed:
@@ -195,7 +217,35 @@ def _apply(world, items):
         for k in changed:
             world.bver[k] = t
             world.chunks[k].dirty = True
-        # light: only chunks that overlap the relit boxes can differ
+        # meshes: chunks holding a changed voxel or one of its face neighbours, only
+        # the render regions (64 layers) that hold a changed voxel's faces
+        remesh = {C.key_of(x + i, y + j) for x, y, _ in last for i, j in
+                  ((0, 0), (-1, 0), (1, 0), (0, -1), (0, 1))}
+        rx0, ry0 = min(k[0] for k in remesh), min(k[1] for k in remesh)
+        rx1, ry1 = max(k[0] for k in remesh) + 1, max(k[1] for k in remesh) + 1
+        i, j = rx0 * S - 1 - x0, ry0 * S - 1 - y0
+        sub = np.array(blocks[i:i + (rx1 - rx0) * S + 2, j:j + (ry1 - ry0) * S + 2], order="F")
+        for (x, y, z), (b, _) in last.items():
+            if 0 <= x - x0 - i < sub.shape[0] and 0 <= y - y0 - j < sub.shape[1]:
+                sub[x - x0 - i, y - y0 - j, z] = b
+        zs = [z for _, _, z in last]
+        r0 = max(min(zs) - 1, 0) // meshing.REGION_H
+        r1 = min(max(zs) + 1, C.HEIGHT - 1) // meshing.REGION_H + 1
+        whole = any(world.chunks.get(k) is not None and world.chunks[k].mesh is None
+                    for k in remesh)
+        regions = None if whole else (r0, r1)
+        meshes = _mesh(meshing, sub, (rx0, ry0), remesh, regions)
+        # light: relight voxel by voxel (each update starts from the exact light of
+        # the blocks before it), then keep what changed inside the relit boxes
+        lo = [x1 - x0, y1 - y0, C.HEIGHT]  # union of the relit boxes
+        hi = [0, 0, 0]
+        for x, y, z, b, old in steps:
+            wx, wy = x - x0, y - y0
+            blocks[wx, wy, z] = b
+            box = light.update(blocks, lit, wx, wy, z, old)
+            lo = [min(v, sl.start) for v, sl in zip(lo, box)]
+            hi = [max(v, sl.stop) for v, sl in zip(hi, box)]
+        # light: only the relit boxes can differ (outside them lit holds the old light)
         relit = set()
         if hi[0] > lo[0]:
             for cx in range((lo[0] + x0) >> 4, ((hi[0] + x0 - 1) >> 4) + 1):
@@ -203,28 +253,25 @@ def _apply(world, items):
                     c = world.chunks.get((cx, cy))
                     if (cx, cy) not in near or c is None:
                         continue
-                    i, j = cx * S - x0, cy * S - y0
-                    zs = slice(lo[2], hi[2])  # outside the boxes nothing moved
-                    new = lit[i:i + S, j:j + S, zs]
-                    if not np.array_equal(new, c.light[:, :, zs]):
+                    i0, j0 = max(lo[0], cx * S - x0), max(lo[1], cy * S - y0)
+                    i1, j1 = min(hi[0], cx * S + S - x0), min(hi[1], cy * S + S - y0)
+                    box = (slice(i0 + x0 - cx * S, i1 + x0 - cx * S),
+                           slice(j0 + y0 - cy * S, j1 + y0 - cy * S), slice(lo[2], hi[2]))
+                    new = lit[i0:i1, j0:j1, lo[2]:hi[2]]
+                    if not np.array_equal(new, c.light[box]):
                         c.light = c.light.copy(order="F")  # payloads out there keep theirs
-                        c.light[:, :, zs] = new
+                        c.light[box] = new
                         c.dirty = True
                         relit.add((cx, cy))
-        # meshes: chunks holding a changed voxel or one of its face neighbours
-        remesh = {C.key_of(x + i, y + j) for x, y, _ in last for i, j in
-                  ((0, 0), (-1, 0), (1, 0), (0, -1), (0, 1))}
-        rx0, ry0 = min(k[0] for k in remesh), min(k[1] for k in remesh)
-        rx1, ry1 = max(k[0] for k in remesh) + 1, max(k[1] for k in remesh) + 1
-        i, j = rx0 * S - 1 - x0, ry0 * S - 1 - y0
-        sub = blocks[i:i + (rx1 - rx0) * S + 2, j:j + (ry1 - ry0) * S + 2]
-        meshes = _mesh(meshing, sub, (rx0, ry0), remesh)
         remeshed = set()
         for k in remesh:
             c = world.chunks.get(k)
-            if c is None or k in world.corrupt or _same(c.mesh, meshes[k]):
+            if c is None or k in world.corrupt:
+                continue
+            m = meshes[k] if regions is None else meshing.splice(c.mesh, meshes[k], r0, r1)
+            if _same(c.mesh, m):
                 continue  # e.g. a hidden face stayed hidden: no new payload
-            c.mesh = meshes[k]
+            c.mesh = m
             remeshed.add(k)
         payloads = []
         for k in sorted(relit | remeshed):
@@ -235,9 +282,9 @@ def _apply(world, items):
     rows = [(x, y, z, *last[(x, y, z)]) for x, y, z in last]
     # the changed chunks are written with their new light; relit neighbours' stored
     # light is dropped now and saved again with them later (marked changed)
-    world.commit(changed, rows, stale_light=relit - changed)
     for s in list(world.streams):
         s.offer(payloads)
+    (world.commit if write else world.hold)(changed, rows, stale_light=relit - changed)
     rec = Record(tuple(voxels), tuple(first[v] for v in voxels), tuple(last[v] for v in voxels))
     return sorted(payloads + list(fresh.values())), rec
 
@@ -247,12 +294,13 @@ def _same(a, b) -> bool:
         np.array_equal(a.ranges, b.ranges)
 
 
-def _mesh(meshing, blocks, origin, keys):
+def _mesh(meshing, blocks, origin, keys, regions=None):
     """build_chunks on OpenCL when no stream batch holds it, else NumPy (same output)."""
     blocks = np.asfortranarray(blocks)
     if build.backends()[1] == "opencl" and build.CL_LOCK.acquire(blocking=False):
         try:
-            return meshing.build_chunks(blocks, origin, backend="opencl", keys=keys)
+            return meshing.build_chunks(blocks, origin, backend="opencl", keys=keys,
+                                        regions=regions)
         finally:
             build.CL_LOCK.release()
-    return meshing.build_chunks(blocks, origin, backend="numpy", keys=keys)
+    return meshing.build_chunks(blocks, origin, backend="numpy", keys=keys, regions=regions)

@@ -52,6 +52,7 @@ class World:
         self._evictions: dict[tuple[int, int], int] = {}
         self._edits: dict[tuple[int, int, int], tuple[int, int]] = {}  # unsaved user edits
         self._stale: set = set()  # chunks whose light in the file no longer holds
+        self._held: set = set()   # chunks a stroke changed, written at its commit
         self.corrupt: dict[tuple[int, int], str] = {}  # key -> message, reported once
         self.bver: dict[tuple[int, int], int] = {}   # key -> tick of its last block change
         self.pver: dict[tuple[int, int], int] = {}   # key -> version of its newest payload
@@ -303,18 +304,39 @@ class World:
         if self.readonly:
             return
         with self._flush_lock:
+            if only is None:
+                with self._lock:
+                    self._held = set()  # written now with everything else
             self._write(only)
 
-    def commit(self, keys, edits, stale_light=()) -> None:
+    def commit(self, keys=(), edits=(), stale_light=()) -> None:
         """Write chunks `keys` (if changed), `edits` ((x, y, z, block, data) rows) and
-        what is pending in one transaction; other changed chunks stay for later.
-        `stale_light`: chunks whose stored light no longer holds."""
+        what is pending or held in one transaction; other changed chunks stay for
+        later. `stale_light`: chunks whose stored light no longer holds."""
         if self.readonly:
             return
         with self._flush_lock:
             with self._lock:
                 self._stale.update(stale_light)
+                keys, self._held = set(keys) | self._held, set()
             self._write(keys, edits)
+
+    def hold(self, keys, edits, stale_light=()) -> None:
+        """`commit` later: keep chunks `keys`, `edits` and `stale_light` pending until
+        the next commit (or flush, or close) writes them all in one transaction, so a
+        stroke of many parts is one transaction when it ends."""
+        if self.readonly:
+            return
+        with self._lock:
+            self._stale.update(stale_light)
+            self._held.update(keys)
+            for x, y, z, b, d in edits:
+                self._edits[(x, y, z)] = (b, d)
+
+    @property
+    def held(self) -> bool:
+        """Whether a stroke's changes wait for a commit."""
+        return bool(self._held)
 
     def _write(self, keys, extra=()) -> None:
         # Snapshots go into _saving before the write so a chunk evicted and reloaded

@@ -178,7 +178,8 @@ class VOXEL_OT_edit_stroke(bpy.types.Operator):
                 cells.update(dict.fromkeys(brush.cells(c, s.size, s.shape)))
         if not cells:
             return
-        payloads, rec = strokes.apply(self.world, _changes(cells, self.bid))
+        # held in memory (shown now), written in one transaction when the stroke ends
+        payloads, rec = strokes.apply(self.world, _changes(cells, self.bid), write=False)
         self.rec = strokes.merge(self.rec, rec)
         if self.mode == "PLACE":  # paint along the surface, not up a tower of our own
             self.placed.update(cells)
@@ -212,10 +213,18 @@ class VOXEL_OT_edit_stroke(bpy.types.Operator):
 
     def _finish(self, context):
         from .. import strokes
+        strokes.finish(self.world)
         if not self.rec.voxels:
             return {"CANCELLED"}
         strokes.commit(context.scene, self.rec)
         return {"FINISHED"}
+
+    def cancel(self, context):
+        """Blender ends the drag (its window or file closes): keep what was shown."""
+        from .. import strokes
+        strokes.finish(self.world)
+        if self.rec.voxels:
+            strokes.commit(context.scene, self.rec)
 
 
 class VOXEL_OT_pick_block(bpy.types.Operator):

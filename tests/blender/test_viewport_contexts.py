@@ -1,5 +1,5 @@
 """The live view's GPU set of a GL context that is not current (another window's, or
-one gone with its window): viewport._Gpu.orphan() frees its textures, buffers and
+one gone with its window): viewgpu.Gpu.orphan() frees its textures, buffers and
 programs through the current context (Blender's contexts share objects) and never
 deletes a VAO or framebuffer name there, which would be the current context's own.
 
@@ -54,13 +54,13 @@ def _current(egl, dpy, ctx):
 
 
 def test_orphan_frees_shared_objects_and_keeps_the_current_contexts_own(gl):
-    from voxel_addon.blender import viewport
+    from voxel_addon.blender import viewgpu
     egl = _egl()
     gl.__enter__()  # the moderngl fixture's context is current (it is "this window")
     dpy, mine, other = _shared_context(egl)
     try:
         _current(egl, dpy, other)  # "the other window" draws: its GPU set
-        g = viewport._Gpu(other)
+        g = viewgpu.Gpu(other)
         prog = g.program(1, 0)  # as composite() makes them
         g._vao[prog.glo] = g.ctx.vertex_array(prog, [])
         names = _names(g)

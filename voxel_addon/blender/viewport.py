@@ -5,7 +5,7 @@ overlay framebuffer that holds the viewport's depth. Per redraw and region:
 
 1. the CPU side (`_Feed`, one per world, shared by every window) takes the chunks
    that became ready within a small time budget;
-2. the GPU side of the current GL context (`_Gpu`: a moderngl context attached to
+2. the GPU side of the current GL context (viewgpu.Gpu: a moderngl context attached to
    Blender's, a Renderer, the composite program; VAOs and framebuffers are not shared
    between contexts, so a second window gets its own) uploads what changed and renders
    the pipeline with the region's own view and window matrices into its targets;
@@ -18,7 +18,7 @@ overlay framebuffer that holds the viewport's depth. Per redraw and region:
 
 Blender redraws a region for many reasons while its view rests (hover, gizmos, the
 UI, other areas). Once it rests, the composite goes into the region's kept targets
-(_Kept: colour, depth already in Blender's projection) and from there into Blender's
+(viewgpu.Kept: colour, depth already in Blender's projection) and from there into Blender's
 framebuffer; a redraw where nothing that shapes the picture changed (`look`: view,
 window, size, settings, time of day, uploaded chunks, Blender's depth setup) draws
 only the kept frame (shaders/viewport_kept.frag): Blender's objects still mix by
@@ -31,15 +31,15 @@ asks for another redraw. shutdown() removes handlers, timer, GL objects and thre
 """
 from __future__ import annotations
 
-import math
 import time
-from dataclasses import astuple
 import traceback
 from collections import deque
+from dataclasses import astuple
 
 import numpy as np
 
 from ..core.errors import VoxelError
+from .viewgpu import Gpu
 
 # What the panel shows (the last frame of any region).
 STATUS = {"drawn": 0, "wanted": 0, "wanted_shown": 0, "ms": 0.0, "python_ms": 0.0, "quality": "full",
@@ -53,13 +53,11 @@ OVERLAYS: list = []
 DRAFT_SCALE = 0.5    # draft frames render at this fraction of the region's size
 STILL_S = 0.25       # the view is still this long after its last change: full quality
 BUDGET_S = 0.004     # CPU time per redraw for taking in streamed chunks
-MIN_GL = 410
-KEPT_MAX = 8         # kept frames per GL context (one per region; quad view has four)
 REUSE = True         # a still region redraws from its kept frame (off: the pipeline every time)
 
 _handle = None
 _timer_on = False
-_gpus: dict = {}      # native GL context -> _Gpu
+_gpus: dict = {}      # native GL context -> viewgpu.Gpu
 _windows = frozenset()  # the windows open at the last frame (pointers)
 _regions: dict = {}   # region pointer -> _Region
 _lead = None          # the region whose view the stream follows
@@ -173,192 +171,6 @@ def _feed_for(scene):
     return _feed
 
 
-# ---------------------------------------------------------------------- GPU side
-class _Gpu:
-    """The GL objects of one GL context: moderngl on Blender's context, a Renderer,
-    the composite program; which chunk versions it has uploaded."""
-
-    def __init__(self, native):
-        import moderngl
-        from _moderngl import DefaultLoader
-        from ..render.pipeline import Renderer
-        from ..render.settings import Settings
-        # create_context() without a loader may take GLX on an EGL Blender (offscreen.py)
-        self.ctx = moderngl.create_context(context=DefaultLoader())
-        if self.ctx.version_code < MIN_GL:
-            v = self.ctx.info.get("GL_VERSION", "?")
-            self.ctx = None
-            raise VoxelError(f"the voxel view needs OpenGL 4.1 or newer (this is {v})")
-        self.native = native
-        self.windows: set = set()  # the windows drawn with this context
-        self.r = Renderer(self.ctx, Settings())
-        self.versions: dict = {}
-        self.feed = None
-        self._comp: dict = {}
-        self._vao: dict = {}
-        self._kept_prog = None
-        self.kept: dict = {}     # region pointer -> _Kept
-        self.gen = 0             # bumped whenever the uploaded chunks change
-
-    def sync(self, feed) -> int:
-        """Upload what changed in the feed; returns the number of chunks drawn."""
-        r = self.r
-        if self.feed is not feed:  # another world or distance: nothing of ours stays
-            self.feed = feed
-            self.versions = {k: None for k in self.versions}
-        gone = [k for k in self.versions if k not in feed.chunks]
-        new = [p for k, p in feed.chunks.items() if self.versions.get(k) != p.version]
-        if gone or new:
-            self.gen += 1
-        if gone:
-            r.remove_chunks(gone)
-            for k in gone:
-                del self.versions[k]
-        if new:
-            r.update_chunks(new)
-            for p in new:
-                self.versions[p.key] = p.version
-        return len(self.versions)
-
-    def program(self, samples, layers, keep=0):
-        key = (samples, layers, keep)
-        p = self._comp.get(key)
-        if p is None:
-            p = self._comp[key] = self.r.progs.get(
-                "fullscreen.vert", "viewport.frag", {"SAMPLES": samples, "LAYERS": layers, "KEEP": keep})
-            _units(p)
-        return p
-
-    def composite(self, f, host, host_vp, sky, kept=None):
-        """The frame into Blender's framebuffer (bound again here), depth tested; with
-        `kept` (a region's _Kept) into those targets first and drawn from there."""
-        from ..render import glstate
-        gl = glstate.gl()
-        blend = f.blend_depth
-        prog = self.program(f.T["ms"], 1 if blend is not None else 0, int(kept is not None))
-        f.color.use(_UNIT["color"])
-        f.depth.use(0)
-        if blend is not None:
-            blend.use(9)
-        prog["host_vp"].write(np.asarray(host_vp, np.float32).T.tobytes())
-        prog["host_range"].value = tuple(host["depth_range"])
-        prog["host_zero_one"].value = bool(host["clip"] and host["clip"][1] == 0x935F)
-        prog["sky"].value = bool(sky)
-        if kept is None:
-            self._into_host(host)
-            self._vao_of(prog).render(mode=self.ctx.TRIANGLES, vertices=3)
-            return
-        kept.fbo.use()  # (its viewport too)
-        gl.Disable(0x0B71)  # DEPTH_TEST
-        gl.Disable(0x0BE2)  # BLEND
-        self._vao_of(prog).render(mode=self.ctx.TRIANGLES, vertices=3)
-        self.draw_kept(kept, host)
-
-    def draw_kept(self, kept, host):
-        """A region's kept frame into Blender's framebuffer: what composite() wrote
-        there, without the pipeline (needs no frame block nor G-buffer)."""
-        prog = self._kept_prog
-        if prog is None:
-            prog = self._kept_prog = self.r.progs.get("fullscreen.vert", "viewport_kept.frag")
-            _units(prog)
-        kept.color.use(_UNIT["kept_color"])
-        kept.depth.use(_UNIT["kept_depth"])
-        self._into_host(host)
-        self._vao_of(prog).render(mode=self.ctx.TRIANGLES, vertices=3)
-
-    def _into_host(self, host):
-        from ..render import glstate
-        gl = glstate.gl()
-        gl.BindFramebuffer(0x8CA9, host["fb"][0])
-        gl.Viewport(*host["viewport"])
-        gl.Enable(0x0B71)       # DEPTH_TEST
-        gl.DepthFunc(0x0203)    # LEQUAL
-        gl.DepthMask(1)
-
-    def _vao_of(self, prog):
-        vao = self._vao.get(prog.glo)
-        if vao is None:
-            vao = self._vao[prog.glo] = self.ctx.vertex_array(prog, [])
-        return vao
-
-    def kept_for(self, region, size):
-        """The kept targets of a region (made or resized; the least recently used go
-        beyond KEPT_MAX: regions of closed areas)."""
-        k = self.kept.pop(region, None)
-        old = [k] if k is not None and k.size != size else []
-        if old:
-            k = None
-        self.kept[region] = k = k or _Kept(self.ctx, size)
-        while len(self.kept) > KEPT_MAX:
-            old.append(self.kept.pop(next(iter(self.kept))))
-        if old:  # moderngl rebinds its last framebuffer after making one: not a released one
-            self.r._idle.use()
-            for x in old:
-                x.release()
-        return k
-
-    def release(self):
-        for k in self.kept.values():
-            k.release()
-        self.kept.clear()
-        self._kept_prog = None
-        for v in self._vao.values():
-            v.release()
-        self._vao.clear()
-        self._comp.clear()  # (programs belong to the Renderer's cache)
-        if self.r is not None:
-            self.r.release()
-            self.r = None
-
-    def orphan(self):
-        """Forget a set whose GL context is not current (it went with its window, or
-        is another window's): its VAOs, framebuffers and queries are that context's
-        alone (deleting their names here would hit this context's own), while textures,
-        buffers and programs live in the object space all Blender's contexts share:
-        free those from the current one."""
-        import gc
-        import moderngl as mgl
-        shared = {mgl.Texture, mgl.Texture3D, mgl.TextureArray, mgl.TextureCube, mgl.Buffer,
-                  mgl.Program, mgl.ComputeShader, mgl.Renderbuffer, mgl.Sampler}
-        ctx = self.ctx
-        for o in gc.get_objects():  # type(), not isinstance: a removed bpy struct raises
-            if type(o) in shared and o.ctx is ctx:
-                o.release()
-        self._vao.clear()
-        self._comp.clear()
-        self.r = None
-
-
-# texture units of the composite passes: among those glstate.kept() saves and restores
-_UNIT = {"color": 1, "g_depth": 0, "prev_depth": 9, "kept_color": 1, "kept_depth": 0}
-
-
-def _units(prog):
-    for k, u in _UNIT.items():
-        if k in prog:
-            prog[k].value = u
-
-
-class _Kept:
-    """A region's last composited frame, at the region's size: colour (alpha 0 where
-    Blender's own picture stays) and depth in Blender's projection. While nothing that
-    changes the picture changed (`look`), a redraw draws these and skips the pipeline."""
-    __slots__ = ("size", "color", "depth", "fbo", "look", "quality")
-
-    def __init__(self, ctx, size):
-        self.size, self.look, self.quality = size, None, "full"
-        self.color = ctx.texture(size, 4)
-        self.depth = ctx.texture(size, 1, dtype="f4")
-        for t in (self.color, self.depth):
-            t.filter = (ctx.NEAREST, ctx.NEAREST)
-        self.fbo = ctx.framebuffer([self.color, self.depth])
-
-    def release(self):
-        for x in (self.fbo, self.color, self.depth):
-            x.release()
-        self.look = None
-
-
 class _Region:
     __slots__ = ("view", "changed", "quality")
 
@@ -431,7 +243,7 @@ def _frame(context, scene, vv):
     with glstate.kept() as host:
         g = _gpus.get(native)
         if g is None:
-            g = _gpus[native] = _Gpu(native)
+            g = _gpus[native] = Gpu(native)
         if context.window is not None:
             g.windows.add(context.window.as_pointer())
         t1 = time.perf_counter()

@@ -206,11 +206,16 @@ def start():
     global OUT, WORLD, EMPTY, QUICK
     args = sys.argv[sys.argv.index("--") + 1:]
     OUT, WORLD, EMPTY, QUICK = Path(args[0]), args[1], args[2], args[3] == "1"
+    drive(main())
+
+
+def drive(gen):
+    """Run a job generator from a timer (yielded values: seconds to the next step),
+    with the checkout and Blender's site packages importable."""
     for p in (os.environ.get("VOXEL_BLENDER_SITE"), str(ROOT / ".blender" / "site"), str(ROOT)):
         if p and p not in sys.path:
             sys.path.insert(0, p)
     bpy.context.preferences.view.show_splash = False
-    gen = main()
 
     def timer():
         try:

@@ -25,7 +25,6 @@ from __future__ import annotations
 import gc
 import json
 import math
-import os
 import sys
 import time
 import traceback
@@ -323,19 +322,7 @@ def main(out, mode, world, d, limit):
 def start():
     args = sys.argv[sys.argv.index("--") + 1:]
     out, mode, world, d, limit = Path(args[0]), args[1], args[2], int(args[3]), float(args[4])
-    root = Path(__file__).resolve().parents[1]
-    for p in (os.environ.get("VOXEL_BLENDER_SITE"), str(root / ".blender" / "site"), str(root)):
-        if p and p not in sys.path:
-            sys.path.insert(0, p)
-    bpy.context.preferences.view.show_splash = False
-    gen = main(out, mode, world, d, limit)
-
-    def timer():
-        try:
-            return next(gen)
-        except StopIteration:
-            return None
-    bpy.app.timers.register(timer, first_interval=1.0, persistent=True)
+    V.drive(main(out, mode, world, d, limit))
 
 
 if __name__ == "__main__":

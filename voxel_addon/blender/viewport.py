@@ -295,7 +295,6 @@ def _prune(context, wins):
     """A window opened or closed: forget the regions that went, and the GPU set of a
     GL context no open window drew with (one context per window on some platforms:
     it went with its window; a handle the driver hands out again must not find it)."""
-    from ..render import glstate
     from .offscreen import _native
     global _windows
     _windows = wins
@@ -307,12 +306,19 @@ def _prune(context, wins):
     for key, g in list(_gpus.items()):
         g.windows &= wins
         if not g.windows:
-            if key == native:
-                with glstate.kept():
-                    g.release()
-            else:
-                g.orphan()
-            del _gpus[key]
+            _drop_gpu(key, native)
+
+
+def _drop_gpu(key, native):
+    """Container objects (VAOs, framebuffers) are per context: free everything only
+    on its own; another window's context gets its shared objects freed."""
+    from ..render import glstate
+    g = _gpus.pop(key)
+    if key == native:
+        with glstate.kept():
+            g.release()
+    else:
+        g.orphan()
 
 
 def _want_redraw(after: float):
@@ -402,16 +408,8 @@ def _close_data():
     _regions.clear()
     _windows = frozenset()
     native = _native()
-    for key, g in list(_gpus.items()):
-        # container objects (VAOs, framebuffers) are per context: free everything
-        # only on its own; another window's context gets its shared objects freed
-        if key == native:
-            from ..render import glstate
-            with glstate.kept():
-                g.release()
-        else:
-            g.orphan()
-        del _gpus[key]
+    for key in list(_gpus):
+        _drop_gpu(key, native)
     STATUS.update(drawn=0, wanted=0, error=None)
 
 

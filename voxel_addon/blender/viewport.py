@@ -233,7 +233,11 @@ def _frame(context, scene, vv):
     # seconds on software GL and starves the stream's worker thread
     draft = vv.quality == "draft" or (vv.quality == "auto" and (moving or loading))
     s = settings_of(vv, draft)
-    if not cam.ortho:
+    if cam.ortho:
+        # distance fog needs an eye; an orthographic view's is arbitrary (it moves with
+        # the zoom), and a side view would show the far half of the area washed out
+        s.fog = False
+    else:
         s.fov = min(150.0, max(10.0, cam.fov))
     native = _native()
     host_vp = np.array(rv3d.perspective_matrix, np.float64)

@@ -180,7 +180,8 @@ class AllOps(PassGenerator):
             ir = L.irand2(x - z, y, 5)
             nb = p.read("h", ir - 2, 2 - ir, reach=2)          # a neighbour per lane
             f = L.floor(n3 * 10.0) + L.sqrt(L.absolute(n3)) + L.min_(n3, p.read("w")) \
-                + L.max_(n2, r2) - L.clamp01(n2)
+                + L.max_(n2, r2) - L.clamp01(n2) \
+                + L.select(r3 < 0.5, L.perlin3(y / 4, x / 6, z / 5), n2 * 2.0)  # lazy float arm
             i = L.ifloor(f * 7.0) + (x - z) // 3 + (y + z) % 5 + L.absolute(x - 40 * z) \
                 + L.min_(x, z) + L.max_(y, nb - z)
             c = ((n3 > 0.1) & ~(r3 < 0.3)) | (p.read("w") > 0.2) | (p.read("flag") == 1)

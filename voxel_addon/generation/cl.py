@@ -155,7 +155,7 @@ class _Gen:
                     block(1, f"{v} {_BIN[e.op]} {{}}")
                     out.append(f"{pad}}}")
                 else:  # an arm computed for all lanes, then merged by the condition
-                    out.append(f"{pad}{self.ct[e.t]} {v} = 0;")
+                    out.append(f"{pad}{self.ct[e.t]} {v} = ({self.ct[e.t]})0;")
                     out.append(f"{pad}if (any({c})) {{")
                     block(1)
                     out.append(f"{pad}}}")

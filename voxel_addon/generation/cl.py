@@ -4,10 +4,11 @@ and runs it on batches of chunks.
 Every node becomes one C statement doing exactly the float32 operation NumPy does
 (execute.py); constants are written as hex floats so no decimal rounding sneaks in.
 
-Speed on pocl comes from its work-group vectorizer (see gpu/noise.h), so kernels
-have no control flow: no early returns (2D domains are padded, 3D kernels run on a
-list of (chunk, z) layers below the pass's `top`), no && || (they branch), and
-loads that might be out of range are clamped and then masked.
+Speed on pocl: 2D kernels rely on its work-group vectorizer (see gpu/noise.h), so
+they have no control flow: no early returns (domains are padded), no && || (they
+branch), and loads that might be out of range are clamped and then masked. 3D
+kernels run on a list of (chunk, z) layers below the pass's `top`, skip columns
+above their own top, and are written as explicit 8-lane code (`_GenV`, README).
 """
 from __future__ import annotations
 

@@ -1,6 +1,7 @@
 // Generator programs: generation/cl_exec.py appends one kernel per pass (unit),
 // compiled from a generation/lang.py Program. This file holds what they share.
 #include "noise.h"
+#include "noise8.h"
 
 // Floor division and modulo by a positive constant (NumPy's // and %).
 VX_INLINE int vx_fdiv(int a, int n) { return (a - (a < 0 ? n - 1 : 0)) / n; }

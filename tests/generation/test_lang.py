@@ -158,3 +158,52 @@ def test_top_must_depend_on_the_column_only():
         p.block(1)
     with pytest.raises(ValueError):
         g.units()
+
+
+class AllOps(PassGenerator):
+    """Every op the 8-lane 3D kernels implement (cl._GenV), in z-dependent forms that
+    stay in the 3D pass, plus a 3D pass with Voronoi that stays scalar."""
+    name = "allops"
+
+    def program(self):
+        g = L.Program()
+        with g.pass2d() as p:
+            p.out("h", L.ifloor(L.perlin2(p.x / 23, p.y / 23) * 30 + 90))
+            p.out("w", L.perlin2(p.x / 7, p.y / 7))
+            p.out("flag", L.select(L.perlin2(p.x / 5, p.y / 5) > 0, 1, 0))
+        with g.pass3d() as p:
+            x, y, z = p.x, p.y, p.z
+            p.top(p.read("h") + 3)
+            n3 = L.perlin3(x / 13, y / 17, z / 7)
+            n2 = L.perlin2(x / 9 + z / 5, y / 11)
+            r3, r2 = L.rand3(x, y, z), L.rand2(x + z, y)
+            ir = L.irand2(x - z, y, 5)
+            nb = p.read("h", ir - 2, 2 - ir, reach=2)          # a neighbour per lane
+            f = L.floor(n3 * 10.0) + L.sqrt(L.absolute(n3)) + L.min_(n3, p.read("w")) \
+                + L.max_(n2, r2) - L.clamp01(n2) \
+                + L.select(r3 < 0.5, L.perlin3(y / 4, x / 6, z / 5), n2 * 2.0)  # lazy float arm
+            i = L.ifloor(f * 7.0) + (x - z) // 3 + (y + z) % 5 + L.absolute(x - 40 * z) \
+                + L.min_(x, z) + L.max_(y, nb - z)
+            c = ((n3 > 0.1) & ~(r3 < 0.3)) | (p.read("w") > 0.2) | (p.read("flag") == 1)
+            lazy = c & (L.perlin3(x / 5, y / 5, z / 3) > 0.0)    # computed inside an `if`
+            arm = L.select(n2 > 0.0, L.ifloor(L.perlin3(x / 3, z / 3, y / 3) * 4.0), -i)
+            p.block(L.select(lazy, 9, 1 + (i + arm + L.select(c, 0, 3)) % 7))
+        with g.pass3d() as p:
+            p.block(L.select((p.prev(-1) == 9) & (p.prev(1) != 9), 8, p.prev()))
+        with g.pass3d() as p:
+            hole = L.voronoi3(p.x / 9, p.y / 9, p.z / 9)[0] > 0.5
+            p.block(L.select(hole & (p.prev() == 1), 0, p.prev()))
+        return g
+
+
+def test_vector_kernels_every_op_exact(cl_device):
+    from voxel_addon.generation import cl
+    units = AllOps(5, None, "numpy").units
+    assert [cl.vectorizable(u) for u in units if u.kind == "3d"] == [True, True, False]
+    keys = [(0, 0), (-1, -1), (-3, 2), (5, -7), (-200, 130)]
+    a = AllOps(5, None, "numpy").generate(keys)
+    b = AllOps(5, None, "opencl").generate(keys)
+    for k, x, y in zip(keys, a, b):
+        assert np.array_equal(x, y), f"chunk {k}: {(x != y).sum()} voxels differ"
+    allb = np.concatenate([x.ravel() for x in a])
+    assert set(np.unique(allb)) == set(range(10))   # every branch taken somewhere

@@ -4,10 +4,11 @@ and runs it on batches of chunks.
 Every node becomes one C statement doing exactly the float32 operation NumPy does
 (execute.py); constants are written as hex floats so no decimal rounding sneaks in.
 
-Speed on pocl comes from its work-group vectorizer (see gpu/noise.h), so kernels
-have no control flow: no early returns (2D domains are padded, 3D kernels run on a
-list of (chunk, z) layers below the pass's `top`), no && || (they branch), and
-loads that might be out of range are clamped and then masked.
+Speed on pocl: 2D kernels rely on its work-group vectorizer (see gpu/noise.h), so
+they have no control flow: no early returns (domains are padded), no && || (they
+branch), and loads that might be out of range are clamped and then masked. 3D
+kernels run on a list of (chunk, z) layers below the pass's `top`, skip columns
+above their own top, and are written as explicit 8-lane code (`_GenV`, README).
 """
 from __future__ import annotations
 
@@ -47,6 +48,9 @@ def _pad(size, local):
 
 
 class _Gen:
+    vec = False
+    ct = CT
+
     def __init__(self, units):
         self.units = units
         self.fields = {}  # name -> (type, halo)
@@ -136,15 +140,30 @@ class _Gen:
             if not slots:
                 a = [done[x.id] for x in e.a]
                 done[e.id] = f"v{e.id}"
-                out.append(f"{pad}{CT[e.t]} v{e.id} = {self.expr(e, a, unit)};")
+                out.append(f"{pad}{self.ct[e.t]} v{e.id} = {self.expr(e, a, unit)};")
                 continue
             v = done[e.id] = f"v{e.id}"
 
-            def block(i):  # statements computing operand i, then v = operand i
+            def block(i, merge="{}"):  # statements computing operand i, then v = operand i
                 inner = [n for n in slots.get(i, ()) if owner.get(n.id) == (e.id, i)]
                 self._emit(inner, lazy, owner, unit, done, out, depth + 1)
-                out.append(f"{pad}    {v} = {done[e.a[i].id]};")
-            if e.op in ("and", "or"):
+                out.append(f"{pad}    {v} = {merge.format(done[e.a[i].id])};")
+            if self.vec:  # lanes share the branch: taken when any lane needs the operand
+                c = done[e.a[0].id]
+                if e.op in ("and", "or"):
+                    out.append(f"{pad}vi8 {v} = {c};")
+                    out.append(f"{pad}if ({'any' if e.op == 'and' else '!all'}({v})) {{")
+                    block(1, f"{v} {_BIN[e.op]} {{}}")
+                    out.append(f"{pad}}}")
+                else:  # an arm computed for all lanes, then merged by the condition
+                    out.append(f"{pad}{self.ct[e.t]} {v} = ({self.ct[e.t]})0;")
+                    out.append(f"{pad}if (any({c})) {{")
+                    block(1)
+                    out.append(f"{pad}}}")
+                    out.append(f"{pad}if (!all({c})) {{")
+                    block(2, f"select({{}}, {v}, {c})")
+                    out.append(f"{pad}}}")
+            elif e.op in ("and", "or"):
                 out.append(f"{pad}int {v} = {done[e.a[0].id]};")
                 out.append(f"{pad}if ({'' if e.op == 'and' else '!'}{v}) {{")
                 block(1)
@@ -193,10 +212,13 @@ class _Gen:
                     f"    int lx = r % {w} - {u.halo}, ly = r / {w} - {u.halo};"]
         else:
             out += ["    int grp = get_group_id(0), lid = get_local_id(0);",
-                    "    int c = layers[2 * grp], z = layers[2 * grp + 1];",
+                    "    int cz = layers[grp], c = cz >> 8, z = cz & 255;",
                     f"    int lx = lid & {C.SIZE - 1}, ly = lid >> 4;",
                     f"    int gid = c * {C.VOLUME} + z * {LAYER} + lid;"]
-        out += ["    int x = org[2 * c] + lx, y = org[2 * c + 1] + ly;"]
+        out += ["    int x = org[c] + lx, y = org[n + c] + ly;"]
+        if u.kind == "3d" and u.top is not None:
+            # the blocks buffer is zero-filled: nothing to compute above this column's top
+            out += [f"    if (z > {self.read(u.top, 0, 0)}) return;"]
         out += self.salts(roots)
         done = {}
         out += self.body(roots, u, done)
@@ -205,6 +227,106 @@ class _Gen:
         else:
             top = "255" if u.top is None else self.read(u.top, 0, 0)
             out += [f"    blocks[gid] = (ushort)(z <= {top} ? {done[u.blk.id]} : 0);"]
+        return "\n".join(out + ["}", ""])
+
+
+# ops the 8-lane 3D kernels implement; a unit using others stays scalar
+_VEC_OPS = set(_BIN) | {"const", "x", "y", "z", "neg", "not", "min", "max", "abs", "floor",
+                        "sqrt", "int", "float", "fdiv", "fmod", "select", "perlin2",
+                        "perlin3", "rand2", "rand3", "irand2", "read", "prev"}
+VLANES = 8
+VECTOR = True  # False: every unit scalar (for comparisons)
+VLOCAL = LAYER // VLANES  # a 3D work-group: one z layer, one row of 8 voxels per item
+
+
+def vectorizable(u: Unit) -> bool:
+    return (VECTOR and u.kind == "3d"
+            and all(e.op in _VEC_OPS and e.t != "f3" for e in nodes(u.roots())))
+
+
+class _GenV(_Gen):
+    """The 3D kernels as explicit 8-lane code (gpu/noise8.h): pocl's work-group
+    vectorizer gives up on the big generated kernels (README), explicit vectors need
+    none. Bools are 0/-1 lanes; numbers as in the scalar code, op for op."""
+    vec = True
+    ct = {"f": "vf8", "i": "vi8", "b": "vi8"}
+
+    def expr(self, e, a, unit):
+        op, k = e.op, e.k
+        if op == "const" and e.t == "b":
+            return "(-1)" if e.k else "0"
+        if op in ("const", "x", "y", "z") or op in _BIN or op == "neg":
+            return super().expr(e, a, unit)
+        if op == "not":
+            return f"(~{a[0]})"
+        if op in ("min", "max"):
+            return f"vx_{'f' if e.t == 'f' else 'i'}{op}8({a[0]}, {a[1]})"
+        if op == "abs":
+            return f"fabs({a[0]})" if e.t == "f" else f"vx_iabs8({a[0]})"
+        if op in ("floor", "sqrt"):
+            return f"{op}({a[0]})"
+        src = e.a[0].t if e.a else None
+        if op == "int":
+            return {"f": f"convert_int8({a[0]})", "b": f"(-{a[0]})"}.get(src, a[0])
+        if op == "float":
+            return f"convert_float8({'-' if src == 'b' else ''}{a[0]})"
+        if op in ("fdiv", "fmod"):
+            return f"vx_{op}8({a[0]}, {k})"
+        if op == "select":
+            return f"select({a[2]}, {a[1]}, {a[0]})"
+        if op == "perlin2":
+            return f"perlin2_8({a[0]}, {a[1]}, perm, s{k})"
+        if op == "perlin3":
+            return f"perlin3_8({a[0]}, {a[1]}, {a[2]}, perm, s{k})"
+        if op == "rand2":
+            return f"vx_unit8(vx_hash2_8({a[0]}, {a[1]}, s{k}))"
+        if op == "rand3":
+            return f"vx_unit8(vx_hash3_8({a[0]}, {a[1]}, {a[2]}, s{k}))"
+        if op == "irand2":
+            return f"convert_int8((vx_hash2_8({a[0]}, {a[1]}, s{k[0]}) >> 8) % {k[1]}u)"
+        if op == "read":
+            name, dx, dy, reach = k
+            v = self.read(name, dx, dy, a, reach)
+            return f"(-{v})" if e.t == "b" else v
+        if op == "prev":
+            return f"vx_prev8(prev, c, zs + ({k}), row)"
+        raise ValueError(f"no 8-lane form of {op}")
+
+    def read(self, name, dx, dy, a=(), reach=0):
+        t, hf = self.fields[name]
+        wf = C.SIZE + 2 * hf
+        base = f"f_{name} + c * {wf * wf}"
+        if dx is None:  # a different neighbour per lane
+            dx = f"vx_imin8(vx_imax8({a[0]}, (vi8){-reach}), (vi8){reach})"
+            dy = f"vx_imin8(vx_imax8({a[1]}, (vi8){-reach}), (vi8){reach})"
+            idx = f"((ly + {hf} + ({dy})) * {wf} + (lx + {hf} + ({dx})))"
+            return f"VX_GATHER8({self.ct[t]}, {base}, {idx})"
+        return f"vload8(0, {base} + (ly + {hf} + ({dy})) * {wf} + (lx0 + {hf} + ({dx})))"
+
+    def kernel(self, i, u: Unit):
+        roots = u.roots()
+        args = ["__global const int* org", "__constant const int* perm", "uint seed", "int n",
+                "__global const int* layers", "__global ushort* blocks",
+                "__global const ushort* prev"]
+        args += [f"__global const {CT[self.fields[n][0]]}* f_{n}" for n in self.reads(u)]
+        out = [f"__kernel void unit{i}({', '.join(args)}) {{",
+               "    int grp = get_group_id(0), lid = get_local_id(0);",
+               "    int cz = layers[grp], c = cz >> 8, zs = cz & 255;",
+               f"    int lx0 = (lid & {C.SIZE // VLANES - 1}) * {VLANES};",
+               f"    int ly = lid / {C.SIZE // VLANES}, row = ly * {C.SIZE} + lx0;",
+               "    vi8 lx = lx0 + VX_LANES;",
+               "    vi8 x = org[c] + lx, y = (vi8)(org[n + c] + ly), z = (vi8)zs;"]
+        if u.top is not None:
+            # the blocks buffer is zero-filled: nothing to compute above each column's top
+            out += [f"    vi8 top = {self.read(u.top, 0, 0)};",
+                    "    if (!any(z <= top)) return;"]
+        out += self.salts(roots)
+        done = {}
+        out += self.body(roots, u, done)
+        blk = done[u.blk.id]
+        if u.top is not None:
+            blk = f"select((vi8)0, {blk}, z <= top)"
+        out += [f"    vstore8(convert_ushort8({blk}), 0, blocks + c * {C.VOLUME} + zs * {LAYER} + row);"]
         return "\n".join(out + ["}", ""])
 
 
@@ -253,8 +375,9 @@ def _lazy_blocks(order, roots):
 
 
 def source(units) -> str:
-    g = _Gen(units)
-    return resources.kernel("gen.cl") + "\n".join(g.kernel(i, u) for i, u in enumerate(units))
+    g, gv = _Gen(units), _GenV(units)
+    return resources.kernel("gen.cl") + "\n".join(
+        (gv if vectorizable(u) else g).kernel(i, u) for i, u in enumerate(units))
 
 
 class Runner:
@@ -271,6 +394,7 @@ class Runner:
         # fields each unit reads: walking the expression graph per batch cost ~5 % of
         # a batch's time in Python (the GIL the stream's light solve wants)
         self._reads = [self.gen.reads(u) for u in units]
+        self._vec = [vectorizable(u) for u in units]
         self._perm = {}
         self._bufs = {}
         self.timings = None  # set to a dict to collect seconds per unit (serialises the queue)
@@ -302,7 +426,7 @@ class Runner:
             zmax = np.clip(top.reshape(n, -1).max(axis=1), -1, C.HEIGHT - 1)
         cs = np.repeat(np.arange(n), zmax + 1)
         zs = np.concatenate([np.arange(m + 1) for m in zmax]) if n else cs
-        return np.stack([cs, zs], 1).astype(np.int32)
+        return (cs * 256 + zs).astype(np.int32)
 
     def _read_field(self, name, fields, n):
         import pyopencl as cl
@@ -316,7 +440,7 @@ class Runner:
     def run(self, keys, seed32, perm, want=()):
         import pyopencl as cl
         q, n = self.queue, len(keys)
-        org = (np.array(keys, np.int64).reshape(-1, 2) * C.SIZE).astype(np.int32)
+        org = (np.array(keys, np.int64).reshape(-1, 2).T * C.SIZE).astype(np.int32).copy()
         borg = self._buf("org", org.nbytes)
         cl.enqueue_copy(q, borg, org)
         bperm = self._perm_buf(seed32, perm)
@@ -342,7 +466,8 @@ class Runner:
                 if len(lay):
                     cl.enqueue_copy(q, blay, lay)
                 args += [blay, blocks, prev if prev is not None else self._buf("dummy", 2)]
-                size, local = len(lay) * LAYER, LAYER
+                local = VLOCAL if self._vec[i] else LAYER
+                size = len(lay) * local
             args += [fields[name][0] for name in self._reads[i]]
             if size == 0:
                 continue

@@ -1,0 +1,101 @@
+// Eight-lane twins of noise.h for the 3D generator kernels (generation/cl.py): one
+// work-item computes a row of 8 voxels with explicit float8/int8 code, so the SIMD
+// no longer depends on pocl's work-group vectorizer (which gives up on the big
+// kernels, see generation/README.md). Same IEEE operations in the same order as
+// the scalar versions; bools are 0/-1 lanes (OpenCL vector comparisons), and a
+// select(b, a, c) here is the scalar `c ? a : b`.
+#ifndef VOXEL_NOISE8_H
+#define VOXEL_NOISE8_H
+#include "noise.h"
+
+typedef float8 vf8;
+typedef int8 vi8;
+typedef uint8 vu8;
+#define VX_LANES ((vi8)(0, 1, 2, 3, 4, 5, 6, 7))
+// per-lane loads (no gather instruction in OpenCL C)
+#define VX_GATHER8(T, p, i) ((T)((p)[(i).s0], (p)[(i).s1], (p)[(i).s2], (p)[(i).s3], \
+                                 (p)[(i).s4], (p)[(i).s5], (p)[(i).s6], (p)[(i).s7]))
+
+VX_INLINE vu8 vx_mix8(vu8 h) {
+    h ^= h >> 16; h *= 0x7feb352du;
+    h ^= h >> 15; h *= 0x846ca68bu;
+    h ^= h >> 16;
+    return h;
+}
+VX_INLINE vu8 vx_hash2_8(vi8 x, vi8 y, uint s) {
+    return vx_mix8(as_uint8(x) * 0x8da6b343u + as_uint8(y) * 0xd8163841u + s);
+}
+VX_INLINE vu8 vx_hash3_8(vi8 x, vi8 y, vi8 z, uint s) {
+    return vx_mix8(as_uint8(x) * 0x8da6b343u + as_uint8(y) * 0xd8163841u
+                   + as_uint8(z) * 0xcb1ab31fu + s);
+}
+VX_INLINE vf8 vx_unit8(vu8 h) { return convert_float8(h >> 8) * 0x1p-24f; }
+
+VX_INLINE vi8 vx_ifloor8(vf8 v) { vi8 i = convert_int8(v); return i + (v < convert_float8(i)); }
+VX_INLINE vf8 vx_fade8(vf8 t) { return t * t * t * (t * (t * 6.0f - 15.0f) + 10.0f); }
+VX_INLINE vf8 vx_lerp8(vf8 t, vf8 a, vf8 b) { return a + t * (b - a); }
+VX_INLINE vf8 vx_fmin8(vf8 a, vf8 b) { return select(a, b, b < a); }
+VX_INLINE vf8 vx_fmax8(vf8 a, vf8 b) { return select(a, b, b > a); }
+VX_INLINE vi8 vx_imin8(vi8 a, vi8 b) { return select(a, b, b < a); }
+VX_INLINE vi8 vx_imax8(vi8 a, vi8 b) { return select(a, b, b > a); }
+VX_INLINE vi8 vx_iabs8(vi8 a) { return select(a, -a, a < 0); }
+VX_INLINE vi8 vx_fdiv8(vi8 a, int n) { return (a - select((vi8)0, (vi8)(n - 1), a < 0)) / n; }
+VX_INLINE vi8 vx_fmod8(vi8 a, int n) { return a - vx_fdiv8(a, n) * n; }
+
+VX_INLINE vf8 vx_grad3_8(vi8 h, vf8 x, vf8 y, vf8 z) {
+    h &= 15;
+    vf8 u = select(y, x, h < 8);
+    vf8 v = select(select(z, x, (h == 12) | (h == 14)), y, h < 4);
+    return select(u, -u, (h & 1) != 0) + select(v, -v, (h & 2) != 0);
+}
+VX_INLINE vf8 vx_grad2_8(vi8 h, vf8 x, vf8 y) {
+    vf8 a = select(x, -x, (h & 1) != 0);
+    vf8 b = select(y, -y, (h & 1) != 0);
+    vf8 c = select(y, -y, (h & 2) != 0);
+    return select(select(a, b, (h & 2) != 0), (a + c) * 0x1.6a09e6p-1f, (h & 4) != 0);
+}
+
+VX_INLINE vf8 perlin2_8(vf8 x, vf8 y, __constant const int* perm, uint s) {
+    vi8 ix = vx_ifloor8(x), iy = vx_ifloor8(y);
+    vi8 X = (ix + (int)(s & 255u)) & 255;
+    vi8 Y = (iy + (int)((s >> 8) & 255u)) & 255;
+    x = x - convert_float8(ix); y = y - convert_float8(iy);
+    vf8 u = vx_fade8(x), v = vx_fade8(y);
+    vi8 A = VX_GATHER8(vi8, perm, X) + Y, B = VX_GATHER8(vi8, perm, X + 1) + Y;
+    vf8 x1 = x - 1.0f, y1 = y - 1.0f;
+    return vx_lerp8(v,
+        vx_lerp8(u, vx_grad2_8(VX_GATHER8(vi8, perm, A), x, y),
+                    vx_grad2_8(VX_GATHER8(vi8, perm, B), x1, y)),
+        vx_lerp8(u, vx_grad2_8(VX_GATHER8(vi8, perm, A + 1), x, y1),
+                    vx_grad2_8(VX_GATHER8(vi8, perm, B + 1), x1, y1)));
+}
+
+VX_INLINE vf8 perlin3_8(vf8 x, vf8 y, vf8 z, __constant const int* perm, uint s) {
+    vi8 ix = vx_ifloor8(x), iy = vx_ifloor8(y), iz = vx_ifloor8(z);
+    vi8 X = (ix + (int)(s & 255u)) & 255;
+    vi8 Y = (iy + (int)((s >> 8) & 255u)) & 255;
+    vi8 Z = (iz + (int)((s >> 16) & 255u)) & 255;
+    x = x - convert_float8(ix); y = y - convert_float8(iy); z = z - convert_float8(iz);
+    vf8 u = vx_fade8(x), v = vx_fade8(y), w = vx_fade8(z);
+    vi8 A = VX_GATHER8(vi8, perm, X) + Y;
+    vi8 AA = VX_GATHER8(vi8, perm, A) + Z, AB = VX_GATHER8(vi8, perm, A + 1) + Z;
+    vi8 B = VX_GATHER8(vi8, perm, X + 1) + Y;
+    vi8 BA = VX_GATHER8(vi8, perm, B) + Z, BB = VX_GATHER8(vi8, perm, B + 1) + Z;
+    vf8 x1 = x - 1.0f, y1 = y - 1.0f, z1 = z - 1.0f;
+    return vx_lerp8(w,
+        vx_lerp8(v, vx_lerp8(u, vx_grad3_8(VX_GATHER8(vi8, perm, AA), x, y, z),
+                                vx_grad3_8(VX_GATHER8(vi8, perm, BA), x1, y, z)),
+                    vx_lerp8(u, vx_grad3_8(VX_GATHER8(vi8, perm, AB), x, y1, z),
+                                vx_grad3_8(VX_GATHER8(vi8, perm, BB), x1, y1, z))),
+        vx_lerp8(v, vx_lerp8(u, vx_grad3_8(VX_GATHER8(vi8, perm, AA + 1), x, y, z1),
+                                vx_grad3_8(VX_GATHER8(vi8, perm, BA + 1), x1, y, z1)),
+                    vx_lerp8(u, vx_grad3_8(VX_GATHER8(vi8, perm, AB + 1), x, y1, z1),
+                                vx_grad3_8(VX_GATHER8(vi8, perm, BB + 1), x1, y1, z1))));
+}
+
+// prev(dz) for a row of 8: 0 outside 0..255 (z is the same for the whole row)
+VX_INLINE vi8 vx_prev8(__global const ushort* p, int c, int z, int row) {
+    if (z < 0 || z > 255) return (vi8)0;
+    return convert_int8(vload8(0, p + c * 65536 + z * 256 + row));
+}
+#endif

@@ -183,7 +183,13 @@ def until_fresh(n0, timeout=120.0):
             raise RuntimeError(f"no fresh frame after a change: {viewport.STATUS}")
         view3d()[1].tag_redraw()
         yield 0.1
-    yield from wait_frames(2)
+    # a view change draws drafts first, then one full frame once still (later on a
+    # loaded machine): wait for a redraw from the kept frame, however many that takes
+    while not _since(n0)["last_reused"]:
+        if time.time() - t0 > timeout:
+            raise RuntimeError(f"no redraw from the kept frame after a change: {_since(n0)}")
+        view3d()[1].tag_redraw()
+        yield 0.1
 
 
 def step_still():

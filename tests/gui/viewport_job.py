@@ -184,6 +184,12 @@ def until_fresh(n0, timeout=120.0):
         view3d()[1].tag_redraw()
         yield 0.1
     yield from wait_frames(2)
+    # the last of those may be the fresh full frame itself (a faster frame lands there)
+    while not _since(n0)["last_reused"]:
+        if time.time() - t0 > timeout:
+            raise RuntimeError(f"no redraw from the kept frame after a change: {viewport.STATUS}")
+        view3d()[1].tag_redraw()
+        yield 0.1
 
 
 def step_still():

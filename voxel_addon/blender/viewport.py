@@ -65,19 +65,35 @@ _feed = None          # _Feed of the shown world
 
 
 # ---------------------------------------------------------------------- settings
-def settings_of(vv, draft: bool = False):
-    """render.Settings from scene.voxel_view; draft drops the expensive passes."""
+VIEW_SHADOW_SIZE = 1024  # the viewport's shadow map (renders: Settings.shadow_size)
+
+
+def settings_of(vv, draft: bool = False, render: bool = False):
+    """render.Settings from scene.voxel_view; draft drops the expensive passes. A
+    render (Render Voxel View, Render Animation) keeps the CLI's MSAA and shadow map:
+    the viewport's cheaper ones are for redraws."""
     from ..render.settings import EFFECTS, Settings
     s = Settings(distance=vv.distance, light_radius=min(8, vv.distance))
     for e in EFFECTS:
         setattr(s, e, bool(getattr(vv, e)))
+    if render:
+        return _common(s, vv)
     s.msaa = 2 if vv.msaa else 1
-    s.transparency = vv.transparency
-    s.debug = vv.debug_view or "none"
+    # the map covers ~100 blocks up to the shadow fade: at 1024 a texel is still a tenth
+    # of a block (frames equal to 2048's within 16 levels, mean 0.00) at half the pass
+    # cost (clear + raster of 4M texels: 78 -> 34 ms at distance 16 on llvmpipe)
+    s.shadow_size = VIEW_SHADOW_SIZE
+    _common(s, vv)
     if draft:
         s.shadows = s.ssao = s.dof = s.godrays = False
         s.msaa, s.per_sample = 1, False
         s.peel_layers = min(s.peel_layers, 1)
+    return s
+
+
+def _common(s, vv):
+    s.transparency = vv.transparency
+    s.debug = vv.debug_view or "none"
     return s
 
 

@@ -25,7 +25,7 @@ class _Job:
             raise VoxelError("the scene has no camera")
         self.scene = scene
         self.world = session.world(scene.voxel.path)
-        self.settings = viewport.settings_of(scene.voxel_view)
+        self.settings = viewport.settings_of(scene.voxel_view, render=True)
         self.movie = scene.render.is_movie_format
         if self.movie:
             from .. import movie

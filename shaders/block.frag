@@ -7,31 +7,15 @@
 #include "include/shade.glsl"
 #endif
 
-uniform sampler2DArray tex;
-uniform sampler2DArray glow_tex;
-uniform float glow_scale[64];
-#ifdef PEEL
-uniform GSAMPLER opaque_depth;
-uniform GSAMPLER prev_depth;
-#endif
-
-#if defined(MSAA_ALPHA) && SAMPLES > 1
-sample in vec2 g_uv;
-#else
-in vec2 g_uv;
-#endif
-in vec3 g_world;
-flat in float g_layer;
-flat in vec3 g_normal;
-flat in uint g_quad;
-
-#if defined(OIT)
-layout(location = 0) out vec4 out_accum;   // sum of w * premultiplied colour, sum of w * alpha
-layout(location = 1) out vec4 out_reveal;  // r: sum of -log(1 - alpha)
-#elif !defined(SHADOW)
-layout(location = 0) out vec4 out_albedo;
-layout(location = 1) out vec4 out_normal;
-#endif
+//@ sampler sampler2DArray tex
+//@ sampler sampler2DArray glow_tex
+//@ push float glow_scale[64]
+//@ sampler gdepth2D opaque_depth   if PEEL
+//@ sampler gdepth2D prev_depth     if PEEL
+//@ out 0 vec4 out_accum            if OIT  // sum of w * premultiplied colour, sum of w * alpha
+//@ out 1 vec4 out_reveal           if OIT  // r: sum of -log(1 - alpha)
+//@ out 0 vec4 out_albedo           if !defined(OIT) && !defined(SHADOW)
+//@ out 1 vec4 out_normal           if !defined(OIT) && !defined(SHADOW)
 
 vec4 texel(vec2 uv) {
 #ifdef SMOOTH_MAG

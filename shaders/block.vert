@@ -3,22 +3,15 @@
 #include "include/vertex.glsl"
 #include "include/frame.glsl"
 
-in uint in_v;
-#ifdef UNIFORM_ORIGIN
-uniform vec3 region_origin;     // one draw per region (GL 4.1)
-#else
-in vec3 in_origin;              // per region, through baseInstance (GL 4.3+)
-#endif
-
-out vec3 g_world;
-#if defined(MSAA_ALPHA) && defined(SAMPLES) && SAMPLES > 1
-sample out vec2 g_uv;  // alpha test per sample (alpha-to-sample, fig. 6.4)
-#else
-out vec2 g_uv;
-#endif
-flat out float g_layer;
-flat out vec3 g_normal;
-flat out uint g_quad;
+//@ in uint in_v
+//@ push vec3 region_origin     if UNIFORM_ORIGIN          // one draw per region (GL 4.1)
+//@ in vec3 in_origin           if !defined(UNIFORM_ORIGIN) // per region, through baseInstance
+//@ vary smooth vec3 g_world
+//@ vary sample vec2 g_uv       if defined(MSAA_ALPHA) && SAMPLES > 1  // alpha test per sample (fig. 6.4)
+//@ vary smooth vec2 g_uv       if !(defined(MSAA_ALPHA) && SAMPLES > 1)
+//@ vary flat float g_layer
+//@ vary flat vec3 g_normal
+//@ vary flat uint g_quad
 
 // Vertex animation (§5.3.1): 1 = wave the top (plants), 2 = all (leaves), 3 = water surface.
 vec3 wave(vec3 p, uint anim, vec3 n) {

@@ -7,15 +7,11 @@
 #include "include/common.glsl"
 #include "include/shade.glsl"
 
-uniform GSAMPLER g_depth;
-uniform GSAMPLER g_albedo;
-uniform GSAMPLER g_normal;
-
-in vec2 v_uv;
-layout(location = 0) out vec4 out_color;
-#ifndef LAYER
-layout(location = 1) out vec4 out_front;  // distance, normal: for SSAO, DOF, god rays
-#endif
+//@ sampler gdepth2D g_depth
+//@ sampler gsampler2D g_albedo
+//@ sampler gsampler2D g_normal
+//@ out 0 vec4 out_color
+//@ out 1 vec4 out_front  if !defined(LAYER)  // distance, normal: for SSAO, DOF, god rays
 
 struct Frag { float depth; vec4 albedo; vec3 n; float glow; };
 

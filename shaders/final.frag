@@ -1,12 +1,9 @@
 // Second global pass: mix in the distance blur by depth (§5.4.3), clamp to 8 bits.
 // Defines: DOF.
 #include "include/frame.glsl"
-uniform sampler2D sharp;
-#ifdef DOF
-uniform sampler2D blurred;
-#endif
-in vec2 v_uv;
-out vec4 out_color;
+//@ sampler sampler2D sharp
+//@ sampler sampler2D blurred  if DOF
+//@ out 0 vec4 out_color
 
 void main() {
     vec4 c = texture(sharp, v_uv);

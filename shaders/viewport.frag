@@ -9,21 +9,16 @@
 #include "include/common.glsl"
 #include "include/frame.glsl"
 
-uniform sampler2D color;       // final pass, display values
-uniform GSAMPLER g_depth;
-#if LAYERS > 0
-uniform GSAMPLER prev_depth;   // first depth-peeling layer
-#endif
-uniform mat4 host_vp;          // Blender's perspective_matrix (window @ view)
-uniform vec2 host_range;       // glDepthRange of Blender's context
-uniform bool host_zero_one;    // glClipControl ZERO_TO_ONE
-uniform bool sky;
-
-in vec2 v_uv;
-out vec4 out_color;
-#if KEEP
-layout(location = 1) out float out_depth;
-#endif
+//@ sampler sampler2D color        // final pass, display values
+//@ sampler gdepth2D g_depth
+//@ sampler gdepth2D prev_depth   if LAYERS > 0  // first depth-peeling layer
+//@ push mat4 host_vp             // Blender's perspective_matrix (window @ view)
+//@ push vec2 host_range          // glDepthRange of Blender's context
+//@ push bool host_zero_one       // glClipControl ZERO_TO_ONE
+//@ push bool sky
+//@ out 0 vec4 out_color
+//@ out 1 float out_depth         if KEEP
+//@ depth_write                   if !KEEP
 
 float nearest(ivec2 c) {
     float d = 1.0;

@@ -1,10 +1,10 @@
 // A region's kept frame (viewport.frag with KEEP) into Blender's framebuffer: the
 // same colour and depth the composite would write, depth tested LEQUAL by the
 // caller, so Blender's objects still mix both ways while the pipeline is skipped.
-uniform sampler2D kept_color;  // RGBA8, alpha 0: nothing of ours here
-uniform sampler2D kept_depth;  // R32F, Blender's depth
-in vec2 v_uv;
-out vec4 out_color;
+//@ sampler sampler2D kept_color  // RGBA8, alpha 0: nothing of ours here
+//@ sampler sampler2D kept_depth  // R32F, Blender's depth
+//@ out 0 vec4 out_color
+//@ depth_write
 
 void main() {
     ivec2 size = textureSize(kept_color, 0);

@@ -18,7 +18,7 @@ vec3 hash_color(uint h) {
 }
 
 // World position of a depth-buffer value at normalised screen coordinate uv.
-vec3 world_pos(mat4 inv_vp, vec2 uv, float depth) {
-    vec4 p = inv_vp * vec4(uv * 2.0 - 1.0, depth * 2.0 - 1.0, 1.0);
+vec3 world_pos(mat4 inv_m, vec2 uv, float depth) {
+    vec4 p = inv_m * vec4(uv * 2.0 - 1.0, depth * 2.0 - 1.0, 1.0);
     return p.xyz / p.w;
 }

@@ -1,26 +1,36 @@
-// What every pass reads of the frame: one std140 uniform block, written once per
-// frame (voxel_addon/render/frame.py reads this declaration for the byte offsets, so
-// this is the only place the layout is written down). Member types: float, int,
-// bool, vec2, ivec2, vec3, vec4, mat4; a float after a vec3 shares its 16 bytes.
-#ifndef FRAME_GLSL
-#define FRAME_GLSL
-layout(std140) uniform Frame {
-    mat4 vp;               // the drawn camera (the culling view draws from above)
-    mat4 inv_vp;
-    mat4 shadow_vp;        // the light's view-projection: the shadow-map pass
-    mat4 shadow_mat;       // world -> shadow-map texture coordinates and depth
-    vec3 cam_pos;          float far_dist;
-    vec3 shadow_eye;       float shadow_fade;  // the real camera; no shadow from there on
-    vec3 day_ambient;      float day_u;        // eq. 4.1's daylight (light.daytime)
-    vec3 day_direct;       float shadow_texel; // world size of one shadow-map texel
-    vec3 sky_zenith;       float sky_stars;    // eq. 5.1
-    vec3 sky_horizon;      float shadow_bias;  // depth units
-    vec3 sky_halo;         float time;         // seconds: waving
-    vec3 sky_disc;         float godray_strength;
-    vec3 sky_light_dir;    bool waving;        // towards the sun by day, the moon by night
-    vec2 sun_px;           float sun_radius;   bool sun_visible;  // the disc on screen, pixels
-    float fog_start;       float fog_end;      float dof_start;   float dof_end;
-    float ssao_radius;     // blocks
-    vec3 cam_fwd;          bool ortho;         // orthographic: parallel rays along cam_fwd
-};
-#endif
+// What every pass reads of the frame: one uniform block, written once per frame
+// (voxel_addon/render/frame.py packs it by render/glsl.py's frame_layout, which reads
+// these lines: this is the only place the members are written down). Member types:
+// float, int, bool, vec2, ivec2, vec3, vec4, mat4; bodies read them by name.
+//@ frame mat4 vp               // the drawn camera (the culling view draws from above)
+//@ frame mat4 inv_vp
+//@ frame mat4 shadow_vp        // the light's view-projection: the shadow-map pass
+//@ frame mat4 shadow_mat       // world -> shadow-map texture coordinates and depth
+//@ frame vec3 cam_pos
+//@ frame float far_dist
+//@ frame vec3 shadow_eye       // the real camera; no shadow from shadow_fade on
+//@ frame float shadow_fade
+//@ frame vec3 day_ambient      // eq. 4.1's daylight (light.daytime)
+//@ frame float day_u
+//@ frame vec3 day_direct
+//@ frame float shadow_texel    // world size of one shadow-map texel
+//@ frame vec3 sky_zenith       // eq. 5.1
+//@ frame float sky_stars
+//@ frame vec3 sky_horizon
+//@ frame float shadow_bias     // depth units
+//@ frame vec3 sky_halo
+//@ frame float time            // seconds: waving
+//@ frame vec3 sky_disc
+//@ frame float godray_strength
+//@ frame vec3 sky_light_dir    // towards the sun by day, the moon by night
+//@ frame bool waving
+//@ frame vec2 sun_px           // the disc on screen, pixels
+//@ frame float sun_radius
+//@ frame bool sun_visible
+//@ frame float fog_start
+//@ frame float fog_end
+//@ frame float dof_start
+//@ frame float dof_end
+//@ frame float ssao_radius     // blocks
+//@ frame vec3 cam_fwd          // orthographic: parallel rays along cam_fwd
+//@ frame bool ortho

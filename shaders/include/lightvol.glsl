@@ -3,10 +3,10 @@
 // SPEC §3 uint16. Outside the resident box [vol_lo, vol_hi) the light is open daylight.
 // Sampling and eq. 4.1 are light.glsl's; this file only plugs the lookup into it
 // (call light_sample(light_vol, vec3(0.0), p, n): voxel indices are world coordinates).
-uniform usampler3D light_vol;
-uniform int vol_size;
-uniform ivec2 vol_lo;
-uniform ivec2 vol_hi;
+//@ sampler usampler3D light_vol
+//@ push int vol_size
+//@ push ivec2 vol_lo
+//@ push ivec2 vol_hi
 
 vec4 light_torus(usampler3D vol, ivec3 v) {
     uint l;

@@ -11,9 +11,7 @@
 #define DEBUG 0
 #endif
 
-#ifdef SHADOWS
-uniform sampler2DShadow shadow_map;
-#endif
+//@ sampler sampler2DShadow shadow_map  if SHADOWS
 
 float shadow_at(vec3 p, vec3 n) {
 #ifdef SHADOWS

@@ -5,8 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from voxel_addon import light, resources
+from voxel_addon import light
 from voxel_addon.light import scenes
+from voxel_addon.render import glsl
 from voxel_addon.render.lightvol import LightVolume, window
 
 N = 96  # sample points
@@ -14,16 +15,18 @@ N = 96  # sample points
 
 
 def sample_gl(ctx, vol, pts, nrm):
-    src = resources.shader("include/lightvol.glsl")
-    prog = ctx.program(vertex_shader="""#version 410 core
-        in vec2 pos; void main() { gl_Position = vec4(pos, 0.0, 1.0); }""",
-                       fragment_shader="#version 410 core\n" + src + f"""
-        uniform vec3 pts[{N}]; uniform vec3 nrm[{N}];
-        out vec4 color;
+    frag = f"""#include "include/lightvol.glsl"
+        //@ push vec3 pts[{N}]
+        //@ push vec3 nrm[{N}]
+        //@ out 0 vec4 color
         void main() {{
             int i = int(gl_FragCoord.x);
             color = light_sample(light_vol, vec3(0.0), pts[i], nrm[i]);
-        }}""")
+        }}"""
+    vert = """//@ in vec2 pos
+        void main() { gl_Position = vec4(pos, 0.0, 1.0); }"""
+    p = glsl.program("probe.vert", "probe.frag", texts=(vert, frag))
+    prog = ctx.program(vertex_shader=glsl.source(p, "vert"), fragment_shader=glsl.source(p, "frag"))
     prog["pts"].write(pts.astype("f4").tobytes())
     prog["nrm"].write(nrm.astype("f4").tobytes())
     vol.bind(prog, 0)

@@ -32,7 +32,6 @@ import numpy as np
 
 from .. import meshing
 from . import camera
-from .programs import source
 
 PASSES = meshing.PASSES  # opaque, cutout (leaves), cutout2 (double-sided plants), blend
 _QUAD = 4 * meshing.BYTES_PER_VERTEX  # bytes of one quad's vertices
@@ -384,7 +383,8 @@ class Geometry:
             last = self.bufs[slot] = [buf, None, ("gpu", self.gen), None]
         buf, n = last[0], len(self.cmd)
         if self._cs is None:
-            self._cs = self.ctx.compute_shader(source("cull.comp", None, 430))
+            from .. import resources
+            self._cs = self.ctx.compute_shader("#version 430 core\n" + resources.shader("cull.comp"))
         self._cs["planes"].write(camera.planes(mvp).astype(np.float32).tobytes())
         self._cs["n"].value = n
         buf.bind_to_storage_buffer(0)

@@ -1,4 +1,4 @@
-"""GLSL programs from shaders/: #include via resources, #define injection, one cache per context.
+"""GLSL programs from shaders/ on a moderngl context: render/glsl.py writes their text, one cache per context.
 
 A program is named by its files plus a defines dict; the same source compiles into
 several variants (the thesis's face contexts: opaque / alpha test / peel / shadow).
@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import resources
+from . import glsl
 from .frame import BINDING
 
 # Every sampler name has one texture unit in all programs, set when a program is
@@ -19,21 +19,9 @@ UNITS = {"g_depth": 0, "g_albedo": 1, "g_normal": 2, "shadow_map": 3, "light_vol
          "src": 0, "sharp": 0, "blurred": 1, "accum": 0, "reveal": 1}
 
 
-def source(name: str, defines: dict | None = None, version: int = 410) -> str:
-    """Shader text with `#version` first and the defines right after it."""
-    lines = [f"#version {version} core"]
-    for k, v in sorted((defines or {}).items()):
-        if v is False or v is None:
-            continue
-        lines.append(f"#define {k} {int(v) if v is True else v}")
-    body = resources.shader(name)
-    # A file may carry its own #version (editor tooling); ours wins.
-    body = "\n".join(ln for ln in body.splitlines() if not ln.lstrip().startswith("#version"))
-    return "\n".join(lines) + "\n#line 1\n" + body
-
-
 class Programs:
-    """Compiles and caches (vertex, fragment, defines) -> moderngl.Program."""
+    """Compiles and caches (vertex, fragment, defines) -> moderngl.Program (shader
+    text from render/glsl.py)."""
 
     def __init__(self, ctx):
         self.ctx = ctx
@@ -46,15 +34,17 @@ class Programs:
         if prog is None:
             d = dict(defines or {})
             d.setdefault("GLSL_VERSION", self.version)
-            kw = {"vertex_shader": source(vert, d, self.version)}
+            p = glsl.program(vert, frag, d)
+            samples = int(d.get("SAMPLES", 1) or 1)
+            kw = {"vertex_shader": glsl.source(p, "vert", self.version, samples)}
             if frag:
-                kw["fragment_shader"] = source(frag, d, self.version)
+                kw["fragment_shader"] = glsl.source(p, "frag", self.version, samples)
             try:
                 prog = self.ctx.program(**kw)
-            except Exception as e:  # name the file: moderngl's message only has line numbers
-                raise RuntimeError(f"shader {vert}/{frag} {d}: {e}") from None
-            if "Frame" in prog:
-                prog["Frame"].binding = BINDING
+            except Exception as e:  # name the file: the driver's message has numbers
+                raise RuntimeError(f"shader {p.name} {d}: {p.where(str(e))}") from None
+            if glsl.FRAME_BLOCK in prog:
+                prog[glsl.FRAME_BLOCK].binding = BINDING
             for name, unit in UNITS.items():
                 if name in prog:
                     prog[name].value = unit

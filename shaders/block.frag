@@ -7,8 +7,8 @@
 #include "include/shade.glsl"
 #endif
 
-//@ sampler sampler2DArray tex
-//@ sampler sampler2DArray glow_tex
+//@ sampler sampler2DArray tex       // per layer the mip chain side by side (texel())
+//@ sampler sampler2DArray glow_tex  // 16x16 per layer
 //@ push float glow_scale[64]
 //@ sampler gdepth2D opaque_depth   if PEEL
 //@ sampler gdepth2D prev_depth     if PEEL
@@ -17,18 +17,31 @@
 //@ out 0 vec4 out_albedo           if !defined(OIT) && !defined(SHADOW)
 //@ out 1 vec4 out_normal           if !defined(OIT) && !defined(SHADOW)
 
+// Texels with no sampler state (Blender's gpu module binds textures nearest, clamped,
+// without mipmaps): a layer holds the 16x16 texture and its mip levels side by side
+// (level l, 16 >> l wide, at x = 32 - (32 >> l)); the texel index wraps (merged quads
+// repeat the texture), and GL's NEAREST_MIPMAP_LINEAR is done here: the level from the
+// derivatives, the nearest texel in the two levels around it, blended.
+vec4 level_texel(vec2 t, int l) {  // t: level-0 texel coordinates
+    int size = 16 >> l;
+    ivec2 i = ivec2(floor(t / float(1 << l))) & (size - 1);  // (two's complement: wraps)
+    return texelFetch(tex, ivec3(i.x + 32 - (32 >> l), i.y, int(g_layer)), 0);
+}
+
 vec4 texel(vec2 uv) {
+    vec2 t = uv * 16.0;
+    float lod = log2(max(length(dFdx(t)), length(dFdy(t))));
 #ifdef SMOOTH_MAG
     // Linear blend only across texel borders, as wide as one screen pixel (fig. 6.3).
-    vec2 t = uv * 16.0;
     vec2 w = max(fwidth(t), vec2(1e-4));
     vec2 f = fract(t - 0.5);
     vec2 s = clamp((f - 0.5) / w + 0.5, 0.0, 1.0);
-    vec2 q = (floor(t - 0.5) + s + 0.5) / 16.0;
-    return textureGrad(tex, vec3(q, g_layer), dFdx(uv), dFdy(uv));
-#else
-    return texture(tex, vec3(uv, g_layer));
+    t = floor(t - 0.5) + s + 0.5;
 #endif
+    if (!(lod > 0.0)) return level_texel(t, 0);  // magnified (or a degenerate derivative)
+    lod = min(lod, 4.0);
+    int l = min(int(lod), 3);
+    return mix(level_texel(t, l), level_texel(t, l + 1), lod - float(l));
 }
 
 #ifdef OIT
@@ -68,7 +81,8 @@ void main() {
 #endif
 #ifndef SHADOW
     vec3 n = gl_FrontFacing ? g_normal : -g_normal;  // double-sided passes
-    float glow = texture(glow_tex, vec3(g_uv, g_layer)).r * glow_scale[int(g_layer)];
+    ivec2 gi = ivec2(floor(g_uv * 16.0)) & 15;  // nearest, repeated
+    float glow = texelFetch(glow_tex, ivec3(gi, int(g_layer)), 0).r * glow_scale[int(g_layer)];
 #ifdef DEBUG_AGG
     c.rgb = hash_color(g_quad * 7919u + uint(g_layer));  // one colour per merged quad
     glow = 0.0;

@@ -1,11 +1,12 @@
 // Block faces for the G-buffer, depth peeling and the shadow map (thesis §5.3.1).
-// UNIFORM_ORIGIN: the GL 4.1 path (Geometry.indirect_ok off).
+// One draw per batch of chunks (render/geometry.py): in_v.x is the packed vertex
+// (include/vertex.glsl), in_v.y where its render region lies in the batch (bits 0-1
+// chunk x, 2-3 chunk y, 4-11 region; bits 12-31 are free).
 #include "include/vertex.glsl"
 #include "include/frame.glsl"
 
-//@ in uint in_v
-//@ push vec3 region_origin     if UNIFORM_ORIGIN          // one draw per region (GL 4.1)
-//@ in vec3 in_origin           if !defined(UNIFORM_ORIGIN) // per region, through baseInstance
+//@ in uvec2 in_v
+//@ push vec4 batch_origin     // xyz: the batch's first block, w: the region height
 //@ vary smooth vec3 g_world
 //@ vary sample vec2 g_uv       if defined(MSAA_ALPHA) && SAMPLES > 1  // alpha test per sample (fig. 6.4)
 //@ vary smooth vec2 g_uv       if !(defined(MSAA_ALPHA) && SAMPLES > 1)
@@ -23,12 +24,10 @@ vec3 wave(vec3 p, uint anim, vec3 n) {
 }
 
 void main() {
-    Vertex v = decode(in_v);
-#ifdef UNIFORM_ORIGIN
-    vec3 p = v.position + region_origin;
-#else
-    vec3 p = v.position + in_origin;
-#endif
+    Vertex v = decode(in_v.x);
+    uint o = in_v.y;
+    vec3 p = v.position + batch_origin.xyz
+           + vec3(float(o & 3u) * 16.0, float((o >> 2) & 3u) * 16.0, float((o >> 4) & 255u) * batch_origin.w);
     if (waving && v.anim != 0u) p = wave(p, v.anim, v.normal);
     g_world = p;
     g_uv = v.uv;

@@ -52,7 +52,7 @@ void main() {
         float z01 = host_zero_one ? max(ndc, 0.0) : ndc * 0.5 + 0.5;
         z = mix(host_range.x, host_range.y, z01);
     }
-    out_color = vec4(texture(color, v_uv).rgb, 1.0);
+    out_color = vec4(bilinear(color, v_uv).rgb, 1.0);  // draft frames are smaller
 #if KEEP
     out_depth = z;
 #else

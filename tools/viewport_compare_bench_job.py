@@ -219,41 +219,14 @@ def accounted(w, viewport) -> dict:
     for g in viewport._gpus.values():
         r = g.r
         add("light (renderer)", (a for v in r.lights.values() for a in _arrays(v)))
-        geo = r.geo
-        bufs = [b for b in (geo.vbo, geo.ibo, geo.obo, geo._boxes) if b is not None]
-        bufs += [b[0] for b in geo.bufs.values() if b[0] is not None]
-        out["GL vertex/index/command buffers"] = sum(b.size for b in bufs) / MB
-        out["GL light volume"] = r.vol.tex.width * r.vol.tex.height * r.vol.tex.depth * 2 / MB
-        out["GL render targets"] = _targets_mb(r.targets)
-        out["GL block textures"] = (r.tex.width * r.tex.height * r.tex.layers * 4 * 4 / 3
-                                    + r.glow.width * r.glow.height * r.glow.layers) / MB
-        out["targets key"] = list(r.targets.get("key", ()))
+        out["GL vertex buffers"] = r.geo.nbytes / MB
+        out["GL light volume"] = r.vol.tex.nbytes / MB
+        out["GL render targets"] = r.targets.nbytes / MB if r.targets else 0.0
+        out["GL block textures"] = (r.blocks.tex.nbytes + r.blocks.glow.nbytes) / MB
+        out["targets key"] = str(r.targets.shape) if r.targets else ""
     return out
 
 
-def _targets_mb(T) -> float:
-    """Bytes of the render targets' textures (per sample), each object once."""
-    import moderngl
-    size = {"f1": 1, "u1": 1, "f2": 2, "u2": 2, "f4": 4, "u4": 4, "i4": 4}
-    seen, n = set(), 0
-
-    def walk(x):
-        nonlocal n
-        if isinstance(x, dict):
-            for v in x.values():
-                walk(v)
-        elif isinstance(x, (list, tuple)):
-            for v in x:
-                walk(v)
-        elif isinstance(x, moderngl.Texture) and x.glo not in seen:
-            seen.add(x.glo)
-            b = 4 if x.depth else x.components * size.get(x.dtype, 4)
-            n += x.width * x.height * b * max(1, x.samples)
-    walk({k: v for k, v in T.items() if k != "key"})
-    return n / MB
-
-
-# ---------------------------------------------------------------------- baked
 def baked(world, d, limit):
     from voxel_addon.blender import session
     sc = setup(world, d)

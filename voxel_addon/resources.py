@@ -4,8 +4,10 @@ In the repo they sit beside voxel_addon/; in the extension zip build.py stages t
 the same way, so one relative path serves both. `load_source` resolves
 `#include "name"` lines (relative to the same folder) once per file, like
 moderngl-window's loader, so kernels and shaders can share helpers. `shader_stage`
-also marks where each file starts and resumes with `#line LINE FILE` (FILE: its
-number in the returned list), so a compiler's message can name the file.
+also marks where each file starts and resumes with `#line` (number: the file's index
+in the returned list times LINES plus its line; drivers print the line and some drop
+GLSL's source-string number, and MSL takes no number there), so a compiler's message
+can name the file (render/glsl.py, Program.where).
 """
 from __future__ import annotations
 
@@ -17,6 +19,7 @@ ROOT = Path(__file__).resolve().parent.parent
 KERNELS = ROOT / "gpu"
 SHADERS = ROOT / "shaders"
 
+LINES = 10000  # `#line` numbers: file index * LINES + line
 _INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"\s*$', re.M)
 
 
@@ -30,8 +33,8 @@ def expand(folder: Path, name: str, text: str | None = None,
            lines: bool = False) -> tuple[str, tuple[str, ...]]:
     """(text with includes replaced, the files in the order they were first read).
     `text` stands in for folder/name's contents (a test's own shader); with `lines`
-    every file starts with `#line 1 K` and the text after an include resumes with
-    `#line N K`, K the file's index in the list."""
+    every file's lines are numbered K * LINES + N (`#line` where it starts and after
+    each include), K the file's index in the list."""
     seen: list[str] = []
 
     def read(rel: str, body: str | None = None) -> str:
@@ -46,11 +49,11 @@ def expand(folder: Path, name: str, text: str | None = None,
             body = path.read_text()
         if not lines:
             return _INCLUDE.sub(lambda m: read(m.group(1)), body)
-        out = [f"#line 1 {k}"]
+        out = [f"#line {k * LINES + 1}"]
         for n, ln in enumerate(body.splitlines(), 1):
             m = _INCLUDE.match(ln)
             if m:
-                out += [read(m.group(1)), f"#line {n + 1} {k}"]
+                out += [read(m.group(1)), f"#line {k * LINES + n + 1}"]
             else:
                 out.append(ln)
         return "\n".join(out)

@@ -17,6 +17,20 @@ vec3 hash_color(uint h) {
     return vec3(float(h & 255u), float((h >> 8) & 255u), float((h >> 16) & 255u)) / 255.0;
 }
 
+// Linear filtering by hand (devices bind textures nearest): four texels, clamped.
+vec4 bilinear(sampler2D t, vec2 uv) {
+    ivec2 size = textureSize(t, 0);
+    vec2 p = uv * vec2(size) - 0.5;
+    ivec2 b = ivec2(floor(p));
+    vec2 f = p - floor(p);
+    ivec2 hi = size - 1;
+    vec4 a = mix(texelFetch(t, clamp(b, ivec2(0), hi), 0),
+                 texelFetch(t, clamp(b + ivec2(1, 0), ivec2(0), hi), 0), f.x);
+    vec4 c = mix(texelFetch(t, clamp(b + ivec2(0, 1), ivec2(0), hi), 0),
+                 texelFetch(t, clamp(b + ivec2(1, 1), ivec2(0), hi), 0), f.x);
+    return mix(a, c, f.y);
+}
+
 // World position of a depth-buffer value at normalised screen coordinate uv.
 vec3 world_pos(mat4 inv_m, vec2 uv, float depth) {
     vec4 p = inv_m * vec4(uv * 2.0 - 1.0, depth * 2.0 - 1.0, 1.0);

@@ -34,3 +34,6 @@
 //@ frame float ssao_radius     // blocks
 //@ frame vec3 cam_fwd          // orthographic: parallel rays along cam_fwd
 //@ frame bool ortho
+//@ frame int vol_n             // the light volume (include/lightvol.glsl): slots per side
+//@ frame ivec2 vol_lo          // its resident box, in blocks
+//@ frame ivec2 vol_hi

@@ -149,14 +149,13 @@ class View:
                 self.r.set_area(a.blocks, a.light, a.cx0, a.cy0, ring=True, method=method,
                                 light_at=a.light_at)
                 self._area = None
-            fbo = self.r.draw(camera, hours, (w, h))
+            tex = self.r.draw(camera, hours, (w, h))
             dst = host["fb"][0]  # the offscreen's framebuffer, bound by off.bind()
             if self._dst is None or self._dst.glo != dst:
                 self._dst = self.ctx.detect_framebuffer(dst)
-            self.ctx.copy_framebuffer(self._dst, fbo)
+            self.ctx.copy_framebuffer(self._dst, self.r.targets.out_fb.obj)
             if out is not None:
-                data = fbo.read(components=3)
-                out.append(np.frombuffer(data, np.uint8).reshape(h, w, 3)[::-1].copy())
+                out.append(np.ascontiguousarray(self.r.dev.read(tex)[::-1, :, :3]))
         self.ms = (time.perf_counter() - t0) * 1e3
 
     def _attach(self):
@@ -178,8 +177,7 @@ class View:
         self.r = Renderer(self.ctx, self.settings)
         c = self.ctx
         self.info = {"version": c.info["GL_VERSION"], "renderer": c.info["GL_RENDERER"],
-                     "version_code": c.version_code, "max_samples": c.max_samples,
-                     "multi_draw_indirect": self.r.geo.indirect_ok}
+                     "version_code": c.version_code, "max_samples": c.max_samples}
 
     # ------------------------------------------------------------------ cleanup
     def _free_offscreen(self):

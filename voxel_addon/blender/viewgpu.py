@@ -62,8 +62,8 @@ class Gpu:
         key = (samples, layers, keep)
         p = self._comp.get(key)
         if p is None:
-            p = self._comp[key] = self.r.progs.get(
-                "fullscreen.vert", "viewport.frag", {"SAMPLES": samples, "LAYERS": layers, "KEEP": keep})
+            p = self._comp[key] = self.r.dev.program(
+                "fullscreen.vert", "viewport.frag", {"SAMPLES": samples, "LAYERS": layers, "KEEP": keep}).obj
             _units(p)
         return p
 
@@ -73,11 +73,11 @@ class Gpu:
         from ..render import glstate
         gl = glstate.gl()
         blend = f.blend_depth
-        prog = self.program(f.T["ms"], 1 if blend is not None else 0, int(kept is not None))
-        f.color.use(_UNIT["color"])
-        f.depth.use(0)
+        prog = self.program(f.targets.samples, 1 if blend is not None else 0, int(kept is not None))
+        f.color.obj.use(_UNIT["color"])
+        f.depth.obj.use(0)
         if blend is not None:
-            blend.use(9)
+            blend.obj.use(9)
         prog["host_vp"].write(np.asarray(host_vp, np.float32).T.tobytes())
         prog["host_range"].value = tuple(host["depth_range"])
         prog["host_zero_one"].value = bool(host["clip"] and host["clip"][1] == 0x935F)
@@ -97,7 +97,7 @@ class Gpu:
         there, without the pipeline (needs no frame block nor G-buffer)."""
         prog = self._kept_prog
         if prog is None:
-            prog = self._kept_prog = self.r.progs.get("fullscreen.vert", "viewport_kept.frag")
+            prog = self._kept_prog = self.r.dev.program("fullscreen.vert", "viewport_kept.frag").obj
             _units(prog)
         kept.color.use(_UNIT["kept_color"])
         kept.depth.use(_UNIT["kept_depth"])
@@ -130,7 +130,7 @@ class Gpu:
         while len(self.kept) > KEPT_MAX:
             old.append(self.kept.pop(next(iter(self.kept))))
         if old:  # moderngl rebinds its last framebuffer after making one: not a released one
-            self.r._idle.use()
+            self.r.dev._idle.use()
             for x in old:
                 x.release()
         return k

@@ -22,10 +22,10 @@ def layout() -> tuple[dict, int]:
 
 
 class FrameBlock:
-    """The block's values by member name; upload() packs them in one struct call (a
+    """The block's values by member name; pack() packs them in one struct call (a
     frame sets ~30 members: one NumPy write each cost more than the whole pack)."""
 
-    def __init__(self, ctx):
+    def __init__(self):
         self.members, size = layout()
         self.order = sorted(self.members, key=lambda k: self.members[k][0])
         fmt, at = "<", 0
@@ -39,13 +39,13 @@ class FrameBlock:
         self.data = bytearray(size)
         self.values = {k: 0 if self.members[k][1] == 1 else (0,) * self.members[k][1]
                        for k in self.order}
-        self.buf = ctx.buffer(reserve=size)
 
     def set(self, **values) -> None:
         """Scalars, sequences, or row-major 4x4 NumPy matrices (GL gets columns)."""
         self.values.update(values)
 
     def pack(self) -> bytes:
+        """The block's bytes (a device uploads them: Device.frame)."""
         flat = []
         for k in self.order:
             v, n = self.values[k], self.members[k][1]
@@ -57,11 +57,3 @@ class FrameBlock:
                 flat.extend(map(float, v))
         struct.pack_into(self.fmt, self.data, 0, *flat)
         return bytes(self.data)
-
-    def upload(self) -> None:
-        data = self.pack()
-        self.buf.orphan()  # fresh storage: no wait for the previous frame's draws
-        self.buf.write(data)
-
-    def release(self) -> None:
-        self.buf.release()

@@ -80,20 +80,23 @@ class Program:
     name: str
 
     def where(self, message: str) -> str:
-        """A compiler message with the `#line` file numbers replaced by file names
-        (a section after a line naming the fragment stage uses that stage's files)."""
+        """A compiler message with the `#line` numbers as file:line (a section after
+        a line naming the fragment stage uses that stage's files)."""
         files = self.vert[1]
 
-        def sub(m):
-            k = int(m.group(1))
-            return f"{files[k] if k < len(files) else m.group(1)}:{m.group(2)}"
+        def at(line):
+            k, n = divmod(int(line), resources.LINES)
+            return f"{files[k]}:{n}" if 0 < n and k < len(files) else line
+
         out = []
         for ln in message.splitlines():
             if "fragment" in ln.lower() and self.frag:
                 files = self.frag[1]
             elif "vertex" in ln.lower():
                 files = self.vert[1]
-            out.append(re.sub(r"\b(\d+)[:(](\d+)\)?", sub, ln))
+            # Mesa "0:LINE(COL)", others "0(LINE)"
+            out.append(re.sub(r"\b\d+(?::(\d+)\((\d+)\)|\((\d+)\))", lambda m: (
+                f"{at(m.group(1))}({m.group(2)})" if m.group(1) else at(m.group(3))), ln))
         return "\n".join(out)
 
 
@@ -113,8 +116,13 @@ def condition(expr: str, defines: dict) -> bool:
 
 
 def active(defines: dict) -> dict:
-    """The defines a body sees: False/None dropped, True as 1."""
-    return {k: (1 if v is True else v) for k, v in defines.items() if v is not False and v is not None}
+    """The defines a body sees: False/None dropped, True as 1 (NumPy scalars too)."""
+    out = {}
+    for k, v in defines.items():
+        v = v.item() if hasattr(v, "item") else v
+        if v is not False and v is not None:
+            out[k] = 1 if v is True else v
+    return out
 
 
 def annotations(text: str, defines: dict):

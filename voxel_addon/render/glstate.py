@@ -16,7 +16,6 @@ import ctypes
 from contextlib import contextmanager
 
 from .frame import BINDING
-from .programs import UNITS
 
 # glIsEnabled caps -> value in a fresh moderngl context (GL's defaults, plus what
 # moderngl enables when it creates a context: primitive restart, seamless cube maps)
@@ -177,10 +176,11 @@ def gl() -> GL:
 
 
 def saved_units() -> list[int]:
-    """The units the pipeline binds (programs.UNITS) and the last one, where moderngl
-    binds a texture to write it."""
+    """The units the pipeline binds (a program's samplers take units 0, 1, ... in
+    their order: device/mgl.py) and the last one, where moderngl binds a texture to
+    write it."""
     n = gl().int(0x8B4D)  # MAX_COMBINED_TEXTURE_IMAGE_UNITS
-    return sorted(set(UNITS.values()) | {n - 1})
+    return sorted(set(range(16)) | {n - 1})
 
 
 def snapshot(units: list[int] | None = None) -> dict:

@@ -8,8 +8,7 @@
 #endif
 
 //@ sampler sampler2DArray tex       // per layer the mip chain side by side (texel())
-//@ sampler sampler2DArray glow_tex  // 16x16 per layer
-//@ push float glow_scale[64]
+//@ sampler sampler2DArray glow_tex  // 16x16 per layer: the mask times its blocks' glow
 //@ sampler gdepth2D opaque_depth   if PEEL
 //@ sampler gdepth2D prev_depth     if PEEL
 //@ out 0 vec4 out_accum            if OIT  // sum of w * premultiplied colour, sum of w * alpha
@@ -82,7 +81,7 @@ void main() {
 #ifndef SHADOW
     vec3 n = gl_FrontFacing ? g_normal : -g_normal;  // double-sided passes
     ivec2 gi = ivec2(floor(g_uv * 16.0)) & 15;  // nearest, repeated
-    float glow = texelFetch(glow_tex, ivec3(gi, int(g_layer)), 0).r * glow_scale[int(g_layer)];
+    float glow = texelFetch(glow_tex, ivec3(gi, int(g_layer)), 0).r;  // (mask x block glow)
 #ifdef DEBUG_AGG
     c.rgb = hash_color(g_quad * 7919u + uint(g_layer));  // one colour per merged quad
     glow = 0.0;

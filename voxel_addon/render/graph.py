@@ -60,7 +60,6 @@ def build(dev, T, sw: Switches, blocks, vol) -> Graph:
          "FOG": sw.fog and sw.debug == "none", "DEBUG": dbg}
     parts = [("opaque", {}), ("cutout", cut), ("cutout2", cut)]
     tex = blocks.bindings()
-    glow = {"glow_scale": blocks.glow_scale}
 
     def block(defines):
         return dev.program("block.vert", "block.frag", defines)
@@ -76,15 +75,15 @@ def build(dev, T, sw: Switches, blocks, vol) -> Graph:
     G = Graph()
     G.shadow = GeometryPass(dev, T.shadow_fb, [
         (n, block({"SHADOW": 1, "ALPHA_TEST": n != "opaque"})) for n, _ in parts],
-        DEPTH_LESS, values=glow, **tex) if sw.shadows else None
+        DEPTH_LESS, **tex) if sw.shadows else None
     G.g = GeometryPass(dev, T.g.target, [(n, block({**g, **x})) for n, x in parts], DEPTH_LESS,
-                       values=glow, **tex)
+                       **tex)
     G.shade = Pass(dev, T.shaded, full("deferred.frag", {**d, "FILL_HOLES": sw.fill_holes}),
                    clear=True, **gbuf(T.g))
     if sw.oit:  # resolved into layer 0: the composite blends it as one peel layer
         G.transparency = oit.OIT(
             GeometryPass(dev, T.oit_fb, [("blend", block({**g, **d, "OIT": 1}))],
-                         State("less", False, False, "add"), values=glow,
+                         State("less", False, False, "add"),
                          light_vol=vol, **tex, **sm),
             Pass(dev, T.layer_fb[0], full("oit_resolve.frag", {"SAMPLES": ms}),
                  accum=T.accum, reveal=T.reveal))
@@ -92,7 +91,7 @@ def build(dev, T, sw: Switches, blocks, vol) -> Graph:
         layer = full("deferred.frag", {**d, "LAYER": 1}) if sw.layers else None
         G.transparency = Peel(
             [GeometryPass(dev, p.target, [("blend", block({**g, "PEEL": i + 1}))],
-                          State("less", True, False), values=glow, opaque_depth=T.g.depth,
+                          State("less", True, False), opaque_depth=T.g.depth,
                           prev_depth=T.peel[i - 1].depth if i else T.g.depth, **tex)
              for i, p in enumerate(T.peel[:sw.layers])],
             [Pass(dev, f, layer, clear=True, **gbuf(p))

@@ -1,8 +1,10 @@
 // A region's kept frame (viewport.frag with KEEP) into Blender's framebuffer: the
 // same colour and depth the composite would write, depth tested LEQUAL by the
 // caller, so Blender's objects still mix both ways while the pipeline is skipped.
+#include "include/common.glsl"
 //@ sampler sampler2D kept_color  // RGBA8, alpha 0: nothing of ours here
 //@ sampler sampler2D kept_depth  // R32F, Blender's depth
+//@ push int srgbTarget           // set by Blender (include/common.glsl, to_target)
 //@ out 0 vec4 out_color
 //@ depth_write
 
@@ -12,5 +14,5 @@ void main() {
     vec4 col = texelFetch(kept_color, c, 0);
     if (col.a == 0.0) discard;
     gl_FragDepth = texelFetch(kept_depth, c, 0).r;
-    out_color = col;
+    out_color = vec4(to_target(col.rgb, srgbTarget), col.a);
 }

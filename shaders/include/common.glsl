@@ -31,6 +31,16 @@ vec4 bilinear(sampler2D t, vec2 uv) {
     return mix(a, c, f.y);
 }
 
+// Display colours into a host's framebuffer: Blender's viewport framebuffer is sRGB
+// (the GPU encodes what is written), and Blender sets its builtin `srgbTarget` then (a
+// `//@ push int srgbTarget` is filled by Blender, 0 elsewhere): decode ours first, as
+// Blender's own shaders do (blender_srgb_to_framebuffer_space).
+vec3 to_target(vec3 c, int srgb) {
+    if (srgb == 0) return c;
+    c = max(c, vec3(0.0));
+    return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), step(vec3(0.04045), c));
+}
+
 // World position of a depth-buffer value at normalised screen coordinate uv.
 vec3 world_pos(mat4 inv_m, vec2 uv, float depth) {
     vec4 p = inv_m * vec4(uv * 2.0 - 1.0, depth * 2.0 - 1.0, 1.0);

@@ -238,14 +238,15 @@ def _green(img) -> float:
 def test_a_second_window_shows_voxels_and_closing_it_releases_its_share(run):
     w = run["steps"]["window1"]
     assert w["windows"] == 2 and w["windows_drawn"] == 2, w
-    # one GPU set per GL context (Blender 4.3 on X11 draws every window with one)
-    assert w["gpus_open"] == w["contexts"] >= 1, w
+    # a Pane per window (framebuffers belong to one GL context; a platform may give
+    # each window its own)
+    assert w["gpus_open"] == 2, w
     assert w["regions_open"] >= 2, w
     r = w["rect2"]  # the second window's 3D viewport, the top view: grass
     crop = _img({"png": w["png2"]})[r["y"] + r["h"] // 5:r["y"] + 4 * r["h"] // 5,
                                    r["x"] + r["w"] // 5:r["x"] + 4 * r["w"] // 5]
     assert _green(crop) > 0.3, _green(crop)
-    # closed: its region is forgotten, one set stays (the first window's), one
+    # closed: its region is forgotten, one Pane stays (the first window's), one
     # Renderer alive, no error, and the first window still draws voxels
     assert w["windows_closed"] == 1 and w["regions_closed"] == w["regions_open"] - 1, w
     assert w["gpus_closed"] == 1 and w["renderers"] == 1, w

@@ -37,7 +37,6 @@ SAMPLERS = {  # annotation type -> (GLSL type with SAMPLES 1, with SAMPLES > 1, 
     "sampler2D": ("sampler2D", None, False), "sampler2DArray": ("sampler2DArray", None, False),
     "sampler3D": ("sampler3D", None, False), "usampler2D": ("usampler2D", None, False),
     "usampler3D": ("usampler3D", None, False), "depth2D": ("sampler2D", None, True),
-    "sampler2DShadow": ("sampler2DShadow", None, True),
     "gsampler2D": ("sampler2D", "sampler2DMS", False),   # multisampled under MSAA (moderngl)
     "gdepth2D": ("sampler2D", "sampler2DMS", True),
 }

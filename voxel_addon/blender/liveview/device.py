@@ -13,6 +13,12 @@ What the module lacks and how the pipeline does without:
 - multisampled textures: no MSAA (`max_samples` 1);
 - storage buffers, indirect and multi-draw: region batches and CPU culling
   (render/geometry.py).
+
+Blender frees a GPU object when its last Python reference goes, but on Vulkan the
+draws that use it run later (the command buffer is submitted at the end of the
+frame): a light-volume layer's source texture dropped right after its copy draw
+crashed Blender 5.2 on lavapipe. So what is released stays referenced for RETIRE
+frames (`_retired`).
 """
 from __future__ import annotations
 
@@ -27,13 +33,14 @@ _FORMAT = {"rgba8": "RGBA8", "rgba16f": "RGBA16F", "rgba32f": "RGBA32F", "r8": "
            "r16": "R16", "r16f": "R16F", "r32f": "R32F", "depth": "DEPTH_COMPONENT32F"}
 _SAMPLER = {"sampler2D": "FLOAT_2D", "sampler2DArray": "FLOAT_2D_ARRAY", "sampler3D": "FLOAT_3D",
             "usampler2D": "UINT_2D", "usampler3D": "UINT_3D", "depth2D": "DEPTH_2D",
-            "sampler2DShadow": "SHADOW_2D", "gsampler2D": "FLOAT_2D", "gdepth2D": "DEPTH_2D"}
+            "gsampler2D": "FLOAT_2D", "gdepth2D": "DEPTH_2D"}
 _TYPE = {"float": "FLOAT", "vec2": "VEC2", "vec3": "VEC3", "vec4": "VEC4", "mat4": "MAT4",
          "int": "INT", "ivec2": "IVEC2", "ivec3": "IVEC3", "ivec4": "IVEC4", "uint": "UINT",
          "uvec2": "UVEC2", "uvec3": "UVEC3", "uvec4": "UVEC4", "bool": "BOOL"}
 _DEPTH = {None: "NONE", "less": "LESS", "lequal": "LESS_EQUAL"}
 _QUAL = {"smooth": "smooth", "flat": "flat", "noperspective": "no_perspective"}
 SOFTWARE = ("llvmpipe", "lavapipe", "softpipe", "swiftshader", "swrast")
+RETIRE = 4  # frames a released object stays referenced (draws may still use it)
 
 
 class GpuDevice(Device):
@@ -51,6 +58,8 @@ class GpuDevice(Device):
         self._fs = None          # a 3-vertex batch: the fullscreen triangle
         self._prog = None
         self._layer_fb: dict = {}  # (texture, layer) -> framebuffer (light volume uploads)
+        self._frames = 0
+        self._retired: list = []   # (frame, objects): kept until RETIRE frames later
 
     # ------------------------------------------------------------------ resources
     def texture(self, size, fmt, *, layers=0, samples=1, data=None):
@@ -80,6 +89,7 @@ class GpuDevice(Device):
             self.state(State())
             self.use(prog, {"src": Texture(src, tex.size, tex.fmt)})
             self.draw()
+        self._retire(src)
 
     def target(self, colors, depth=None):
         import gpu
@@ -128,8 +138,8 @@ class GpuDevice(Device):
                 info.push_constant(_TYPE[t], n, size)
             else:
                 info.push_constant(_TYPE[t], n)
-        if f.depth_write:
-            info.depth_write("ANY")
+        if f.depth_write and hasattr(info, "depth_write"):  # (Blender 4.3 has none: GL
+            info.depth_write("ANY")                           # writes gl_FragDepth anyway)
         info.vertex_source(head + p.vert[0])
         info.fragment_source(head + p.frag[0])
         try:
@@ -155,6 +165,9 @@ class GpuDevice(Device):
 
     def frame(self, data):
         import gpu
+        self._frames += 1
+        while self._retired and self._retired[0][0] <= self._frames - RETIRE:
+            self._retired.pop(0)
         f = np.frombuffer(data, np.float32)
         buf = gpu.types.Buffer("FLOAT", f.size, f.copy())
         if self._ubo is None:
@@ -164,15 +177,22 @@ class GpuDevice(Device):
 
     def release(self, *objs):
         """Blender frees its GPU objects when nothing refers to them any more (in the
-        context they belong to): dropping ours is enough."""
+        context they belong to): ours go after RETIRE frames."""
         for o in objs:
             if isinstance(o, Texture):
                 for k in [k for k, v in self._layer_fb.items() if v[1] is o.obj]:
-                    del self._layer_fb[k]
+                    self._retire(self._layer_fb.pop(k))
+        self._retire(*objs)
+
+    def _retire(self, *objs) -> None:
+        objs = [o for o in objs if o is not None]
+        if objs:
+            self._retired.append((self._frames, objs))
 
     def close(self):
         self._progs.clear()
         self._layer_fb.clear()
+        self._retired.clear()
         self._ubo = self._ibo = self._fs = self._prog = None
 
     # ------------------------------------------------------------------ drawing

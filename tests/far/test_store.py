@@ -52,6 +52,12 @@ def test_chunk_writes_dirty_the_tiles_over_them(tmp_path):
         assert store.tile((1, 0, 0), grid.N) is None
         assert store.tile((3, 5, 5), grid.N)["height"][0, 0] == 70
         assert store.take_dirty(lambda cs: set()) == set()
+        w.set_block(-20, 5, 100, "stone")
+        w.flush()
+        store.take_dirty(lambda cs: set())
+        w.file.clear_edits()           # edits gone: the tiles they raised are stale
+        got = store.take_dirty(lambda cs: {(9,) + c for c in cs})
+        assert got == {(9, -2, 0)}
 
 
 def test_other_generator_clears(tmp_path):

@@ -6,7 +6,7 @@ Tables of our own beside SPEC 3's, created on first use:
   small rows instead of decoding whole chunks;
 - `far_dirty(cx, cy)`: chunks written since the far data was made: triggers on
   `chunks` fill it (and drop the chunk's summary) whoever writes, so a tile over a
-  changed chunk is rebuilt; the builder empties it.
+  changed chunk is rebuilt, and so does dropping edits; the builder empties it.
 - `far_info`: the signature of what the data was made from (generator, seed,
   params, layout); another signature clears the tables.
 Blobs are the codec's compression of fixed-size little-endian arrays, decoded to
@@ -35,6 +35,10 @@ SCHEMA = (
     """CREATE TRIGGER IF NOT EXISTS far_chunk_deleted AFTER DELETE ON chunks BEGIN
         DELETE FROM far_columns WHERE cx = OLD.cx AND cy = OLD.cy;
         INSERT OR IGNORE INTO far_dirty VALUES (OLD.cx, OLD.cy);
+    END""",
+    # edits raise far samples by themselves (tiles.raise_edits): cleared ones too
+    """CREATE TRIGGER IF NOT EXISTS far_edit_deleted AFTER DELETE ON edits BEGIN
+        INSERT OR IGNORE INTO far_dirty VALUES (OLD.x >> 4, OLD.y >> 4);
     END""",
 )
 # (name, dtype, lowest, highest) of a sample's values, in blob order; block ids are

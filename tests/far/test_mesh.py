@@ -55,6 +55,10 @@ def test_vertices_are_the_samples():
     # water cells: those with water at a corner (the 4x4 wet samples: 5x5 cells)
     assert len(m.water) // 3 == 2 * 5 * 5
     assert m.vertices.dtype == np.uint32 and m.vertices.shape[1] * 4 == mesh.BYTES_PER_VERTEX
+    # next to the hole the coarse surface is undefined: no morph
+    zc = (m.vertices[:, 2] & 8191) / 8.0
+    near = g & (np.abs(kx - 19) <= 1) & (np.abs(ky - 19) <= 1)
+    assert np.allclose(zc[near], p[near, 2])
 
 
 def test_surfaces_face_up(cl_device):
@@ -115,3 +119,55 @@ def test_no_cracks_between_levels(cl_device):
                 assert closed.all(), (a, b, side)
                 pairs += 1
     assert pairs > 10
+
+
+def _surface_at(m, pts):
+    """z of mesh m's ground surface (unmorphed, no skirts) at points (n, 2)."""
+    p = decode(m)[0]
+    kind = decode(m)[3]
+    t = m.ground.reshape(-1, 3)
+    t = t[(kind[t] != mesh.SKIRT).all(1)]
+    a, b, c = p[t[:, 0]], p[t[:, 1]], p[t[:, 2]]
+    out = np.full(len(pts), np.nan)
+    for i, q in enumerate(pts):
+        v0, v1, v2 = b[:, :2] - a[:, :2], c[:, :2] - a[:, :2], q - a[:, :2]
+        den = v0[:, 0] * v1[:, 1] - v1[:, 0] * v0[:, 1]
+        u = (v2[:, 0] * v1[:, 1] - v1[:, 0] * v2[:, 1]) / den
+        v = (v0[:, 0] * v2[:, 1] - v2[:, 0] * v0[:, 1]) / den
+        inside = (u >= -1e-9) & (v >= -1e-9) & (u + v <= 1 + 1e-9)
+        j = np.flatnonzero(inside)[0]
+        out[i] = a[j, 2] + u[j] * (b[j, 2] - a[j, 2]) + v[j] * (c[j, 2] - a[j, 2])
+    return out
+
+
+def test_a_new_level_starts_as_its_parent(cl_device):
+    """Walking toward a tile until it splits: at the switch its children, morphed as
+    drawn, are its surface exactly (no pop), and they get their own shape nearer."""
+    from .skyline import positions
+    gen = make_generator("overworld", 7, None, "opencl")
+    parent = (3, 3, -4)          # 256-block tile on the slopes at (768..1024, -1024..-768)
+    r = grid.rect(parent)
+    switch = grid.DETAIL * grid.spacing(3)
+    y = (r[1] + r[3]) / 2
+    before = (r[0] - switch - 0.5, y)   # not split yet
+    after = (r[0] - switch + 0.5, y)    # split: the 4 children drawn
+    assert grid._dist(*before, r) >= switch > grid._dist(*after, r)
+    pm = mesh.build(parent, tile_of(gen, parent))
+    worst = 0.0
+    for i in (0, 1):
+        for j in (0, 1):
+            child = (2, 2 * parent[1] + i, 2 * parent[2] + j)
+            cm = mesh.build(child, tile_of(gen, child))
+            kind = decode(cm)[3]
+            g = kind == mesh.GROUND
+            drawn = positions(cm, after)[g]
+            inside = (drawn[:, 0] < r[2]) & (drawn[:, 1] < r[3])  # the last row is the next tile's
+            want = _surface_at(pm, drawn[inside, :2])
+            worst = max(worst, np.abs(drawn[inside, 2] - want).max())
+            own = positions(cm)[g]
+            near = positions(cm, (r[0] - 10.0, y))[g]
+            assert np.abs(own[:, 2] - drawn[:, 2]).max() > 1.0   # the level has detail to add
+            assert np.allclose(near[:, 2], own[:, 2], atol=0.13) or \
+                np.abs(near[:, 2] - own[:, 2]).mean() < np.abs(drawn[:, 2] - own[:, 2]).mean()
+    assert worst <= 1 / 8 + 1e-6, worst   # the vertex's 1/8-block z quantum
+

@@ -24,6 +24,7 @@ N = TILE + 3
 LEVELS = (1, 2, 3, 4, 5)
 DETAIL = 64       # samples per unit of distance / spacing (see select)
 FAR_MAX = 256     # chunks
+MORPH = (0.65, 0.95)  # morph to the coarser level over these fractions of its switch distance
 
 
 def spacing(level: int) -> int:
@@ -69,6 +70,18 @@ def touching(cx: int, cy: int, levels=LEVELS):
                     continue
                 out.append((level, tx, ty))
     return out
+
+
+def morph(d, level: int, detail: int = DETAIL):
+    """How far a vertex of a level-`level` tile at horizontal distance d from the view
+    has morphed to the next coarser level's surface (far/mesh.py): 0 near, 1 from
+    MORPH[1] of the distance at which that level's tiles replace this one's (the
+    far shader computes the same). The coarsest level does not morph."""
+    if level >= LEVELS[-1]:
+        return np.zeros_like(np.asarray(d, np.float64))
+    t = np.asarray(d, np.float64) / (detail * spacing(level + 1))
+    t = np.clip((t - MORPH[0]) / (MORPH[1] - MORPH[0]), 0.0, 1.0)
+    return t * t * (3 - 2 * t)
 
 
 def _dist(x, y, r) -> float:

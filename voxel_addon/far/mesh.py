@@ -6,6 +6,15 @@ water surfaces, in an 8-byte vertex (two uints, decoded by the far shader):
             2 skirt)
     word 1: bits 0-7 normal x, 8-15 normal y (int8, /127; z = sqrt(1 - x² - y²) >= 0),
             16-31 albedo RGB565
+    word 2: bits 0-12 zc: z on the next coarser level's surface (1/8 blocks)
+
+No popping (geomorphing): a vertex is drawn at mix(z, zc, grid.morph(d, level)),
+d its horizontal distance to the view. The next level's samples are this tile's
+even ones (point samples), so zc is that level's mesh exactly: its own height at
+even vertices, the mean of the two ends on a coarse edge, of the coarse cell's
+chosen diagonal in a cell centre. A tile appears when its parent is split, i.e.
+when the parent is nearer than DETAIL x the parent's spacing, where morph is 1: it
+starts as its parent's surface and gets its own shape as the view comes nearer.
 
 The ground vertex of sample (kx, ky) sits on the column's top face (z = height + 1),
 raised under a canopy by its cover x CANOPY blocks and tinted toward leaves. Skirts:
@@ -28,7 +37,7 @@ from . import grid
 GROUND, WATER, SKIRT = 0, 1, 2
 CANOPY = 5.0            # blocks a full canopy stands above the ground
 WATER_TOP = 7 / 8       # the water face's height in its block (meshing: water sits lower)
-BYTES_PER_VERTEX = 8
+BYTES_PER_VERTEX = 12
 T = grid.TILE
 
 
@@ -56,7 +65,7 @@ class FarMesh:
     key: tuple
     origin: tuple      # (x, y) of vertex (0, 0) minus 0.5, blocks
     spacing: int
-    vertices: np.ndarray   # (n, 2) uint32
+    vertices: np.ndarray   # (n, 3) uint32
     ground: np.ndarray     # (m,) uint32 triangle indices: ground and skirts
     water: np.ndarray      # (w,) uint32 triangle indices: water surfaces
     zrange: tuple      # (lowest, highest) z of the mesh, blocks
@@ -96,6 +105,30 @@ def _quads(m: np.ndarray, zc: np.ndarray, vid: np.ndarray) -> np.ndarray:
     return np.concatenate([t1, t2], 1).reshape(-1).astype(np.uint32)
 
 
+def _coarse(z: np.ndarray, ok: np.ndarray) -> np.ndarray:
+    """zc of the (T+1, T+1) vertices: the next coarser level's surface (see above)."""
+    zc = z.copy()
+    zc[1::2, ::2] = (z[:-1:2, ::2] + z[2::2, ::2]) / 2     # on coarse edges along x
+    zc[::2, 1::2] = (z[::2, :-1:2] + z[::2, 2::2]) / 2     # along y
+    a, b = z[:-1:2, :-1:2], z[2::2, :-1:2]                 # coarse cell corners
+    c, d = z[2::2, 2::2], z[:-1:2, 2::2]
+    flip = np.abs(b - d) < np.abs(a - c)                   # as _quads splits
+    zc[1::2, 1::2] = np.where(flip, (b + d) / 2, (a + c) / 2)
+    # next to a hole the coarse surface is undefined: no morph there
+    return np.where(_grow(~ok), z, zc)
+
+
+def _grow(m: np.ndarray) -> np.ndarray:
+    """m and its 8 neighbours."""
+    n0, n1 = m.shape
+    p = np.pad(m, 1)
+    out = np.zeros_like(m)
+    for dx in (0, 1, 2):
+        for dy in (0, 1, 2):
+            out |= p[dx:dx + n0, dy:dy + n1]
+    return out
+
+
 def build(key, a: dict, version: int = 0) -> FarMesh:
     """The mesh of tile `key` from its sample arrays (far/tiles.py)."""
     level = key[0]
@@ -126,7 +159,11 @@ def build(key, a: dict, version: int = 0) -> FarMesh:
         z8 = np.clip(np.rint(z8 * 8), 0, 8191).astype(np.uint32)
         return ix | (iy << 6) | (z8 << 12) | (np.uint32(kind) << 25)
 
-    verts = [np.stack([word0(z, GROUND), w1], -1).reshape(-1, 2)]
+    def word2(z8):
+        return np.clip(np.rint(z8 * 8), 0, 8191).astype(np.uint32)
+
+    zc = _coarse(z, ok)
+    verts = [np.stack([word0(z, GROUND), w1, word2(zc)], -1).reshape(-1, 3)]
     vid = np.arange((T + 1) ** 2, dtype=np.uint32).reshape(T + 1, T + 1)
     tris = [_quads(_corners(ok), z, vid)]
     nv = (T + 1) ** 2
@@ -143,7 +180,8 @@ def build(key, a: dict, version: int = 0) -> FarMesh:
         e_ok = ok[edge]
         bottom = np.arange(nv, nv + len(top), dtype=np.uint32)
         zb = np.maximum(z[edge] - depth[edge], 0.0)
-        verts.append(np.stack([word0(zb, SKIRT, kx[edge], ky[edge]), w1[edge]], -1))
+        zcb = np.maximum(zc[edge] - depth[edge], 0.0)
+        verts.append(np.stack([word0(zb, SKIRT, kx[edge], ky[edge]), w1[edge], word2(zcb)], -1))
         nv += len(top)
         m = e_ok[:-1] & e_ok[1:]
         t0, t1, b0, b1 = top[:-1][m], top[1:][m], bottom[:-1][m], bottom[1:][m]
@@ -171,12 +209,13 @@ def build(key, a: dict, version: int = 0) -> FarMesh:
         w1w = np.uint32(_rgb565(wcol)) << 16  # flat normal (0, 0, 1): nx = ny = 0
         wid = np.full((T + 1, T + 1), 0, np.uint32)
         wid[corner] = np.arange(nv, nv + corner.sum(), dtype=np.uint32)
-        verts.append(np.stack([word0(wzc[corner] + WATER_TOP, WATER, kx[corner], ky[corner]),
-                               np.full(corner.sum(), w1w, np.uint32)], -1))
+        wtop = wzc[corner] + WATER_TOP
+        verts.append(np.stack([word0(wtop, WATER, kx[corner], ky[corner]),
+                               np.full(corner.sum(), w1w, np.uint32), word2(wtop)], -1))
         nv += int(corner.sum())
         water = _quads(cell, wzc, wid)
-    v = np.concatenate([x.reshape(-1, 2) for x in verts]).astype(np.uint32)
-    zs = z[ok]
+    v = np.concatenate([x.reshape(-1, 3) for x in verts]).astype(np.uint32)
+    zs = np.r_[z[ok], zc[ok]]
     zr = (float(max(zs.min() - depth.max(), 0.0)) if zs.size else 0.0,
           float(max(zs.max() if zs.size else 0.0,
                     (wz.max() + 1.0) if wet.any() else 0.0)))

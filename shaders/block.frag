@@ -1,7 +1,9 @@
 // G-buffer writer. Defines: ALPHA_TEST, PEEL (discard at/before the previous layer),
-// SHADOW (depth only), DEBUG_AGG (colour by merged quad), SMOOTH_MAG (edge-aware
-// magnification), MSAA_ALPHA (alpha test per sample), OIT (forward-shaded weighted
-// blended order-independent transparency: accumulation instead of a G-buffer).
+// SHADOW (depth only), DEBUG_AGG (colour by merged quad), MSAA_ALPHA (alpha test per
+// sample), OIT (forward-shaded weighted blended order-independent transparency:
+// accumulation instead of a G-buffer). (SMOOTH_MAG, the edge-aware magnification of
+// fig. 6.3, moved texel borders under a nearest magnification filter, which made it
+// the nearest texel again: it had no visible effect and is not applied here.)
 #include "include/common.glsl"
 #ifdef OIT
 #include "include/shade.glsl"
@@ -29,14 +31,11 @@ vec4 level_texel(vec2 t, int l) {  // t: level-0 texel coordinates
 
 vec4 texel(vec2 uv) {
     vec2 t = uv * 16.0;
-    float lod = log2(max(length(dFdx(t)), length(dFdy(t))));
-#ifdef SMOOTH_MAG
-    // Linear blend only across texel borders, as wide as one screen pixel (fig. 6.3).
-    vec2 w = max(fwidth(t), vec2(1e-4));
-    vec2 f = fract(t - 0.5);
-    vec2 s = clamp((f - 0.5) / w + 0.5, 0.0, 1.0);
-    t = floor(t - 0.5) + s + 0.5;
+#ifdef SHADOW
+    return level_texel(t, 0);  // casters: the alpha test of the texture itself
 #endif
+    vec2 dx = dFdx(t), dy = dFdy(t);
+    float lod = 0.5 * log2(max(dot(dx, dx), dot(dy, dy)));  // GL's: log2 of the longer
     if (!(lod > 0.0)) return level_texel(t, 0);  // magnified (or a degenerate derivative)
     lod = min(lod, 4.0);
     int l = min(int(lod), 3);

@@ -13,13 +13,6 @@
 
 //@ sampler depth2D shadow_map  if SHADOWS
 
-#ifdef SHADOWS
-// 1 where the map's depth at texel c (clamped to the edge) is not nearer than ref
-float shadow_test(sampler2D m, ivec2 c, ivec2 size, float ref) {
-    return ref <= texelFetch(m, clamp(c, ivec2(0), size - 1), 0).r ? 1.0 : 0.0;
-}
-#endif
-
 float shadow_at(vec3 p, vec3 n) {
 #ifdef SHADOWS
     // linear fade by camera-to-fragment distance, none from shadow_fade on (§5.4.1)
@@ -31,17 +24,13 @@ float shadow_at(vec3 p, vec3 n) {
     s.xyz /= s.w;
     if (any(lessThan(s.xy, vec2(0.0))) || any(greaterThan(s.xy, vec2(1.0)))) return 1.0;
     float ref = s.z - shadow_bias;
-    // 2x2 PCF, bilinearly weighted (§5.4.1); the comparisons by hand (no device has to
-    // set a sampler's compare mode): what textureGather with a shadow sampler returns
-    ivec2 size = textureSize(shadow_map, 0);
-    vec2 t = s.xy * vec2(size) - 0.5;
+    // 2x2 PCF in one gather, bilinearly weighted (§5.4.1): the four depths (a gather
+    // neither filters nor needs a compare mode, only the clamp every device binds),
+    // compared here as a shadow sampler's gather would
+    vec2 size = vec2(textureSize(shadow_map, 0));
+    vec2 t = s.xy * size - 0.5;
     vec2 f = fract(t);
-    ivec2 b = ivec2(floor(t));
-    vec4 g;  // x (0, 1), y (1, 1), z (1, 0), w (0, 0): the gather's order
-    g.x = shadow_test(shadow_map, b + ivec2(0, 1), size, ref);
-    g.y = shadow_test(shadow_map, b + ivec2(1, 1), size, ref);
-    g.z = shadow_test(shadow_map, b + ivec2(1, 0), size, ref);
-    g.w = shadow_test(shadow_map, b, size, ref);
+    vec4 g = vec4(lessThanEqual(vec4(ref), textureGather(shadow_map, (floor(t) + 1.0) / size)));
     float lit = mix(mix(g.w, g.z, f.x), mix(g.x, g.y, f.x), f.y);
     return mix(lit, 1.0, clamp(dist / shadow_fade, 0.0, 1.0));
 #else
@@ -51,7 +40,7 @@ float shadow_at(vec3 p, vec3 n) {
 
 // Eq. 4.1 (light.glsl) with the direct term dimmed by the shadow map.
 vec3 shade_light(vec3 albedo, vec3 p, vec3 n, float glow) {
-    vec4 l = light_sample(light_vol, vec3(0.0), p, n);
+    vec4 l = light_volume(p, n);
     DayLight dl = DayLight(day_ambient, day_direct * shadow_at(p, n), sky_light_dir, day_u);
     return light_shade(albedo, l.rgb, glow, l.a, n, dl);
 }

@@ -1,4 +1,5 @@
-"""The renderer's camera-centred toroidal light volume feeds light.glsl's light_sample:
+"""The renderer's camera-centred toroidal light volume (lightvol.glsl's light_volume,
+light.glsl's light_sample for this layout):
 it must give exactly what the NumPy sampler gives, also at negative coordinates and
 across the wrap, and open daylight outside the resident window."""
 from __future__ import annotations
@@ -23,7 +24,7 @@ def sample_gl(dev, vol, pts, nrm):
         //@ out 0 vec4 color
         void main() {{
             int i = int(gl_FragCoord.x);
-            color = light_sample(light_vol, vec3(0.0), pts[i], nrm[i]);
+            color = light_volume(pts[i], nrm[i]);
         }}"""
     vert = """//@ in vec2 pos
         void main() { gl_Position = vec4(pos, 0.0, 1.0); }"""

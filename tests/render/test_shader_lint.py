@@ -28,8 +28,9 @@ and_eq or_eq xor_eq not_eq bool_t size_t ptrdiff_t nullptr alignas alignof declt
 noexcept static_assert thread_local constexpr export inline
 """.split())
 # lookups that need a sampler state (compare mode, filtering, mip levels) a device
-# cannot set: devices bind every texture nearest and clamped, without mipmaps
-SAMPLER_STATE = re.compile(r"\b(sampler\w*Shadow|textureGather\w*|textureLod\w*|textureGrad\w*|"
+# cannot set: devices bind every texture nearest and clamped, without mipmaps (a plain
+# textureGather reads four texels unfiltered: it needs only the clamp)
+SAMPLER_STATE = re.compile(r"\b(sampler\w*Shadow|textureLod\w*|textureGrad\w*|"
                            r"textureProj\w*|texture2D|shadow2D)\b")
 
 
@@ -103,4 +104,4 @@ def test_declarations_are_annotations(name):
 def test_the_lint_can_fail():
     assert _names("vec3 vertex = p; float f(float kernel) { return kernel; }") & RESERVED \
         == {"vertex", "kernel"}
-    assert SAMPLER_STATE.findall("textureGather(m, uv, ref); sampler2DShadow s;")
+    assert SAMPLER_STATE.findall("textureLod(m, uv, 2.0); sampler2DShadow s;")

@@ -41,7 +41,7 @@ def snapshot(world, cx0: int, cy0: int, cx1: int, cy1: int):
     where a chunk is not active, e.g. corrupt) and {key: block tick} at copy time."""
     out = C.empty(width=C.SIZE * (cx1 - cx0), depth=C.SIZE * (cy1 - cy0))
     ticks = {}
-    with world._lock:
+    with world.locked():
         for k in keys_of(cx0, cy0, cx1, cy1):
             ticks[k] = world.bver.get(k, 0)
             c = world.chunks.get(k)
@@ -68,7 +68,7 @@ def light_and_mesh(world, cx0: int, cy0: int, cx1: int, cy1: int, *, backends_=N
     if load:
         world.load(ring)
     blocks, ticks = snapshot(world, cx0 - 1, cy0 - 1, cx1 + 1, cy1 + 1)
-    with world._lock:  # light stored in the file (loaded with the blocks) is final
+    with world.locked():  # light stored in the file (loaded with the blocks) is final
         need = any(c is not None and c.light is None
                    for c in map(world.chunks.get, keys_of(cx0, cy0, cx1, cy1)))
     # one solve for the whole rectangle: its ring is the only overhead
@@ -84,7 +84,7 @@ def store(world, cx0, cy0, cx1, cy1, lit, meshes, ticks) -> list[Payload]:
     is saved with it (reloading then skips the solve)."""
     out = []
     s = C.SIZE
-    with world._lock:
+    with world.locked():
         for k in keys_of(cx0, cy0, cx1, cy1):
             c = world.chunks.get(k)
             if c is None:
@@ -107,7 +107,7 @@ def store(world, cx0, cy0, cx1, cy1, lit, meshes, ticks) -> list[Payload]:
 
 def payload(world, key) -> Payload | None:
     """The current payload of an active chunk whose light and mesh are known."""
-    with world._lock:
+    with world.locked():
         c = world.chunks.get(key)
         if c is None or c.light is None or c.mesh is None:
             return None

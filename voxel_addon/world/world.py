@@ -132,30 +132,41 @@ class World:
         return self.chunk_at(x >> 4, y >> 4).get(x & 15, y & 15, z)
 
     def set_block(self, x: int, y: int, z: int, block: int | str, data: int = 0) -> int:
-        """Place (or, with air, clear) a block; returns the id that was there."""
-        if self.readonly:
-            raise VoxelError(f"{self.file.path} is open read-only")
-        C.check_z(z)
-        bid = REGISTRY.id(block) if isinstance(block, str) else int(block)
-        if not 0 <= bid < len(REGISTRY):
-            raise VoxelError(f"unknown block id {bid}")
+        """Place (or, with air, clear) a block; returns the id that was there.
+
+        The bulk form of world.edit.edit: the same checks and the same write, kept
+        like an edit until the next flush, but no relight and no undo record: the
+        light and meshes of the 3x3 around are dropped and made again by whoever
+        needs them (streams, build.light_and_mesh), as for a chunk loaded without
+        light. Tests and importers set many voxels this way; strokes use edit()."""
+        from .edit import check
+        ((x, y, z, bid, data),) = check(self, [(x, y, z, block, data)])
         with self._lock:
             c = self.chunk_at(x >> 4, y >> 4)
             old = c.get(x & 15, y & 15, z)
             c.set(x & 15, y & 15, z, bid, data)
             self.bver[c.key] = self.tick()
             self._edits[(x, y, z)] = (bid, data)
-            # light and meshes around are stale: streams make them again
-            # (world.edit.edit relights and remeshes them at once instead)
+            self.drop_light(c.key)
+        return old
+
+    def drop_light(self, key) -> None:
+        """Light and meshes of the 3x3 around chunk `key` no longer hold (in memory
+        and in the file); streams make them again."""
+        with self._lock:
             for i in (-1, 0, 1):
                 for j in (-1, 0, 1):
-                    k = (c.key[0] + i, c.key[1] + j)
+                    k = (key[0] + i, key[1] + j)
                     self.pver.pop(k, None)
                     self._stale.add(k)
                     n = self.chunks.get(k)
                     if n is not None:
                         n.light = n.mesh = None
-        return old
+
+    def locked(self):
+        """The world's lock, for code that reads or changes active chunks together
+        (`with world.locked(): ...`); re-entrant."""
+        return self._lock
 
     def region_blocks(self, cx0: int, cy0: int, cx1: int, cy1: int) -> np.ndarray:
         """Blocks of chunks [cx0, cx1) x [cy0, cy1) as one (W, H, 256) array."""
@@ -245,11 +256,7 @@ class World:
         """The file's edits inside chunk `key` applied to freshly generated arrays
         (in place, data values included: the one place that does it); (blocks, data)."""
         for x, y, z, b, d in self.file.edits_in(key):
-            blocks[x & 15, y & 15, z] = b
-            if d or data is not None:
-                if data is None:
-                    data = C.empty()
-                data[x & 15, y & 15, z] = d
+            data = C.put(blocks, data, x & 15, y & 15, z, b, d)
         return blocks, data
 
     def _report_corrupt(self, key, msg: str) -> None:
@@ -282,9 +289,11 @@ class World:
         now = time.monotonic() if now is None else now
         with self._lock:
             idle = [k for k, c in self.chunks.items() if now - c.last_use > self.idle_timeout]
-        return self._evict(idle)
+        return self.evict(idle)
 
-    def _evict(self, keys) -> int:
+    def evict(self, keys) -> int:
+        """Save (if changed) and drop chunks `keys` from memory; returns how many
+        were asked. A chunk asked for again meanwhile comes back with every edit."""
         if not keys:
             return 0
         with self._lock:
@@ -372,7 +381,7 @@ class World:
     def unload_all(self) -> None:
         with self._lock:
             keys = list(self.chunks)
-        self._evict(keys)
+        self.evict(keys)
 
     def close(self) -> None:
         """Stop streams and the loader, save everything, close the file. Safe to

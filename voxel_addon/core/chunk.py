@@ -173,10 +173,11 @@ class Chunk:
 
 
 def put(blocks, data, lx: int, ly: int, z: int, block: int, value: int):
-    """The one place that writes a voxel's block id and small data: `data` is
-    allocated on the first non-zero value (None while all zero); returns it."""
+    """The one place that writes voxels' block ids and small data (scalars, or index
+    arrays and values): `data` is allocated on the first non-zero value (None while
+    all zero); returns it."""
     blocks[lx, ly, z] = block
-    if value or data is not None:
+    if data is not None or np.any(value):
         if data is None:
             data = empty()
         data[lx, ly, z] = value

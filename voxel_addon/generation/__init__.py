@@ -7,6 +7,7 @@ from ..core.errors import VoxelError
 
 # name -> "module:Class"; imported on demand so registering the add-on stays cheap.
 GENERATORS = {
+    "empty": "empty:EmptyGenerator",
     "flat": "flat:FlatGenerator",
     "overworld": "overworld:OverworldGenerator",
 }

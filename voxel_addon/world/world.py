@@ -424,6 +424,65 @@ class World:
                 progress(done, len(todo))
         return len(todo)
 
+    def store_chunks(self, items) -> None:
+        """Write whole chunks ((key, blocks, data-or-None) triples: an import) in one
+        transaction, in place of what the file and memory held; the stored light of
+        their 3x3 is dropped. Active copies are replaced, so a live view shows them."""
+        if self.readonly:
+            raise VoxelError(f"{self.file.path} is open read-only")
+        items = [(tuple(k), b, d) for k, b, d in items]
+        rows = [self.file.encode_chunk(k, b, d) for k, b, d in items]
+        stale = {(k[0] + i, k[1] + j) for k, _, _ in items for i in (-1, 0, 1)
+                 for j in (-1, 0, 1)}
+        with self._flush_lock:
+            self.file.save(rows, stale_light=stale)
+            with self._lock:
+                for k, b, d in items:
+                    self._saving.pop(k, None)
+                    self.corrupt.pop(k, None)
+                    c = self.chunks.get(k)
+                    if c is not None:
+                        c.blocks, c.data, c.dirty = b.copy(order="F"), \
+                            None if d is None else d.copy(order="F"), False
+                    self.bver[k] = self.tick()
+                for k, _, _ in items:
+                    self.drop_light(k)
+                self._stale -= stale  # the file's light rows are gone already
+
+    def set_blocks(self, xyz, ids, data=None) -> None:
+        """set_block for many voxels at once ((n, 3) positions, n ids, n data values
+        or None), kept like edits until the next flush or commit (a .vox stamp)."""
+        if self.readonly:
+            raise VoxelError(f"{self.file.path} is open read-only")
+        xyz = np.asarray(xyz, np.int64).reshape(-1, 3)
+        ids = np.asarray(ids, np.uint16)
+        vals = np.zeros(len(ids), np.uint16) if data is None else np.asarray(data, np.uint16)
+        if len(xyz) and (xyz[:, 2].min() < 0 or xyz[:, 2].max() >= C.HEIGHT):
+            raise VoxelError(f"z outside the world (0..{C.HEIGHT - 1})")
+        if len(ids) and int(ids.max()) >= len(REGISTRY):
+            raise VoxelError(f"unknown block id {int(ids.max())}")
+        keys = np.stack([xyz[:, 0] >> 4, xyz[:, 1] >> 4], 1)
+        for k in {tuple(v) for v in keys.tolist()}:
+            if k in self.corrupt:
+                raise VoxelError(f"chunk {k} is damaged in the file; it cannot be edited")
+        order = np.lexsort((keys[:, 1], keys[:, 0]))
+        xyz, ids, vals, keys = xyz[order], ids[order], vals[order], keys[order]
+        cut = np.flatnonzero(np.any(np.diff(keys, axis=0) != 0, axis=1)) + 1
+        for part in np.split(np.arange(len(ids)), cut):
+            if not len(part):
+                continue
+            k = tuple(int(v) for v in keys[part[0]])
+            with self._lock:
+                c = self.chunk_at(*k)
+                lx, ly, z = xyz[part, 0] & 15, xyz[part, 1] & 15, xyz[part, 2]
+                c.data = C.put(c.blocks, c.data, lx, ly, z, ids[part], vals[part])
+                c.dirty = True
+                self.bver[k] = self.tick()
+                for (x, y, zz), b, d in zip(xyz[part].tolist(), ids[part].tolist(),
+                                            vals[part].tolist()):
+                    self._edits[(x, y, zz)] = (b, d)
+                self.drop_light(k)
+
     def recreate(self, keep_edits: bool = True) -> None:
         """Forget every generated chunk (they regenerate on demand from the seed)."""
         with self._lock:

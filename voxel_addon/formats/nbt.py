@@ -3,9 +3,10 @@ big-endian named tags. Hostile input: every length is checked against the bytes
 left before anything is allocated, nesting stops at 512 levels, and a parse never
 reads past its buffer; any fault is an NbtError (a ValueError) with the offset.
 
-`parse(buf, keep)` returns the root compound as a dict; `keep` (a set of names)
-limits the root to those entries and skips the rest without building them (a
-chunk's entities, heightmaps and structures cost most of a full parse). Lists of
+`parse(buf, keep)` returns the root compound as a dict; `keep` ({name: sub-keep or
+None for all of it}) limits a compound, or each compound of a list, to those
+entries and skips the rest without building them (a chunk's entities, heightmaps,
+light and block properties cost most of a full parse). Lists of
 numbers and the array tags come back as NumPy arrays (big-endian dtypes), other
 lists as Python lists, strings as str (modified UTF-8 read as UTF-8, errors
 replaced).
@@ -36,8 +37,8 @@ class _Reader:
     __slots__ = ("buf", "n")
 
     def __init__(self, buf):
-        self.buf = memoryview(buf).cast("B") if not isinstance(buf, bytes) else buf
-        self.n = len(buf)
+        self.buf = bytes(buf)
+        self.n = len(self.buf)
 
     def need(self, pos: int, k: int) -> int:
         if k < 0 or pos + k > self.n:
@@ -45,10 +46,12 @@ class _Reader:
         return pos + k
 
     def string(self, pos):
-        end = self.need(pos, 2)
-        (k,) = _U16.unpack_from(self.buf, pos)
-        stop = self.need(end, k)
-        return bytes(self.buf[end:stop]).decode("utf-8", "replace"), stop
+        if pos + 2 > self.n:
+            raise NbtError(f"NBT ends early at byte {pos}")
+        stop = pos + 2 + (self.buf[pos] << 8 | self.buf[pos + 1])
+        if stop > self.n:
+            raise NbtError(f"a string runs past the NBT at byte {pos}")
+        return self.buf[pos + 2:stop].decode("utf-8", "replace"), stop
 
     def length(self, pos, size):
         end = self.need(pos, 4)
@@ -58,7 +61,7 @@ class _Reader:
         self.need(end, k * size)  # before anything is allocated
         return k, end
 
-    def value(self, tag, pos, depth):
+    def value(self, tag, pos, depth, keep=None):
         if depth > MAX_DEPTH:
             raise NbtError("NBT nested deeper than 512 levels")
         s = _SCALAR.get(tag)
@@ -84,11 +87,11 @@ class _Reader:
                 raise NbtError(f"unknown list item tag {item} at byte {end}")
             out = []
             for _ in range(k):
-                v, pos = self.value(item, pos, depth + 1)
+                v, pos = self.value(item, pos, depth + 1, keep)
                 out.append(v)
             return out, pos
         if tag == COMPOUND:
-            return self.compound(pos, depth + 1, None)
+            return self.compound(pos, depth + 1, keep)
         raise NbtError(f"unknown tag {tag} at byte {pos}")
 
     def skip(self, tag, pos, depth):
@@ -120,8 +123,8 @@ class _Reader:
                 t = self.buf[pos]
                 if t == END:
                     return end
-                _, pos = self.string(end)
-                pos = self.skip(t, pos, depth + 1)
+                e2 = self.need(end, 2)
+                pos = self.skip(t, self.need(e2, _U16.unpack_from(self.buf, end)[0]), depth + 1)
         raise NbtError(f"unknown tag {tag} at byte {pos}")
 
     def compound(self, pos, depth, keep):
@@ -132,8 +135,10 @@ class _Reader:
             if t == END:
                 return out, end
             name, pos = self.string(end)
-            if keep is None or name in keep:
+            if keep is None:
                 out[name], pos = self.value(t, pos, depth)
+            elif name in keep:
+                out[name], pos = self.value(t, pos, depth, keep[name])
             else:
                 pos = self.skip(t, pos, depth)
 
@@ -144,5 +149,5 @@ def parse(buf, keep=None) -> dict:
     if r.n < 3 or r.buf[0] != COMPOUND:
         raise NbtError("not NBT (the root is not a compound)")
     _, pos = r.string(1)
-    out, _ = r.compound(pos, 0, None if keep is None else set(keep))
+    out, _ = r.compound(pos, 0, keep)
     return out

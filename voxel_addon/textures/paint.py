@@ -366,14 +366,6 @@ PAINTERS = {
 }
 
 
-def _more():
-    from .built import PAINTERS as more  # building materials (issue 21)
-    PAINTERS.update(more)
-
-
-_more()
-
-
 def fallback(rng, name: str):
     """A texture for a name nobody painted yet: stone-like noise in a hashed colour."""
     h = np.frombuffer(name.encode().ljust(3, b"_")[:3], np.uint8).astype(np.float32)

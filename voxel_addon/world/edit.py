@@ -33,6 +33,7 @@ import numpy as np
 from ..core import chunk as C
 from ..core.blocks import REGISTRY
 from ..core.errors import VoxelError
+from ..meshing import tint
 from . import build
 from .payload import Payload
 
@@ -273,13 +274,18 @@ def _remesh(world, blocks, last, win) -> set:
     for (x, y, z), (b, _) in last.items():
         if 0 <= x - x0 - i < sub.shape[0] and 0 <= y - y0 - j < sub.shape[1]:
             sub[x - x0 - i, y - y0 - j, z] = b
+    data = None
+    if (sub == tint.COLOR).any():  # coloured voxels: their colour is their data (after the stroke)
+        gx, gy = x0 + i, y0 + j
+        data = np.array(_gather(world, gx, gy, gx + sub.shape[0], gy + sub.shape[1], "data"),
+                        order="F")
     zs = [z for _, _, z in last]
     r0 = max(min(zs) - 1, 0) // meshing.REGION_H
     r1 = min(max(zs) + 1, C.HEIGHT - 1) // meshing.REGION_H + 1
     whole = any(world.chunks.get(k) is not None and world.chunks[k].mesh is None
                 for k in remesh)
     regions = None if whole else (r0, r1)
-    meshes = _mesh(meshing, sub, (rx0, ry0), remesh, regions)
+    meshes = _mesh(meshing, sub, (rx0, ry0), remesh, regions, data)
     out = set()
     for k in remesh:
         c = world.chunks.get(k)
@@ -334,13 +340,14 @@ def _same(a, b) -> bool:
         np.array_equal(a.ranges, b.ranges)
 
 
-def _mesh(meshing, blocks, origin, keys, regions=None):
+def _mesh(meshing, blocks, origin, keys, regions=None, data=None):
     """build_chunks on OpenCL when no stream batch holds it, else NumPy (same output)."""
     blocks = np.asfortranarray(blocks)
     if build.backends()[1] == "opencl" and build.CL_LOCK.acquire(blocking=False):
         try:
             return meshing.build_chunks(blocks, origin, backend="opencl", keys=keys,
-                                        regions=regions)
+                                        regions=regions, data=data)
         finally:
             build.CL_LOCK.release()
-    return meshing.build_chunks(blocks, origin, backend="numpy", keys=keys, regions=regions)
+    return meshing.build_chunks(blocks, origin, backend="numpy", keys=keys, regions=regions,
+                                data=data)

@@ -172,3 +172,20 @@ def test_unpack_matches_a_plain_loop():
         for spanning in (False, True):
             longs = np.array(mc.pack(idx, bits, spanning), ">i8")
             assert np.array_equal(anvil.unpack(longs, n, spanning), idx)
+
+
+def test_interrupted_import_keeps_finished_batches(tmp_path):
+    secs = {0: np.full((16, 16, 16), "minecraft:stone", object)}
+    body = mc.chunk_nbt(0, 0, secs)
+    mc.write_region(tmp_path / "region", {(x, z): body for x in range(8) for z in range(5)}, 3)
+    w = tmp_path / "w.sqlite"
+    calls = []
+    with World.create(w, seed=0, generator="empty", loader=False) as world:
+        rep = minecraft.import_world(world, tmp_path, progress=lambda d, t: calls.append(d),
+                                     cancelled=lambda: True)
+    assert rep.chunks == minecraft.BATCH and calls == [minecraft.BATCH]
+    with World.open(w, loader=False) as world:
+        assert world.file.chunk_count() == minecraft.BATCH
+        with pytest.raises(VoxelError, match="replace"):
+            minecraft.import_world(world, tmp_path)
+        assert minecraft.import_world(world, tmp_path, replace=True).chunks == 40

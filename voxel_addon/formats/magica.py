@@ -55,7 +55,12 @@ def stamp(scene: vox.Scene, at, palette: np.ndarray):
 
 def import_vox(world, path, at=(0, 0, 0)) -> dict:
     """Place a .vox into `world` (one transaction); returns a small report."""
-    scene = read_file(path)
+    return place(world, read_file(path), at)
+
+
+def place(world, scene: vox.Scene, at=(0, 0, 0)) -> dict:
+    """Place a read scene into `world`, its bounding box corner at `at`, kept like
+    edits and written in one transaction; returns a small report."""
     pal = colors.parse(world.file.meta)
     xyz, data, pal = stamp(scene, at, pal)
     world.file.set_meta(colors.KEY, colors.dump(pal))

@@ -191,18 +191,28 @@ def import_world(world, path, *, y_min=None, area=None, replace=False, progress=
     module docstring). `progress(done, total)`; `cancelled()` -> True stops after
     the batch in hand (what was written stays)."""
     report = Report()
+    for done, total in steps(world, path, report, y_min=y_min, area=area, replace=replace):
+        if progress:
+            progress(done, total)
+        if cancelled is not None and cancelled():
+            break  # the batches written so far stay
+    return report
+
+
+def steps(world, path, report: Report, *, y_min=None, area=None, replace=False):
+    """The import as a generator of (chunks done, total), one step per batch written,
+    filling `report`. Closing it early keeps every batch written so far."""
     todo = plan(path, area)
     keys = {to_key(cx, cz) for _, cx, cz in todo}
     have = keys & set(world.file.chunk_keys())
     if have and not replace:
         raise VoxelError(f"{len(have)} of the {len(keys)} chunks are already in "
                          f"{world.file.path} (imported before, or generated); "
-                         "--replace overwrites them")
+                         "import with --replace (Blender: Replace) to overwrite them")
     version = level_version(path) if Path(path).is_dir() else None
     pal = _Palettes(world, report)
     batch = []
-    done = 0
-    for reg, cx, cz in todo:
+    for done, (reg, cx, cz) in enumerate(todo, 1):
         try:
             ch = anvil.read(reg.payload(cx, cz))
         except External:
@@ -216,28 +226,22 @@ def import_world(world, path, *, y_min=None, area=None, replace=False, progress=
                                   else f"{reg.path.name} chunk ({cx}, {cz}): {msg}")
             ch = None
         if ch is not None:
-            if version is None:
-                version = ch.version
             if report.version is None:
-                report.version = version
+                report.version = version if version is not None else ch.version
                 report.y_min = y_min if y_min is not None else (
-                    -64 if version >= anvil.V_NO_LEVEL else 0)
+                    -64 if report.version >= anvil.V_NO_LEVEL else 0)
             if ch.status not in anvil.DONE:
                 report.unfinished[ch.status] += 1
             else:
                 blocks, data, dropped = convert(ch, report.y_min, pal)
                 report.dropped += dropped
                 batch.append((to_key(cx, cz), blocks, data))
-        done += 1
         if len(batch) >= BATCH or (done == len(todo) and batch):
             pal.save()
             world.store_chunks(batch)
             report.chunks += len(batch)
             batch = []
-        if progress:
-            progress(done, len(todo))
-        if cancelled is not None and not batch and cancelled():
-            break
+            yield done, len(todo)
     if report.version is None:
         report.y_min = y_min if y_min is not None else 0
-    return report
+    yield len(todo), len(todo)

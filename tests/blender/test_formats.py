@@ -78,3 +78,36 @@ def test_vox_import_and_export_operators(addon, tmp_path):
     assert session.world(str(world)).file.generator == "flat"   # the scene's own world
     with pytest.raises(RuntimeError, match="missing.vox"):
         bpy.ops.import_scene.voxel_vox(filepath=str(tmp_path / "missing.vox"))
+
+
+def test_stamp_is_one_undo_step(bpy, tmp_path):
+    """voxel.stamp (a click of the edit tool with Stamp on) places the model centred
+    on the cell, its bottom at the cell's z, as one stroke: one Ctrl+Z removes it."""
+    import voxel_addon
+    from voxel_addon.blender import session, strokes
+    from voxel_addon.core import colors
+    from voxel_addon.core.blocks import REGISTRY
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    voxel_addon.register()
+    try:
+        sc = bpy.context.scene
+        sc.voxel.path, sc.voxel.seed, sc.voxel.generator = str(tmp_path / "w.sqlite"), 3, "flat"
+        assert bpy.ops.voxel.world_new() == {"FINISHED"}
+        sc.voxel_edit.step = 0
+        src = tmp_path / "tree.vox"
+        vs = [(1, 1, z, 3) for z in range(4)] + [(x, y, 4, 7) for x in range(3) for y in range(3)]
+        src.write_bytes(vf.file(vf.model((3, 3, 5), vs)))
+        r = bpy.ops.voxel.stamp("EXEC_DEFAULT", True, filepath=str(src), location=(20, 30, 64))
+        assert r == {"FINISHED"} and sc.voxel_edit.step == 1
+        w = session.world(sc.voxel.path)
+        color = REGISTRY.id("color")
+        pal = colors.parse(w.file.meta)
+        assert w.get_block(20, 30, 64) == color and w.get_block(19, 29, 68) == color
+        assert tuple(pal[w.chunk_at(1, 1).data[20 & 15, 30 & 15, 64]]) == (255, 255, 153)  # default palette index 3
+        sc.voxel_edit.step = 0                     # Ctrl+Z
+        strokes.on_undo_redo(sc)
+        assert w.get_block(20, 30, 64) == 0 and w.get_block(19, 29, 68) == 0
+    finally:
+        sc.property_unset("voxel")
+        sc.property_unset("voxel_edit")
+        voxel_addon.unregister()

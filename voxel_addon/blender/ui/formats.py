@@ -203,6 +203,47 @@ class EXPORT_SCENE_OT_voxel_vox(bpy.types.Operator, ExportHelper):
         return {"FINISHED"}
 
 
+def stamp_at(context, path: str, cell) -> int:
+    """Place the .vox at `path` on the scene's world as one edit stroke (one undo
+    step): centred on `cell` in x and y, its bottom at the cell's z. Returns the
+    voxels changed."""
+    import numpy as np
+    from ...core import colors
+    from ...formats import magica
+    from .. import session, strokes
+    world = session.world(context.scene.voxel.path)
+    scene = magica.read_file(bpy.path.abspath(path))
+    size = magica.vox.voxels(scene)[2]
+    at = (cell[0] - int(size[0]) // 2, cell[1] - int(size[1]) // 2, cell[2])
+    xyz, data, pal = magica.stamp(scene, at, colors.parse(world.file.meta))
+    world.file.set_meta(colors.KEY, colors.dump(pal))  # colours only: not undone
+    color = np.full(len(xyz), magica.COLOR)
+    return strokes.stroke(context, list(zip(*xyz.T.tolist(), color.tolist(), data.tolist())))
+
+
+class VOXEL_OT_stamp(bpy.types.Operator):
+    bl_idname = "voxel.stamp"
+    bl_label = "Stamp MagicaVoxel Model"
+    bl_description = ("Place a .vox model centred on a cell (its bottom at the cell's z), "
+                      "one undo step: what a click of the Voxel Edit tool does with Stamp on")
+    bl_options = {"REGISTER", "UNDO"}
+
+    filepath: StringProperty(name="Model", subtype="FILE_PATH")
+    location: IntVectorProperty(name="Location", size=3)
+
+    def execute(self, context):
+        from ...core.errors import VoxelError
+        try:
+            n = stamp_at(context, self.filepath, tuple(self.location))
+        except VoxelError as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        if not n:
+            self.report({"INFO"}, "nothing changed")
+            return {"CANCELLED"}
+        return {"FINISHED"}
+
+
 def _redraw(context):
     for area in getattr(context.screen, "areas", ()) if context.screen else ():
         if area.type == "VIEW_3D":
@@ -221,7 +262,8 @@ def menu_export_vox(self, context):
     self.layout.operator(EXPORT_SCENE_OT_voxel_vox.bl_idname, text="MagicaVoxel (.vox)")
 
 
-CLASSES = [IMPORT_SCENE_OT_voxel_minecraft, IMPORT_SCENE_OT_voxel_vox, EXPORT_SCENE_OT_voxel_vox]
+CLASSES = [IMPORT_SCENE_OT_voxel_minecraft, IMPORT_SCENE_OT_voxel_vox, EXPORT_SCENE_OT_voxel_vox,
+           VOXEL_OT_stamp]
 
 
 def register():

@@ -216,3 +216,82 @@ def write_region(folder: Path, chunks: dict, kind: int = 2, external=()) -> Path
 
 def level_dat(folder: Path, version: int) -> None:
     (folder / "level.dat").write_bytes(gzip.compress(nbt({"Data": {"DataVersion": version}})))
+
+
+# ---- a small build (the GUI test's and the README picture's scene) ---------------
+def demo_build(save: Path) -> Path:
+    """A 1.18+ save of 3 x 3 chunks: meadow, a cobblestone-and-planks house with glass
+    panes, a brick chimney, torches, a lava pit, a pond, a gravel path, an oak tree."""
+    W = 48
+    world = {}
+
+    def put(x, y, z, name):
+        world[(x, y, z)] = "minecraft:" + name
+
+    for x in range(W):
+        for z in range(W):
+            for y in range(56, 64):
+                put(x, y, z, "stone" if y < 61 else "dirt")
+            put(x, 64, z, "grass_block")
+    # house: x 14..24, z 14..22, floor 65
+    for x in range(14, 25):
+        for z in range(14, 23):
+            put(x, 65, z, "cobblestone")
+            edge = x in (14, 24) or z in (14, 22)
+            for y in range(66, 70):
+                if edge:
+                    corner = x in (14, 24) and z in (14, 22)
+                    window = y in (67, 68) and (x in (17, 21) or z in (17, 19)) and not corner
+                    put(x, y, z, "oak_log" if corner else "glass_pane" if window else "oak_planks")
+    for x in range(18, 21):   # door gap facing south (+z)
+        for y in (66, 67):
+            world.pop((x, y, 22), None)
+            world.pop((x - 1, y, 22), None) if x == 18 else None
+    # roof: stepped spruce planks and a stone-brick ridge
+    for k in range(5):
+        for x in range(13 + k, 26 - k):
+            for z in range(13, 24):
+                put(x, 70 + k, z, "stone_bricks" if k == 4 else "spruce_planks")
+    for y in range(66, 78):
+        put(22, y, 20, "bricks")
+    for x, z in ((13, 18), (25, 18), (19, 23)):
+        put(x, 67, z, "torch")
+    # lava pit with a cobblestone rim, a pond
+    for x in range(30, 35):
+        for z in range(28, 33):
+            put(x, 64, z, "cobblestone" if x in (30, 34) or z in (28, 32) else "lava")
+    for x in range(6, 12):
+        for z in range(28, 36):
+            if (x - 8.5) ** 2 / 9 + (z - 31.5) ** 2 / 16 < 1:
+                put(x, 64, z, "water")
+                put(x, 63, z, "clay")
+    for z in range(23, 40):   # gravel path south of the door
+        for x in (18, 19):
+            put(x, 64, z, "gravel")
+    # an oak tree
+    for y in range(65, 71):
+        put(36, y, 12, "oak_log")
+    for x in range(33, 40):
+        for z in range(9, 16):
+            for y in range(69, 73):
+                if abs(x - 36) + abs(z - 12) + abs(y - 71) < 5 and (x, y, z) not in world:
+                    put(x, y, z, "oak_leaves")
+    rng = np.random.default_rng(5)
+    for _ in range(60):
+        x, z = (int(v) for v in rng.integers(0, W, 2))
+        if world.get((x, 64, z)) == "minecraft:grass_block" and (x, 65, z) not in world:
+            put(x, 65, z, "poppy" if rng.random() < 0.3 else "short_grass")
+    chunks = {}
+    for cx in range(3):
+        for cz in range(3):
+            secs = {}
+            for sy in (3, 4):
+                a = np.full((16, 16, 16), "minecraft:air", object)
+                for (x, y, z), n in world.items():
+                    if x >> 4 == cx and z >> 4 == cz and y >> 4 == sy:
+                        a[y & 15, z & 15, x & 15] = n
+                secs[sy] = a
+            chunks[(cx, cz)] = chunk_nbt(cx, cz, secs)
+    write_region(save / "region", chunks, 2)
+    level_dat(save, 3953)
+    return save

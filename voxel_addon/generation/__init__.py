@@ -7,9 +7,9 @@ from ..core.errors import VoxelError
 
 # name -> "module:Class"; imported on demand so registering the add-on stays cheap.
 GENERATORS = {
-    "empty": "empty:EmptyGenerator",
     "flat": "flat:FlatGenerator",
     "overworld": "overworld:OverworldGenerator",
+    "empty": "empty:EmptyGenerator",  # air: worlds an import creates (issue 21)
 }
 DEFAULT = "overworld"
 

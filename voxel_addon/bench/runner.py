@@ -17,7 +17,7 @@ import traceback
 from pathlib import Path
 
 AREAS = ["storage", "generation", "light", "meshing", "bake", "render", "world", "viewport", "edit",
-         "formats"]
+         "far", "formats"]
 
 
 class Context:

@@ -106,3 +106,28 @@ def test_good_blobs_still_decode():
     # a zstd frame without a declared size decodes too
     c = zstandard.ZstdCompressor(write_content_size=False)
     assert codecs.decode("zstd", c.compress(raw), SIZE) == raw
+
+
+def test_hostile_tables_give_one_line_or_are_left_out(world_path):
+    from voxel_addon.core.errors import VoxelError
+    with World.create(world_path, seed=1, generator="flat", loader=False) as w:
+        w.set_block(1, 2, 100, "glass")
+    db = sqlite3.connect(world_path)
+    db.executemany("INSERT OR REPLACE INTO edits VALUES (?, ?, ?, ?, ?, 0)",
+                   [(3, 3, 300, 1, 0), (4, 4, -1, 1, 0), (5, 5, 50, 1, 1 << 20),
+                    (6, 6, 60, -7, 0), (7, 7, 70, 1 << 40, 0)])
+    db.commit()
+    with World.open(world_path, loader=False, readonly=True) as w:
+        c = w.chunk_at(0, 0)                      # loads; bad rows never reach the arrays
+        assert c.get(1, 2, 100) != 0 and w.file.edits_in((0, 0))
+    # regenerated from the seed with the stored edits: the hostile rows are skipped
+    db.execute("DELETE FROM chunks")
+    db.commit()
+    with World.open(world_path, loader=False, readonly=True) as w:
+        c = w.chunk_at(0, 0)
+        assert c.get(1, 2, 100) != 0 and c.get(6, 6, 60) == 0 and c.get(7, 7, 70) == 0
+    db.execute("INSERT INTO block_types VALUES (?, 'stone_x')", (1 << 40,))
+    db.commit()
+    db.close()
+    with pytest.raises(VoxelError, match="outside 0..65535"):
+        WorldFile(world_path, readonly=True)

@@ -131,3 +131,20 @@ def test_hostile_tables_give_one_line_or_are_left_out(world_path):
     db.close()
     with pytest.raises(VoxelError, match="outside 0..65535"):
         WorldFile(world_path, readonly=True)
+
+
+def test_block_ids_beyond_the_table_are_a_damaged_chunk(world_path):
+    with World.create(world_path, seed=1, generator="flat", loader=False) as w:
+        w.generate_area([(0, 0)])
+    ids = np.full(chunk.VOLUME, 5000, "<u2").tobytes()
+    db = sqlite3.connect(world_path)
+    db.execute("UPDATE chunks SET codec='zlib', blocks=? WHERE cx=0 AND cy=0",
+               (zlib.compress(ids),))
+    db.commit()
+    db.close()
+    wf = WorldFile(world_path, readonly=True)
+    try:
+        with pytest.raises(CorruptChunk, match="missing from block_types"):
+            wf.read_chunk((0, 0))
+    finally:
+        wf.close()

@@ -203,10 +203,10 @@ class WorldFile:
         except ValueError as e:
             raise CorruptChunk(f"chunk ({key[0]}, {key[1]}) in {self.path} is damaged ({e}); "
                                "it was left untouched") from None
+        if blocks.max() >= len(self._to_reg):  # checked always: tables are indexed by id
+            raise CorruptChunk(f"chunk ({key[0]}, {key[1]}) in {self.path} has block ids "
+                               "missing from block_types; it was left untouched")
         if not self._identity:
-            if blocks.max() >= len(self._to_reg):
-                raise CorruptChunk(f"chunk ({key[0]}, {key[1]}) in {self.path} has block ids "
-                                   "missing from block_types; it was left untouched")
             blocks = self._to_reg[blocks]
         if not light:
             return blocks, data

@@ -148,3 +148,17 @@ def test_block_ids_beyond_the_table_are_a_damaged_chunk(world_path):
             wf.read_chunk((0, 0))
     finally:
         wf.close()
+
+
+@pytest.mark.parametrize("params", ['{"layers": 5}', '{"layers": [["stone", "x"]]}',
+                                    '{"layers": [[1]]}', "[1, 2", '"text"'])
+def test_damaged_generator_settings_are_one_line(world_path, params):
+    from voxel_addon.core.errors import VoxelError
+    World.create(world_path, seed=1, generator="flat", loader=False).close()
+    db = sqlite3.connect(world_path)
+    db.execute("UPDATE meta SET value=? WHERE key='generator_params'", (params,))
+    db.commit()
+    db.close()
+    with pytest.raises(VoxelError) as e:
+        World.open(world_path, loader=False)
+    assert "\n" not in str(e.value)

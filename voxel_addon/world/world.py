@@ -83,6 +83,10 @@ class World:
         wf = WorldFile(path, readonly=readonly)
         try:
             gen = make_generator(wf.generator, wf.seed, wf.generator_params, backend)
+        except (ValueError, TypeError, KeyError, IndexError, AttributeError) as e:
+            wf.close()  # a hostile or damaged meta row: one line, not a traceback
+            raise VoxelError(f"{path}: its generator settings are damaged "
+                             f"({type(e).__name__}: {e})") from None
         except BaseException:
             wf.close()
             raise

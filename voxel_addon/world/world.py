@@ -102,6 +102,17 @@ class World:
     def seed(self) -> int:
         return self.file.seed
 
+    def colors(self):
+        """The world's colour palette ((n, 3) uint8, core.colors): the `color` block's
+        data indexes it (meshes carry the index per vertex, ChunkMesh.colors). Parsed
+        once per change of the file's meta value."""
+        from ..core import colors
+        raw = self.file.meta.get(colors.KEY)
+        cached = getattr(self, "_colors", None)
+        if cached is None or cached[0] != raw:
+            cached = self._colors = (raw, colors.parse(self.file.meta))
+        return cached[1]
+
     def tick(self) -> int:
         """A new number, larger than every one before (versions, block changes)."""
         return next(self._tick)

@@ -11,6 +11,7 @@
 
 //@ sampler sampler2DArray tex       // per layer the mip chain side by side (texel())
 //@ sampler sampler2DArray glow_tex  // 16x16 per layer: the mask times its blocks' glow
+//@ sampler sampler2D palette        // the world's colours, 256 a row (`color` blocks)
 //@ sampler gdepth2D opaque_depth   if PEEL
 //@ sampler gdepth2D prev_depth     if PEEL
 //@ out 0 vec4 out_accum            if OIT  // sum of w * premultiplied colour, sum of w * alpha
@@ -77,6 +78,8 @@ void main() {
     if (c.a < 0.5) discard;
     c.a = 1.0;
 #endif
+    if (g_color != 0u)  // a `color` block: its texture tinted by the palette colour
+        c.rgb *= texelFetch(palette, ivec2(int(g_color & 255u), int(g_color >> 8)), 0).rgb;
 #ifndef SHADOW
     vec3 n = gl_FrontFacing ? g_normal : -g_normal;  // double-sided passes
     ivec2 gi = ivec2(floor(g_uv * 16.0)) & 15;  // nearest, repeated

@@ -1,7 +1,8 @@
 // Block faces for the G-buffer, depth peeling and the shadow map (thesis §5.3.1).
 // One draw per batch of chunks (render/geometry.py): in_v.x is the packed vertex
 // (include/vertex.glsl), in_v.y where its render region lies in the batch (bits 0-1
-// chunk x, 2-3 chunk y, 4-11 region; bits 12-31 are free).
+// chunk x, 2-3 chunk y, 4-11 region) and, in bits 16-31, the colour of a `color`
+// block (its index into the world's palette, meshing.ChunkMesh.colors; 0 white).
 #include "include/vertex.glsl"
 #include "include/frame.glsl"
 
@@ -13,6 +14,7 @@
 //@ vary flat float g_layer
 //@ vary flat vec3 g_normal
 //@ vary flat uint g_quad
+//@ vary flat uint g_color
 
 // Vertex animation (§5.3.1): 1 = wave the top (plants), 2 = all (leaves), 3 = water surface.
 vec3 wave(vec3 p, uint anim, vec3 n) {
@@ -34,6 +36,7 @@ void main() {
     g_layer = float(v.layer);
     g_normal = v.normal;
     g_quad = uint(gl_VertexID) >> 2;
+    g_color = in_v.y >> 16;
     #ifdef SHADOW
     gl_Position = shadow_vp * vec4(p, 1.0);
 #else

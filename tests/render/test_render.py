@@ -277,3 +277,26 @@ def test_all_air_is_sky(gl):
     img = r.render(Camera(8, 8, 80, 0, 10), 12.0, SIZE)
     assert r.stats["triangles"] == 0 and img.std(axis=(0, 1)).max() < 40
     r.release()
+
+
+def test_color_blocks_show_their_palette_colour(gl):
+    """The `color` block (issue 21): its small data indexes the world's palette and the
+    face shows the texture tinted by that colour (noon from above: the left half red,
+    the right half blue; another palette recolours them)."""
+    from voxel_addon.render.pipeline import Renderer
+    b = floor("stone", n=2)
+    d = np.zeros_like(b)
+    b[:, :, 60] = R.id("color")
+    d[:16, :, 60], d[16:, :, 60] = 1, 2
+    r = Renderer(gl, Settings(msaa=1, dof=False, godrays=False, shadows=False))
+    r.set_area(b, light.solve(b), 0, 0, data=d)
+    r.set_palette(np.array([[255, 255, 255], [230, 30, 20], [20, 40, 230]], np.uint8))
+    cam = Camera(16, 16, 90, 90, -89.9)
+    img = r.render(cam, 12.0, SIZE).astype(int)
+    left, right = img[20:44, 10:36].reshape(-1, 3).mean(0), img[20:44, 60:86].reshape(-1, 3).mean(0)
+    assert left[0] > left[2] + 40 and right[2] > right[0] + 40, (left, right)
+    r.set_palette(np.array([[255, 255, 255], [20, 200, 20], [20, 200, 20]], np.uint8))
+    img = r.render(cam, 12.0, SIZE).astype(int)
+    left = img[20:44, 10:36].reshape(-1, 3).mean(0)
+    assert left[1] > left[0] + 40, left
+    r.release()

@@ -76,7 +76,9 @@ def run(args):
     ctx = source.context()
     r = Renderer(ctx, s)
     r.set_area(data.blocks, data.light, data.cx0, data.cy0, ring=True, method=args.aggregation,
-               light_at=data.light_at)
+               light_at=data.light_at, data=data.data)
+    if data.palette is not None:
+        r.set_palette(data.palette)
     img = r.render(Camera(*cam_args), hours, (w, h))
     rgba = np.dstack([img, np.full(img.shape[:2], 255, np.uint8)])
     args.out.parent.mkdir(parents=True, exist_ok=True)

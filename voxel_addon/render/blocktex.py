@@ -1,7 +1,8 @@
 """The block textures on the device: an array of 32x16 layers, each the 16x16 texture
 with its mip chain beside it (level l, 16 >> l wide, at x = 32 - (32 >> l)), sampled
-by hand in shaders/block.frag (no device sampler state: nearest, clamped); and the
-glow masks (16x16), each times the strongest glow of a block that uses its layer."""
+by hand in shaders/block.frag (no device sampler state: nearest, clamped); the glow
+masks (16x16), each times the strongest glow of a block that uses its layer; and the
+world's colour palette (the `color` block's tint, 256 colours a row)."""
 from __future__ import annotations
 
 import numpy as np
@@ -29,9 +30,27 @@ class BlockTextures:
         self.dev = dev
         self.tex = dev.texture((32, 16), "rgba8", layers=n, data=atlas)
         self.glow = dev.texture((16, 16), "r8", layers=n, data=glow)
+        self.palette = None
+        self._rgb = None
+        self.set_palette(np.array([[255, 255, 255]], np.uint8))
+
+    def set_palette(self, rgb) -> bool:
+        """The world's colours ((n, 3) uint8, core.colors); returns whether the texture
+        changed (then the passes that bind it are made again)."""
+        rgb = np.asarray(rgb, np.uint8).reshape(-1, 3)
+        if self._rgb is not None and np.array_equal(rgb, self._rgb):
+            return False
+        rows = -(-len(rgb) // 256)
+        data = np.full((rows * 256, 4), 255, np.uint8)
+        data[:len(rgb), :3] = rgb
+        old = self.palette
+        self.palette = self.dev.texture((256, rows), "rgba8", data=data.reshape(rows, 256, 4))
+        self.dev.release(old)
+        self._rgb = rgb.copy()
+        return True
 
     def bindings(self) -> dict:
-        return {"tex": self.tex, "glow_tex": self.glow}
+        return {"tex": self.tex, "glow_tex": self.glow, "palette": self.palette}
 
     def release(self) -> None:
-        self.dev.release(self.tex, self.glow)
+        self.dev.release(self.tex, self.glow, self.palette)

@@ -125,15 +125,22 @@ class Geometry:
             b.starts[p, 1:] = np.cumsum(counts.sum(0)) // 4
             if not counts.any():
                 continue
-            parts, words = [], []
+            parts, words, tints = [], [], []
             for r in range(nreg):  # region by region: the regions in view are one range
                 for c in np.flatnonzero(counts[:, r]):
                     f, n = ranges[c, r, p]
                     parts.append(ms[c].vertices[f:f + n])
                     words.append((n, code[c] | np.uint32(r << 4)))
+                    cols = getattr(ms[c], "colors", None)  # `color` blocks' palette index
+                    if cols is not None:
+                        tints.append((len(parts) - 1, cols[f:f + n]))
             w = np.empty((int(counts.sum()), 2), np.uint32)
             w[:, 0] = np.concatenate(parts)
             w[:, 1] = np.repeat([c for _, c in words], [n for n, _ in words])
+            if tints:
+                at = np.cumsum([0] + [len(x) for x in parts])
+                for i, cols in tints:
+                    w[at[i]:at[i + 1], 1] |= cols.astype(np.uint32) << 16
             b.meshes[p] = self.dev.mesh(w)
         used = np.array([k for k, m in zip(inside, ms) if m.ranges[..., 1].any()])
         if len(used):

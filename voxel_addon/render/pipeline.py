@@ -80,26 +80,38 @@ class Renderer:
 
     def set_area(self, blocks: np.ndarray, light: np.ndarray, cx0: int, cy0: int,
                  ring: bool = False, method: str = "greedy", backend: str | None = None,
-                 light_at: tuple[int, int] | None = None):
+                 light_at: tuple[int, int] | None = None, data: np.ndarray | None = None):
         """Show the chunks [cx0, cx0+w) x [cy0, cy0+h) from a block array and their light
         instead of what was shown.
 
         blocks is (16w, 16h, 256), or with ring=True (16w+2, 16h+2, 256) including a
         one-voxel ring of neighbours (else outside counts as air); light is the packed
         light of whole chunks from light_at (default (cx0, cy0)), e.g. (16w, 16h, 256);
-        chunks it does not cover get open daylight.
+        chunks it does not cover get open daylight. data: the blocks' small data (the
+        same shape, or None): `color` blocks of different colours stay apart.
         """
         from .. import meshing
         if not ring:
             pad = np.zeros((blocks.shape[0] + 2, blocks.shape[1] + 2, 256), np.uint16, order="F")
             pad[1:-1, 1:-1] = blocks
             blocks = pad
+            if data is not None:
+                d = np.zeros_like(pad)
+                d[1:-1, 1:-1] = data
+                data = d
         # one batched call for the whole area (meshing README: build_chunks); backend
         # None: the OpenCL twin when there is a device (same meshes, much faster)
-        meshes = meshing.build_chunks(blocks, (cx0, cy0), method=method, backend=backend)
+        meshes = meshing.build_chunks(blocks, (cx0, cy0), method=method, backend=backend,
+                                      data=data)
         lights = chunk.cut(light, *(light_at or (cx0, cy0)))
         self.remove_chunks([k for k in self.geo.keys if k not in meshes])
         self.update_chunks(_Chunk(k, m, lights.get(k)) for k, m in meshes.items())
+
+    def set_palette(self, rgb) -> None:
+        """The world's colour palette ((n, 3) uint8, core.colors): the `color` block's
+        tint, indexed by the meshes' per-vertex colour (meshing.ChunkMesh.colors)."""
+        if self.blocks.set_palette(rgb):
+            self._graphs.clear()
 
     def set_meshes(self, meshes: dict) -> None:
         """{(cx, cy): meshing.ChunkMesh} to draw instead of what was shown; the light

@@ -31,7 +31,9 @@ class Still:
             if self._area is not None:
                 a, method = self._area
                 self.r.set_area(a.blocks, a.light, a.cx0, a.cy0, ring=True, method=method,
-                                light_at=a.light_at)
+                                light_at=a.light_at, data=a.data)
+                if a.palette is not None:
+                    self.r.set_palette(a.palette)
                 self._area = None
             img = self.r.render(camera, hours, (int(size[0]), int(size[1])))
         self.ms = (time.perf_counter() - t0) * 1e3

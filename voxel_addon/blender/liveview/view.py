@@ -78,6 +78,9 @@ class Pane:
         if self.feed is not feed:  # another world or distance: nothing of ours stays
             self.feed = feed
             self.versions = {k: None for k in self.versions}
+        colors = getattr(feed.world, "colors", None)
+        if colors is not None:
+            r.set_palette(colors())  # (cached by the world; compared here)
         gone = [k for k in self.versions if k not in feed.chunks]
         new = [p for k, p in feed.chunks.items() if self.versions.get(k) != p.version]
         if gone or new:

@@ -50,12 +50,9 @@ void main() {
         vec4 c = host_vp * vec4(world_pos(inv_vp, v_uv, d), 1.0);
         z = clamp(c.z / c.w, -1.0, 1.0) * 0.5 + 0.5;
     }
-    vec3 rgb = bilinear(color, v_uv).rgb;  // draft frames are smaller
-#if KEEP
-    out_color = vec4(rgb, 1.0);  // (viewport_kept.frag converts on its way to Blender)
-#else
-    out_color = vec4(to_target(rgb, srgbTarget), 1.0);
-#endif
+    // (draft frames are smaller); into Blender's sRGB framebuffer or the kept frame's
+    // sRGB texture: both encode what is written
+    out_color = vec4(to_target(bilinear(color, v_uv).rgb, srgbTarget), 1.0);
 #if KEEP
     out_depth = z;
 #else

@@ -41,6 +41,12 @@ vec3 to_target(vec3 c, int srgb) {
     return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), step(vec3(0.04045), c));
 }
 
+// linear -> sRGB display values (a target that does not encode what is written)
+vec3 srgb_encode(vec3 c) {
+    c = max(c, vec3(0.0));
+    return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(vec3(0.0031308), c));
+}
+
 // World position of a depth-buffer value at normalised screen coordinate uv.
 vec3 world_pos(mat4 inv_m, vec2 uv, float depth) {
     vec4 p = inv_m * vec4(uv * 2.0 - 1.0, depth * 2.0 - 1.0, 1.0);

@@ -253,7 +253,7 @@ class Renderer:
               dof_start=fog_end * 0.7, dof_end=fog_end * 1.1, ssao_radius=s.ssao_radius,
               **self.vol.frame_values())
         self.dev.frame(F.pack())
-        return Frame(T, G, view, cast, layers, use_oit, ssao, dof)
+        return Frame(T, G, view, cast, layers, use_oit)
 
     def submit(self, f: "Frame") -> None:
         """Run the passes of a prepared frame."""
@@ -282,11 +282,11 @@ class Frame:
     RGBA8 texture), `depth` (the opaque G-buffer depth, `targets.samples` samples)
     and `blend_depth` (the nearest transparent surface's depth when peeling drew one,
     else None; OIT writes no depth)."""
-    __slots__ = ("targets", "G", "view", "cast", "stats", "layers", "use_oit", "ssao", "dof")
+    __slots__ = ("targets", "G", "view", "cast", "stats", "layers", "use_oit")
 
-    def __init__(self, T, G, view, cast, layers, use_oit, ssao, dof):
+    def __init__(self, T, G, view, cast, layers, use_oit):
         self.targets, self.G, self.view, self.cast = T, G, view, cast
-        self.layers, self.use_oit, self.ssao, self.dof = layers, use_oit, ssao, dof
+        self.layers, self.use_oit = layers, use_oit
         self.stats = Stats()
 
     @property

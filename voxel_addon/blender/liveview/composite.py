@@ -20,12 +20,15 @@ KEEP = State()
 class Kept:
     """A region's last composited frame at the region's size: colour (alpha 0 where
     Blender's own picture stays) and depth in Blender's projection; `look` is
-    everything the picture depended on."""
+    everything the picture depended on. The colour is an sRGB texture, like Blender's
+    viewport framebuffer: written with the composite's decoding, read back decoded by
+    the GPU, so a redraw from it decodes nothing itself (a pow per pixel was half of a
+    still redraw's cost on llvmpipe)."""
     __slots__ = ("size", "color", "depth", "target", "look", "quality")
 
     def __init__(self, dev, size):
         self.size, self.look, self.quality = size, None, "full"
-        self.color = dev.texture(size, "rgba8")
+        self.color = dev.texture(size, "srgba8")
         self.depth = dev.texture(size, "r32f")
         self.target = dev.target([self.color, self.depth])
 

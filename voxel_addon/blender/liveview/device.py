@@ -29,7 +29,7 @@ import numpy as np
 from ...render import glsl
 from ...render.device import FORMATS, Device, State, Target, Texture
 
-_FORMAT = {"rgba8": "RGBA8", "rgba16f": "RGBA16F", "rgba32f": "RGBA32F", "r8": "R8",
+_FORMAT = {"rgba8": "RGBA8", "srgba8": "SRGB8_A8", "rgba16f": "RGBA16F", "rgba32f": "RGBA32F", "r8": "R8",
            "r16": "R16", "r16f": "R16F", "r32f": "R32F", "depth": "DEPTH_COMPONENT32F"}
 _SAMPLER = {"sampler2D": "FLOAT_2D", "sampler2DArray": "FLOAT_2D_ARRAY", "sampler3D": "FLOAT_3D",
             "usampler2D": "UINT_2D", "usampler3D": "UINT_3D", "depth2D": "DEPTH_2D",

@@ -49,7 +49,9 @@ KEPT_MAX = 8         # kept frames per window (one per region; quad view has fou
 class Frame(NamedTuple):
     """One redraw of one region, as the bench reads it."""
     ms: float           # the handler's wall time
-    python_ms: float    # our Python outside the GPU calls (prepare, bookkeeping)
+    python_ms: float    # our Python outside the GPU calls (prepare, bookkeeping): this
+                        # thread's CPU time (waits for the GIL, held by the world's
+                        # loader and saver threads, are not ours)
     quality: str        # "full" or "draft"
     drawn: int          # chunks drawn
     upload_ms: float    # chunks uploaded in this redraw
@@ -181,7 +183,7 @@ class LiveView:
 
     def _frame(self, context, scene, vv):
         import gpu
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.thread_time()
         region, rv3d, window = context.region, context.region_data, context.window
         if region is None or rv3d is None or window is None:
             return
@@ -221,7 +223,7 @@ class LiveView:
         pane = self.panes.get(window.as_pointer())
         if pane is None:
             pane = self.panes[window.as_pointer()] = Pane(host.device())
-        t_py = time.perf_counter() - t0
+        t_py = time.thread_time() - c0
         t1 = time.perf_counter()
         drawn = pane.sync(feed)
         t_sync = time.perf_counter() - t1
@@ -241,10 +243,10 @@ class LiveView:
             pane.r.s = s
             scale = DRAFT_SCALE if draft else 1.0
             size = (max(8, int(vw * scale)), max(8, int(vh * scale)))
-            t1 = time.perf_counter()
+            c1 = time.thread_time()
             f = pane.r.prepare(cam, hours, size)
+            t_py += time.thread_time() - c1
             t2 = time.perf_counter()
-            t_py += t2 - t1
             pane.r.submit(f)
             # kept only once the view rests: a frame while moving or loading is the last
             k = pane.kept_for(key, (vw, vh)) if self.reuse and not (moving or loading) else None

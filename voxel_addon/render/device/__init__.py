@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 # texture formats: name -> (components, bytes per component)
-FORMATS = {"rgba8": (4, 1), "rgba16f": (4, 2), "rgba32f": (4, 4), "r8": (1, 1),
+FORMATS = {"rgba8": (4, 1), "srgba8": (4, 1), "rgba16f": (4, 2), "rgba32f": (4, 4), "r8": (1, 1),
            "r16": (1, 2), "r16f": (1, 2), "r32f": (1, 4), "depth": (1, 4)}
 
 

@@ -5,15 +5,15 @@ gpu module offers none of them).
 Chunks are grouped into batches of BATCH x BATCH chunks. Per batch and pass one vertex
 buffer holds the quads of its chunks ordered region by region (chunks within a
 region), each vertex with a word saying where its region lies in the batch
-(shaders/block.vert), so the regions of a batch that are in view are one range of
-it and one draw. A changed chunk marks its batch; the batch is built again (its
+(shaders/block.vert). A changed chunk marks its batch; the batch is built again (its
 chunks' vertices gathered, one upload per pass) when the next frame is prepared, so
 many changes in one frame cost one build.
 
-Culling is on the CPU: one NumPy product tests every (batch, region) box against the
-clip planes (camera.visible_boxes); a batch draws from its first to its last region
-in view. At distance 16 that is ~81 batches: a frame draws a few hundred ranges over
-all passes instead of thousands of per-chunk draws.
+Culling is on the CPU, as fine as the thesis's: one NumPy product tests every
+(chunk, region) box against the clip planes (camera.visible_boxes); the visible rows
+of a batch that follow each other in its vertex order are one range and one draw.
+At distance 16 (~81 batches) a frame draws a few hundred ranges over all passes
+instead of thousands of per-chunk draws.
 """
 from __future__ import annotations
 
@@ -29,14 +29,13 @@ BATCH = 4                # chunks per side of a batch (the origin word has 2 bit
 
 
 class _Batch:
-    __slots__ = ("key", "meshes", "starts", "lo", "hi", "origin")
+    __slots__ = ("key", "meshes", "rows", "origin")
 
     def __init__(self, key):
         self.key = key
         self.meshes = [None] * len(PASSES)  # per pass: the device's vertex buffer
-        self.starts = None                  # (passes, regions + 1): quad offsets
-        self.lo = self.hi = None            # xy box of its chunks with faces
-        self.origin = (0.0, 0.0, 0.0, 0.0)
+        self.rows = [[] for _ in PASSES]    # per pass: (first quad, quads, chunk, region)
+        self.origin = (0.0, 0.0, 0.0, 0.0)  # in vertex order
 
 
 class Geometry:
@@ -119,18 +118,18 @@ class Geometry:
         ms = [self.chunks[k] for k in inside]
         ranges = np.stack([m.ranges for m in ms])        # (chunks, regions, passes, 2)
         code = np.array([(k[0] - bx * BATCH) | (k[1] - by * BATCH) << 2 for k in inside], np.uint32)
-        b.starts = np.zeros((npass, nreg + 1), np.int64)
         for p in range(npass):
             counts = ranges[:, :, p, 1]                   # (chunks, regions) vertices
-            b.starts[p, 1:] = np.cumsum(counts.sum(0)) // 4
             if not counts.any():
                 continue
-            parts, words, tints = [], [], []
-            for r in range(nreg):  # region by region: the regions in view are one range
+            parts, words, tints, q = [], [], [], 0
+            for r in range(nreg):  # region by region (visible neighbours: one range)
                 for c in np.flatnonzero(counts[:, r]):
                     f, n = ranges[c, r, p]
                     parts.append(ms[c].vertices[f:f + n])
                     words.append((n, code[c] | np.uint32(r << 4)))
+                    b.rows[p].append((q, int(n) // 4, inside[c], r))
+                    q += int(n) // 4
                     cols = getattr(ms[c], "colors", None)  # `color` blocks' palette index
                     if cols is not None:
                         tints.append((len(parts) - 1, cols[f:f + n]))
@@ -142,62 +141,69 @@ class Geometry:
                 for i, cols in tints:
                     w[at[i]:at[i + 1], 1] |= cols.astype(np.uint32) << 16
             b.meshes[p] = self.dev.mesh(w)
-        used = np.array([k for k, m in zip(inside, ms) if m.ranges[..., 1].any()])
-        if len(used):
-            b.lo, b.hi = used.min(0) * 16, (used.max(0) + 1) * 16
         b.origin = (float(bx * BATCH * 16), float(by * BATCH * 16), 0.0, float(self.region_h))
-        self._batches[key] = b
+        if any(b.rows):
+            self._batches[key] = b
 
     def _table(self) -> None:
-        """The arrays a frame culls and draws with: (batch, region) boxes, starts."""
-        self._list = [b for b in self._batches.values() if b.lo is not None]
-        n, nreg, h = len(self._list), self.nreg, self.region_h
-        self._starts = np.array([b.starts for b in self._list]).reshape(n, len(PASSES), nreg + 1)
-        lo = np.zeros((n, nreg, 3))
-        hi = np.zeros((n, nreg, 3))
-        for i, b in enumerate(self._list):
-            lo[i, :, :2], hi[i, :, :2] = b.lo, b.hi
+        """The arrays a frame culls and draws with: the (chunk, region) boxes, and per
+        pass every batch's rows in vertex order (batch, first quad, quads, box)."""
+        self._list = list(self._batches.values())
+        nreg, h = self.nreg, self.region_h
+        keys = sorted({row[2] for b in self._list for rows in b.rows for row in rows})
+        index = {k: i for i, k in enumerate(keys)}
+        lo = np.zeros((len(keys), nreg, 3))
+        lo[:, :, :2] = (np.array(keys, np.float64).reshape(-1, 1, 2) * 16) if keys else 0.0
         lo[..., 2] = np.arange(nreg) * h
-        hi[..., 2] = lo[..., 2] + h
+        hi = lo + [16.0, 16.0, h]
         # 0.5 slack for waving: vertices move by < 0.1 blocks
         self._boxes = camera.boxes(lo.reshape(-1, 3) - 0.5, hi.reshape(-1, 3) + 0.5)
+        self._rows = []
+        for p in range(len(PASSES)):
+            t = [(i, q, n, index[k] * nreg + r) for i, b in enumerate(self._list)
+                 for q, n, k, r in b.rows[p]]
+            self._rows.append(np.array(t, np.int64).reshape(-1, 4).T if t else None)
         self._last: dict = {}
 
     # ------------------------------------------------------------------ frames
     def cull(self, mvp: np.ndarray) -> np.ndarray:
-        """(batches, regions) bool: whose box may intersect the clip volume."""
-        return camera.visible_boxes(mvp, self._boxes).reshape(len(self._list), self.nreg)
+        """(chunk, region) boxes: whether each may intersect the clip volume."""
+        return camera.visible_boxes(mvp, self._boxes)
 
     def seen(self, name: str, vis: np.ndarray) -> bool:
         """Whether pass name has quads in a visible region."""
-        p = PASSES.index(name)
-        s = self._starts[:, p]
-        return bool(((s[:, 1:] > s[:, :-1]) & vis).any())
+        t = self._rows[PASSES.index(name)]
+        return t is not None and bool(vis[t[3]].any())
 
     def batches(self, vis: np.ndarray, names, slot: str = "view") -> dict:
         """{pass name: [(mesh, first quad, quads, origin)] or None} for the culling of
-        cull(): per batch the range from its first to its last region in view."""
+        cull(): a batch's visible rows that follow each other in its vertex order are
+        one range."""
         last = self._last.get(slot)
         if last is not None and last[0] == tuple(names) and np.array_equal(last[1], vis):
             return last[2]
         out = {}
-        any_v = vis.any(1)
-        r0 = vis.argmax(1)
-        r1 = self.nreg - vis[:, ::-1].argmax(1)
-        rows = np.arange(len(self._list))
         for name in names:
             p = PASSES.index(name)
-            first = self._starts[rows, p, r0]
-            n = self._starts[rows, p, r1] - first
-            sel = np.flatnonzero(any_v & (n > 0))
-            out[name] = [(self._list[i].meshes[p], int(first[i]), int(n[i]), self._list[i].origin)
-                         for i in sel.tolist()] or None
+            t = self._rows[p]
+            if t is None:
+                out[name] = None
+                continue
+            bi, q, n, box = t
+            v = vis[box]
+            same = np.r_[False, bi[1:] == bi[:-1]]            # the row before is the batch's
+            starts = np.flatnonzero(v & ~(same & np.r_[False, v[:-1]]))
+            ends = np.flatnonzero(v & ~(np.r_[same[1:], False] & np.r_[v[1:], False]))
+            first, end = q[starts], q[ends] + n[ends]
+            out[name] = [(self._list[i].meshes[p], int(f), int(e - f), self._list[i].origin)
+                         for i, f, e in zip(bi[starts].tolist(), first.tolist(), end.tolist())] \
+                or None
         self._last[slot] = (tuple(names), vis.copy(), out)
         return out
 
     @property
     def quads(self) -> int:
-        return int(self._starts[:, :, -1].sum()) if len(self._list) else 0
+        return int(sum(t[2].sum() for t in self._rows if t is not None))
 
     @property
     def nbytes(self) -> int:

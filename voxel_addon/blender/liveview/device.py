@@ -232,26 +232,11 @@ class GpuDevice(Device):
             self.push(push)
 
     def push(self, values):
-        import gpu
         prog = self._prog
-        sh = prog.shader
         for k, v in values.items():
-            t = prog.push.get(k)
-            if t is None:
-                continue
-            typ, size = t
-            if size:
-                a = np.ascontiguousarray(v, np.float32).ravel()
-                sh.uniform_vector_float(sh.uniform_from_name(k),
-                                        gpu.types.Buffer("FLOAT", a.size, a), 1, size)
-            elif typ == "mat4":
-                sh.uniform_float(k, np.asarray(v, np.float32).T.ravel().tolist())
-            elif typ == "bool":
-                sh.uniform_bool(k, [bool(v)])
-            elif typ.startswith("i") or typ == "int":
-                sh.uniform_int(k, v if typ == "int" else tuple(int(x) for x in v))
-            else:
-                sh.uniform_float(k, v if typ == "float" else tuple(float(x) for x in v))
+            f = prog.setters.get(k)
+            if f is not None:
+                f(v)
 
     def draw(self, mesh=None, first=0, quads=0):
         sh = self._prog.shader
@@ -305,11 +290,39 @@ def _floats(data) -> np.ndarray:
 
 
 class _Program:
-    __slots__ = ("shader", "info", "push", "samplers")
+    __slots__ = ("shader", "info", "setters", "samplers")
 
     def __init__(self, shader, info, push):
-        self.shader, self.info, self.push = shader, info, push
+        self.shader, self.info = shader, info
         self.samplers = {n for _, n in info.iface.samplers}
+        self.setters = {n: _setter(shader, n, typ, size) for n, (typ, size) in push.items()}
+
+
+def _setter(sh, name, typ, size):
+    """How a per-draw value reaches the shader (a function per name: a geometry pass
+    sets one per draw, hundreds a frame)."""
+    import gpu
+    if size:
+        def f(v):
+            a = np.ascontiguousarray(v, np.float32).ravel()
+            sh.uniform_vector_float(sh.uniform_from_name(name), gpu.types.Buffer("FLOAT", a.size, a),
+                                    1, size)
+    elif typ == "mat4":
+        def f(v):
+            sh.uniform_float(name, np.asarray(v, np.float32).T.ravel().tolist())
+    elif typ == "bool":
+        def f(v):
+            sh.uniform_bool(name, [bool(v)])
+    elif typ in ("int", "ivec2", "ivec3", "ivec4"):
+        def f(v):
+            sh.uniform_int(name, int(v) if typ == "int" else tuple(int(x) for x in v))
+    elif typ == "float":
+        def f(v):
+            sh.uniform_float(name, float(v))
+    else:  # vecN: a tuple of floats as it comes (batch_origin, once per draw)
+        def f(v):
+            sh.uniform_float(name, v)
+    return f
 
 
 class _Mesh:

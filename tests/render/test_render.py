@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from voxel_addon import light
 from voxel_addon.core import chunk

@@ -18,9 +18,13 @@ def app():
     path = TOOLS / "blender_app.py"
     if not path.exists():
         return None
-    spec = importlib.util.spec_from_file_location("voxel_blender_app", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
+    import sys
+    mod = sys.modules.get("voxel_blender_app")
+    if mod is None:
+        spec = importlib.util.spec_from_file_location("voxel_blender_app", path)
+        mod = importlib.util.module_from_spec(spec)
+        sys.modules[spec.name] = mod  # (its dataclasses look their module up there)
+        spec.loader.exec_module(mod)
     return mod
 
 

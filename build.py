@@ -143,25 +143,53 @@ def task_blender(args) -> int:
 
 
 GUI_TESTS = "tests/gui"
+# The GUI tests of what draws or moves with the GPU backend and the Blender version
+# (the live view, the edit tool, the first minute) and the installed zip: these run in
+# every real Blender and, in the newest, on Vulkan too; the rest of tests/gui runs in
+# the newest Blender on OpenGL (CI time: see README, Tests).
+GUI_EVERYWHERE = ["tests/gui/test_viewport.py", "tests/gui/test_edit_tool.py",
+                  "tests/gui/test_first_minute.py", "tests/gui/test_installed.py"]
+GUI_VULKAN = GUI_EVERYWHERE[:3]
 
 
-def _layers(user: str) -> list[tuple[str, list, dict]]:
-    """The three test layers: (name, command, extra environment); user: an empty
-    folder for the real Blender's preferences and extensions."""
-    app = "trixie"  # until the live view draws in 5.2 (issue 19), the layers run in 4.3
-    return [
-        ("pytest under the bpy module", [PY, "-m", "pytest", "tests", f"--ignore={GUI_TESTS}"], {}),
-        ("the Blender-facing tests inside the real Blender",
-         [_app().get(app).launcher, "-b", "--factory-startup", "--python-exit-code", "1",
-          "-P", ROOT / "tests" / "run.py"], {"VOXEL_BLENDER_USER": user}),
-        ("GUI tests (the real Blender under Xvfb)", [PY, "-m", "pytest", GUI_TESTS],
-         {"VOXEL_BLENDER_APP": app}),
-    ]
+def _blender_facing(app, user: Path, **extra) -> tuple[list, dict]:
+    return ([app.launcher, "-b", "--factory-startup", "--python-exit-code", "1",
+             "-P", ROOT / "tests" / "run.py"], {"VOXEL_BLENDER_USER": str(user), **extra})
+
+
+def _layers(user: Path) -> list[tuple[str, list, dict]]:
+    """The test layers: (name, command, extra environment); user: an empty folder for
+    the real Blenders' preferences and extensions (one below it per run)."""
+    apps = _app().apps()  # newest first
+    newest = apps[0]
+    gui = [PY, "-m", "pytest"]
+    layers = [("pytest under the bpy module",
+               [PY, "-m", "pytest", "tests", f"--ignore={GUI_TESTS}"], {})]
+    for a in apps:
+        layers.append((f"Blender-facing tests in Blender {a.version}",
+                       *_blender_facing(a, user / a.suite)))
+    layers.append((f"Blender-facing tests without OpenCL (VOXEL_OPENCL=0), Blender {newest.version}",
+                   *_blender_facing(newest, user / "no-opencl", VOXEL_OPENCL="0")))
+    layers.append((f"GUI tests in Blender {newest.version}, OpenGL", [*gui, GUI_TESTS],
+                   {"VOXEL_BLENDER_APP": newest.suite, "VOXEL_GPU_BACKEND": "opengl"}))
+    if "vulkan" in newest.backends:
+        layers.append((f"GUI tests (live view, edit tool) in Blender {newest.version}, Vulkan",
+                       [*gui, *_present(GUI_VULKAN)],
+                       {"VOXEL_BLENDER_APP": newest.suite, "VOXEL_GPU_BACKEND": "vulkan"}))
+    for a in apps[1:]:
+        layers.append((f"GUI tests (live view, edit tool, installed zip) in Blender {a.version}, "
+                       "OpenGL", [*gui, *_present(GUI_EVERYWHERE)],
+                       {"VOXEL_BLENDER_APP": a.suite, "VOXEL_GPU_BACKEND": "opengl"}))
+    return layers
+
+
+def _present(paths: list[str]) -> list[str]:
+    return [p for p in paths if (ROOT / p).exists()]
 
 
 def task_test(args) -> int:
-    """test [PYTEST_ARGS]: with arguments, pytest under bpy with them; without, all
-    three layers (each runs even when an earlier one failed), timed."""
+    """test [PYTEST_ARGS]: with arguments, pytest under bpy with them; without, every
+    layer (each runs even when an earlier one failed), timed."""
     import time
     setup()
     if args:
@@ -169,13 +197,14 @@ def task_test(args) -> int:
     import tempfile
     results = []
     with tempfile.TemporaryDirectory(prefix="voxel-blender-user-") as user:
-        for name, cmd, extra in _layers(user):
+        for name, cmd, extra in _layers(Path(user)):
             log(f"layer: {name}")
             t0 = time.monotonic()
             code = subprocess.run([str(c) for c in cmd], cwd=ROOT, env={**env(), **extra}).returncode
             results.append((name, code, time.monotonic() - t0))
     for name, code, secs in results:
         log(f"{'ok    ' if code == 0 else 'FAILED'} {secs:6.0f} s  {name}")
+    log(f"{sum(s for *_, s in results):.0f} s in all")
     return next((code for _, code, _ in results if code), 0)
 
 

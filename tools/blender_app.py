@@ -570,9 +570,14 @@ def gui_missing(app=None) -> str | None:
     return None
 
 
+def backend_name() -> str:
+    """The GPU backend GUI starts ask for by default: $VOXEL_GPU_BACKEND, else opengl."""
+    return os.environ.get(BACKEND_ENV) or "opengl"
+
+
 def backend(name: str | None = None, app=None) -> str:
     """The GPU backend a GUI start asks for: NAME, else $VOXEL_GPU_BACKEND, else opengl."""
-    name = name or os.environ.get(BACKEND_ENV) or "opengl"
+    name = name or backend_name()
     a = get(app)
     if name not in a.backends:
         raise SetupError(f"blender: backend {name!r} is not set up for {a.suite}'s Blender "

@@ -22,7 +22,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / ".blender" / "site"))  # moderngl for the voxel view (Python 3.13)
+sys.path.insert(0, os.environ.get("VOXEL_BLENDER_SITE") or str(ROOT / ".blender" / "site"))  # moderngl for the voxel view
 
 import bpy  # noqa: E402
 from mathutils import Quaternion, Vector  # noqa: E402
@@ -112,6 +112,20 @@ def surface_cell(px, py, z_top):
     p = o + d * t
     fx, fy = p.x - math.floor(p.x), p.y - math.floor(p.y)
     return (math.floor(p.x), math.floor(p.y), z_top + 1), min(fx, 1 - fx, fy, 1 - fy)
+
+
+def row_off_edges(px, py, z_top, margin=0.25):
+    """A region row near PY whose ray at column PX meets z_top + 1 away from the cells'
+    y edges (a row through an edge leaves which cell a pixel means to half a pixel's
+    rounding: the add-on's picking and this oracle differ there)."""
+    for dy in range(0, 80):
+        for y in (py + dy, py - dy):
+            o, d = pixel_ray(px, y)
+            if d.z < 0:
+                fy = (o + d * ((z_top + 1 - o.z) / d.z)).y % 1.0
+                if min(fy, 1 - fy) > margin:
+                    return y
+    raise RuntimeError("no row away from cell edges")
 
 
 def good_pixel(rng, z_top, margin=0.25):
@@ -292,8 +306,8 @@ def case_drag(w):
     set_view(True, dist=30.0)
     yield 3
     _, _, region, _ = view3d()
-    y = region.height // 2
     xs = list(range(region.width // 2 - 120, region.width // 2 + 120, 6))
+    y = row_off_edges(xs[0], region.height // 2, TOP)
     cells = sorted({c for x in xs for c in [surface_cell(x, y, TOP)[0]]})
     before, step = file_snapshot(), sc.voxel_edit.step
     move((xs[0], y))

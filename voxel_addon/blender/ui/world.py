@@ -96,19 +96,37 @@ class VOXEL_OT_world_recreate(bpy.types.Operator):
         return {"FINISHED"}
 
 
+BACKEND_NAMES = {"opencl": "OpenCL", "numpy": "NumPy (CPU)"}
+
+
+def backend_line(backend: str | None = None) -> tuple:
+    """("info", "Generates with", NAME): the open world's generator's backend, or
+    (None) the one a new world would get, and why not OpenCL when it is NumPy."""
+    from ... import opencl
+    if backend is None:
+        backend = opencl.pick(None)
+    text = BACKEND_NAMES.get(backend, backend)
+    if backend == "numpy" and opencl.why_not():
+        text += ", no OpenCL"
+    return ("info", "Generates with", text)
+
+
 def lines(s: VoxelWorldSettings) -> list[tuple]:
     """What the panel shows under New / Open, by the state of the file at s.path:
-    open: its own seed and generator (read-only) and Recreate; missing: the settings
-    New creates it with; there but not open: a hint and Recreate."""
+    open: its own seed and generator (read-only), the backend it generates with and
+    Recreate; missing: the settings New creates it with and the backend it would use;
+    there but not open: a hint and Recreate."""
     import os
     from .. import session
     if session.is_open(s.path):
         w = session.world(s.path)
         gen = getattr(w.generator, "name", "?")
         return [("label", "Open", "CHECKMARK"), ("info", "Seed", str(w.seed)),
-                ("info", "Generator", gen.capitalize()), ("recreate",)]
+                ("info", "Generator", gen.capitalize()),
+                backend_line(getattr(w.generator, "backend", None)), ("recreate",)]
     if not s.path or not os.path.exists(bpy.path.abspath(s.path)):
-        return [("label", "New World:", "ADD"), ("prop", "seed"), ("prop", "generator")]
+        return [("label", "New World:", "ADD"), ("prop", "seed"), ("prop", "generator"),
+                backend_line()]
     return [("label", "Not open: Open it, or Show in Viewport", "INFO"), ("recreate",)]
 
 

@@ -11,11 +11,19 @@ def _generators(self, context):
     return [(n, n.capitalize(), f"{n} generator") for n in GENERATORS]
 
 
+def _default_generator() -> int:
+    """Overworld, as an index (a callback's items take an int default): a first world
+    has hills, water and trees, not a green plane."""
+    from ...generation import DEFAULT, GENERATORS
+    return list(GENERATORS).index(DEFAULT)
+
+
 class VoxelWorldSettings(bpy.types.PropertyGroup):
     path: StringProperty(name="File", subtype="FILE_PATH", default="//world.sqlite",
                          description="SQLite world file (// = next to the .blend)")
     seed: IntProperty(name="Seed", default=2019, min=0)
-    generator: EnumProperty(name="Generator", items=_generators)
+    generator: EnumProperty(name="Generator", items=_generators, default=_default_generator(),
+                            description="How the new world is generated")
     keep_edits: BoolProperty(name="Keep Edits", default=True,
                              description="Recreate keeps the blocks you placed or removed")
 

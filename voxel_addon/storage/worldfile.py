@@ -294,8 +294,19 @@ class _Transaction:
         return self.wf.db
 
     def __exit__(self, exc_type, exc, tb):
+        db = self.wf.db
         try:
-            self.wf.db.execute("ROLLBACK" if exc_type else "COMMIT")
+            if exc_type:
+                db.execute("ROLLBACK")
+            else:
+                try:
+                    db.execute("COMMIT")
+                except sqlite3.Error:
+                    # a COMMIT that failed (disk full, I/O error) can leave the
+                    # transaction open: end it, so a later save can try again
+                    if db.in_transaction:
+                        db.execute("ROLLBACK")
+                    raise
         finally:
             self.wf._lock.release()
         return False

@@ -248,16 +248,24 @@ def task_bench(args) -> int:
                           cwd=ROOT, env=env()).returncode
 
 
-# Wheels bundled into the extension (Blender ships numpy): pyopencl with its pocl
-# CPU device, moderngl and zstandard, with their pure-Python dependencies, for the
-# Pythons of the Blenders we support: 3.11 (official 4.2-5.0 builds) and 3.13 (newer
-# builds, Linux distributions' Blender). Blender installs only the matching ones.
-WHEELS = ["pyopencl==2026.1.4", "pocl-binary-distribution==3.0", "pytools", "platformdirs",
-          "typing_extensions", "siphash24", "moderngl==5.13.0", "glcontext==3.1.0",
-          "zstandard==0.25.0"]
-WHEEL_PYTHONS = ["3.11", "3.13"]
-WHEEL_PLATFORMS = {"linux-x64": ["manylinux_2_17_x86_64", "manylinux2014_x86_64",
-                                 "manylinux_2_28_x86_64"]}
+# Wheels bundled into the extension (Blender ships numpy; Debian's Blenders do not ship
+# zstandard, so it comes along): pyopencl (on Linux with its pocl CPU device; Windows
+# and macOS have no pocl wheel: there pyopencl's loader finds the vendor's driver, else
+# the NumPy path runs), moderngl and zstandard, with their dependencies. Per Blender
+# platform, for the Pythons of the Blenders that run there: 3.11 (official 4.2-5.0),
+# 3.13 (official 5.1+, Debian trixie's 4.3), 3.14 on Linux (Debian sid's 5.2) and
+# whatever Python an installed real Blender has. No macos-x64: Intel Macs run Blender
+# up to 4.5 LTS, but moderngl 5.13 has no x86_64 macOS wheel.
+WHEELS = ["pyopencl==2026.1.4", "pytools", "platformdirs", "typing_extensions", "siphash24",
+          "moderngl==5.13.0", "glcontext==3.1.0", "zstandard==0.25.0"]
+MAC_ARM = [f"macosx_{v}_0_arm64" for v in range(11, 16)] + \
+    [f"macosx_10_{v}_universal2" for v in range(9, 16)] + [f"macosx_{v}_0_universal2" for v in range(11, 16)]
+WHEEL_PLATFORMS = {  # Blender platform -> (pip platform tags, Pythons, its own extra wheels)
+    "linux-x64": (["manylinux_2_17_x86_64", "manylinux2014_x86_64", "manylinux_2_28_x86_64"],
+                  ["3.11", "3.13", "3.14"], ["pocl-binary-distribution==3.0"]),
+    "windows-x64": (["win_amd64"], ["3.11", "3.13"], []),
+    "macos-arm64": (MAC_ARM, ["3.11", "3.13"], []),
+}
 WHEEL_DIR = ROOT / ".cache" / "wheels"
 # Test tools for the real Blender's Python (.blender/site), versions as in requirements.txt;
 # with their dependencies but not numpy (Blender's own must be the one imported).
@@ -272,27 +280,29 @@ def _pip_for(python: str, tags, *args) -> None:
          *[a for t in tags for a in ("--platform", t)], *args[1:]], env=env())
 
 
-def _linux_pythons() -> list[str]:
-    """The Pythons the Linux wheels are for: WHEEL_PYTHONS and every installed real
-    Blender's (Debian sid's moves: 3.14 today)."""
-    return sorted({*WHEEL_PYTHONS, *(a.pyver for a in _app().apps())},
-                  key=lambda v: tuple(map(int, v.split("."))))
+def wheel_pythons(platform: str) -> list[str]:
+    """The Pythons PLATFORM's wheels are for (on Linux also every installed real
+    Blender's: Debian sid's moves)."""
+    tags, pythons, _ = WHEEL_PLATFORMS[platform]
+    if platform == "linux-x64":
+        pythons = [*pythons, *(a.pyver for a in _app().apps())]
+    return sorted(set(pythons), key=lambda v: tuple(map(int, v.split("."))))
 
 
 def setup_wheels() -> None:
     """The extension's wheels in .cache/wheels/<platform> (downloaded once), and each
     real Blender's .blender/<suite>/site: pytest and the wheels for its Python."""
-    pythons = _linux_pythons()
-    want = hashlib.sha256(f"{WHEELS} {pythons} {WHEEL_PLATFORMS}".encode()).hexdigest()
+    targets = {p: wheel_pythons(p) for p in WHEEL_PLATFORMS}
+    want = hashlib.sha256(f"{WHEELS} {targets} {WHEEL_PLATFORMS}".encode()).hexdigest()
     stamp = WHEEL_DIR / ".stamp"
     if not (stamp.exists() and stamp.read_text() == want):
-        for platform, tags in WHEEL_PLATFORMS.items():
+        for platform, (tags, _, extra) in WHEEL_PLATFORMS.items():
             dest = WHEEL_DIR / platform
             shutil.rmtree(dest, ignore_errors=True)  # no stale versions next to new ones
             dest.mkdir(parents=True)
-            for python in pythons:
+            for python in targets[platform]:
                 log(f"pip download wheels for {platform}, Python {python}")
-                _pip_for(python, tags, "download", "--no-deps", "-d", dest, *WHEELS)
+                _pip_for(python, tags, "download", "--no-deps", "-d", dest, *WHEELS, *extra)
         stamp.write_text(want)
     for app in _app().apps():
         _setup_site(app, want)
@@ -305,26 +315,35 @@ def _setup_site(app, wheels_stamp: str) -> None:
     if (site / ".stamp").exists() and (site / ".stamp").read_text() == want_site:
         return
     shutil.rmtree(site, ignore_errors=True)
-    tags = WHEEL_PLATFORMS["linux-x64"]
+    tags, _, extra = WHEEL_PLATFORMS["linux-x64"]
     log(f"pip install pytest, matplotlib and the extension's wheels into {site} "
         f"(Python {app.pyver})")
     _pip_for(app.pyver, tags, "install", "--target", site, *BLENDER_TEST_PACKAGES)
     _pip_for(app.pyver, tags, "install", "--target", site, "--no-deps", *BLENDER_TEST_NODEPS)
     _pip_for(app.pyver, tags, "install", "--target", site, "--no-deps", "--no-index",
-             "--find-links", WHEEL_DIR / "linux-x64", *[w.split("=")[0] for w in WHEELS])
+             "--find-links", WHEEL_DIR / "linux-x64", *[w.split("=")[0] for w in WHEELS + extra])
     (site / ".stamp").write_text(want_site)
 
 
 def task_extension(args) -> int:
-    """extension [--no-wheels]: dist/voxel_worlds-<version>.zip (Linux x64 wheels bundled)."""
+    """extension [--no-wheels]: one zip per platform in dist/
+    (voxel_worlds-<version>-<platform>.zip, that platform's wheels bundled), built and
+    validated by the newest real Blender's own extension tool; --no-wheels: one zip
+    without wheels."""
     setup()
-    extra = []
+    extra = ["--blender", _app().get().launcher]
     if "--no-wheels" not in args:
         for platform in WHEEL_PLATFORMS:
             extra += ["--wheels", WHEEL_DIR / platform, "--platform", platform]
     rest = [a for a in args if a != "--no-wheels"]
-    return subprocess.run([PY, ROOT / "tools" / "extension.py", *extra, *rest], cwd=ROOT,
-                          env=env()).returncode
+    r = subprocess.run([PY, ROOT / "tools" / "extension.py", *extra, *rest], cwd=ROOT,
+                       env=env(), capture_output=True, text=True)
+    sys.stderr.write(r.stderr)
+    for line in r.stdout.split():
+        z = Path(line)
+        log(f"{z.relative_to(ROOT) if z.is_relative_to(ROOT) else z}: "
+            f"{z.stat().st_size / 2**20:.1f} MiB")
+    return r.returncode
 
 
 def task_dev(args) -> int:

@@ -74,8 +74,8 @@ WHEELS = ROOT / ".cache" / "wheels" / "linux-x64"  # build.py setup downloads th
 
 @pytest.fixture(scope="session")
 def ext_zip_wheels(tmp_path_factory):
-    """The extension zip as `build.py extension` makes it: Linux x64 wheels for
-    Python 3.11 and 3.13 bundled."""
+    """The Linux zip as `build.py extension` makes it: Linux x64 wheels for Python
+    3.11, 3.13 and 3.14 (and any real Blender's Python) bundled."""
     if not list(WHEELS.glob("*cp313*.whl")):
         pytest.skip(f"no wheels in {WHEELS} (run `python build.py setup`)")
     return _tool().build(tmp_path_factory.mktemp("dist"), WHEELS, platforms=["linux-x64"])

@@ -8,11 +8,11 @@ import zipfile
 from pathlib import Path
 
 
-def test_zip_carries_wheels_for_python_311_and_313(ext_zip_wheels):
+def test_zip_carries_wheels_for_python_311_313_and_314(ext_zip_wheels):
     names = [Path(n).name for n in zipfile.ZipFile(ext_zip_wheels).namelist()
              if n.endswith(".whl")]
     for mod in ("pyopencl", "moderngl", "glcontext", "zstandard", "siphash24"):
-        for tag in ("cp311", "cp313"):
+        for tag in ("cp311", "cp313", "cp314"):
             assert any(n.startswith(mod + "-") and f"-{tag}-" in n for n in names), (mod, tag)
     assert any(n.startswith("pocl_binary_distribution-") for n in names)
 
@@ -29,6 +29,7 @@ def test_installed_extension_generates_renders_bakes_and_exports(app, gui, ext_z
     for name, path in r["modules"].items():
         assert path.startswith(r["user"]) and "/extensions/" in path, (name, path)
     assert "Portable Computing Language" in r["opencl"] and r["backend"] == "opencl", r
+    assert r["edit"] == ["FINISHED"] and r["edited"] == "glass", r
     v = r["view"]
     assert r["render"] == ["FINISHED"] and v["size"] == [160, 90] and v["std"] > 0.02, r
     assert v["top"][2] > v["top"][0] + 0.1, f"sky is blue at noon: {v}"

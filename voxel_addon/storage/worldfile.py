@@ -58,7 +58,9 @@ class WorldFile:
             raise VoxelError(f"{self.path} already exists")
         try:
             if readonly:
-                uri = f"file:{self.path.resolve()}?mode=ro"
+                # as_uri escapes what a URI would misread (#, ?, %, spaces) and spells
+                # Windows paths file:///C:/...
+                uri = self.path.resolve().as_uri() + "?mode=ro"
                 self.db = sqlite3.connect(uri, uri=True, check_same_thread=False)
             else:
                 self.db = sqlite3.connect(self.path, check_same_thread=False, timeout=30)

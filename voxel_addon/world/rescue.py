@@ -39,7 +39,7 @@ def write(world) -> Path:
                            "edits": _read(path) + edits})
         tmp = path.with_name(path.name + ".tmp")
         try:
-            with open(tmp, "w") as f:
+            with open(tmp, "w", encoding="utf-8") as f:
                 f.write(text)
                 f.flush()
                 os.fsync(f.fileno())
@@ -56,7 +56,7 @@ def write(world) -> Path:
 
 def _read(path: Path) -> list:
     try:
-        data = json.loads(path.read_text())
+        data = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return []
     return data.get("edits", []) if data.get("format") == FORMAT else []

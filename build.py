@@ -1,17 +1,20 @@
 """Task runner for Voxel Worlds (plain Python 3.11, no bpy import).
 
     python build.py setup       install what is missing (apt when root, .venv, npm tools,
-                                the real Blender application in .blender/)
+                                the real Blender applications in .blender/: Debian
+                                sid's, the newest, and trixie's 4.3)
     python build.py blender [NAME] [-- ARGS]
                                 run a real Blender with ARGS: the newest (Debian sid's,
                                 5.2 today), or NAME: a version or suite (4.3 or trixie,
                                 5.2 or sid)
-    python build.py test [ARGS] setup, then the three test layers: pytest under bpy, the
-                                Blender-facing tests inside the real Blender, the GUI
-                                tests (with ARGS: only pytest under bpy, with ARGS)
+    python build.py test [ARGS] setup, then every test layer: pytest under bpy, the
+                                Blender-facing tests inside each real Blender (and
+                                once without OpenCL), the GUI tests in each Blender
+                                and backend (with ARGS: only pytest under bpy, with
+                                ARGS)
     python build.py demo        setup, then generate a world, render a picture, bake a .glb
     python build.py bench [DIR] setup, then `python -m voxel_addon bench --out DIR`
-    python build.py extension   setup, then build the Blender extension zip into dist/
+    python build.py extension   setup, then one extension zip per platform into dist/
     python build.py dev         editor stubs (fake-bpy-module) in their own .venv-dev,
                                 so they can never shadow the real bpy the tests use
 

@@ -255,7 +255,7 @@ def task_bench(args) -> int:
 # zstandard, so it comes along): pyopencl (on Linux with its pocl CPU device; Windows
 # and macOS have no pocl wheel: there pyopencl's loader finds the vendor's driver, else
 # the NumPy path runs), moderngl and zstandard, with their dependencies. Per Blender
-# platform, for the Pythons of the Blenders that run there: 3.11 (official 4.2-5.0),
+# platform, for the Pythons of the Blenders that run there: 3.11 (official 4.3-5.0),
 # 3.13 (official 5.1+, Debian trixie's 4.3), 3.14 on Linux (Debian sid's 5.2) and
 # whatever Python an installed real Blender has. No macos-x64: Intel Macs run Blender
 # up to 4.5 LTS, but moderngl 5.13 has no x86_64 macOS wheel.

@@ -22,8 +22,9 @@ def _wait_full(gui, viewport, timeout=300.0):
     while time.time() - t0 < timeout:
         gui.area("VIEW_3D").tag_redraw()
         s = viewport.STATUS
-        if s["error"]:
-            raise RuntimeError(f"the live view failed: {s['error']}")
+        why = s["error"] or viewport.problem(bpy.context)  # what the View panel would say
+        if why:
+            raise RuntimeError(f"the live view cannot draw: {why}")
         if s["frames"] >= start + 2 and s["drawn"] >= s["wanted"] > 0 and s["quality"] == "full":
             return
         yield 0.2

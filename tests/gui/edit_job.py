@@ -523,6 +523,9 @@ def wait_frames(n=2, timeout=120.0):
             return
         if s["error"]:
             raise RuntimeError(s["error"])
+        why = viewport.problem(bpy.context)  # what the panel says, e.g. the wrong backend:
+        if why and time.time() - t0 > 10:  # not a passing state, no use waiting longer
+            raise RuntimeError(f"the live view cannot draw: {why}")
         yield 2
     raise RuntimeError(f"timed out waiting for frames: {viewport.STATUS}")
 

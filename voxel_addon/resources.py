@@ -30,7 +30,7 @@ def load_source(folder: Path, name: str) -> str:
         path = folder / rel
         if not path.is_file():
             raise FileNotFoundError(f"{path} (included data file is missing)")
-        return _INCLUDE.sub(lambda m: expand(m.group(1)), path.read_text())
+        return _INCLUDE.sub(lambda m: expand(m.group(1)), path.read_text(encoding="utf-8"))
 
     return expand(name)
 

@@ -84,6 +84,9 @@ def wait_frames(n=2, full=True, timeout=120.0):
         if (s["frames"] >= start + n and s["drawn"] >= s["wanted"] > 0
                 and (not full or s["quality"] == "full")):
             return
+        why = viewport.problem(bpy.context)  # what the panel says, e.g. the wrong backend:
+        if why and time.time() - t0 > 10:  # not a passing state, no use waiting longer
+            raise RuntimeError(f"the live view cannot draw: {why}")
         yield 0.1
     raise RuntimeError(f"timed out waiting for frames: {viewport.STATUS}")
 

@@ -39,6 +39,7 @@ from dataclasses import astuple
 import numpy as np
 
 from ..core.errors import VoxelError
+from . import firstview
 from .viewgpu import Gpu
 
 # What the panel shows (the last frame of any region).
@@ -184,6 +185,7 @@ def _feed_for(scene):
             _feed.close()
         _feed = _Feed(scene.voxel.path, world, vv.distance)
         STATUS.update(drawn=0, wanted=0)
+        firstview.shown(scene.voxel.path)  # the first minute: views underground come up
     return _feed
 
 

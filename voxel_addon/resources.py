@@ -46,7 +46,7 @@ def expand(folder: Path, name: str, text: str | None = None,
             path = folder / rel
             if not path.is_file():
                 raise FileNotFoundError(f"{path} (included data file is missing)")
-            body = path.read_text()
+            body = path.read_text(encoding="utf-8")
         if not lines:
             return _INCLUDE.sub(lambda m: read(m.group(1)), body)
         out = [f"#line {k * LINES + 1}"]

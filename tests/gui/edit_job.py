@@ -117,6 +117,20 @@ def surface_cell(px, py, z_top):
     return (math.floor(p.x), math.floor(p.y), z_top + 1), min(fx, 1 - fx, fy, 1 - fy)
 
 
+def row_off_edges(px, py, z_top, margin=0.25):
+    """A region row near PY whose ray at column PX meets z_top + 1 away from the cells'
+    y edges (a row through an edge leaves which cell a pixel means to half a pixel's
+    rounding: the add-on's picking and this oracle differ there)."""
+    for dy in range(0, 80):
+        for y in (py + dy, py - dy):
+            o, d = pixel_ray(px, y)
+            if d.z < 0:
+                fy = (o + d * ((z_top + 1 - o.z) / d.z)).y % 1.0
+                if min(fy, 1 - fy) > margin:
+                    return y
+    raise RuntimeError("no row away from cell edges")
+
+
 def good_pixel(rng, z_top, margin=0.25):
     _, _, region, _ = view3d()
     for _ in range(500):
@@ -295,8 +309,8 @@ def case_drag(w):
     set_view(True, dist=30.0)
     yield 3
     _, _, region, _ = view3d()
-    y = region.height // 2
     xs = list(range(region.width // 2 - 120, region.width // 2 + 120, 6))
+    y = row_off_edges(xs[0], region.height // 2, TOP)
     cells = sorted({c for x in xs for c in [surface_cell(x, y, TOP)[0]]})
     before, step = file_snapshot(), sc.voxel_edit.step
     move((xs[0], y))
@@ -509,13 +523,18 @@ def wait_frames(n=2, timeout=120.0):
         view3d()[1].tag_redraw()
         s = LIVE.stats
         if s["frames"] >= start + n and s["drawn"] >= s["wanted"] > 0 and s["quality"] == "full":
-            # one redraw more before a screenshot: on Vulkan (lavapipe's X11 swapchain)
-            # the screen may still show an image presented a few frames earlier
-            view3d()[1].tag_redraw()
-            yield 0.5
+            # one frame more before a screenshot: on Vulkan (lavapipe's X11 swapchain)
+            # the screen may still show an image presented a frame earlier
+            n1 = s["frames"]
+            while LIVE.stats["frames"] <= n1 and time.time() - t0 < timeout:
+                view3d()[1].tag_redraw()
+                yield 0.05
             return
         if LIVE.error:
             raise RuntimeError(LIVE.error)
+        why = LIVE.problem(bpy.context)  # what the panel says, e.g. no world open:
+        if why and time.time() - t0 > 10:  # not a passing state, no use waiting longer
+            raise RuntimeError(f"the live view cannot draw: {why}")
         yield 2
     raise RuntimeError(f"timed out waiting for frames: {LIVE.stats}")
 

@@ -135,6 +135,7 @@ def _cli(world, size, hours=12.0):
     """The CLI's renderer from the job's camera, on a standalone EGL context."""
     from voxel_addon.world import World
     from voxel_addon.render import Camera, Settings, source
+    from voxel_addon.render.device import mgl
     from voxel_addon.render.pipeline import Renderer
     s = Settings(distance=4, light_radius=4, fov=CAM[5], dof=False)  # as the viewport
     w = World.open(world, readonly=True, loader=False)
@@ -142,7 +143,7 @@ def _cli(world, size, hours=12.0):
         a = source.world_area(w, CAM[0], CAM[1], s.distance, s.light_radius)
     finally:
         w.close()
-    ctx = source.context()
+    ctx = mgl.context()
     try:
         r = Renderer(ctx, s)
         r.set_area(a.blocks, a.light, a.cx0, a.cy0, ring=True, light_at=a.light_at)

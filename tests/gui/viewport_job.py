@@ -83,13 +83,24 @@ def wait_frames(n=2, full=True, timeout=120.0):
         s = LIVE.stats
         if (s["frames"] >= start + n and s["drawn"] >= s["wanted"] > 0
                 and (not full or s["quality"] == "full")):
-            # one redraw more before a screenshot: on Vulkan (lavapipe's X11 swapchain)
-            # the screen may still show an image presented a few frames earlier
-            area.tag_redraw()
-            yield 0.3
+            # one frame more before a screenshot: on Vulkan (lavapipe's X11 swapchain)
+            # the screen may still show an image presented a frame earlier
+            yield from one_more_frame(area)
             return
+        why = viewport.problem(bpy.context)  # what the panel says, e.g. the wrong backend:
+        if why and time.time() - t0 > 10:  # not a passing state, no use waiting longer
+            raise RuntimeError(f"the live view cannot draw: {why}")
         yield 0.1
     raise RuntimeError(f"timed out waiting for frames: {LIVE.stats}")
+
+
+def one_more_frame(area, timeout=30.0):
+    """Generator: redraw until the voxel view has drawn one more frame."""
+    from voxel_addon.blender.liveview import LIVE
+    n, t0 = LIVE.stats["frames"], time.time()
+    while LIVE.stats["frames"] <= n and time.time() - t0 < timeout:
+        area.tag_redraw()
+        yield 0.05
 
 
 def settle(n=3):

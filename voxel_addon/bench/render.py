@@ -129,8 +129,9 @@ def run(ctx):
     from ..meshing import scenes
     from ..light import daytime
     from ..render import Camera, Settings, source
+    from ..render.device import mgl
     from ..render.pipeline import Renderer
-    gl = source.context()
+    gl = mgl.context()
     size = (320, 180) if ctx.quick else (640, 360)
     variants = [v for v in VARIANTS if v[0] in QUICK] if ctx.quick else VARIANTS
     n = 1 if ctx.quick else 3

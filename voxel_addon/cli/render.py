@@ -38,6 +38,7 @@ def run(args):
     from ..render import Camera, Settings
     from ..light import daytime
     from ..render import source
+    from ..render.device import mgl
     from ..render.pipeline import Renderer
     from ..textures import png_bytes
     import numpy as np
@@ -73,7 +74,7 @@ def run(args):
                                      s.light_radius)
         finally:
             world.close()
-    ctx = source.context()
+    ctx = mgl.context()
     r = Renderer(ctx, s)
     r.set_area(data.blocks, data.light, data.cx0, data.cy0, ring=True, method=args.aggregation,
                light_at=data.light_at, data=data.data)

@@ -10,15 +10,6 @@ import numpy as np
 from ..core.errors import VoxelError
 
 
-def context():
-    """A standalone moderngl context (EGL, headless) for the CLI, tests and bench."""
-    import moderngl
-    try:
-        return moderngl.create_standalone_context(backend="egl")
-    except Exception as e:  # no EGL/GL here: a clear one-liner beats a C traceback
-        raise VoxelError(f"cannot open an OpenGL context (EGL): {e}") from None
-
-
 class Area(NamedTuple):
     """What Renderer.set_area(blocks, light, cx0, cy0, ring=True, light_at=...) takes."""
     blocks: np.ndarray      # (16w + 2, 16h + 2, 256): the chunks plus a one-voxel ring

@@ -28,6 +28,7 @@ import numpy as np
 
 from ...render import glsl
 from ...render.device import FORMATS, Device, State, Target, Texture
+from .. import compat
 
 _FORMAT = {"rgba8": "RGBA8", "srgba8": "SRGB8_A8", "rgba16f": "RGBA16F", "rgba32f": "RGBA32F", "r8": "R8",
            "r16": "R16", "r16f": "R16F", "r32f": "R32F", "depth": "DEPTH_COMPONENT32F"}
@@ -83,7 +84,7 @@ class GpuDevice(Device):
         key = (id(tex.obj), layer)
         fb = self._layer_fb.get(key)
         if fb is None:
-            fb = self._layer_fb[key] = (_layer_target(tex.obj, layer), tex.obj)
+            fb = self._layer_fb[key] = (compat.layer_target(tex.obj, layer), tex.obj)
         prog = self.program("fullscreen.vert", "copy.frag")
         with fb[0].bind():
             self.state(State())
@@ -138,8 +139,8 @@ class GpuDevice(Device):
                 info.push_constant(_TYPE[t], n, size)
             else:
                 info.push_constant(_TYPE[t], n)
-        if f.depth_write and hasattr(info, "depth_write"):  # (Blender 4.3 has none: GL
-            info.depth_write("ANY")                           # writes gl_FragDepth anyway)
+        if f.depth_write:
+            compat.depth_write(info)
         info.vertex_source(head + p.vert[0])
         info.fragment_source(head + p.frag[0])
         try:
@@ -266,17 +267,6 @@ class GpuDevice(Device):
     def finish(self):
         import gpu
         gpu.state.active_framebuffer_get().read_color(0, 0, 1, 1, 4, 0, "UBYTE")
-
-
-def _layer_target(tex, layer: int):
-    """A framebuffer of one layer of an array texture."""
-    import gpu
-    try:
-        return gpu.types.GPUFrameBuffer(color_slots=({"texture": tex, "layer": layer},))
-    except TypeError:
-        # Blender 4.3 reads an attachment dict's keys inverted (a key's value goes to
-        # the first field whose name does not match): this is what it reads right
-        return gpu.types.GPUFrameBuffer(color_slots=({"layer": tex, "texture": layer},))
 
 
 def _floats(data) -> np.ndarray:

@@ -36,6 +36,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ...core.errors import VoxelError
+from .. import firstview
 from . import composite, host
 from .feed import Feed
 from .options import hours_of, settings_of, view_camera
@@ -283,6 +284,7 @@ class LiveView:
                 f.close()
             self.feed = Feed(scene.voxel.path, world, vv.distance)
             self.stats.update(drawn=0, wanted=0)
+            firstview.shown(scene.voxel.path)  # the first minute: views underground come up
         return self.feed
 
     def _prune(self, context, wins) -> None:

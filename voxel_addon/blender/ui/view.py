@@ -127,6 +127,7 @@ class VOXEL_PT_view(bpy.types.Panel):
         v = context.scene.voxel_view
         col = self.layout.column()
         col.prop(v, "show", icon="HIDE_OFF" if v.show else "HIDE_ON")
+        col.operator("voxel.frame_world", icon="WORLD")
         if v.show:
             problem = LIVE.problem(context)
             if problem:

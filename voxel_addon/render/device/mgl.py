@@ -1,6 +1,7 @@
 """The device on moderngl (render/device/__init__.py): the CLI, tests and bench draw on
-a standalone EGL context (render.source.context()). Every texture is nearest and
-clamped like the gpu module's, so both devices sample alike."""
+a standalone context (`context()`: EGL on Linux, headless; the platform's own
+elsewhere). Every texture is nearest and clamped like the gpu module's, so both devices
+sample alike."""
 from __future__ import annotations
 
 from contextlib import contextmanager
@@ -16,6 +17,20 @@ _DTYPE = {"rgba8": "f1", "rgba16f": "f2", "rgba32f": "f4", "r8": "f1", "r16": "n
 _DEPTH = {None: None, "less": "<", "lequal": "<="}
 _READ = {"rgba8": np.uint8, "r8": np.uint8, "rgba16f": np.float16, "r16f": np.float16,
          "rgba32f": np.float32, "r32f": np.float32, "depth": np.float32, "r16": np.uint16}
+
+
+def context():
+    """A standalone moderngl context for the CLI, tests and bench: EGL on Linux (no
+    display needed), the platform's default elsewhere (WGL, CGL: EGL is not there)."""
+    import sys
+    import moderngl
+    from ...core.errors import VoxelError
+    kw = {"backend": "egl"} if sys.platform.startswith("linux") else {}
+    try:
+        return moderngl.create_standalone_context(**kw)
+    except Exception as e:  # no GL here: a clear one-liner beats a C traceback
+        raise VoxelError(f"cannot open an OpenGL context ({kw.get('backend', 'default')}): "
+                         f"{e}") from None
 
 
 class MglDevice(Device):

@@ -26,7 +26,7 @@ Frag fetch(ivec2 c, int s) {
 }
 
 vec4 shade(Frag f, vec2 uv, out float dist) {
-    vec3 p = world_pos(inv_vp, uv, f.depth);
+    vec3 p = scene_pos(uv, f.depth);
     dist = eye_dist(p);
     return shade_surface(f.albedo, p, normalize(f.n), f.glow);
 }

@@ -8,6 +8,7 @@
 // goes, and the depth as a value; viewport_kept.frag draws them, again while still).
 #include "include/common.glsl"
 #include "include/frame.glsl"
+#include "include/eye.glsl"
 
 //@ sampler sampler2D color        // final pass, display values
 //@ sampler gdepth2D g_depth
@@ -47,7 +48,7 @@ void main() {
         z = 1.0;
     } else {
         // Blender keeps GL's conventions on every backend: NDC depth -1..1 -> 0..1
-        vec4 c = host_vp * vec4(world_pos(inv_vp, v_uv, d), 1.0);
+        vec4 c = host_vp * vec4(scene_pos(v_uv, d), 1.0);
         z = clamp(c.z / c.w, -1.0, 1.0) * 0.5 + 0.5;
     }
     // (draft frames are smaller); into Blender's sRGB framebuffer or the kept frame's

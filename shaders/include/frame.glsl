@@ -37,3 +37,5 @@
 //@ frame int vol_n             // the light volume (include/lightvol.glsl): slots per side
 //@ frame ivec2 vol_lo          // its resident box, in blocks
 //@ frame ivec2 vol_hi
+//@ frame mat4 far_inv_vp        // far terrain's projection, inverted (render/far.py)
+//@ frame float far_split        // 0: one depth range; 0.5: far terrain's depths from here on

@@ -18,6 +18,9 @@ def add_parser(sub):
     p.add_argument("--size", nargs=2, type=int, default=(640, 360), metavar=("W", "H"))
     p.add_argument("--out", required=True, type=Path, metavar="F.png")
     p.add_argument("--distance", type=int, default=None, help="view distance in chunks")
+    p.add_argument("--far", type=int, default=None, metavar="N",
+                   help="far terrain out to N chunks beyond the view distance (0..256, 0: off; "
+                        "a world only)")
     p.add_argument("--effects", default=None,
                    help="comma list: all, none, [+-]shadows, ssao, fog, dof, godrays, waving, "
                         "smooth_mag, fill_holes, msaa_alpha, per_sample, peel0..3 (depth peeling, "
@@ -49,7 +52,11 @@ def run(args):
     s = Settings(debug=args.debug_view).with_effects(args.effects).with_values(args.set)
     if args.distance is not None:
         s.distance = args.distance
+    if args.far is not None:
+        s.far = args.far
     s.check()
+    if s.far and args.world is None:
+        raise VoxelError("--far needs --world (a scene has no terrain beyond it)")
     cam_args, hhmm = args.camera, args.time
     if args.scene:
         from ..meshing import scenes
@@ -64,6 +71,7 @@ def run(args):
     hours = daytime.parse_time(hhmm or "12:00")
     if not 0 <= cam_args[2] <= 400:
         raise VoxelError("camera z must be between 0 and 400")
+    far_meshes = []
     if args.scene:
         data = source.scene_area(args.scene)
     else:
@@ -72,6 +80,10 @@ def run(args):
         try:
             data = source.world_area(world, cam_args[0], cam_args[1], s.distance,
                                      s.light_radius)
+            if s.far:
+                from ..far import ring
+                far_meshes = ring(world.file, world.generator, cam_args[0], cam_args[1],
+                                  s.far, s.distance)
         finally:
             world.close()
     ctx = mgl.context()
@@ -80,6 +92,7 @@ def run(args):
                light_at=data.light_at, data=data.data)
     if data.palette is not None:
         r.set_palette(data.palette)
+    r.update_far(far_meshes)
     img = r.render(Camera(*cam_args), hours, (w, h))
     rgba = np.dstack([img, np.full(img.shape[:2], 255, np.uint8)])
     args.out.parent.mkdir(parents=True, exist_ok=True)

@@ -39,9 +39,12 @@ def _overlap(a, b) -> bool:
 
 
 class Builder:
-    def __init__(self, file, generator):
+    def __init__(self, file, generator, lock=None):
+        """lock: held around the generator's use (a World's, whose loader thread
+        generates with the same generator: OpenCL queues are not re-entrant)."""
         self.file = file
         self.generator = generator
+        self._gen_lock = lock
         self.store = FarStore(file, signature(generator))
         self.error: BaseException | None = None
         self.stats = {"built": 0, "loaded": 0, "from_chunks": 0, "build_s": 0.0}
@@ -183,7 +186,11 @@ class Builder:
         t0 = time.perf_counter()
         a = None if key in self._stale else self.store.tile(key, grid.N)
         if a is None:
-            a, n = tiles.build(key, self.store, self.generator, self._read_chunk)
+            if self._gen_lock is None:
+                a, n = tiles.build(key, self.store, self.generator, self._read_chunk)
+            else:
+                with self._gen_lock:
+                    a, n = tiles.build(key, self.store, self.generator, self._read_chunk)
             self.store.put_tiles([(key, a)])
             self.stats["built"] += 1
             self.stats["from_chunks"] += n
@@ -200,3 +207,15 @@ class Builder:
             if key in self._wset:
                 self._emitted[key] = ver
                 self._ready.append(m)
+
+
+def ring(file, generator, x: float, y: float, far: int, near: int = 0,
+         timeout: float = 600.0) -> list:
+    """The far meshes of a view, all of them, built now (renders: the CLI's
+    `render --far`, Render Voxel View): [FarMesh]."""
+    with Builder(file, generator) as b:
+        b.set_view(x, y, far, near)
+        if not b.wait_ready(timeout):
+            raise VoxelError(f"far terrain not built within {timeout:.0f} s")
+        meshes, _ = b.drain(1e9)
+    return meshes

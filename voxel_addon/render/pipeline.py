@@ -13,8 +13,10 @@ import numpy as np
 
 from ..core import chunk
 from . import camera as cam
+from . import far as far_mod
 from . import graph, shadow, sky
 from .blocktex import BlockTextures
+from .far import FarRing, near_edge
 from .device import Device
 from .frame import FrameBlock
 from .geometry import PASSES, Geometry, Stats
@@ -43,6 +45,8 @@ class Renderer:
         self.lights: dict = {}       # (cx, cy) -> its light (None: open daylight; or packed)
         self._vol_key = None         # the light window last made resident
         self._graphs: dict = {}      # Switches -> Graph, for these targets and volume
+        self.far = FarRing(dev)      # far terrain tiles (render/far.py), drawn when s.far > 0
+        self._near_dirty = True
 
     @property
     def software(self) -> bool:
@@ -129,10 +133,19 @@ class Renderer:
             self.vol.forget(k)
         self._vol_key = None
 
+    def update_far(self, meshes) -> None:
+        """Show or replace far tiles (voxel_addon/far/mesh.py FarMeshes, by duck
+        typing); drawn out to Settings.far chunks where no chunk is."""
+        self.far.update(meshes)
+
+    def remove_far(self, keys) -> None:
+        self.far.remove(keys)
+
     def _shown(self) -> None:
         """The shown chunks changed: their box (self.area), the light window again."""
         self.area = self.geo.bounds()
         self._vol_key = None
+        self._near_dirty = True
 
     def _sync_light(self, camera) -> None:
         """The light window (Settings.light_radius chunks around the camera's chunk,
@@ -231,6 +244,18 @@ class Renderer:
 
         F = self.frame
         fog_end = (s.distance + 0.5) * 16.0  # thick by the nearest edge of the shown area
+        far = None
+        if s.far > 0 and self.far.tiles and not draw_cam.ortho and s.debug != "culling":
+            if self._near_dirty:
+                self.far.set_near(self.geo.keys)
+                self._near_dirty = False
+            fog_end = s.far * 16.0  # the far ring's edge (it ends in the sky there)
+            vp, inv_vp, fvp, far_inv, far_clip = self.far.view(
+                camera, vp, near_edge(camera, self.area), fog_end)
+            far = (self.far.visible(fvp, (camera.x, camera.y), fog_end), fvp)
+            F.set(far_inv_vp=far_inv, far_split=far_mod.SPLIT)
+        else:
+            F.set(far_inv_vp=np.eye(4), far_split=0.0)
         cast = None
         if shadows:
             light_vp, texel, bias = shadow.fit(camera, sp["light_dir"], self.area,
@@ -242,7 +267,7 @@ class Renderer:
             F.set(**{f"sky_{k}": sp[k] if shaded else (0.0, 0.0, 0.0)})
         F.set(vp=vp, inv_vp=inv_vp, cam_pos=(draw_cam.x, draw_cam.y, draw_cam.z),
               cam_fwd=draw_cam.fwd(), ortho=draw_cam.ortho,
-              far_dist=camera.far, shadow_eye=(camera.x, camera.y, camera.z),
+              far_dist=camera.far if far is None else far_clip, shadow_eye=(camera.x, camera.y, camera.z),
               # orthographic: no eye to fade from; the map covers the view box
               shadow_fade=1e9 if camera.ortho else s.shadow_fade,
               day_ambient=sp["ambient"], day_u=sp["u"],
@@ -253,7 +278,9 @@ class Renderer:
               dof_start=fog_end * 0.7, dof_end=fog_end * 1.1, ssao_radius=s.ssao_radius,
               **self.vol.frame_values())
         self.dev.frame(F.pack())
-        return Frame(T, G, view, cast, layers, use_oit)
+        fr = Frame(T, G, view, cast, layers, use_oit)
+        fr.far = far
+        return fr
 
     def submit(self, f: "Frame") -> None:
         """Run the passes of a prepared frame."""
@@ -261,6 +288,8 @@ class Renderer:
         if f.cast is not None:  # shadows on: cleared even with no caster in view
             G.shadow.draw(f.cast, stats, shadow=True)  # blend casts none (§5.4.1)
         G.g.draw(f.view, stats)
+        if f.far is not None:  # after the chunks: far pixels behind them fail the depth test
+            self.far.draw(f.targets.g.target, f.far[0], f.far[1], stats)
         G.transparency.geometry(f.view, stats)
         G.shade.run()
         G.transparency.shade(f.view, stats)
@@ -272,6 +301,7 @@ class Renderer:
         self.geo.release()
         self.vol.release()
         self.blocks.release()
+        self.far.release()
         if self._own:
             self.dev.close()
 
@@ -282,12 +312,13 @@ class Frame:
     RGBA8 texture), `depth` (the opaque G-buffer depth, `targets.samples` samples)
     and `blend_depth` (the nearest transparent surface's depth when peeling drew one,
     else None; OIT writes no depth)."""
-    __slots__ = ("targets", "G", "view", "cast", "stats", "layers", "use_oit")
+    __slots__ = ("targets", "G", "view", "cast", "stats", "layers", "use_oit", "far")
 
     def __init__(self, T, G, view, cast, layers, use_oit):
         self.targets, self.G, self.view, self.cast = T, G, view, cast
         self.layers, self.use_oit = layers, use_oit
         self.stats = Stats()
+        self.far = None  # (far tiles in view, the far projection) or None
 
     @property
     def color(self):

@@ -16,6 +16,7 @@ TRANSPARENCY = ("peel", "oit")
 @dataclass
 class Settings:
     distance: int = 8             # view distance in chunks
+    far: int = 0                  # far terrain out to this many chunks (0: off; render/far.py)
     light_radius: int = 8         # chunks around the centre with exact light (bounded volume)
     msaa: int = 2                 # 1, 2, 4, 8 (clamped to the context's maximum)
     per_sample: bool = True       # MSAA shading per sample (else per pixel)
@@ -108,6 +109,8 @@ class Settings:
             raise VoxelError("msaa must be 1, 2, 4 or 8")
         if not 1 <= self.distance <= 32:
             raise VoxelError("view distance must be 1..32 chunks")
+        if not 0 <= self.far <= 256:
+            raise VoxelError("far distance must be 0..256 chunks (0: off)")
         for name, lo, hi in (("light_radius", 1, 32), ("shadow_size", 256, 8192),
                              ("shadow_fade", 1.0, 1000.0), ("godray_strength", 0.0, 10.0),
                              ("anisotropy", 1.0, 16.0), ("fov", 10.0, 150.0),

@@ -164,6 +164,18 @@ class GpuDevice(Device):
         vbo.attr_fill("in_v", words)
         return _Mesh(gpu.types.GPUBatch(type="TRIS", buf=vbo, elem=self._ibo), quads)
 
+    def trimesh(self, words, indices):
+        import gpu
+        words = np.ascontiguousarray(words, np.uint32)
+        fmt = gpu.types.GPUVertFormat()
+        fmt.attr_add(id="in_f", comp_type="U32", len=words.shape[1], fetch_mode="INT")
+        vbo = gpu.types.GPUVertBuf(fmt, len(words))
+        vbo.attr_fill("in_f", words)
+        idx = np.ascontiguousarray(indices, np.int32).reshape(-1, 3)
+        ibo = gpu.types.GPUIndexBuf(type="TRIS", seq=idx)
+        return _TriMesh(gpu.types.GPUBatch(type="TRIS", buf=vbo, elem=ibo),
+                        words.nbytes + idx.nbytes)
+
     def frame(self, data):
         import gpu
         self._frames += 1
@@ -253,6 +265,9 @@ class GpuDevice(Device):
             return
         mesh.batch.draw_range(sh, elem_start=6 * first, elem_count=6 * quads)
 
+    def draw_tris(self, mesh):
+        mesh.batch.draw(self._prog.shader)
+
     def read(self, tex):
         w, h = tex.size
         c, b = FORMATS[tex.fmt]
@@ -324,3 +339,10 @@ class _Mesh:
     @property
     def nbytes(self) -> int:
         return 32 * self.quads
+
+
+class _TriMesh:
+    __slots__ = ("batch", "nbytes")
+
+    def __init__(self, batch, nbytes):
+        self.batch, self.nbytes = batch, nbytes

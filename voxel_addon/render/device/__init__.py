@@ -90,6 +90,11 @@ class Device:
         word (shaders/block.vert), drawn with the shared quad index pattern."""
         raise NotImplementedError
 
+    def trimesh(self, words: np.ndarray, indices: np.ndarray):
+        """A vertex buffer of triangles (far terrain): words (n, k) uint32, the vertex
+        input `in_f` (uvec<k>), and its own indices (m,) uint32, three a triangle."""
+        raise NotImplementedError
+
     def frame(self, data: bytes) -> None:
         """This frame's uniform block (render/frame.py packs it); every program that
         reads the block sees it from now on."""
@@ -125,6 +130,10 @@ class Device:
     def draw(self, mesh=None, first: int = 0, quads: int = 0) -> None:
         """Quads [first, first + quads) of a mesh, or with no mesh one triangle that
         covers the target (fullscreen.vert)."""
+        raise NotImplementedError
+
+    def draw_tris(self, mesh) -> None:
+        """All triangles of a trimesh."""
         raise NotImplementedError
 
     def read(self, tex: Texture) -> np.ndarray:

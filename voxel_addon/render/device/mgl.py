@@ -115,6 +115,12 @@ class MglDevice(Device):
             self._ibos.append(self._ibo)  # (older meshes keep drawing with the smaller ones)
         return _Mesh(self.ctx.buffer(words.tobytes()), self._ibo, quads)
 
+    def trimesh(self, words, indices):
+        words = np.ascontiguousarray(words, np.uint32)
+        idx = np.ascontiguousarray(indices, np.uint32)
+        return _TriMesh(self.ctx.buffer(words.tobytes()), self.ctx.buffer(idx.tobytes()),
+                        words.shape[1], len(idx) // 3)
+
     def frame(self, data):
         self._block.orphan()  # fresh storage: no wait for the previous frame's draws
         self._block.write(data)
@@ -203,6 +209,15 @@ class MglDevice(Device):
                 prog, [(mesh.vbo, "2u4", "in_v")], index_buffer=mesh.ibo, index_element_size=4)
         vao.render(mode=self.ctx.TRIANGLES, vertices=6 * quads, first=6 * first)
 
+    def draw_tris(self, mesh):
+        prog = self._prog.obj
+        vao = mesh.vaos.get(prog.glo)
+        if vao is None:
+            vao = mesh.vaos[prog.glo] = self.ctx.vertex_array(
+                prog, [(mesh.vbo, f"{mesh.k}u4", "in_f")], index_buffer=mesh.ibo,
+                index_element_size=4)
+        vao.render(mode=self.ctx.TRIANGLES, vertices=3 * mesh.tris)
+
     def read(self, tex):
         w, h = tex.size
         c = FORMATS[tex.fmt][0]
@@ -236,3 +251,20 @@ class _Mesh:
             vao.release()
         self.vaos.clear()
         self.vbo.release()
+
+
+class _TriMesh(_Mesh):
+    """Triangles with their own indices (far terrain: render/far.py)."""
+    __slots__ = ("k", "tris")
+
+    def __init__(self, vbo, ibo, k, tris):
+        super().__init__(vbo, ibo, 0)
+        self.k, self.tris = k, tris
+
+    @property
+    def nbytes(self) -> int:
+        return self.vbo.size + self.ibo.size
+
+    def release(self):
+        super().release()
+        self.ibo.release()

@@ -1,0 +1,31 @@
+// Far terrain (issue 22): a far tile's heightfield into the G-buffer, like the near
+// chunks (render/far.py draws it after them). The vertex is voxel_addon/far/mesh.py's
+// 12 bytes: in_f.x kx (bits 0-5), ky (6-11), z in 1/8 blocks (12-24), kind (25-26:
+// ground, water, skirt); in_f.y normal x, y (int8 each) and albedo RGB565 (16-31);
+// in_f.z zc, the z of the next coarser level's surface (geomorphing: no popping).
+// The depth range is split (far.py): gl_Position by the far projection (far_vp).
+#include "include/frame.glsl"
+
+//@ in uvec3 in_f
+//@ push vec4 tile         // xy: the tile's vertex (0, 0) minus 0.5, z: spacing (blocks)
+//@ push vec4 morph        // k = smoothstep of clamp(d * x - y): far/grid.py morph(); x 0: none
+//@ push mat4 far_vp       // the far projection, its depth in [0.5, 1]
+//@ vary smooth vec3 f_world
+//@ vary smooth vec3 f_normal
+//@ vary smooth vec3 f_albedo
+
+void main() {
+    uint w0 = in_f.x, w1 = in_f.y;
+    vec2 xy = tile.xy + vec2(float(w0 & 63u), float((w0 >> 6) & 63u)) * tile.z + 0.5;
+    float z = float((w0 >> 12) & 8191u) / 8.0;
+    float zc = float(in_f.z & 8191u) / 8.0;
+    float t = clamp(distance(xy, cam_pos.xy) * morph.x - morph.y, 0.0, 1.0);
+    z = mix(z, zc, t * t * (3.0 - 2.0 * t));
+    int nx = int(w1 & 255u), ny = int((w1 >> 8) & 255u);  // int8, two's complement
+    vec2 n = vec2(float(nx >= 128 ? nx - 256 : nx), float(ny >= 128 ? ny - 256 : ny)) / 127.0;
+    f_normal = vec3(n, sqrt(max(0.0, 1.0 - dot(n, n))));
+    uint c = w1 >> 16;
+    f_albedo = vec3(float(c >> 11) / 31.0, float((c >> 5) & 63u) / 63.0, float(c & 31u) / 31.0);
+    f_world = vec3(xy, z);
+    gl_Position = far_vp * vec4(f_world, 1.0);
+}

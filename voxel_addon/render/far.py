@@ -1,0 +1,185 @@
+"""Far terrain (issue 22): the ring of far tiles beyond the chunks, out to `far`
+chunks, drawn into the G-buffer after the chunks (shaders/far.vert, far.frag), so
+the deferred light, fog, sky and the debug views treat it like any surface.
+
+Tiles come as voxel_addon/far/mesh.py FarMeshes, by duck typing (`key` = (level, tx,
+ty), `origin`, `spacing`, `vertices` (n, 3) uint32, `ground` and `water` indices,
+`zrange`). Culling is on the CPU per tile (its box against the view), shadows are not
+cast by far tiles (beyond the shadow distance they would not show), and a far pixel
+is dropped where a chunk is drawn (the near mask), so the two never double up and
+meet at the chunks' edge.
+
+Depth: one buffer, its range split. The chunks' projection (the camera's, or
+Blender's) is squeezed into [0, 0.5), far tiles get their own projection from a near
+plane at about half the view distance out to `far` in [0.5, 1]: at 4 km a 24-bit or
+32F buffer then resolves ~0.03 blocks instead of ~10 with one projection. The chunks
+are always in front of the far ring (the camera is inside the chunks' square), so
+comparing across the two halves is right; `scene_pos` (include/eye.glsl) reads a
+depth back with the half's inverse (`far_split`, `far_inv_vp`).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .device import State
+
+MORPH = (0.65, 0.95)   # far/grid.py MORPH: the share of a level's switch distance
+DETAIL = 64            # far/grid.py DETAIL
+COARSEST = 5           # far/grid.py LEVELS[-1]: does not morph
+SPLIT = 0.5
+_NEAR = np.diag([1.0, 1.0, 0.5, 1.0])  # clip z -> 0.5 z - 0.5 w: depth [0, 0.5]
+_NEAR[2, 3] = -0.5
+_FAR = np.diag([1.0, 1.0, 0.5, 1.0])   # clip z -> 0.5 z + 0.5 w: depth [0.5, 1]
+_FAR[2, 3] = 0.5
+DEPTH = State("less", True, False)
+
+
+class _Tile:
+    __slots__ = ("mesh", "tile", "morph", "box", "tris", "nbytes")
+
+
+class FarRing:
+    def __init__(self, dev):
+        self.dev = dev
+        self.tiles: dict = {}
+        self.prog = None
+        self._mask = None            # near mask texture
+        self._box = (0.0, 0.0, 0.0, 0.0)
+        self._near_keys = None       # the chunk keys the mask was made for
+        self._boxes = np.zeros((0, 6))
+        self._order: list = []
+
+    # ------------------------------------------------------------------ data
+    def update(self, meshes) -> None:
+        """Show or replace far tiles (FarMesh-like)."""
+        for m in meshes:
+            old = self.tiles.pop(tuple(m.key), None)
+            if old is not None:
+                self.dev.release(old.mesh)
+            idx = np.concatenate([m.ground, m.water]).astype(np.uint32)
+            if not len(idx):
+                continue
+            t = _Tile()
+            t.mesh = self.dev.trimesh(m.vertices, idx)
+            level, s = int(m.key[0]), float(m.spacing)
+            t.tile = (float(m.origin[0]), float(m.origin[1]), s, 0.0)
+            if level >= COARSEST:  # k = 0 everywhere
+                t.morph = (0.0, 0.0, 0.0, 0.0)
+            else:  # far/grid.py morph(): t = (d / D - M0) / (M1 - M0), D = DETAIL * 2s
+                D = DETAIL * 2 * s
+                t.morph = (1.0 / (D * (MORPH[1] - MORPH[0])), MORPH[0] / (MORPH[1] - MORPH[0]),
+                           0.0, 0.0)
+            n = 32 * s  # grid.TILE cells
+            ox, oy = m.origin[0] + 0.5, m.origin[1] + 0.5
+            t.box = (ox, oy, float(m.zrange[0]) - 1.0, ox + n, oy + n, float(m.zrange[1]) + 1.0)
+            t.tris = len(idx) // 3
+            t.nbytes = int(m.vertices.nbytes + idx.nbytes)
+            self.tiles[tuple(m.key)] = t
+        self._boxes = None
+
+    def remove(self, keys) -> None:
+        for k in keys:
+            t = self.tiles.pop(tuple(k), None)
+            if t is not None:
+                self.dev.release(t.mesh)
+        self._boxes = None
+
+    def clear(self) -> None:
+        self.remove(list(self.tiles))
+
+    @property
+    def triangles(self) -> int:
+        return sum(t.tris for t in self.tiles.values())
+
+    @property
+    def nbytes(self) -> int:
+        return sum(t.nbytes for t in self.tiles.values())
+
+    def set_near(self, keys) -> None:
+        """The chunks drawn as chunks: far pixels over them are dropped."""
+        keys = frozenset(keys)
+        if keys == self._near_keys:
+            return
+        self._near_keys = keys
+        self.dev.release(self._mask)
+        if not keys:
+            self._mask, self._box = self.dev.texture((1, 1), "r8", data=np.zeros((1, 1), np.uint8)), \
+                (0.0, 0.0, 0.0, 0.0)
+            return
+        k = np.array(sorted(keys), np.int64)
+        x0, y0 = k.min(0)
+        w, h = k.max(0) - (x0, y0) + 1
+        a = np.zeros((h, w), np.uint8)
+        a[k[:, 1] - y0, k[:, 0] - x0] = 255
+        self._mask = self.dev.texture((int(w), int(h)), "r8", data=a)
+        self._box = (float(x0), float(y0), float(w), float(h))
+
+    # ------------------------------------------------------------------ frame
+    def view(self, camera, vp: np.ndarray, near_edge: float, reach: float):
+        """(near vp, its inverse, far vp, its inverse), all with the depth range
+        split, for a perspective camera whose chunks' projection is vp; near_edge:
+        the horizontal distance from the camera to the chunks' edge, reach: how far
+        the far ring goes (blocks)."""
+        n = max(1.0, 0.5 * near_edge)
+        f = max(reach * 1.5 + 512.0, n * 2)
+        A, B = (f + n) / (n - f), 2 * f * n / (n - f)
+        fvp = vp.copy()
+        fvp[2] = -A * vp[3]  # vp's w row is minus the view depth
+        fvp[2, 3] += B
+        nv, fv = _NEAR @ vp, _FAR @ fvp
+        return nv, np.linalg.inv(nv), fv, np.linalg.inv(fv), f
+
+    def visible(self, fvp: np.ndarray, eye, reach: float) -> list:
+        """Tiles whose box is in the view (fvp: the far projection) within reach."""
+        if self._boxes is None:
+            self._order = list(self.tiles.values())
+            self._boxes = np.array([t.box for t in self._order], np.float64).reshape(-1, 6)
+        b = self._boxes
+        if not len(b):
+            return []
+        ix = np.array([[0, 1, 2], [3, 1, 2], [0, 4, 2], [3, 4, 2],
+                       [0, 1, 5], [3, 1, 5], [0, 4, 5], [3, 4, 5]])
+        c = b[:, ix]                                     # (T, 8, 3)
+        clip = c @ fvp[:, :3].T + fvp[:, 3]              # (T, 8, 4)
+        x, y, z, w = clip[..., 0], clip[..., 1], clip[..., 2], clip[..., 3]
+        out = ((x > w).all(1) | (x < -w).all(1) | (y > w).all(1) | (y < -w).all(1)
+               | (z > w).all(1) | (w <= 0).all(1))
+        dx = np.maximum(np.maximum(b[:, 0] - eye[0], 0), eye[0] - b[:, 3])
+        dy = np.maximum(np.maximum(b[:, 1] - eye[1], 0), eye[1] - b[:, 4])
+        out |= np.hypot(dx, dy) > reach
+        return [self._order[i] for i in np.flatnonzero(~out)]
+
+    def draw(self, target, tiles, fvp, stats=None) -> None:
+        """The tiles into the G-buffer target (after the chunks: depth tested, kept)."""
+        if not tiles:
+            return
+        dev = self.dev
+        if self.prog is None:
+            self.prog = dev.program("far.vert", "far.frag")
+        if self._mask is None:
+            self.set_near(())
+        with dev.begin(target, DEPTH, False):
+            dev.use(self.prog, {"near_mask": self._mask},
+                    {"far_vp": fvp, "near_box": self._box})
+            for t in tiles:
+                dev.push({"tile": t.tile, "morph": t.morph})
+                dev.draw_tris(t.mesh)
+        if stats is not None:
+            tris = sum(t.tris for t in tiles)
+            stats.add(tris, len(tiles), False)
+            stats["far_triangles"] = tris
+            stats["far_tiles"] = len(tiles)
+
+    def release(self) -> None:
+        self.clear()
+        self.dev.release(self._mask)
+        self._mask, self._near_keys = None, None
+
+
+def near_edge(camera, area) -> float:
+    """Horizontal distance from the camera to the nearest edge of the chunks' box
+    (area: cx0, cy0, cx1, cy1), 0 outside it."""
+    if area is None:
+        return 0.0
+    x0, y0, x1, y1 = (16.0 * v for v in area)
+    return max(0.0, min(camera.x - x0, x1 - camera.x, camera.y - y0, y1 - camera.y))

@@ -10,6 +10,7 @@
 //@ push vec4 tile         // xy: the tile's vertex (0, 0) minus 0.5, z: spacing (blocks)
 //@ push vec4 morph        // k = smoothstep of clamp(d * x - y): far/grid.py morph(); x 0: none
 //@ push mat4 far_vp       // the far projection, its depth in [0.5, 1]
+//@ push vec4 near_box     // the chunks' box (far.frag): xy its first chunk, zw its size
 //@ vary smooth vec3 f_world
 //@ vary smooth vec3 f_normal
 //@ vary smooth vec3 f_albedo
@@ -21,6 +22,13 @@ void main() {
     float zc = float(in_f.z & 8191u) / 8.0;
     float t = clamp(distance(xy, cam_pos.xy) * morph.x - morph.y, 0.0, 1.0);
     z = mix(z, zc, t * t * (3.0 - 2.0 * t));
+    // Under the chunks (where far.frag drops it) the surface goes down to the bottom:
+    // the cells across the chunks' edge become a wall behind it. Else a ray passing
+    // just over the edge could cross the far surface (coarser, raised by canopies)
+    // under the chunks, be dropped there and miss the ground behind (a gap at the seam).
+    vec2 cc = floor(xy / 16.0) - near_box.xy;
+    if (all(greaterThanEqual(cc, vec2(0.0))) && all(lessThan(cc, near_box.zw)))
+        z = -16.0;
     int nx = int(w1 & 255u), ny = int((w1 >> 8) & 255u);  // int8, two's complement
     vec2 n = vec2(float(nx >= 128 ? nx - 256 : nx), float(ny >= 128 ? ny - 256 : ny)) / 127.0;
     f_normal = vec3(n, sqrt(max(0.0, 1.0 - dot(n, n))));

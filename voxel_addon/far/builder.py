@@ -210,10 +210,10 @@ class Builder:
 
 
 def ring(file, generator, x: float, y: float, far: int, near: int = 0,
-         timeout: float = 600.0) -> list:
+         timeout: float = 600.0, lock=None) -> list:
     """The far meshes of a view, all of them, built now (renders: the CLI's
     `render --far`, Render Voxel View): [FarMesh]."""
-    with Builder(file, generator) as b:
+    with Builder(file, generator, lock) as b:
         b.set_view(x, y, far, near)
         if not b.wait_ready(timeout):
             raise VoxelError(f"far terrain not built within {timeout:.0f} s")

@@ -1,6 +1,9 @@
 """The chunks of the shown world, shared by every window: payloads from a world.Stream
-(nearest first, made in its background thread)."""
+(nearest first, made in its background thread), and the far tiles beyond them from
+a far.Builder (its own thread, nearest first) when the view's `far` is on."""
 from __future__ import annotations
+
+import math
 
 
 class Feed:
@@ -10,12 +13,56 @@ class Feed:
         self.chunks: dict = {}   # key -> Payload (.key, .mesh, .light, .version)
         self.stream = Stream(world, distance)
         self.wanted = 0          # chunks the stream means to show
+        self.far = 0             # far distance (chunks; 0: no far ring)
+        self.tiles: dict = {}    # far tile key -> far.mesh.FarMesh (.version)
+        self.far_wanted = 0      # tiles the far builder means to show
+        self._far = None         # the far.Builder
+        self._far_at = None      # the view chunk it was last given
+        self._at = None
+
+    def set_far(self, far: int) -> None:
+        """The far ring out to `far` chunks (0: none): a builder is made or let go."""
+        far = int(far)
+        if far == self.far:
+            return
+        self.far, self._far_at = far, None
+        if far and self._far is None:
+            from ...far import Builder
+            # the world's loader generates with the same generator: one at a time
+            self._far = Builder(self.world.file, self.world.generator,
+                                lock=getattr(self.world, "_gen_lock", None))
+        elif not far and self._far is not None:
+            self._far.close()
+            self._far = None
+            self.tiles.clear()
+            self.far_wanted = 0
+
+    def _update_far(self, budget) -> bool:
+        b = self._far
+        if b is None:
+            return False
+        if self._at is not None:
+            c = (math.floor(self._at[0]) >> 4, math.floor(self._at[1]) >> 4)
+            if c != self._far_at:  # the ring is chosen per view chunk
+                self._far_at = c
+                b.set_view(self._at[0], self._at[1], self.far, self.distance)
+        ready, gone = b.drain(budget)
+        for m in ready:
+            self.tiles[m.key] = m
+        for k in gone:
+            self.tiles.pop(k, None)
+        if b.error is not None:
+            raise b.error
+        self.far_wanted, done = b.counts
+        return done < self.far_wanted or bool(ready)
 
     def update(self, at, direction, budget) -> bool:
         """Take in what is ready within budget seconds (at: (x, y) of the view point, or
         None to keep it); returns whether more is on its way."""
         if at is not None:
             self.stream.set_view(at[0], at[1], direction)
+            self._at = at
+        far_loading = self._update_far(budget / 2)
         ready, gone = self.stream.drain(budget)
         for p in ready:
             self.chunks[p.key] = packed(p)
@@ -24,9 +71,10 @@ class Feed:
         if self.stream.error is not None:
             raise self.stream.error
         self.wanted = self.stream.counts[0]
-        return len(self.chunks) < self.wanted
+        return len(self.chunks) < self.wanted or far_loading
 
     def close(self) -> None:
+        self.set_far(0)
         self.stream.close()
         self.chunks.clear()
 

@@ -22,7 +22,7 @@ def settings_of(vv, draft: bool = False, render: bool = False):
     viewport's cheaper one is for redraws. (MSAA: Blender's gpu module has no
     multisampled textures, so frames in Blender are never multisampled.)"""
     from ...render.settings import Settings
-    s = Settings(distance=vv.distance, light_radius=min(8, vv.distance), msaa=1)
+    s = Settings(distance=vv.distance, far=vv.far, light_radius=min(8, vv.distance), msaa=1)
     for e in effects():
         setattr(s, e, bool(getattr(vv, e)))
     s.transparency = vv.transparency

@@ -24,6 +24,13 @@ class Still:
         """What to show: a render.source.Area (meshed at the next frame)."""
         self._area = (area, method)
 
+    def set_far(self, meshes) -> None:
+        """The far tiles to draw (far.mesh.FarMeshes; Settings.far > 0): instead of
+        those shown."""
+        keys = {m.key for m in meshes}
+        self.r.remove_far([k for k in self.r.far.tiles if k not in keys])
+        self.r.update_far(meshes)
+
     def render(self, camera, hours: float, size) -> np.ndarray:
         """A frame as an (h, w, 3) uint8 image, row 0 = top."""
         t0 = time.perf_counter()

@@ -71,6 +71,7 @@ class Pane:
         self.dev = dev
         self.r = Renderer(dev, Settings())
         self.versions: dict = {}
+        self.far_versions: dict = {}  # far tile key -> version uploaded
         self.feed = None
         self.kept: dict = {}     # region pointer -> composite.Kept
         self.gen = 0             # bumped whenever the uploaded chunks change
@@ -81,6 +82,7 @@ class Pane:
         if self.feed is not feed:  # another world or distance: nothing of ours stays
             self.feed = feed
             self.versions = {k: None for k in self.versions}
+            self.far_versions = {k: None for k in self.far_versions}
         colors = getattr(feed.world, "colors", None)
         if colors is not None:
             r.set_palette(colors())  # (cached by the world; compared here)
@@ -96,6 +98,16 @@ class Pane:
             r.update_chunks(new)
             for p in new:
                 self.versions[p.key] = p.version
+        gone = [k for k in self.far_versions if k not in feed.tiles]
+        new = [m for k, m in feed.tiles.items() if self.far_versions.get(k) != m.version]
+        if gone or new:
+            self.gen += 1
+            r.remove_far(gone)
+            r.update_far(new)
+            for k in gone:
+                del self.far_versions[k]
+            for m in new:
+                self.far_versions[m.key] = m.version
         return len(self.versions)
 
     def kept_for(self, region, size) -> composite.Kept:
@@ -135,7 +147,8 @@ class LiveView:
         self.windows = frozenset()    # the windows open at the last frame (pointers)
         self.lead = None              # the region whose view the stream follows
         self.error: str | None = None  # the last frame's failure, for the panel
-        self.stats = {"drawn": 0, "wanted": 0, "wanted_shown": 0, "ms": 0.0, "python_ms": 0.0,
+        self.stats = {"drawn": 0, "wanted": 0, "wanted_shown": 0, "far_drawn": 0, "far_wanted": 0,
+                      "ms": 0.0, "python_ms": 0.0,
                       "quality": "full", "frames": 0, "reused": 0, "draw_calls": 0}
         self.frames: deque = deque(maxlen=512)  # the last redraws (Frame), for the bench
         # f(context) after each voxel frame with Blender's state back and the voxels'
@@ -207,8 +220,9 @@ class LiveView:
         at = None
         if key == self.lead:
             at = tuple(rv3d.view_location)[:2] if cam.ortho else (cam.x, cam.y)
+        feed.set_far(vv.far)
         loading = feed.update(at, cam.forward, BUDGET_S)
-        self.stats["wanted"] = feed.wanted
+        self.stats.update(wanted=feed.wanted, far_wanted=feed.far_wanted)
         # draft while moving and while chunks stream in: a full frame holds the GIL for
         # seconds on software GL and starves the stream's worker thread
         draft = vv.quality == "draft" or (vv.quality == "auto" and (moving or loading))
@@ -263,7 +277,7 @@ class LiveView:
         S = self.stats
         if (drawn, S["wanted"], q) != (S["drawn"], S["wanted_shown"], S["quality"]):
             self._panel_redraw()  # the sidebar shows progress and quality
-        S.update(drawn=drawn, ms=ms, python_ms=t_py * 1e3, quality=q, frames=S["frames"] + 1,
+        S.update(drawn=drawn, far_drawn=len(pane.far_versions), ms=ms, python_ms=t_py * 1e3, quality=q, frames=S["frames"] + 1,
                  wanted_shown=S["wanted"], reused=S["reused"] + reused, draw_calls=calls)
         self.frames.append(Frame(ms, t_py * 1e3, q, drawn, t_sync * 1e3, reused, calls,
                                  t_sub * 1e3))

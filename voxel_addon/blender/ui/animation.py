@@ -33,6 +33,7 @@ class _Job:
             from .. import movie
             movie.check()
         self.view = Still(self.settings)
+        self._far = None   # far.Builder while far terrain is on (tiles follow the camera)
         self.frames = list(range(scene.frame_start, scene.frame_end + 1, scene.frame_step))
         self.done = 0
         self.centre = None
@@ -69,6 +70,8 @@ class _Job:
             self.view.set_area(source.world_area(self.world, cam.x, cam.y, s.distance,
                                                  s.light_radius))
             self.centre = c
+            if s.far:
+                self._far_ring(cam, s)
         r = sc.render
         w = max(8, r.resolution_x * r.resolution_percentage // 100)
         h = max(8, r.resolution_y * r.resolution_percentage // 100)
@@ -85,6 +88,22 @@ class _Job:
         self.size = (w, h)
         self.done += 1
         return True
+
+    def _far_ring(self, cam, s) -> None:
+        """Far tiles for the camera's chunk, waited for (kept in the file: a second
+        render of the same path loads them)."""
+        from ...core.errors import VoxelError
+        from ...far import Builder
+        if self._far is None:
+            self._far = Builder(self.world.file, self.world.generator,
+                                lock=getattr(self.world, "_gen_lock", None))
+        b = self._far
+        b.set_view(cam.x, cam.y, s.far, s.distance)
+        if not b.wait_ready(600.0):
+            raise VoxelError("far terrain not built within 600 s")
+        ready, gone = b.drain(1e9)
+        self.view.r.remove_far(gone)
+        self.view.r.update_far(ready)
 
     def _encode(self) -> bool:
         from .. import movie
@@ -110,6 +129,9 @@ class _Job:
 
     def finish(self):
         """Always (done, stopped or failed): GPU objects, the frame, temporary files."""
+        if self._far is not None:
+            self._far.close()
+            self._far = None
         self.view.release()
         self.scene.frame_set(self._restore)
         if self._enc is not None:

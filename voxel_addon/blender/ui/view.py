@@ -38,6 +38,9 @@ VoxelViewSettings = type("VoxelViewSettings", (bpy.types.PropertyGroup,), {"__an
                          description="Draw the open world in every 3D viewport of the scene"),
     "distance": IntProperty(name="Distance", default=8, min=1, max=32, update=_redraw,
                             description="View distance in chunks (16 blocks)"),
+    "far": IntProperty(name="Far", default=0, min=0, max=256, update=_redraw,
+                       description="Far terrain beyond Distance out to this many chunks, in "
+                                   "coarser levels of detail (256 = 4 km; 0 = off)"),
     "hours": FloatProperty(name="Time of Day", default=12.0, min=0.0, max=24.0, update=_redraw,
                            description="Hours (0 midnight, 12 noon); animatable"),
     "follow_timeline": BoolProperty(name="Follow Timeline", default=False, update=_redraw,
@@ -97,6 +100,10 @@ class VOXEL_OT_render_view(bpy.types.Operator):
             view = Still(s)
             try:
                 view.set_area(area)
+                if s.far:  # waits for the far builder (tiles kept in the file: quick again)
+                    from ...far import ring
+                    view.set_far(ring(world.file, world.generator, cam.x, cam.y, s.far,
+                                      s.distance, lock=getattr(world, "_gen_lock", None)))
                 img = view.render(cam, hours_of(sc), (w, h))
             finally:
                 view.release()
@@ -136,8 +143,12 @@ class VOXEL_PT_view(bpy.types.Panel):
                 st = LIVE.stats
                 col.label(text=f"chunks {st['drawn']} / {st['wanted']}"
                           + ("  loading…" if st["drawn"] < st["wanted"] else ""))
+                if v.far:
+                    col.label(text=f"far tiles {st['far_drawn']} / {st['far_wanted']}")
                 col.label(text=f"last frame {st['ms']:.0f} ms ({st['quality']})")
-        col.prop(v, "distance")
+        row = col.row(align=True)
+        row.prop(v, "distance")
+        row.prop(v, "far")
         row = col.row(align=True)
         row.prop(v, "hours")
         col.prop(v, "follow_timeline")

@@ -280,3 +280,25 @@ def test_render_animation_from_the_ui_writes_frames_and_esc_stops(run):
     # encoded by Blender's render job, with no render window and the preference back
     assert m["job"] and m["display"] == "WINDOW" and m["windows"] == 1, m
     assert m["stopped_with"] >= 2 and m["files2"] == [] and m["tmp2"] == [], m
+
+
+def test_far_terrain_shows_and_mixes_with_far_objects_by_depth(run):
+    """Far 32 beyond distance 4 (viewport_job.py step_far): terrain where far 0 showed
+    sky toward the horizon; a cube ~400 blocks away above the far ground stays in
+    front of it, one sunk into the far ground is hidden by it."""
+    st = run["steps"]
+    f0, f64, off = st["far0"], st["far32"], st["far_off"]
+    assert f64["status"]["far_drawn"] >= f64["status"]["far_wanted"] > 0, f64["status"]
+    a, b, c = _region(f0), _region(f64), _region(off)
+    h = a.shape[0]
+    band = slice(int(h * 0.25), int(h * 0.6))  # around the horizon
+    changed = np.abs(b[band].astype(int) - a[band]).max(-1) > 12
+    assert changed.mean() > 0.15, changed.mean()
+    grey = _patch(_img(off), f64["above"]).mean(0)  # Blender's lit cube, voxels off
+    assert np.ptp(grey) < 12, grey
+    # in front of the far terrain: its pixels as without voxels
+    assert np.abs(_patch(_img(f64), f64["above"]).mean(0) - grey).max() <= 12
+    # sunk into the far ground: hidden by it (and shown without voxels)
+    sunk_off = _patch(_img(off), f64["sunk"]).mean(0)
+    assert np.ptp(sunk_off) < 12, sunk_off
+    assert np.abs(_patch(_img(f64), f64["sunk"]).mean(0) - sunk_off).max() > 20

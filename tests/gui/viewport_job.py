@@ -87,7 +87,7 @@ def wait_frames(n=2, full=True, timeout=120.0):
             # the screen may still show an image presented a frame earlier
             yield from one_more_frame(area)
             return
-        why = viewport.problem(bpy.context)  # what the panel says, e.g. the wrong backend:
+        why = LIVE.problem(bpy.context)  # what the panel says, e.g. the wrong backend:
         if why and time.time() - t0 > 10:  # not a passing state, no use waiting longer
             raise RuntimeError(f"the live view cannot draw: {why}")
         yield 0.1
@@ -281,6 +281,63 @@ def step_camera():
     yield from wait_frames()
     corners = [project((x, y, 64.0)) for x, y in ((0, 0), (48, 0), (0, 48), (48, 48))]
     record("ortho", corners=corners)
+
+
+def step_far():
+    """Far terrain (issue 22) out to 32 chunks beyond distance 4, toward the highest
+    ground ~400 blocks away, with two Blender cubes there: one above the far ground
+    (in front of it), one sunk into it (hidden by it). Far 0 first: the sky it fills."""
+    from voxel_addon.blender import session
+    from voxel_addon.blender.liveview import LIVE
+    import numpy as np
+    sc = bpy.context.scene
+    vv = sc.voxel_view
+    vv.show, vv.hours, vv.far = True, 12.0, 0
+    _, area, sp = view3d()
+    clip = sp.clip_end
+    sp.clip_end = 5000.0  # Blender draws its far objects (ours: any distance)
+    gen = session.world(WORLD).generator
+
+    def ground(x, y):
+        return float(gen.surface(np.array([[int(x), int(y)]]))["height"][0]) + 1.0
+    h0 = ground(8, 8)
+    R = 400.0
+    yaw = max(np.radians(np.arange(0, 360, 10)),
+              key=lambda a: ground(8 + R * np.cos(a), 8 + R * np.sin(a)))
+    f, side = np.array([np.cos(yaw), np.sin(yaw)]), np.array([-np.sin(yaw), np.cos(yaw)])
+    pa, ps = 8 + R * f + 40 * side, 8 + R * f - 40 * side
+    za, zs = max(ground(*pa), h0) + 40.0, ground(*ps) - 40.0
+    objs = []
+    for name, p, z in (("FarAbove", pa, za), ("FarSunk", ps, zs)):
+        o = bpy.data.objects["Cube"].copy()
+        o.name, o.location, o.scale = name, (p[0], p[1], z), (12.0, 12.0, 12.0)
+        sc.collection.objects.link(o)
+        objs.append(o)
+    # the face toward the view, its centre; the sunk one's top edge
+    near_a, near_s = pa - 12 * f, ps - 12 * f
+    points = lambda: {"above": project((near_a[0], near_a[1], za)),
+                      "sunk": project((near_s[0], near_s[1], zs + 11.0))}
+    look = 8 + 30 * f
+    set_view((look[0], look[1], h0 + 30.0), (86, 0, math.degrees(yaw) - 90), 30.0)
+    try:
+        yield from wait_frames()
+        record("far0", **points())
+        vv.far = 32
+        t0 = time.time()
+        while not (LIVE.stats["far_wanted"] > 0 and LIVE.stats["far_drawn"] >= LIVE.stats["far_wanted"]):
+            if time.time() - t0 > 300:
+                raise RuntimeError(f"far tiles not drawn: {LIVE.stats}")
+            area.tag_redraw()
+            yield 0.2
+        yield from wait_frames()
+        record("far32", **points(), seconds=time.time() - t0, builder=dict(LIVE.feed._far.stats))
+        vv.show = False
+        yield from settle()
+        record("far_off", **points())
+    finally:
+        vv.show, vv.far, sp.clip_end = True, 0, clip
+        for o in objs:
+            bpy.data.objects.remove(o)
 
 
 def step_stream():
@@ -596,6 +653,7 @@ def run():
 
 
 STEPS = {"top": step_top, "still": step_still, "sky": step_sky, "camera": step_camera,
+         "far": step_far,
          "stream": step_stream, "redraws": step_redraws, "quad": step_quad, "window": step_window,
          "problem": step_problem,
          "newfile": step_newfile, "animation": step_animation, "leak": step_leak}

@@ -327,8 +327,7 @@ def step_far():
         while not (LIVE.stats["far_wanted"] > 0 and LIVE.stats["far_drawn"] >= LIVE.stats["far_wanted"]):
             if time.time() - t0 > 300:
                 raise RuntimeError(f"far tiles not drawn: {LIVE.stats}")
-            area.tag_redraw()
-            yield 0.2
+            yield 0.5  # (the view asks for its own redraws while tiles come)
         yield from wait_frames()
         record("far32", **points(), seconds=time.time() - t0, builder=dict(LIVE.feed._far.stats))
         vv.show = False

@@ -1,6 +1,8 @@
 """Bench area `far` (issue 22): the far ring's data side: time from an empty file to
 a horizon at far 128 and 256 (alone and beside the near stream), a second view,
-the generator's surface rate, triangles per level, memory and file growth."""
+the generator's surface rate, triangles per level, memory and file growth; and the
+drawing side: frame times full and draft at distance 16 with far 256 against far 0
+(the live view's settings, at its region size), triangles drawn, memory added."""
 from __future__ import annotations
 
 import gc
@@ -45,9 +47,74 @@ def _horizon(world, far, near=NEAR, drains=None):
     return time.perf_counter() - t0, b, meshes
 
 
+FRAME = (1057, 618)   # the GUI bench's region (bench/gui.py, 1280x720 screen)
+
+
+def _frames(ctx, proc):
+    """Frame ms at distance 16, far 256 against far 0 (interleaved, each the fastest
+    of n after a warm-up: the machine is shared), full and draft as the live view makes them (msaa 1, its
+    shadow map, draft: half size without shadows, SSAO, blur, god rays, one peel)."""
+    import math
+    from ..far import ring
+    from ..render import Camera, Settings, source
+    from ..render.device import mgl
+    from ..render.pipeline import Renderer
+    far, n = (128 if ctx.quick else 256), (3 if ctx.quick else 7)
+    with World.create(ctx.tmp / "farframes.sqlite", seed=SEED) as w:
+        w.generate_area([(x, y) for x in range(-NEAR - 1, NEAR + 2)
+                         for y in range(-NEAR - 1, NEAR + 2)])
+        h0 = float(w.generator.surface(np.array([[8, 8]]))["height"][0])
+        cam = Camera(VIEW[0], VIEW[1], h0 + 24.0, math.degrees(math.atan2(-928, 960)), 2.0)
+        area = source.world_area(w, cam.x, cam.y, NEAR, 8)
+        meshes = ring(w.file, w.generator, cam.x, cam.y, far, NEAR)
+    gl = mgl.context()
+    full = Settings(distance=NEAR, light_radius=8, msaa=1, shadow_size=1024, dof=False)
+    draft = Settings(distance=NEAR, light_radius=8, msaa=1, shadow_size=1024, dof=False,
+                     shadows=False, ssao=False, godrays=False, per_sample=False,
+                     peel_layers=1, far_draft=True)
+    r = Renderer(gl, full)
+    r.set_area(area.blocks, area.light, area.cx0, area.cy0, ring=True, light_at=area.light_at)
+    r.render(cam, 12.0, FRAME)
+    gc.collect()
+    rss0 = proc.memory_info().rss
+    r.update_far(meshes)
+    r.s.far = far
+    r.render(cam, 12.0, FRAME)
+    added = proc.memory_info().rss - rss0
+    tris = r.stats["far_triangles"]
+    out = {}
+    for q, s, size in (("full", full, FRAME), ("draft", draft, (FRAME[0] // 2, FRAME[1] // 2))):
+        r.s = s
+        times = {0: [], far: []}
+        for i in range(n + 1):
+            for f in (0, far):
+                s.far = f
+                gl.finish()
+                t = time.perf_counter()
+                r.draw(cam, 12.0, size)
+                gl.finish()
+                if i:
+                    times[f].append((time.perf_counter() - t) * 1e3)
+        out[q] = {f: float(np.min(v)) for f, v in times.items()}
+    r.release()
+    gl.release()
+    for q in ("full", "draft"):
+        a, b = out[q][0], out[q][far]
+        yield (f"far_frame_{q}_ms_far0", a, "ms", f"distance {NEAR}, {FRAME} (draft half), "
+               f"the vista toward the mountains, fastest of {n}, {_load()}")
+        yield (f"far_frame_{q}_ms_far{far}", b, "ms", f"the same with far {far}")
+        yield (f"far_frame_{q}_ratio{far}", b / a, "x", "far on / off (target <= 1.3)")
+    yield (f"far_frame_triangles{far}", tris, "", "far triangles drawn in that frame (after "
+           "tile culling)")
+    yield (f"far_memory_added_mb{far}", added / 2 ** 20, "MiB", "process RSS added by the far "
+           "ring: its meshes uploaded (llvmpipe keeps GPU buffers in process memory) and the "
+           "first frame (target <= 300)")
+
+
 def run(ctx):
     import psutil
     proc = psutil.Process()
+    yield from _frames(ctx, proc)
     fars = (64, 128) if ctx.quick else (128, 256)
     note_q = " (quick: smaller far)" if ctx.quick else ""
     with World.create(ctx.tmp / "farwarm.sqlite", seed=SEED) as w:  # kernel builds

@@ -23,6 +23,7 @@ import numpy as np
 
 from .device import State
 
+TILE = 32              # far/grid.py TILE: cells a side
 MORPH = (0.65, 0.95)   # far/grid.py MORPH: the share of a level's switch distance
 DETAIL = 64            # far/grid.py DETAIL
 COARSEST = 5           # far/grid.py LEVELS[-1]: does not morph
@@ -36,6 +37,47 @@ DEPTH = State("less", True, False)
 
 class _Tile:
     __slots__ = ("mesh", "tile", "morph", "box", "tris", "nbytes")
+
+
+def coarse(m) -> np.ndarray:
+    """A far mesh's triangles at half its resolution (draft frames): its surface on
+    every other vertex, which with the morph at 1 (z = zc) is exactly the next
+    coarser level's surface (far/mesh.py), with every skirt and water triangle."""
+    nv = (TILE + 1) ** 2  # the grid's vertices come first, id = kx * (TILE + 1) + ky
+    g = np.asarray(m.ground, np.uint32).reshape(-1, 3)
+    on = (g < nv).all(1)
+    used = np.zeros(nv, bool)
+    used[g[on].ravel()] = True
+    u = used.reshape(TILE + 1, TILE + 1)
+    ok = np.ones((TILE // 2, TILE // 2), bool)
+    for i in range(3):
+        for j in range(3):
+            ok &= u[i:i + TILE - 1:2, j:j + TILE - 1:2]
+    zc = (np.asarray(m.vertices[:nv, 2], np.int64) & 8191).reshape(TILE + 1, TILE + 1)
+    vid = np.arange(nv, dtype=np.uint32).reshape(TILE + 1, TILE + 1)
+    s = np.s_
+    a, b, c, d = (vid[s[0:-1:2, 0:-1:2]], vid[s[2::2, 0:-1:2]], vid[s[2::2, 2::2]],
+                  vid[s[0:-1:2, 2::2]])
+    za, zb, zcc, zd = (zc[s[0:-1:2, 0:-1:2]], zc[s[2::2, 0:-1:2]], zc[s[2::2, 2::2]],
+                       zc[s[0:-1:2, 2::2]])
+    flip = (np.abs(zb - zd) < np.abs(za - zcc))[ok]  # as far/mesh.py splits a cell
+    a, b, c, d = a[ok], b[ok], c[ok], d[ok]
+    t1 = np.where(flip[:, None], np.stack([a, b, d], 1), np.stack([a, b, c], 1))
+    t2 = np.where(flip[:, None], np.stack([b, c, d], 1), np.stack([a, c, d], 1))
+    # water: the quads of every other corner (its surface is flat)
+    w = np.unique(np.asarray(m.water, np.uint32))
+    wq = np.zeros(0, np.uint32)
+    if len(w):
+        w0 = np.asarray(m.vertices[w, 0], np.int64)
+        at = np.full((TILE + 1, TILE + 1), -1, np.int64)
+        at[w0 & 63, (w0 >> 6) & 63] = w
+        a, b, c, d = (at[s[0:-1:2, 0:-1:2]], at[s[2::2, 0:-1:2]], at[s[2::2, 2::2]],
+                      at[s[0:-1:2, 2::2]])
+        k = (a >= 0) & (b >= 0) & (c >= 0) & (d >= 0)
+        a, b, c, d = a[k], b[k], c[k], d[k]
+        wq = np.stack([a, b, c, a, c, d], 1).ravel().astype(np.uint32)
+    return np.concatenate([np.concatenate([t1, t2], 1).ravel(), g[~on].ravel(),
+                           wq]).astype(np.uint32)
 
 
 class FarRing:
@@ -60,7 +102,8 @@ class FarRing:
             if not len(idx):
                 continue
             t = _Tile()
-            t.mesh = self.dev.trimesh(m.vertices, idx)
+            low = coarse(m)
+            t.mesh = self.dev.trimesh(m.vertices, idx, low)
             level, s = int(m.key[0]), float(m.spacing)
             t.tile = (float(m.origin[0]), float(m.origin[1]), s, 0.0)
             if level >= COARSEST:  # k = 0 everywhere
@@ -72,8 +115,8 @@ class FarRing:
             n = 32 * s  # grid.TILE cells
             ox, oy = m.origin[0] + 0.5, m.origin[1] + 0.5
             t.box = (ox, oy, float(m.zrange[0]) - 1.0, ox + n, oy + n, float(m.zrange[1]) + 1.0)
-            t.tris = len(idx) // 3
-            t.nbytes = int(m.vertices.nbytes + idx.nbytes)
+            t.tris = (len(idx) // 3, len(low) // 3)
+            t.nbytes = int(m.vertices.nbytes + idx.nbytes + low.nbytes)
             self.tiles[tuple(m.key)] = t
         self._boxes = None
 
@@ -89,7 +132,7 @@ class FarRing:
 
     @property
     def triangles(self) -> int:
-        return sum(t.tris for t in self.tiles.values())
+        return sum(t.tris[0] for t in self.tiles.values())
 
     @property
     def nbytes(self) -> int:
@@ -149,8 +192,9 @@ class FarRing:
         out |= np.hypot(dx, dy) > reach
         return [self._order[i] for i in np.flatnonzero(~out)]
 
-    def draw(self, target, tiles, fvp, stats=None) -> None:
-        """The tiles into the G-buffer target (after the chunks: depth tested, kept)."""
+    def draw(self, target, tiles, fvp, stats=None, draft: bool = False) -> None:
+        """The tiles into the G-buffer target (after the chunks: depth tested, kept);
+        draft: at half their resolution (coarse())."""
         if not tiles:
             return
         dev = self.dev
@@ -161,11 +205,12 @@ class FarRing:
         with dev.begin(target, DEPTH, False):
             dev.use(self.prog, {"near_mask": self._mask},
                     {"far_vp": fvp, "near_box": self._box})
+            part = int(draft)
             for t in tiles:
-                dev.push({"tile": t.tile, "morph": t.morph})
-                dev.draw_tris(t.mesh)
+                dev.push({"tile": t.tile, "morph": (0.0, -1.0, 0.0, 0.0) if draft else t.morph})
+                dev.draw_tris(t.mesh, part)
         if stats is not None:
-            tris = sum(t.tris for t in tiles)
+            tris = sum(t.tris[part] for t in tiles)
             stats.add(tris, len(tiles), False)
             stats["far_triangles"] = tris
             stats["far_tiles"] = len(tiles)

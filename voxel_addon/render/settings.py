@@ -17,6 +17,7 @@ TRANSPARENCY = ("peel", "oit")
 class Settings:
     distance: int = 8             # view distance in chunks
     far: int = 0                  # far terrain out to this many chunks (0: off; render/far.py)
+    far_draft: bool = False       # far tiles at half their resolution (the view's draft frames)
     light_radius: int = 8         # chunks around the centre with exact light (bounded volume)
     msaa: int = 2                 # 1, 2, 4, 8 (clamped to the context's maximum)
     per_sample: bool = True       # MSAA shading per sample (else per pixel)

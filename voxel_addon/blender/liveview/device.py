@@ -164,17 +164,20 @@ class GpuDevice(Device):
         vbo.attr_fill("in_v", words)
         return _Mesh(gpu.types.GPUBatch(type="TRIS", buf=vbo, elem=self._ibo), quads)
 
-    def trimesh(self, words, indices):
+    def trimesh(self, words, *indices):
         import gpu
         words = np.ascontiguousarray(words, np.uint32)
         fmt = gpu.types.GPUVertFormat()
         fmt.attr_add(id="in_f", comp_type="U32", len=words.shape[1], fetch_mode="INT")
         vbo = gpu.types.GPUVertBuf(fmt, len(words))
         vbo.attr_fill("in_f", words)
-        idx = np.ascontiguousarray(indices, np.int32).reshape(-1, 3)
-        ibo = gpu.types.GPUIndexBuf(type="TRIS", seq=idx)
-        return _TriMesh(gpu.types.GPUBatch(type="TRIS", buf=vbo, elem=ibo),
-                        words.nbytes + idx.nbytes)
+        batches, n = [], words.nbytes
+        for i in indices:
+            idx = np.ascontiguousarray(i, np.int32).reshape(-1, 3)
+            n += idx.nbytes
+            batches.append(gpu.types.GPUBatch(type="TRIS", buf=vbo, elem=gpu.types.GPUIndexBuf(
+                type="TRIS", seq=idx)) if len(idx) else None)
+        return _TriMesh(batches, n)
 
     def frame(self, data):
         import gpu
@@ -265,8 +268,10 @@ class GpuDevice(Device):
             return
         mesh.batch.draw_range(sh, elem_start=6 * first, elem_count=6 * quads)
 
-    def draw_tris(self, mesh):
-        mesh.batch.draw(self._prog.shader)
+    def draw_tris(self, mesh, part=0):
+        b = mesh.batches[part]
+        if b is not None:
+            b.draw(self._prog.shader)
 
     def read(self, tex):
         w, h = tex.size
@@ -342,7 +347,7 @@ class _Mesh:
 
 
 class _TriMesh:
-    __slots__ = ("batch", "nbytes")
+    __slots__ = ("batches", "nbytes")
 
-    def __init__(self, batch, nbytes):
-        self.batch, self.nbytes = batch, nbytes
+    def __init__(self, batches, nbytes):
+        self.batches, self.nbytes = batches, nbytes

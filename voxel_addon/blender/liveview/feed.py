@@ -19,6 +19,7 @@ class Feed:
         self._far = None         # the far.Builder
         self._far_at = None      # the view chunk it was last given
         self._at = None
+        self.far_loading = False
 
     def set_far(self, far: int) -> None:
         """The far ring out to `far` chunks (0: none): a builder is made or let go."""
@@ -71,6 +72,7 @@ class Feed:
         if self.stream.error is not None:
             raise self.stream.error
         self.wanted = self.stream.counts[0]
+        self.far_loading = far_loading
         return len(self.chunks) < self.wanted or far_loading
 
     def close(self) -> None:

@@ -37,6 +37,7 @@ def settings_of(vv, draft: bool = False, render: bool = False):
         s.shadows = s.ssao = s.dof = s.godrays = False
         s.per_sample = False
         s.peel_layers = min(s.peel_layers, 1)
+        s.far_draft = True
     return s
 
 

@@ -282,9 +282,11 @@ class LiveView:
         self.frames.append(Frame(ms, t_py * 1e3, q, drawn, t_sync * 1e3, reused, calls,
                                  t_sub * 1e3))
         st.quality = q
-        if loading or drawn < S["wanted"]:
+        if drawn < S["wanted"] or (loading and not feed.far_loading):
             # as long again as the frame took: the worker gets at least half the time
             self._want_redraw(max(0.05, ms / 1e3))
+        elif loading:  # only far tiles to come: their builder needs the GIL more than we
+            self._want_redraw(max(0.5, 4 * ms / 1e3))
         elif draft and vv.quality == "auto":  # once the view is still: a full frame
             self._want_redraw(max(0.02, STILL_S - (time.perf_counter() - st.changed)))
 

@@ -90,9 +90,10 @@ class Device:
         word (shaders/block.vert), drawn with the shared quad index pattern."""
         raise NotImplementedError
 
-    def trimesh(self, words: np.ndarray, indices: np.ndarray):
+    def trimesh(self, words: np.ndarray, *indices: np.ndarray):
         """A vertex buffer of triangles (far terrain): words (n, k) uint32, the vertex
-        input `in_f` (uvec<k>), and its own indices (m,) uint32, three a triangle."""
+        input `in_f` (uvec<k>), and its index sets ((m,) uint32, three a triangle),
+        each drawn on its own (`draw_tris`: e.g. a full and a coarse set)."""
         raise NotImplementedError
 
     def frame(self, data: bytes) -> None:
@@ -132,8 +133,8 @@ class Device:
         covers the target (fullscreen.vert)."""
         raise NotImplementedError
 
-    def draw_tris(self, mesh) -> None:
-        """All triangles of a trimesh."""
+    def draw_tris(self, mesh, part: int = 0) -> None:
+        """The triangles of one index set of a trimesh."""
         raise NotImplementedError
 
     def read(self, tex: Texture) -> np.ndarray:

@@ -115,11 +115,11 @@ class MglDevice(Device):
             self._ibos.append(self._ibo)  # (older meshes keep drawing with the smaller ones)
         return _Mesh(self.ctx.buffer(words.tobytes()), self._ibo, quads)
 
-    def trimesh(self, words, indices):
+    def trimesh(self, words, *indices):
         words = np.ascontiguousarray(words, np.uint32)
-        idx = np.ascontiguousarray(indices, np.uint32)
-        return _TriMesh(self.ctx.buffer(words.tobytes()), self.ctx.buffer(idx.tobytes()),
-                        words.shape[1], len(idx) // 3)
+        ibos = [self.ctx.buffer(np.ascontiguousarray(i, np.uint32).tobytes()) for i in indices]
+        return _TriMesh(self.ctx.buffer(words.tobytes()), ibos, words.shape[1],
+                        [len(i) // 3 for i in indices])
 
     def frame(self, data):
         self._block.orphan()  # fresh storage: no wait for the previous frame's draws
@@ -209,14 +209,15 @@ class MglDevice(Device):
                 prog, [(mesh.vbo, "2u4", "in_v")], index_buffer=mesh.ibo, index_element_size=4)
         vao.render(mode=self.ctx.TRIANGLES, vertices=6 * quads, first=6 * first)
 
-    def draw_tris(self, mesh):
+    def draw_tris(self, mesh, part=0):
         prog = self._prog.obj
-        vao = mesh.vaos.get(prog.glo)
+        vao = mesh.vaos.get((prog.glo, part))
         if vao is None:
-            vao = mesh.vaos[prog.glo] = self.ctx.vertex_array(
-                prog, [(mesh.vbo, f"{mesh.k}u4", "in_f")], index_buffer=mesh.ibo,
+            vao = mesh.vaos[prog.glo, part] = self.ctx.vertex_array(
+                prog, [(mesh.vbo, f"{mesh.k}u4", "in_f")], index_buffer=mesh.ibos[part],
                 index_element_size=4)
-        vao.render(mode=self.ctx.TRIANGLES, vertices=3 * mesh.tris)
+        if mesh.tris[part]:
+            vao.render(mode=self.ctx.TRIANGLES, vertices=3 * mesh.tris[part])
 
     def read(self, tex):
         w, h = tex.size
@@ -254,17 +255,18 @@ class _Mesh:
 
 
 class _TriMesh(_Mesh):
-    """Triangles with their own indices (far terrain: render/far.py)."""
-    __slots__ = ("k", "tris")
+    """Triangles with their own index sets (far terrain: render/far.py)."""
+    __slots__ = ("k", "tris", "ibos")
 
-    def __init__(self, vbo, ibo, k, tris):
-        super().__init__(vbo, ibo, 0)
-        self.k, self.tris = k, tris
+    def __init__(self, vbo, ibos, k, tris):
+        super().__init__(vbo, None, 0)
+        self.ibos, self.k, self.tris = ibos, k, tris
 
     @property
     def nbytes(self) -> int:
-        return self.vbo.size + self.ibo.size
+        return self.vbo.size + sum(i.size for i in self.ibos)
 
     def release(self):
         super().release()
-        self.ibo.release()
+        for i in self.ibos:
+            i.release()

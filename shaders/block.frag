@@ -2,7 +2,12 @@
 // SHADOW (depth only), DEBUG_AGG (colour by merged quad), SMOOTH_MAG (edge-aware
 // magnification), MSAA_ALPHA (alpha test per sample), OIT (forward-shaded weighted
 // blended order-independent transparency: accumulation instead of a G-buffer).
+// Albedo is written as linear reflectance (the textures are sRGB); water (glow_scale
+// < 0 on its layers, render/pipeline.py) is marked by glow 1 (other glow stays below)
+// and, as the nearest peeled layer, takes its colour and opacity from its depth.
 #include "include/common.glsl"
+#include "include/frame.glsl"
+#include "include/tonemap.glsl"
 #ifdef OIT
 #include "include/shade.glsl"
 #endif
@@ -68,6 +73,13 @@ void oit(vec4 c) {
 }
 #endif
 
+// Water over `s` blocks of depth (to the opaque floor): more of its own colour and
+// less of the floor the deeper it is (Beer-Lambert, one grey transmittance).
+vec4 water_body(vec4 c, float s) {
+    float k = 1.0 - exp(-s * 0.25);
+    return vec4(c.rgb * mix(vec3(0.5, 0.6, 0.5), vec3(0.08, 0.2, 0.16), k), mix(0.3, 0.95, k));
+}
+
 void main() {
 #ifdef PEEL
     // behind the opaque scene, or not behind the previous layer: not this layer's
@@ -83,8 +95,17 @@ void main() {
     c.a = 1.0;
 #endif
 #ifndef SHADOW
+    c.rgb = srgb_decode(c.rgb);
     vec3 n = gl_FrontFacing ? g_normal : -g_normal;  // double-sided passes
-    float glow = texture(glow_tex, vec3(g_uv, g_layer)).r * glow_scale[int(g_layer)];
+    float scale = glow_scale[int(g_layer)];
+    float glow = scale < 0.0 ? 1.0 : min(texture(glow_tex, vec3(g_uv, g_layer)).r * scale, 0.99);
+#if defined(PEEL) && PEEL == 1
+    if (scale < 0.0 && water_fx) {
+        float d = FETCH(opaque_depth, pc, gl_SampleID).r;
+        vec2 uv = gl_FragCoord.xy / vec2(textureSize(opaque_depth MS_ARG));
+        c = water_body(c, d < 1.0 ? distance(g_world, world_pos(inv_vp, uv, d)) : 64.0);
+    }
+#endif
 #ifdef DEBUG_AGG
     c.rgb = hash_color(g_quad * 7919u + uint(g_layer));  // one colour per merged quad
     glow = 0.0;

@@ -1,4 +1,5 @@
-// First global pass (§5.4): sky behind the opaque layer, peel layers back to front,
+// First global pass (§5.4): sky (with clouds, or the sea beyond the shown area:
+// include/sky.glsl background) behind the opaque layer, peel layers back to front,
 // SSAO, god rays sampled across the whole sun disc (fixes fig. 5.23).
 // Defines: LAYERS (0..3), SSAO, GODRAYS.
 #include "include/eye.glsl"
@@ -41,7 +42,8 @@ float godrays(vec2 p) {
 void main() {
     vec2 size = vec2(textureSize(opaque, 0));
     vec3 dir = ray_dir(v_uv);
-    vec3 sky = sky_color(dir, sun_visible ? distance(gl_FragCoord.xy, sun_px) : 1e9, sun_radius);
+    vec3 ro = ortho ? world_pos(inv_vp, v_uv, 0.0) : cam_pos;
+    vec3 sky = background(ro, dir, sun_visible ? distance(gl_FragCoord.xy, sun_px) : 1e9, sun_radius);
     vec4 o = texture(opaque, v_uv);
 #ifdef SSAO
     o.rgb *= texture(ao, v_uv).r;
@@ -57,8 +59,13 @@ void main() {
 #if LAYERS > 0
     vec4 l0 = texture(layer0, v_uv); c = c * (1.0 - l0.a) + l0.rgb;
 #endif
+    // the sea beyond the shown area hides what of the area lies below its surface
+    float front_d = texture(front, v_uv).r;
+    float t = sea_hit(ro, dir);
+    if (t > 0.0 && front_d < 1e8 && eye_dist(ro + dir * t) < front_d && !in_area((ro + dir * t).xy))
+        c = sea_color(ro, ro + dir * t);
 #ifdef GODRAYS
-    if (sun_visible) c += sky_disc * 0.12 * godray_strength * godrays(gl_FragCoord.xy);
+    if (sun_visible) c += sky_disc * 0.012 * godray_strength * godrays(gl_FragCoord.xy);
 #endif
-    out_color = vec4(c, texture(front, v_uv).r);
+    out_color = vec4(c, front_d);
 }

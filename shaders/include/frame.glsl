@@ -22,5 +22,18 @@ layout(std140) uniform Frame {
     float fog_start;       float fog_end;      float dof_start;   float dof_end;
     float ssao_radius;     // blocks
     vec3 cam_fwd;          bool ortho;         // orthographic: parallel rays along cam_fwd
+    // the physical sky (render/sky.py, include/atmosphere.glsl), haze, clouds, sea, fade
+    vec4 sky_a[81];        // per node (SKY_NE elevations x SKY_NA azimuths from the sun):
+                           // log of the sky's radiance but the sun's Mie scattering
+    vec4 sky_b[81];        // log of the sun's Mie scattering there, without its phase
+    vec3 sun_dir;          float fog_density;   // towards the sun; haze per block at sea level
+    vec3 sky_pole;         float fog_height;    // the stars turn around it; haze 1/e per blocks
+    vec3 cloud_sun;        float cloud_cover;   // light on the clouds: sun (or moon), 0..1 cover
+    vec3 cloud_sky;        float cloud_z;       // and from the sky; height of the layer
+    vec2 cloud_drift;      float sea_z;         float star_px;  // blocks; sea top; a pixel (rad)
+    vec4 area_box;         // x0, y0, x1, y1 of the shown area (blocks): the sea is beyond it
+    float fade_start;      float fade_end;      // horizontal distance: surfaces fade to the sky
+    int display;           // 0 raw (debug views), 1 sRGB, 2 AgX-like tone curve (tonemap.glsl)
+    bool clouds;           bool cloud_shadows;  bool sea;  bool water_fx;
 };
 #endif

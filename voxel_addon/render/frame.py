@@ -1,7 +1,8 @@
 """The per-frame uniform block (shaders/include/frame.glsl): one std140 buffer that
 every program reads, written once per frame instead of dozens of uniform writes
 spread over the passes. The GLSL declaration is the only place its layout is written;
-the offsets come from it by the std140 rules of the member types it may use.
+the offsets come from it by the std140 rules of the member types it may use
+(and vec4 arrays, `vec4 name[N];`: N × 16 bytes, set as an (N, 4) array).
 """
 from __future__ import annotations
 
@@ -19,22 +20,33 @@ _TYPES = {"float": (4, 4, "f"), "int": (4, 4, "i"), "bool": (4, 4, "i"),
           "vec4": (16, 16, "f"), "mat4": (64, 16, "f")}
 
 
+_MEMBER = re.compile(r"(\w+)\s+(\w+)\s*(?:\[\s*(\d+)\s*\])?\s*;")
+
+
 def layout(text: str | None = None) -> tuple[dict, int]:
     """{member: (first float index, floats, kind)} and the block's size in bytes."""
     text = resources.shader("include/frame.glsl") if text is None else text
     body = re.sub(r"//[^\n]*", "", re.search(r"uniform\s+Frame\s*\{(.*?)\}", text, re.S)[1])
-    left = re.sub(r"(\w+)\s+(\w+)\s*;", "", body).strip()
-    if left:  # e.g. "float a, b;" or arrays would shift every later offset
+    left = _MEMBER.sub("", body).strip()
+    if left:  # e.g. "float a, b;" would shift every later offset
         raise ValueError(f"frame.glsl: cannot lay out {left.split(';')[0]!r}")
     members, off = {}, 0
-    for typ, name in re.findall(r"(\w+)\s+(\w+)\s*;", body):
-        if typ not in _TYPES:
-            raise ValueError(f"frame.glsl: member type {typ} has no std140 rule here")
+    for typ, name, count in _MEMBER.findall(body):
+        if typ not in _TYPES or (count and typ != "vec4"):
+            raise ValueError(f"frame.glsl: member type {typ}{'[]' if count else ''} "
+                             "has no std140 rule here")
         size, align, kind = _TYPES[typ]
+        size *= int(count or 1)  # vec4 arrays: stride 16, no padding
         off = -(-off // align) * align
         members[name] = (off // 4, size // 4, kind)
         off += size
     return members, -(-off // 16) * 16
+
+
+def arrays(text: str | None = None) -> dict:
+    """{member: element count} of the block's array members."""
+    text = resources.shader("include/frame.glsl") if text is None else text
+    return {name: int(n) for _, name, n in _MEMBER.findall(text) if n}
 
 
 class FrameBlock:
@@ -43,6 +55,7 @@ class FrameBlock:
 
     def __init__(self, ctx):
         self.members, size = layout()
+        self.arrays = arrays()
         self.order = sorted(self.members, key=lambda k: self.members[k][0])
         fmt, at = "<", 0
         for k in self.order:
@@ -54,6 +67,8 @@ class FrameBlock:
         self.data = bytearray(size)
         self.values = {k: 0 if self.members[k][1] == 1 else (0,) * self.members[k][1]
                        for k in self.order}
+        for k, n in self.arrays.items():
+            self.values[k] = np.zeros((n, 4))
         self.buf = ctx.buffer(reserve=size)
 
     def set(self, **values) -> None:
@@ -66,6 +81,8 @@ class FrameBlock:
             v, (_, n, kind) = self.values[k], self.members[k]
             if n == 1:
                 flat.append(int(v) if kind == "i" else float(v))
+            elif k in self.arrays:
+                flat.extend(np.asarray(v, float).ravel().tolist())
             elif n == 16:
                 flat.extend(np.asarray(v, float).T.ravel().tolist())
             else:

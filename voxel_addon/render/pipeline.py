@@ -75,6 +75,9 @@ class Renderer:
             if b.shape != "none":
                 for layer in set(REGISTRY.face_texture[i].tolist()):
                     scale[layer] = max(scale[layer], b.glow)
+        # water's layers are marked (block.frag: glow 1, depth colour; shade.glsl: waves)
+        for layer in set(REGISTRY.face_texture[REGISTRY.id("water")].tolist()):
+            scale[layer] = -1.0
         self.glow_scale = scale
 
     def update_chunks(self, payloads) -> None:
@@ -108,17 +111,23 @@ class Renderer:
 
     def set_area(self, blocks: np.ndarray, light: np.ndarray, cx0: int, cy0: int,
                  ring: bool = False, method: str = "greedy", backend: str | None = None,
-                 light_at: tuple[int, int] | None = None):
+                 light_at: tuple[int, int] | None = None, closed: bool = True):
         """Show the chunks [cx0, cx0+w) x [cy0, cy0+h) from a block array and their light
         instead of what was shown.
 
         blocks is (16w, 16h, 256), or with ring=True (16w+2, 16h+2, 256) including a
         one-voxel ring of neighbours (else outside counts as air); light is the packed
         light of whole chunks from light_at (default (cx0, cy0)), e.g. (16w, 16h, 256);
-        chunks it does not cover get open daylight.
+        chunks it does not cover get open daylight. closed: the ring counts as air all
+        the same, so the area's outer wall has faces (seen from outside, or from a side
+        view, the area is a closed block, not a slab open into its caves), and caves
+        that reach the wall end in stone (_close); ring=True then only matters for
+        closed=False.
         """
         from .. import meshing
-        if not ring:
+        if ring and closed:
+            blocks = _close(blocks)
+        elif not ring:
             pad = np.zeros((blocks.shape[0] + 2, blocks.shape[1] + 2, 256), np.uint16, order="F")
             pad[1:-1, 1:-1] = blocks
             blocks = pad
@@ -290,7 +299,7 @@ class Renderer:
         aniso = max(1.0, min(float(s.anisotropy), self.max_anisotropy))
         if aniso != self._aniso:
             self.tex.anisotropy = self._aniso = aniso
-        sp = sky.params(hours)
+        sp = sky.params(hours, s.exposure)
         debug = DEBUG_VIEWS.index(s.debug)
         vp, inv_vp = cull_vp, _ = camera.matrices()
         draw_cam = camera
@@ -329,13 +338,14 @@ class Renderer:
         sky_on = debug in (0, 6)  # debug views show black where there is no surface
         for k in ("zenith", "horizon", "halo", "disc"):
             F.set(**{f"sky_{k}": sp[k] if sky_on else (0.0, 0.0, 0.0)})
+        F.set(**sky_values(s, sp, hours, sky_on, debug, camera, self.area, h))
         F.set(vp=vp, inv_vp=inv_vp, cam_pos=(draw_cam.x, draw_cam.y, draw_cam.z),
               cam_fwd=draw_cam._fwd(), ortho=draw_cam.ortho,
               far_dist=camera.far, shadow_eye=(camera.x, camera.y, camera.z),
               # orthographic: no eye to fade from; the map covers the view box
               shadow_fade=1e9 if camera.ortho else s.shadow_fade,
               day_ambient=sp["ambient"], day_u=sp["u"],
-              day_direct=sp["direct"], sky_stars=sp["stars"] if sky_on else 0.0,
+              day_direct=sp["direct"], sky_stars=sp["stars"] if sky_on and s.stars else 0.0,
               sky_light_dir=sp["light_dir"], time=s.time, waving=s.waving,
               godray_strength=s.godray_strength, sun_px=sun_px, sun_radius=sun_r,
               sun_visible=sun_vis, fog_start=fog_end * 0.55, fog_end=fog_end,
@@ -538,6 +548,46 @@ class _Graph:
     def programs(self) -> list:
         return [p for x in (self.shadow, self.g, self.shade, self.transparency, *self.post)
                 if x is not None for p in x.programs()]
+
+
+def _close(blocks: np.ndarray) -> np.ndarray:
+    """A copy of an area with its one-voxel ring where the ring is air and the caves
+    (air below the column's top) of the area's outermost voxels are stone: every face
+    of the outer wall is drawn, from outside and from inside a cave."""
+    b = np.array(blocks, order="F")
+    stone = REGISTRY.id("stone")
+    for sl in ((1, slice(None)), (-2, slice(None)), (slice(None), 1), (slice(None), -2)):
+        wall = b[sl]                                   # (n, 256) columns of one side
+        solid = wall != 0
+        top = np.where(solid.any(1), 255 - np.argmax(solid[:, ::-1], axis=1), -1)
+        cave = (~solid) & (np.arange(256)[None, :] < top[:, None])
+        wall[cave] = stone
+        b[sl] = wall
+    b[[0, -1]] = 0
+    b[:, [0, -1]] = 0
+    return b
+
+
+def sky_values(s: Settings, sp: dict, hours: float, sky_on: bool, debug: int, camera,
+               area, h: int) -> dict:
+    """The frame block's sky, haze, clouds, sea, fade and display values (issue 20)."""
+    zero = np.full((sky.NE * sky.NA, 4), math.log(sky.EPS))
+    fade_end = s.fade_distance or (s.distance + 0.5) * 16.0
+    box = [16.0 * v for v in area] if area else [0.0, 0.0, 0.0, 0.0]
+    fov = camera.fov or s.fov
+    return dict(
+        sky_a=sp["sky_a"] if sky_on else zero, sky_b=sp["sky_b"] if sky_on else zero,
+        sun_dir=sp["sun_dir"], sky_pole=sp["pole"],
+        fog_density=0.0014 * s.haze if sky_on else 0.0, fog_height=s.fog_height,
+        cloud_sun=sp["cloud_sun"], cloud_sky=sp["cloud_sky"], cloud_cover=s.cloud_cover,
+        cloud_z=s.cloud_height, cloud_drift=sky.drift(hours, s.cloud_speed),
+        sea_z=s.sea_level + 0.95, area_box=box,
+        star_px=2.0 * math.tan(math.radians(fov) / 2.0) / max(h, 1),
+        fade_start=fade_end * (1.0 - s.fade_width) if s.fade else 1e9,
+        fade_end=fade_end if s.fade else 2e9,
+        display=(2 if s.tonemap else 1) if debug in (0, 6) else (1 if debug in (1, 4) else 0),
+        clouds=s.clouds and sky_on, cloud_shadows=s.cloud_shadows, sea=s.sea and sky_on,
+        water_fx=s.water and debug in (0, 6))
 
 
 def _top_camera(camera: cam.Camera) -> cam.Camera:

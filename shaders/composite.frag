@@ -43,10 +43,13 @@ void main() {
     vec2 size = vec2(textureSize(opaque, 0));
     vec3 dir = ray_dir(v_uv);
     vec3 ro = ortho ? world_pos(inv_vp, v_uv, 0.0) : cam_pos;
-    vec3 sky = background(ro, dir, sun_visible ? distance(gl_FragCoord.xy, sun_px) : 1e9, sun_radius);
+    // parallel rays all look one way: below the horizon (where no sea is) an
+    // orthographic view shows the sky as seen that far up, not the ground's haze
+    vec3 bg = ortho && sea_hit(ro, dir) < 0.0 ? vec3(dir.xy, abs(dir.z)) : dir;
+    vec3 sky = background(ro, bg, sun_visible ? distance(gl_FragCoord.xy, sun_px) : 1e9, sun_radius);
     vec4 o = texture(opaque, v_uv);
 #ifdef SSAO
-    o.rgb *= texture(ao, v_uv).r;
+    o.rgb *= pow(texture(ao, v_uv).r, 2.2);  // a factor on screen, as the light levels
 #endif
     vec3 c = o.rgb + sky * (1.0 - o.a);
     // back to front over premultiplied layers

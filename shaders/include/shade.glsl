@@ -52,7 +52,7 @@ vec3 shade_light_day(vec3 albedo, vec3 p, vec3 n, float glow, out float day) {
     // volume: a dim cut instead of open daylight
     vec2 lo = abs(p.xy - area_box.xy), hi = abs(p.xy - area_box.zw);
     if ((lo.x < 1e-3 && n.x < -0.5) || (hi.x < 1e-3 && n.x > 0.5) ||
-        (lo.y < 1e-3 && n.y < -0.5) || (hi.y < 1e-3 && n.y > 0.5)) l = vec4(0.0, 0.0, 0.0, 0.45);
+        (lo.y < 1e-3 && n.y < -0.5) || (hi.y < 1e-3 && n.y > 0.5)) l = vec4(0.0, 0.0, 0.0, 0.6);
     l = pow(l, vec4(2.2));
     day = l.a;
     float direct = l.a > 0.0 ? shadow_at(p, n) * cloud_shadow(p) : 1.0;

@@ -14,13 +14,14 @@ vec2 wave_slope(vec2 xy, float dist) {
     float k = 1.0 - smoothstep(30.0, 160.0, dist);
     if (k <= 0.0) return vec2(0.0);
     vec2 s = vec2(0.0);
+    float t = waving ? time : 0.0;  // still water when the view stands still
     const vec4 w[4] = vec4[4](vec4(0.8, 0.6, 0.9, 1.3), vec4(-0.5, 0.85, 1.7, 1.9),
                               vec4(0.95, -0.3, 2.9, 2.7), vec4(-0.2, -0.98, 4.3, 3.4));
     for (int i = 0; i < 4; i++) {
-        float ph = dot(w[i].xy, xy) * w[i].z + time * w[i].w;
+        float ph = dot(w[i].xy, xy) * w[i].z + t * w[i].w;
         s += w[i].xy * cos(ph) * (0.05 / (1.0 + float(i) * 0.6));
     }
-    s += 0.04 * vec2(gnoise2(xy * 0.9 + time * 0.3, 7u), gnoise2(xy.yx * 0.9 - time * 0.25, 11u));
+    s += 0.04 * vec2(gnoise2(xy * 0.9 + t * 0.3, 7u), gnoise2(xy.yx * 0.9 - t * 0.25, 11u));
     return s * k;
 }
 

@@ -20,7 +20,17 @@ def test_block_layout_matches_the_driver(gl):
     block = frame.FrameBlock(gl)
     bools = set(re.findall(r"\bbool\s+(\w+)\s*;", resources.shader("include/frame.glsl")))
     assert {"waving", "sun_visible", "ortho"} <= bools
+    arrays = frame.arrays()
+    assert arrays.get("sky_a", 0) > 0
     for name, (_, n, kind) in members.items():
+        if name in arrays:  # vec4 NAME[N]: one pixel per element
+            v = rng.uniform(-10, 10, (arrays[name], 4))
+            block.set(**{name: v})
+            for i in range(arrays[name]):
+                lines.append(f"if (k == {k}) r = {name}[{i}];")
+                want.append(v[i])
+                k += 1
+            continue
         if kind == "i":
             v = rng.integers(-100, 100, n)
             if name in bools:  # bools: GLSL gives true for any non-zero

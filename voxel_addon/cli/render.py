@@ -64,15 +64,21 @@ def run(args):
     if not 0 <= cam_args[2] <= 400:
         raise VoxelError("camera z must be between 0 and 400")
     if args.scene:
+        from ..generation import make_generator
+        from ..meshing import scenes
         data = source.scene_area(args.scene)
+        sea = source.sea_level(make_generator(scenes.GENERATOR, scenes.SCENES[args.scene].seed))
     else:
         from ..world import World
         world = World.open(args.world, readonly=True, loader=False)
         try:
             data = source.world_area(world, cam_args[0], cam_args[1], s.distance,
                                      s.light_radius)
+            sea = source.sea_level(world.generator)
         finally:
             world.close()
+    if not any(i.startswith("sea_level=") for i in args.set):
+        s.sea_level = sea
     ctx = source.context()
     r = Renderer(ctx, s)
     r.set_area(data.blocks, data.light, data.cx0, data.cy0, ring=True, method=args.aggregation,

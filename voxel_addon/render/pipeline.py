@@ -349,7 +349,7 @@ class Renderer:
               sky_light_dir=sp["light_dir"], time=s.time, waving=s.waving,
               godray_strength=s.godray_strength, sun_px=sun_px, sun_radius=sun_r,
               sun_visible=sun_vis, fog_start=fog_end * 0.55, fog_end=fog_end,
-              dof_start=fog_end * 0.7, dof_end=fog_end * 1.1, ssao_radius=s.ssao_radius)
+              dof_start=fog_end * 0.8, dof_end=fog_end * 1.15, ssao_radius=s.ssao_radius)
         F.upload()
         F.buf.bind_to_uniform_block(BINDING)
         if geo.gpu:
@@ -551,20 +551,21 @@ class _Graph:
 
 
 def _close(blocks: np.ndarray) -> np.ndarray:
-    """A copy of an area with its one-voxel ring where the ring is air and the caves
-    (air below the column's top) of the area's outermost voxels are stone: every face
-    of the outer wall is drawn, from outside and from inside a cave."""
+    """A copy of an area with its one-voxel ring: the ring is air (water next to
+    water: the sea beyond the area continues it, include/water.glsl) and the caves
+    (air below the column's top) of the area's outermost voxels are stone, so every
+    face of the outer wall is drawn, from outside and from inside a cave."""
     b = np.array(blocks, order="F")
-    stone = REGISTRY.id("stone")
-    for sl in ((1, slice(None)), (-2, slice(None)), (slice(None), 1), (slice(None), -2)):
-        wall = b[sl]                                   # (n, 256) columns of one side
+    stone, water = REGISTRY.id("stone"), REGISTRY.id("water")
+    for inner, outer in (((1, slice(None)), (0, slice(None))), ((-2, slice(None)), (-1, slice(None))),
+                         ((slice(None), 1), (slice(None), 0)), ((slice(None), -2), (slice(None), -1))):
+        wall = b[inner]                                # (n, 256) columns of one side
         solid = wall != 0
         top = np.where(solid.any(1), 255 - np.argmax(solid[:, ::-1], axis=1), -1)
         cave = (~solid) & (np.arange(256)[None, :] < top[:, None])
         wall[cave] = stone
-        b[sl] = wall
-    b[[0, -1]] = 0
-    b[:, [0, -1]] = 0
+        b[inner] = wall
+        b[outer] = np.where(wall == water, water, 0)
     return b
 
 
@@ -581,12 +582,14 @@ def sky_values(s: Settings, sp: dict, hours: float, sky_on: bool, debug: int, ca
         fog_density=0.0014 * s.haze if sky_on else 0.0, fog_height=s.fog_height,
         cloud_sun=sp["cloud_sun"], cloud_sky=sp["cloud_sky"], cloud_cover=s.cloud_cover,
         cloud_z=s.cloud_height, cloud_drift=sky.drift(hours, s.cloud_speed),
-        sea_z=s.sea_level + 0.95, area_box=box,
+        # (the haze thins upwards from the sea, or from the generators' usual 62)
+        sea_z=(s.sea_level if s.sea_level >= 0 else 62) + 0.95, area_box=box,
         star_px=2.0 * math.tan(math.radians(fov) / 2.0) / max(h, 1),
         fade_start=fade_end * (1.0 - s.fade_width) if s.fade else 1e9,
         fade_end=fade_end if s.fade else 2e9,
         display=(2 if s.tonemap else 1) if debug in (0, 6) else (1 if debug in (1, 4) else 0),
-        clouds=s.clouds and sky_on, cloud_shadows=s.cloud_shadows, sea=s.sea and sky_on,
+        clouds=s.clouds and sky_on, cloud_shadows=s.cloud_shadows,
+        sea=s.sea and sky_on and s.sea_level >= 0,
         water_fx=s.water and debug in (0, 6))
 
 

@@ -28,6 +28,12 @@ class Area(NamedTuple):
     light_at: tuple[int, int]
 
 
+def sea_level(generator) -> int:
+    """The water level of a world's generator (its `sea_level` parameter), -1 if it
+    has none (render.Settings.sea_level: the sea beyond the shown area)."""
+    return int(getattr(generator, "params", {}).get("sea_level", -1))
+
+
 def world_area(world, x: float, y: float, distance: int, light_radius: int = 8) -> Area:
     """The (2d+1)² chunks around the chunk holding (x, y), plus ring, and the light of
     the light window (lightvol.window) only: memory stays bounded at distance 32."""

@@ -16,8 +16,8 @@ float cloud_density(vec2 xy, int n) {
     vec2 p = (xy + cloud_drift) / CLOUD_SCALE;
     vec2 q = (xy + cloud_drift * 0.6 + vec2(-cloud_drift.y, cloud_drift.x) * 0.25) / (CLOUD_SCALE * 0.45);
     float f = fbm2(p, CLOUD_SEED, n) + 0.3 * fbm2(q, CLOUD_SEED + 16u, max(n - 2, 1));
-    float t = mix(0.55, -0.45, cloud_cover);
-    return smoothstep(t, t + 0.3, f);
+    float t = mix(0.35, -0.4, cloud_cover);
+    return smoothstep(t, t + 0.25, f);
 }
 
 // The layer seen from ro along d: premultiplied colour and coverage.

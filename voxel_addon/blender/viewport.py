@@ -94,7 +94,20 @@ def settings_of(vv, draft: bool = False, render: bool = False):
 def _common(s, vv):
     s.transparency = vv.transparency
     s.debug = vv.debug_view or "none"
+    s.exposure, s.haze, s.cloud_cover = vv.exposure, vv.haze, vv.cloud_cover
+    s.sea_level = _sea_level(vv.id_data)
     return s
+
+
+def _sea_level(scene) -> int:
+    """The open world's water level (render.source.sea_level), -1 without one."""
+    from . import session
+    from ..core.errors import VoxelError
+    from ..render import source
+    try:
+        return source.sea_level(session.world(scene.voxel.path).generator)
+    except (VoxelError, AttributeError, OSError):
+        return -1
 
 
 def problem(context) -> str | None:

@@ -64,10 +64,8 @@ def run(args):
     if not 0 <= cam_args[2] <= 400:
         raise VoxelError("camera z must be between 0 and 400")
     if args.scene:
-        from ..generation import make_generator
-        from ..meshing import scenes
         data = source.scene_area(args.scene)
-        sea = source.sea_level(make_generator(scenes.GENERATOR, scenes.SCENES[args.scene].seed))
+        sea = source.scene_sea_level(args.scene)
     else:
         from ..world import World
         world = World.open(args.world, readonly=True, loader=False)

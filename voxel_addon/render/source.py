@@ -34,6 +34,13 @@ def sea_level(generator) -> int:
     return int(getattr(generator, "params", {}).get("sea_level", -1))
 
 
+def scene_sea_level(name: str) -> int:
+    """sea_level of a reference scene's generator (meshing.scenes)."""
+    from ..generation import make_generator
+    from ..meshing import scenes
+    return sea_level(make_generator(scenes.GENERATOR, scenes.scene(name).seed))
+
+
 def world_area(world, x: float, y: float, distance: int, light_radius: int = 8) -> Area:
     """The (2d+1)² chunks around the chunk holding (x, y), plus ring, and the light of
     the light window (lightvol.window) only: memory stays bounded at distance 32."""

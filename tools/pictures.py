@@ -7,8 +7,9 @@
 `render` draws the four reference scenes (meshing.scenes) and three generated seed-7
 worlds (a coast with hills, a desert, a mountain range: the bench's biome windows) at
 dawn, noon, dusk and night into OUT/<view>_<HHMM>.png, 640x360. It runs
-`python -m voxel_addon render` in a subprocess, so pointing PYTHONPATH at an older
-checkout renders the same views with that code (the "before" side). The world files
+`python -m voxel_addon render` in a subprocess, from the current directory: run it
+from an older checkout (`cd old && python NEW/tools/pictures.py render OUT`) to render
+the same views with that code (the "before" side). The world files
 are generated once into OUT/../worlds. Cameras of the worlds are aimed from ground
 heights (`aim`), so they need no retuning when the generator changes a little.
 `sheet` puts before and after side by side, one row per picture; `grid` puts a
@@ -26,18 +27,20 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 TIMES = ("07:00", "12:00", "18:30", "23:30")
 SIZE = (640, 360)
-# name -> (seed, centre block (x, y)); eye (x, y, metres above ground), target (x, y, above)
+# name -> (seed, centre block (x, y)); eye (x, y, metres above ground), target (x, y,
+# above), view distance (chunks: the mountains stand at the edge of 8)
 WORLDS = {
-    "coast": (7, (0, -192), (45, -330, 22), (-90, -215, 10)),
-    "desert": (7, (4096, -2400), (4150, -2330, 20), (4000, -2470, 0)),
-    "mountains": (7, (4768, -3328), (4775, -3320, 45), (4690, -3440, 0)),
+    "coast": (7, (0, -192), (45, -330, 22), (-90, -215, 10), 8),
+    "desert": (7, (4096, -2400), (4150, -2330, 20), (4000, -2470, 0), 8),
+    "mountains": (7, (4768, -3328), (4775, -3320, 45), (4690, -3440, 0), 12),
 }
 SCENES = ("ocean", "desert", "landscape", "cave")
 
 
 def cli(*args, env=None) -> None:
+    env = dict(env or os.environ, PYTHONPATH=os.getcwd())  # the checkout it runs in
     r = subprocess.run([sys.executable, "-m", "voxel_addon", *map(str, args)],
-                       capture_output=True, text=True, env=env or os.environ.copy())
+                       capture_output=True, text=True, env=env)
     if r.returncode:
         raise SystemExit(f"voxel_addon {' '.join(map(str, args[:3]))}: {r.stderr.strip()[-800:]}")
 
@@ -73,11 +76,11 @@ def aim(path: Path, eye, target) -> tuple[float, ...]:
 def worlds(folder: Path) -> dict:
     folder.mkdir(parents=True, exist_ok=True)
     out = {}
-    for name, (seed, (x, y), eye, target) in WORLDS.items():
+    for name, (seed, (x, y), eye, target, dist) in WORLDS.items():
         path = folder / f"{name}.sqlite"
         if not path.exists():
             cli("generate", "--world", path, "--seed", seed, "--center", x, y, "--radius", 14)
-        out[name] = (path, aim(path, eye, target))
+        out[name] = (path, aim(path, eye, target), dist)
     return out
 
 
@@ -90,10 +93,10 @@ def render(out: Path, only=(), times=TIMES, extra=()) -> None:
             if not only or f"scene_{name}" in only:
                 cli("render", "--scene", name, "--time", t, "--size", *SIZE,
                     "--out", out / f"scene_{name}_{tag}.png", *extra)
-        for name, (path, cam) in ws.items():
+        for name, (path, cam, dist) in ws.items():
             if not only or f"world_{name}" in only:
                 cli("render", "--world", path, "--camera", *cam, "--time", t, "--size", *SIZE,
-                    "--out", out / f"world_{name}_{tag}.png", *extra)
+                    "--distance", dist, "--out", out / f"world_{name}_{tag}.png", *extra)
         print(f"rendered {t}", flush=True)
 
 

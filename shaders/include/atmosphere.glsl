@@ -44,14 +44,16 @@ vec3 sky_radiance(vec3 d) {
 // The haze's colour looking along d: the air near the ground lit by the light there
 // (eq. 4.1's daylight, brighter looking towards the sun or moon): the horizon's sky in
 // that azimuth, the light of all the air out to the end of the atmosphere, in its own
-// colour but no brighter than that. (After sunset the far air is still in the sun and
-// the horizon glows; the air around the eye is not, and neither is its haze.)
+// colour but (a smooth minimum) no brighter than that. (After sunset the far air is
+// still in the sun and the horizon glows; the air around the eye is not, and neither
+// is its haze.)
 vec3 haze_color(vec3 d) {
     vec3 h = normalize(vec3(d.xy, 0.0) + vec3(0.0, 0.0, 1e-3));
     vec3 local = day_ambient + day_direct * (0.2 + 0.8 * pow(max(dot(h, sky_light_dir), 0.0), 8.0));
     vec3 sky = sky_radiance(h);
     const vec3 Y = vec3(0.2126, 0.7152, 0.0722);
-    return sky * min(1.0, dot(local, Y) / max(dot(sky, Y), 1e-6));
+    float q = dot(sky, Y) / max(dot(local, Y), 1e-6);
+    return sky * inversesqrt(1.0 + q * q);
 }
 
 // Below the horizon, where neither terrain nor sea is: the horizon darkening downwards

@@ -43,11 +43,22 @@ void main() {
     vec2 size = vec2(textureSize(opaque, 0));
     vec3 dir = ray_dir(v_uv);
     vec3 ro = ortho ? world_pos(inv_vp, v_uv, 0.0) : cam_pos;
+    vec4 o = texture(opaque, v_uv);
+    float front_d = texture(front, v_uv).r;
+    // the sea: behind what does not cover the pixel, and beyond the shown area in front
+    // of what of the area lies below its surface (one evaluation for both)
+    float t = sea_hit(ro, dir);
+    vec3 hit = ro + dir * t;
+    bool sea_front = t > 0.0 && front_d < 1e8 && eye_dist(hit) < front_d && !in_area(hit.xy);
+    bool sea_behind = t > 0.0 && o.a < 0.999;
+    vec3 sea_c = sea_front || sea_behind ? sea_color(ro, hit) : vec3(0.0);
     // parallel rays all look one way: below the horizon (where no sea is) an
     // orthographic view shows the sky as seen that far up, not the ground's haze
-    vec3 bg = ortho && sea_hit(ro, dir) < 0.0 ? vec3(dir.xy, abs(dir.z)) : dir;
-    vec3 sky = background(ro, bg, sun_visible ? distance(gl_FragCoord.xy, sun_px) : 1e9, sun_radius);
-    vec4 o = texture(opaque, v_uv);
+    vec3 bg = ortho ? vec3(dir.xy, abs(dir.z)) : dir;
+    // (not behind surfaces that cover the pixel: the clouds' noise is the dear part)
+    vec3 sky = sea_behind ? sea_c : o.a < 0.999
+        ? background(ro, bg, sun_visible ? distance(gl_FragCoord.xy, sun_px) : 1e9, sun_radius)
+        : vec3(0.0);
 #ifdef SSAO
     o.rgb *= pow(texture(ao, v_uv).r, 2.2);  // a factor on screen, as the light levels
 #endif
@@ -62,11 +73,7 @@ void main() {
 #if LAYERS > 0
     vec4 l0 = texture(layer0, v_uv); c = c * (1.0 - l0.a) + l0.rgb;
 #endif
-    // the sea beyond the shown area hides what of the area lies below its surface
-    float front_d = texture(front, v_uv).r;
-    float t = sea_hit(ro, dir);
-    if (t > 0.0 && front_d < 1e8 && eye_dist(ro + dir * t) < front_d && !in_area((ro + dir * t).xy))
-        c = sea_color(ro, ro + dir * t);
+    if (sea_front) c = sea_c;
 #ifdef GODRAYS
     if (sun_visible) c += sky_disc * 0.012 * godray_strength * godrays(gl_FragCoord.xy);
 #endif

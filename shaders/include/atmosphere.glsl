@@ -48,9 +48,15 @@ vec3 sky_radiance(vec3 d) {
 // still in the sun and the horizon glows; the air around the eye is not, and neither
 // is its haze.)
 vec3 haze_color(vec3 d) {
-    vec3 h = normalize(vec3(d.xy, 0.0) + vec3(0.0, 0.0, 1e-3));
-    vec3 local = day_ambient + day_direct * (0.2 + 0.8 * pow(max(dot(h, sky_light_dir), 0.0), 8.0));
-    vec3 sky = sky_radiance(h);
+    vec2 h = d.xy / max(length(d.xy), 1e-5);
+    // the table's horizon row (sky_radiance at elevation 0: one row, no elevation mix)
+    vec2 s = sun_dir.xy / max(length(sun_dir.xy), 1e-5);
+    float a = acos(clamp(dot(h, s), -1.0, 1.0)) * (float(SKY_NA - 1) / 3.14159265);
+    int j = min(int(a), SKY_NA - 2);
+    float fj = a - float(j);
+    vec3 sky = max(exp(mix(sky_a[j].rgb, sky_a[j + 1].rgb, fj)) - SKY_EPS, 0.0)
+             + phase_mie(dot(vec3(h, 0.0), sun_dir)) * max(exp(mix(sky_b[j].rgb, sky_b[j + 1].rgb, fj)) - SKY_EPS, 0.0);
+    vec3 local = day_ambient + day_direct * (0.2 + 0.8 * pow(max(dot(h, sky_light_dir.xy), 0.0), 8.0));
     const vec3 Y = vec3(0.2126, 0.7152, 0.0722);
     float q = dot(sky, Y) / max(dot(local, Y), 1e-6);
     return sky * inversesqrt(1.0 + q * q);

@@ -55,7 +55,7 @@ vec3 shade_light_day(vec3 albedo, vec3 p, vec3 n, float glow, out float day) {
         (lo.y < 1e-3 && n.y < -0.5) || (hi.y < 1e-3 && n.y > 0.5)) l = vec4(0.0, 0.0, 0.0, 0.6);
     l = pow(l, vec4(2.2));
     day = l.a;
-    float direct = l.a > 0.0 ? shadow_at(p, n) * cloud_shadow(p) : 1.0;
+    float direct = l.a > 0.0 && dot(n, sky_light_dir) > 0.0 ? shadow_at(p, n) * cloud_shadow(p) : 1.0;
     DayLight dl = DayLight(day_ambient, day_direct * direct, sky_light_dir, day_u);
     return light_shade(albedo, l.rgb, glow, l.a, n, dl);
 }
@@ -99,13 +99,14 @@ vec4 shade_surface(vec4 albedo, vec3 p, vec3 n, float glow) {
         vec3 m = water ? water_normal(p, n, eye_dist(p)) : n;
         float f = fresnel(water ? 0.02 : 0.04, dot(-v, m));
         float direct = day * (sky_light_dir.z > 0.0 ? shadow_at(p, n) * cloud_shadow(p) : 0.0);
-        vec3 r = reflection(p, v, m, direct) * day;
+        vec3 r = reflection(p, v, m, direct, true) * day;
         o = vec4(o.rgb * (1.0 - f) + r * f, o.a + f * (1.0 - o.a));
     }
 #endif
 #ifdef FOG
     // outdoor air: none in caves (the surface's daylight stands for the way's)
-    o.rgb = mix(o.rgb, haze_color(eye_dir(p)) * o.a, haze(cam_pos, p) * sqrt(day));
+    float h = haze(cam_pos, p) * sqrt(day);
+    if (h > 1e-3) o.rgb = mix(o.rgb, haze_color(eye_dir(p)) * o.a, h);
 #endif
     return o * (1.0 - edge_fade(p));
 #endif

@@ -18,11 +18,9 @@ vec3 sky_color(vec3 n, float d_px, float size_px) {
     return c + stars(n);
 }
 
-// What lies behind every surface along the ray from ro in direction n: the sea where
-// the ray meets it, else the sky with its disc and stars under the clouds.
+// What lies behind every surface along the ray from ro in direction n, where it does
+// not meet the sea (sea_hit, sea_color): the sky with its disc and stars, under the clouds.
 vec3 background(vec3 ro, vec3 n, float d_px, float size_px) {
-    float t = sea_hit(ro, n);
-    if (t > 0.0) return sea_color(ro, ro + n * t);
     vec4 cl = cloud_layer(ro, n);
     return sky_color(n, d_px, size_px) * (1.0 - cl.a) + cl.rgb;
 }

@@ -36,17 +36,18 @@ float fresnel(float f0, float cos_v) {
 }
 
 // What a surface at p with normal n reflects towards the eye looking along v (unit,
-// eye to p): the sky and clouds, and the sun's glint (times `direct`: shadowed, 0..1).
-// Far away the waves smaller than a pixel blur the clouds' reflection away.
-vec3 reflection(vec3 p, vec3 v, vec3 n, float direct) {
+// eye to p): the sky and clouds (with_clouds), and the sun's glint (times `direct`:
+// shadowed, 0..1). Far away the waves smaller than a pixel blur the clouds away.
+vec3 reflection(vec3 p, vec3 v, vec3 n, float direct, bool with_clouds) {
     vec3 r = reflect(v, n);
     r.z = max(r.z, 0.0);  // waves that reflect downwards still see the horizon
     r = normalize(r + vec3(0.0, 0.0, 1e-3));
-    vec4 cl = cloud_layer(p, r) * (1.0 - smoothstep(60.0, 400.0, distance(p, cam_pos)));
+    float near = with_clouds ? 1.0 - smoothstep(60.0, 400.0, distance(p, cam_pos)) : 0.0;
+    vec4 cl = near > 0.0 ? cloud_layer(p, r) * near : vec4(0.0);
     vec3 c = sky_radiance(r) * (1.0 - cl.a) + cl.rgb;
     // a sharp highlight of the disc (the sun's or moon's), dimmed where clouds cover it
-    float g = pow(max(dot(r, sky_light_dir), 0.0), 900.0) * 40.0
-            + pow(max(dot(r, sky_light_dir), 0.0), 120.0) * 1.2;
+    float k = max(dot(r, sky_light_dir), 0.0);
+    float g = pow(k, 900.0) * 40.0 + pow(k, 120.0) * 1.2;
     return c + sky_disc * 0.06 * g * direct * (1.0 - cl.a) * step(0.0, sky_light_dir.z);
 }
 
@@ -59,7 +60,8 @@ float sea_hit(vec3 ro, vec3 d) {
 bool in_area(vec2 xy) { return all(greaterThanEqual(xy, area_box.xy)) && all(lessThan(xy, area_box.zw)); }
 
 // The open sea at p (on the plane), seen from ro: deep water lit like the terrain, the
-// reflection over it by Fresnel, the haze of the way there.
+// reflection of the sky over it by Fresnel (not of the clouds: it lies beyond the shown
+// area, where they would be blurred away, and they cost most), the haze of the way.
 vec3 sea_color(vec3 ro, vec3 p) {
     vec3 v = normalize(p - ro);
     float dist = distance(ro, p);
@@ -67,7 +69,9 @@ vec3 sea_color(vec3 ro, vec3 p) {
     vec3 body = WATER_DEEP * (day_ambient + day_direct * max(sky_light_dir.z, 0.0));
     // far away many waves per pixel: the grazing mirror averages to less
     float f = water_fx ? fresnel(0.02, max(dot(-v, n), 0.12)) : 0.0;
-    vec3 c = mix(body, reflection(p, v, n, water_fx ? cloud_shadow(p) : 0.0), f);
+    // (the clouds' shadow only matters for the glint, near the disc's reflection)
+    bool glint = water_fx && dot(reflect(v, n), sky_light_dir) > 0.99;
+    vec3 c = mix(body, reflection(p, v, n, glint ? cloud_shadow(p) : float(water_fx), false), f);
     return mix(c, haze_color(v), haze(ro, p));
 }
 #endif

@@ -46,7 +46,7 @@ def density(x, y, cover: float, drift=(0.0, 0.0), n: int = 5):
     px, py = (np.asarray(x) + dx) / SCALE, (np.asarray(y) + dy) / SCALE
     qx = (np.asarray(x) + dx * 0.6 - dy * 0.25) / (SCALE * 0.45)
     qy = (np.asarray(y) + dy * 0.6 + dx * 0.25) / (SCALE * 0.45)
-    f = fbm2(px, py, SEED, n) + 0.3 * fbm2(qx, qy, SEED + 16, max(n - 2, 1))
+    f = fbm2(px, py, SEED, n) + 0.3 * fbm2(qx, qy, SEED + 16, max(n - 3, 1))
     t = 0.35 + (-0.4 - 0.35) * cover
     k = np.clip((f - t) / 0.25, 0.0, 1.0)
     return k * k * (3.0 - 2.0 * k)

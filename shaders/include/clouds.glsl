@@ -63,6 +63,6 @@ float cloud_shadow(vec3 p) {
     vec3 l = sky_light_dir;
     if (!clouds || !cloud_shadows || l.z <= 0.02 || p.z >= cloud_z) return 1.0;
     vec2 xy = p.xy + l.xy * ((cloud_z - p.z) / l.z);
-    return 1.0 - 0.7 * cloud_density(xy, 2);
+    return 1.0 - 0.7 * cloud_density(xy, 1);  // soft: the coarse shapes only
 }
 #endif

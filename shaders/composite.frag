@@ -75,7 +75,7 @@ void main() {
 #endif
     if (sea_front) c = sea_c;
 #ifdef GODRAYS
-    if (sun_visible) c += sky_disc * 0.012 * godray_strength * godrays(gl_FragCoord.xy);
+    if (sun_visible) c += sky_disc * godray_strength * godrays(gl_FragCoord.xy);  // (render/sky.py godray_scale)
 #endif
     out_color = vec4(c, front_d);
 }

@@ -42,11 +42,11 @@ vec3 sky_radiance(vec3 d) {
 }
 
 // The haze's colour looking along d: the air near the ground lit by the light there
-// (eq. 4.1's daylight, brighter looking towards the sun or moon): the horizon's sky in
-// that azimuth, the light of all the air out to the end of the atmosphere, in its own
-// colour but (a smooth minimum) no brighter than that. (After sunset the far air is
-// still in the sun and the horizon glows; the air around the eye is not, and neither
-// is its haze.)
+// (eq. 4.1's daylight, brighter looking towards the sun or moon) where the horizon's
+// sky in that azimuth (the light of all the air out to the end of the atmosphere) is
+// brighter than that, else the horizon's sky. (After sunset the far air is still in
+// the sun and the horizon glows; the air around the eye is not, and neither is its
+// haze.)
 vec3 haze_color(vec3 d) {
     vec2 h = d.xy / max(length(d.xy), 1e-5);
     // the table's horizon row (sky_radiance at elevation 0: one row, no elevation mix)
@@ -59,7 +59,10 @@ vec3 haze_color(vec3 d) {
     vec3 local = day_ambient + day_direct * (0.2 + 0.8 * pow(max(dot(h, sky_light_dir.xy), 0.0), 8.0));
     const vec3 Y = vec3(0.2126, 0.7152, 0.0722);
     float q = dot(sky, Y) / max(dot(local, Y), 1e-6);
-    return sky * inversesqrt(1.0 + q * q);
+    float k = inversesqrt(1.0 + q * q);  // ~1 where the sky is the dimmer, ~1/q where not
+    // capped, and in the local light's colour the more the sky outshines it (the
+    // horizon's glow at dusk is far too saturated for the air in front of the ground)
+    return mix(local, sky * k, k);
 }
 
 // Below the horizon, where neither terrain nor sea is: the horizon darkening downwards

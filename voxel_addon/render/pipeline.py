@@ -38,6 +38,8 @@ class Renderer:
         self.targets: dict = {}
         self.stats: dict = {}
         self.area = None             # (cx0, cy0, cx1, cy1): the box of the shown chunks
+        self.edge_water = None       # set_area: the fraction of the area's edge that is
+                                     # open water (the sea beyond it only if it is)
         self.lights: dict = {}       # (cx, cy) -> its light (None: open daylight; or packed)
         self._vol_key = None         # the light window last made resident
         self._fs: dict = {}          # program -> empty VAO for fullscreen passes
@@ -125,6 +127,8 @@ class Renderer:
         closed=False.
         """
         from .. import meshing
+        if ring:
+            self.edge_water = _edge_water(blocks)
         if ring and closed:
             blocks = _close(blocks)
         elif not ring:
@@ -338,7 +342,7 @@ class Renderer:
         sky_on = debug in (0, 6)  # debug views show black where there is no surface
         for k in ("zenith", "horizon", "halo", "disc"):
             F.set(**{f"sky_{k}": sp[k] if sky_on else (0.0, 0.0, 0.0)})
-        F.set(**sky_values(s, sp, hours, sky_on, debug, camera, self.area, h))
+        F.set(**sky_values(s, sp, hours, sky_on, debug, camera, self.area, h, self.edge_water))
         F.set(vp=vp, inv_vp=inv_vp, cam_pos=(draw_cam.x, draw_cam.y, draw_cam.z),
               cam_fwd=draw_cam._fwd(), ortho=draw_cam.ortho,
               far_dist=camera.far, shadow_eye=(camera.x, camera.y, camera.z),
@@ -347,7 +351,8 @@ class Renderer:
               day_ambient=sp["ambient"], day_u=sp["u"],
               day_direct=sp["direct"], sky_stars=sp["stars"] if sky_on and s.stars else 0.0,
               sky_light_dir=sp["light_dir"], time=s.time, waving=s.waving,
-              godray_strength=s.godray_strength, sun_px=sun_px, sun_radius=sun_r,
+              godray_strength=s.godray_strength * sky.godray_scale(sp), sun_px=sun_px,
+              sun_radius=sun_r,
               sun_visible=sun_vis, fog_start=fog_end * 0.55, fog_end=fog_end,
               dof_start=fog_end * 0.8, dof_end=fog_end * 1.15, ssao_radius=s.ssao_radius)
         F.upload()
@@ -550,6 +555,15 @@ class _Graph:
                 if x is not None for p in x.programs()]
 
 
+def _edge_water(blocks: np.ndarray) -> float:
+    """The fraction of an area's outermost columns (inside its ring) whose top is water."""
+    water = REGISTRY.id("water")
+    cols = np.concatenate([blocks[1, 1:-1], blocks[-2, 1:-1], blocks[1:-1, 1], blocks[1:-1, -2]])
+    solid = cols != 0
+    top = 255 - np.argmax(solid[:, ::-1], axis=1)
+    return float((cols[np.arange(len(cols)), top] == water).mean())
+
+
 def _close(blocks: np.ndarray) -> np.ndarray:
     """A copy of an area with its one-voxel ring: the ring is air (water next to
     water: the sea beyond the area continues it, include/water.glsl) and the caves
@@ -570,8 +584,10 @@ def _close(blocks: np.ndarray) -> np.ndarray:
 
 
 def sky_values(s: Settings, sp: dict, hours: float, sky_on: bool, debug: int, camera,
-               area, h: int) -> dict:
-    """The frame block's sky, haze, clouds, sea, fade and display values (issue 20)."""
+               area, h: int, edge_water: float | None = None) -> dict:
+    """The frame block's sky, haze, clouds, sea, fade and display values (issue 20).
+    The sea beyond the area shows where the world has one (sea_level) and, for an area
+    set at once, where a tenth of its edge is open water (a desert fades into the sky)."""
     zero = np.full((sky.NE * sky.NA, 4), math.log(sky.EPS))
     fade_end = s.fade_distance or (s.distance + 0.5) * 16.0
     box = [16.0 * v for v in area] if area else [0.0, 0.0, 0.0, 0.0]
@@ -589,7 +605,7 @@ def sky_values(s: Settings, sp: dict, hours: float, sky_on: bool, debug: int, ca
         fade_end=fade_end if s.fade else 2e9,
         display=(2 if s.tonemap else 1) if debug in (0, 6) else (1 if debug in (1, 4) else 0),
         clouds=s.clouds and sky_on, cloud_shadows=s.cloud_shadows,
-        sea=s.sea and sky_on and s.sea_level >= 0,
+        sea=s.sea and sky_on and s.sea_level >= 0 and (edge_water is None or edge_water > 0.1),
         water_fx=s.water and debug in (0, 6))
 
 

@@ -79,3 +79,11 @@ def drift(hours: float, speed: float) -> tuple[float, float]:
     """How far the clouds have moved at `hours` (blocks), `speed` blocks per minute."""
     m = (float(hours) % 24.0) * 60.0 * speed
     return (-WIND[0] * m, -WIND[1] * m)
+
+
+def godray_scale(p: dict) -> float:
+    """What the disc's colour is multiplied by for the god rays (composite.frag): rays as
+    bright as the thesis's (half the scene's white by day, less by the moon), whatever
+    the disc's radiance and the hour's exposure."""
+    lum = float(atmosphere.luminance(p["disc"]))
+    return (0.35 if p["is_day"] else 0.08) / max(lum, 1e-6)

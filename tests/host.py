@@ -25,10 +25,11 @@ def python_cmd(*args) -> list[str]:
 
 
 def blender_paths() -> None:
-    """Inside the real Blender: the checkout and .blender/site (pytest and the Python
-    3.13 wheels build.py setup installs there) importable; Blender's own numpy wins."""
-    for p in (str(ROOT / ".blender" / "site"), str(ROOT)):
-        if p not in sys.path:
+    """Inside the real Blender: the checkout and its .blender/<suite>/site (pytest and
+    the wheels for its Python that build.py setup installs there; the launcher names it
+    in VOXEL_BLENDER_SITE) importable; Blender's own numpy wins."""
+    for p in (os.environ.get("VOXEL_BLENDER_SITE"), str(ROOT)):
+        if p and p not in sys.path:
             sys.path.insert(0, p)
 
 

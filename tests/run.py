@@ -4,8 +4,9 @@
 
 (any Blender works: `blender -b -P tests/run.py`). Without PYTEST_ARGS it runs
 BLENDER_FACING, the tests that use bpy, Blender's GL context or its glTF exporter.
-Blender's exit code is pytest's. pytest and the extension's Python 3.13 wheels come
-from .blender/site (`python build.py setup`); for another Blender's Python, put pytest
+Blender's exit code is pytest's. pytest and the extension's wheels for that Blender's
+Python come from .blender/<suite>/site (`python build.py setup`; the launcher names it
+in VOXEL_BLENDER_SITE); for another Blender's Python, put pytest
 on its path yourself (e.g. `<blender>/<version>/python/bin/python3 -m pip install pytest`).
 Children that need bpy are started as that Blender again (tests/host.py).
 """

@@ -1,24 +1,39 @@
-"""The real Blender application for tests: Debian trixie's `blender` (4.3, Python 3.13)
-unpacked into the checkout's git-ignored `.blender/` (used by build.py; plain Python).
+"""The real Blender applications for tests: Debian's `blender` from two suites side by
+side, each unpacked into the checkout's git-ignored `.blender/<suite>/` (used by
+build.py; plain Python):
+
+    sid     the newest (5.2.x LTS today, Python 3.14), with Mesa's Vulkan driver
+            (lavapipe) besides llvmpipe: `--gpu-backend opengl` or `vulkan`
+    trixie  Debian 13's 4.3 (Python 3.13), OpenGL
+
+Nothing is pinned: sid moves, and whatever Blender and Python it carries is what the
+tests run (the Python version is read from the unpacked Blender). `get(NAME)` picks an
+application by suite ("sid", "trixie") or by the version its Blender has ("5.2",
+"4.3"); without NAME, $VOXEL_BLENDER_APP, else the newest. GUI starts use the GPU
+backend $VOXEL_GPU_BACKEND ("opengl", the default, or "vulkan").
 
 The packages come from the Debian archive the system's apt already uses, resolved by
-apt with a private state (own sources list, lists, cache and an EMPTY dpkg status, so
-apt fetches the whole closure, glibc included) and never touch /etc/apt or the
-system. The downloaded .debs stay in `$XDG_CACHE_HOME/voxel-worlds/apt` (default
-~/.cache), so another clone of the repository does not fetch them again. Every .deb
-is unpacked (as `dpkg -x` does) once into `$XDG_CACHE_HOME/voxel-worlds/unpacked`,
-and `.blender/root` is a tree of hard links to it (a copy where they cannot be made); trixie's glibc is newer than the
-system's, so everything starts through trixie's own dynamic loader (`patchelf` does
-not help: the libraries carry absolute RUNPATHs).
+apt with a private state per suite (own sources list, lists, cache and an EMPTY dpkg
+status, so apt fetches the whole closure, glibc included) and never touch /etc/apt or
+the system. The downloaded .debs stay in `$XDG_CACHE_HOME/voxel-worlds/<suite>/apt`
+(default ~/.cache), so another clone of the repository does not fetch them again.
+Every .deb is unpacked (as `dpkg -x` does) once into `.../<suite>/unpacked`, and
+`.blender/<suite>/root` is a tree of hard links to it (a copy where they cannot be
+made); the suites' glibc is newer than the system's, so everything starts through the
+suite's own dynamic loader (`patchelf` does not help: the libraries carry absolute
+RUNPATHs).
 
-    .blender/blender      the launcher (a shell script: loader, library path, env)
-    .blender/python/      BLENDER_SYSTEM_PYTHON: lib -> root/usr/lib, bin/python3.13
-                          (a loader wrapper too: Blender runs sys.executable to
-                          install extensions' wheels)
-    .blender/site/        pytest (+ the bundled wheels for 3.13) for tests/run.py
-    .blender/user/        BLENDER_USER_RESOURCES, XDG_CONFIG_HOME, XDG_CACHE_HOME
-                          (VOXEL_BLENDER_USER points a run at another folder)
-    .blender/mesa-cache/  llvmpipe's compiled shaders, shared by all runs
+    .blender/blender              the newest application's launcher
+    .blender/<suite>/blender      the launcher (a shell script: loader, library path, env)
+    .blender/<suite>/python/      BLENDER_SYSTEM_PYTHON: lib -> root/usr/lib, bin/python3.X
+                                  (a loader wrapper too: Blender runs sys.executable to
+                                  install extensions' wheels)
+    .blender/<suite>/site/        pytest and the extension's wheels for that Python
+                                  ($VOXEL_BLENDER_SITE inside Blender; build.py fills it)
+    .blender/<suite>/user/        BLENDER_USER_RESOURCES, XDG_CONFIG_HOME, XDG_CACHE_HOME
+                                  (VOXEL_BLENDER_USER points a run at another folder)
+    .blender/<suite>/mesa-cache/  Mesa's compiled shaders, shared by all runs
+    .blender/<suite>/app.json     {"version": "5.2.2", "python": "3.14"} of the install
 
 Its end (`xserver`, `start`, `wait`, `run`, `gui_missing`) is the one way tests and
 benches start the Blender GUI under a private Xvfb.
@@ -26,26 +41,37 @@ benches start the Blender GUI under a private Xvfb.
 from __future__ import annotations
 
 import contextlib
-import fcntl
 import hashlib
+import json
+import mmap
 import os
 import re
 import shutil
 import signal
 import subprocess
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
 from typing import NamedTuple
 
+try:
+    import fcntl
+except ImportError:  # not on Windows: set-up needs Debian's apt anyway
+    fcntl = None
+
 ROOT = Path(__file__).resolve().parent.parent
 HOME = ROOT / ".blender"
-LAUNCHER = HOME / "blender"
-SUITE = "trixie"
+APP_ENV = "VOXEL_BLENDER_APP"       # which application (suite or version)
+BACKEND_ENV = "VOXEL_GPU_BACKEND"   # which GPU backend a GUI start asks for
+BACKENDS = ("opengl", "vulkan")
 # What Blender needs beyond its own dependencies: numpy for its Python, the GL/EGL
 # stack with Mesa's llvmpipe, and the X cursor library the window asks for.
-PACKAGES = ["blender", "python3-numpy", "libgl1", "libglx-mesa0", "libegl1", "libegl-mesa0",
-            "libgl1-mesa-dri", "libxcursor1"]
-PYVER = "3.13"
+BASE = ("blender", "python3-numpy", "libgl1", "libglx-mesa0", "libegl1", "libegl-mesa0",
+        "libgl1-mesa-dri", "libxcursor1")
+VULKAN = ("mesa-vulkan-drivers", "libvulkan1")  # lavapipe and the Vulkan loader
+# Blender 5.x's extension manager (bl_pkg) imports these on register; Debian's package
+# does not depend on them, and without them Blender cannot install an extension.
+EXT_MANAGER = ("python3-cattr", "python3-requests")
 # Folders of the unpacked tree that hold shared libraries Blender loads.
 LIB_DIRS = ["usr/lib/x86_64-linux-gnu", "usr/lib", "usr/lib/x86_64-linux-gnu/pulseaudio",
             "usr/lib/x86_64-linux-gnu/blas", "usr/lib/x86_64-linux-gnu/lapack"]
@@ -53,15 +79,30 @@ LIB_DIRS = ["usr/lib/x86_64-linux-gnu", "usr/lib", "usr/lib/x86_64-linux-gnu/pul
 SKIP = ["./usr/share/doc/*", "./usr/share/man/*", "./usr/share/locale/*", "./usr/share/info/*"]
 
 
+@dataclass(frozen=True)
+class Spec:
+    suite: str
+    packages: tuple
+    backends: tuple = ("opengl",)
+
+
+# Newest first: the first installed one is the default.
+SPECS = (Spec("sid", BASE + VULKAN + EXT_MANAGER, BACKENDS), Spec("trixie", BASE))
+
+
+class SetupError(SystemExit):
+    """A one-line set-up failure naming its cause."""
+
+
 def log(msg: str) -> None:
     print(f"[build] {msg}", flush=True)
 
 
-def cache_dir() -> Path:
+def cache_base() -> Path:
     """Outside the clone: the caller's XDG_CACHE_HOME (build.py's own default for
     children is inside the checkout, so this reads the caller's environment)."""
     base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "voxel-worlds" / "apt"
+    return Path(base) / "voxel-worlds"
 
 
 def _mirror() -> tuple[str, str]:
@@ -85,94 +126,28 @@ def _mirror() -> tuple[str, str]:
                         and "security" not in m.group(2):
                     key = re.search(r"signed-by=(\S+?)[\s\]]", m.group(1) or "")
                     return m.group(2), key.group(1) if key else ""
-    raise SystemExit("blender: no Debian archive (a 'main' component) in the apt sources")
+    raise SetupError("blender: no Debian archive (a 'main' component) in the apt sources")
 
 
-def _apt_args(state: Path) -> list[str]:
-    args = [f"-o=Dir::Etc::sourcelist={state / 'sources.list'}",
-            f"-o=Dir::Etc::sourceparts={state / 'sources.list.d'}",
-            f"-o=Dir::Etc::preferencesparts={state / 'preferences.d'}",
-            f"-o=Dir::State={state / 'state'}", f"-o=Dir::State::status={state / 'status'}",
-            f"-o=Dir::Cache={state / 'cache'}", "-o=Debug::NoLocking=1",
-            "-o=APT::Get::Assume-Yes=1", "-q"]
-    if os.geteuid() == 0:  # the cache may sit in a home _apt cannot enter
-        args.append("-o=APT::Sandbox::User=root")
-    return args
-
-
-def _apt(state: Path, *cmd) -> str:
-    r = subprocess.run(["apt-get", *_apt_args(state), *cmd], text=True,
-                       capture_output=True, env=dict(os.environ, LC_ALL="C"))
-    if r.returncode:
-        print(r.stdout[-3000:] + r.stderr[-3000:], flush=True)
-        raise subprocess.CalledProcessError(r.returncode, ["apt-get", *cmd], r.stdout, r.stderr)
-    return r.stdout
-
-
-def _prepare_state(state: Path) -> None:
-    for d in ("sources.list.d", "preferences.d", "state/lists/partial", "cache/archives/partial"):
-        (state / d).mkdir(parents=True, exist_ok=True)
-    (state / "status").touch()
-    uri, key = _mirror()
-    opt = f"[signed-by={key}] " if key and Path(key).exists() else ""
-    (state / "sources.list").write_text(f"deb {opt}{uri} {SUITE} main\n")
-
-
-def _selection(state: Path) -> list[Path]:
-    """The .deb files apt chose (simulated install over the empty status). Resolving
-    takes apt seconds of CPU, so the answer is kept for the same lists and packages."""
-    lists = sorted((state / "state" / "lists").glob("*_InRelease"))
-    key = hashlib.sha256(f"{PACKAGES}".encode() + b"".join(f.read_bytes() for f in lists)).hexdigest()
-    memo = state / "selection.txt"
-    if memo.exists():
-        head, *names = memo.read_text().split("\n")
-        if head == key and names:
-            return [state / "cache" / "archives" / n for n in names]
-    out = _apt(state, "install", "-s", "--no-install-recommends", *PACKAGES)
-    names = [f"{name}_{ver.replace(':', '%3a')}_{arch}.deb"
-             for name, ver, arch in re.findall(r"^Inst (\S+) \((\S+) .*\[(\S+)\]\)", out, re.M)]
-    if not names:
-        raise SystemExit("blender: apt selected no packages:\n" + out[-2000:])
-    memo.write_text("\n".join([key, *names]))
-    return [state / "cache" / "archives" / n for n in names]
+def _cause(text: str) -> str:
+    """The line of apt's output that says why it failed."""
+    lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
+    for pick in (lambda ln: ln.startswith("E:") and "Unable to correct" not in ln,
+                 lambda ln: " Depends: " in ln or "has no installation candidate" in ln,
+                 lambda ln: ln.startswith(("E:", "W:", "Err:"))):
+        hit = [ln for ln in lines if pick(ln)]
+        if hit:
+            return hit[0]
+    return lines[-1] if lines else "no output"
 
 
 @contextlib.contextmanager
 def _locked(path: Path):
     path.parent.mkdir(parents=True, exist_ok=True)
     with open(path, "w") as f:
-        fcntl.flock(f, fcntl.LOCK_EX)  # another clone may set up at the same time
+        if fcntl:
+            fcntl.flock(f, fcntl.LOCK_EX)  # another clone may set up at the same time
         yield
-
-
-def download() -> list[Path]:
-    """The selected .debs, fetched into the cache unless already there."""
-    state = cache_dir()
-    with _locked(state / "lock"):
-        _prepare_state(state)
-        fresh = False
-        if not list((state / "state" / "lists").glob(f"*_{SUITE}_InRelease")):
-            log(f"apt-get update (private state in {state})")
-            _apt(state, "update")
-            fresh = True
-        debs = _selection(state)
-        if all(d.exists() for d in debs):
-            return debs
-        try:
-            log(f"apt-get install --download-only ({len(debs)} packages, ~300 MB, once)")
-            _apt(state, "install", "--download-only", "--no-install-recommends", *PACKAGES)
-        except subprocess.CalledProcessError:
-            if fresh:
-                raise
-            # stale lists name versions the archive dropped (point release): refresh
-            log("download failed with cached package lists: apt-get update and retry")
-            _apt(state, "update")
-            debs = _selection(state)
-            _apt(state, "install", "--download-only", "--no-install-recommends", *PACKAGES)
-        missing = [d.name for d in debs if not d.exists()]
-        if missing:
-            raise SystemExit(f"blender: apt did not download {missing[:5]}")
-        return debs
 
 
 def _unpack(debs: list[Path], dest: Path) -> None:
@@ -186,66 +161,275 @@ def _unpack(debs: list[Path], dest: Path) -> None:
                               "--keep-directory-symlink", *excl], stdin=deb_p.stdout)
         deb_p.stdout.close()
         if deb_p.wait() or tar.returncode:
-            raise SystemExit(f"blender: could not unpack {deb.name}")
+            raise SetupError(f"blender: could not unpack {deb.name}")
 
     from concurrent.futures import ThreadPoolExecutor
     with ThreadPoolExecutor(os.cpu_count() or 2) as pool:
         list(pool.map(one, debs))
 
 
-def _link_unpacked(key: str, debs: list[Path], dest: Path) -> bool:
-    """dest as hard links to the unpacked tree kept next to the .debs (unpacked there
-    once): another clone gets its Blender in seconds. False when the cache is on
-    another file system (the caller unpacks into dest itself)."""
-    cache = cache_dir().parent / "unpacked"
-    tree = cache / key
-    with _locked(cache / "lock"):
-        if not (tree / ".complete").exists():
-            for old in cache.glob("*"):
-                if old.is_dir():
-                    shutil.rmtree(old)  # an older package set: only one tree is kept
-            tmp = cache / f"{key}.tmp"
-            shutil.rmtree(tmp, ignore_errors=True)
-            log(f"unpacking {len(debs)} packages into {tree}")
-            _unpack(debs, tmp)
-            (tmp / ".complete").touch()
-            tmp.rename(tree)
-        r = subprocess.run(["cp", "-al", str(tree), str(dest)], capture_output=True)
-    if r.returncode:
-        shutil.rmtree(dest, ignore_errors=True)
-        return False
-    (dest / ".complete").unlink()
-    return True
+def _python_of(binary: Path) -> str:
+    """The Python version the Blender binary links (its libpython3.X)."""
+    with open(binary, "rb") as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as m:
+        hit = re.search(rb"libpython(3\.\d+)\.so", m)
+        found = hit.group(1).decode() if hit else ""
+    if not found:
+        raise SetupError(f"blender: no libpython named in {binary}")
+    return found
 
 
-def _lib_path(root: Path) -> str:
-    return ":".join(str(root / d) for d in LIB_DIRS)
+def _version_of(launcher: Path) -> str:
+    """Blender's version (e.g. "5.2.2") as the installed application reports it."""
+    r = subprocess.run([str(launcher), "--version"], capture_output=True, text=True, timeout=120)
+    m = re.search(r"Blender (\d+\.\d+(?:\.\d+)?)", r.stdout)
+    if not m:
+        raise SetupError(f"blender: {launcher} --version failed: {_cause(r.stdout + r.stderr)}")
+    return m.group(1)
 
 
-def _write_launchers(root: Path) -> None:
-    loader = root / "usr/lib/x86_64-linux-gnu/ld-linux-x86-64.so.2"
-    libs = _lib_path(root)
-    py = HOME / "python"
-    (py / "bin").mkdir(parents=True, exist_ok=True)
-    if not (py / "lib").is_symlink():
-        (py / "lib").symlink_to(Path("..") / "root" / "usr" / "lib")
-    wrapper = py / "bin" / f"python{PYVER}"
-    wrapper.write_text(f'#!/bin/sh\nexec "{loader}" --library-path "{libs}" '
-                       f'"{root}/usr/bin/python{PYVER}" "$@"\n')
-    wrapper.chmod(0o755)
-    for alias in ("python3", "python"):
-        link = py / "bin" / alias
-        if not link.is_symlink():
+class App:
+    """One suite's Blender: where it lives in the checkout and how it is installed."""
+
+    def __init__(self, spec: Spec):
+        self.spec = spec
+        self.suite = spec.suite
+        self.home = HOME / spec.suite
+        self.launcher = self.home / "blender"
+        self.root = self.home / "root"
+        self.site = self.home / "site"
+        self.gui_user = self.home / "gui-user"  # preferences template of the GUI tests
+        self.backends = spec.backends
+
+    def __repr__(self) -> str:
+        return f"<Blender {self.version} ({self.suite}, Python {self.pyver})>"
+
+    # -- what is installed --
+    def info(self) -> dict:
+        try:
+            return json.loads((self.home / "app.json").read_text())
+        except (OSError, ValueError):
+            return {}
+
+    @property
+    def version(self) -> str:
+        """Blender's version (e.g. "5.2.2"), "" before set-up."""
+        return self.info().get("version", "")
+
+    @property
+    def pyver(self) -> str:
+        """Its Python's X.Y (e.g. "3.14"), "" before set-up."""
+        return self.info().get("python", "")
+
+    def config(self) -> str:
+        return hashlib.sha256(f"{self.suite} {list(self.spec.packages)} {SKIP}".encode()).hexdigest()
+
+    def installed(self) -> bool:
+        stamp = self.home / ".stamp"
+        return (stamp.exists() and stamp.read_text().split("\n")[0] == self.config()
+                and self.root.is_dir())
+
+    # -- set-up --
+    def cache(self) -> Path:
+        return cache_base() / self.suite / "apt"
+
+    def setup(self) -> None:
+        """Install (once); later runs only rewrite the launchers (paths of this checkout)."""
+        if self.installed():
+            if self.version:
+                self._write_launchers()
+            else:
+                self._describe()  # moved here from the one-Blender layout
+            return
+        missing = [t for t in ("apt-get", "dpkg-deb", "tar", "cp") if not shutil.which(t)]
+        if missing:
+            raise SetupError(f"blender: {', '.join(missing)} not found (set-up needs a Debian "
+                             "system to fetch Debian's Blender)")
+        debs = self.download()
+        stamp = self.home / ".stamp"
+        want = self.config() + "\n" + hashlib.sha256(
+            "\n".join(sorted(d.name for d in debs)).encode()).hexdigest()
+        if not (stamp.exists() and stamp.read_text() == want and self.root.is_dir()):
+            self.home.mkdir(parents=True, exist_ok=True)
+            tmp = Path(tempfile.mkdtemp(prefix="root.", dir=self.home))
+            shutil.rmtree(tmp)
+            if not self._link_unpacked(hashlib.sha256(want.encode()).hexdigest()[:16], debs, tmp):
+                log(f"unpacking {len(debs)} packages into {self.root}")
+                _unpack(debs, tmp)
+            if self.root.exists():
+                shutil.rmtree(self.root)
+            tmp.rename(self.root)
+        self._describe()
+        _write(stamp, want)
+
+    def _describe(self) -> None:
+        """app.json: the Python the binary links, then the version it reports."""
+        info = {"suite": self.suite, "python": _python_of(self.root / "usr/bin/blender")}
+        _write(self.home / "app.json", json.dumps(info))
+        self._write_launchers()
+        info["version"] = _version_of(self.launcher)
+        _write(self.home / "app.json", json.dumps(info))
+        self._write_launchers()
+
+    def _apt_args(self) -> list[str]:
+        state = self.cache()
+        args = [f"-o=Dir::Etc::sourcelist={state / 'sources.list'}",
+                f"-o=Dir::Etc::sourceparts={state / 'sources.list.d'}",
+                f"-o=Dir::Etc::preferencesparts={state / 'preferences.d'}",
+                f"-o=Dir::State={state / 'state'}", f"-o=Dir::State::status={state / 'status'}",
+                f"-o=Dir::Cache={state / 'cache'}", "-o=Debug::NoLocking=1",
+                "-o=APT::Get::Assume-Yes=1", "-q"]
+        if os.geteuid() == 0:  # the cache may sit in a home _apt cannot enter
+            args.append("-o=APT::Sandbox::User=root")
+        return args
+
+    def _apt(self, *cmd) -> str:
+        r = subprocess.run(["apt-get", *self._apt_args(), *cmd], text=True,
+                           capture_output=True, env=dict(os.environ, LC_ALL="C"))
+        if r.returncode:
+            raise subprocess.CalledProcessError(r.returncode, ["apt-get", *cmd], r.stdout, r.stderr)
+        return r.stdout
+
+    def _prepare_state(self) -> None:
+        state = self.cache()
+        legacy = cache_base() / "apt"  # before the suites sat side by side: trixie's
+        if not state.exists() and (legacy / "sources.list").exists() and \
+                f" {self.suite} main" in (legacy / "sources.list").read_text():
+            state.parent.mkdir(parents=True, exist_ok=True)
+            subprocess.run(["cp", "-al", str(legacy), str(state)], check=False)
+            old = cache_base() / "unpacked"
+            if old.is_dir():
+                subprocess.run(["cp", "-al", str(old), str(state.parent / "unpacked")], check=False)
+        for d in ("sources.list.d", "preferences.d", "state/lists/partial", "cache/archives/partial"):
+            (state / d).mkdir(parents=True, exist_ok=True)
+        (state / "status").touch()
+        uri, key = _mirror()
+        opt = f"[signed-by={key}] " if key and Path(key).exists() else ""
+        _write(state / "sources.list", f"deb {opt}{uri} {self.suite} main\n")
+
+    def _selection(self) -> list[Path]:
+        """The .deb files apt chose (simulated install over the empty status). Resolving
+        takes apt seconds of CPU, so the answer is kept for the same lists and packages."""
+        state = self.cache()
+        lists = sorted((state / "state" / "lists").glob("*_InRelease"))
+        key = hashlib.sha256(f"{list(self.spec.packages)}".encode()
+                             + b"".join(f.read_bytes() for f in lists)).hexdigest()
+        memo = state / "selection.txt"
+        if memo.exists():
+            head, *names = memo.read_text().split("\n")
+            if head == key and names:
+                return [state / "cache" / "archives" / n for n in names]
+        out = self._apt("install", "-s", "--no-install-recommends", *self.spec.packages)
+        names = [f"{name}_{ver.replace(':', '%3a')}_{arch}.deb"
+                 for name, ver, arch in re.findall(r"^Inst (\S+) \((\S+) .*\[(\S+)\]\)", out, re.M)]
+        if not names:
+            raise SetupError(f"blender ({self.suite}): apt selected no packages")
+        _write(memo, "\n".join([key, *names]))
+        return [state / "cache" / "archives" / n for n in names]
+
+    def download(self) -> list[Path]:
+        """The selected .debs, fetched into the cache unless already there. A failure
+        is one line naming apt's reason."""
+        try:
+            return self._download()
+        except subprocess.CalledProcessError as e:
+            raise SetupError(f"blender ({self.suite}): {' '.join(e.cmd[:2])} failed: "
+                             f"{_cause((e.stdout or '') + (e.stderr or ''))}") from None
+
+    def _download(self) -> list[Path]:
+        state = self.cache()
+        with _locked(state.parent / "lock"):
+            self._prepare_state()
+            fresh = False
+            if not list((state / "state" / "lists").glob(f"*_{self.suite}_InRelease")):
+                log(f"apt-get update for {self.suite} (private state in {state})")
+                self._apt("update")
+                fresh = True
+                if not list((state / "state" / "lists").glob(f"*_{self.suite}_InRelease")):
+                    raise SetupError(f"blender ({self.suite}): apt-get update fetched no "
+                                     f"package list for {self.suite}")
+            try:
+                debs = self._selection()
+            except subprocess.CalledProcessError:
+                if fresh:
+                    raise
+                log(f"{self.suite}: cached package lists do not resolve: apt-get update")
+                self._apt("update")
+                fresh = True
+                debs = self._selection()
+            if all(d.exists() for d in debs):
+                return debs
+            try:
+                log(f"apt-get install --download-only for {self.suite} "
+                    f"({len(debs)} packages, ~300 MB, once)")
+                self._apt("install", "--download-only", "--no-install-recommends",
+                          *self.spec.packages)
+            except subprocess.CalledProcessError:
+                if fresh:
+                    raise
+                # stale lists name versions the archive dropped (sid daily, a point release)
+                log("download failed with cached package lists: apt-get update and retry")
+                self._apt("update")
+                debs = self._selection()
+                self._apt("install", "--download-only", "--no-install-recommends",
+                          *self.spec.packages)
+            missing = [d.name for d in debs if not d.exists()]
+            if missing:
+                raise SetupError(f"blender ({self.suite}): apt did not download {missing[:3]}")
+            return debs
+
+    def _link_unpacked(self, key: str, debs: list[Path], dest: Path) -> bool:
+        """dest as hard links to the unpacked tree kept next to the .debs (unpacked there
+        once): another clone gets its Blender in seconds. False when the cache is on
+        another file system (the caller unpacks into dest itself)."""
+        cache = self.cache().parent / "unpacked"
+        tree = cache / key
+        with _locked(cache / "lock"):
+            if not (tree / ".complete").exists():
+                for old in cache.glob("*"):
+                    if old.is_dir():
+                        shutil.rmtree(old)  # an older package set: only one tree is kept
+                tmp = cache / f"{key}.tmp"
+                shutil.rmtree(tmp, ignore_errors=True)
+                log(f"unpacking {len(debs)} packages into {tree}")
+                _unpack(debs, tmp)
+                (tmp / ".complete").touch()
+                tmp.rename(tree)
+            r = subprocess.run(["cp", "-al", str(tree), str(dest)], capture_output=True)
+        if r.returncode:
+            shutil.rmtree(dest, ignore_errors=True)
+            return False
+        (dest / ".complete").unlink()
+        return True
+
+    def _write_launchers(self) -> None:
+        root, home, pyver = self.root, self.home, self.pyver
+        loader = root / "usr/lib/x86_64-linux-gnu/ld-linux-x86-64.so.2"
+        libs = ":".join(str(root / d) for d in LIB_DIRS)
+        py = home / "python"
+        (py / "bin").mkdir(parents=True, exist_ok=True)
+        if not (py / "lib").is_symlink():
+            (py / "lib").symlink_to(Path("..") / "root" / "usr" / "lib")
+        wrapper = py / "bin" / f"python{pyver}"
+        _write(wrapper, f'#!/bin/sh\nexec "{loader}" --library-path "{libs}" '
+                        f'"{root}/usr/bin/python{pyver}" "$@"\n', 0o755)
+        for alias in ("python3", "python"):
+            link = py / "bin" / alias
+            if link.is_symlink():
+                link.unlink()
             link.symlink_to(wrapper.name)
-    fonts = HOME / "fonts.conf"
-    fonts.write_text(
-        '<?xml version="1.0"?>\n<!DOCTYPE fontconfig SYSTEM "urn:fontconfig:fonts.dtd">\n'
-        f"<fontconfig><dir>{root}/usr/share/fonts</dir>"
-        f"<cachedir>{HOME}/user/cache/fontconfig</cachedir></fontconfig>\n")
-    LAUNCHER.write_text(f"""#!/bin/sh
-# Debian {SUITE}'s Blender unpacked in this checkout (written by build.py setup).
-# VOXEL_BLENDER_USER: the user folder (preferences, extensions); default .blender/user.
-H="{HOME}"
+        _write(home / "fonts.conf",
+            '<?xml version="1.0"?>\n<!DOCTYPE fontconfig SYSTEM "urn:fontconfig:fonts.dtd">\n'
+            f"<fontconfig><dir>{root}/usr/share/fonts</dir>"
+            f"<cachedir>{home}/user/cache/fontconfig</cachedir></fontconfig>\n")
+        vulkan = ""
+        if "vulkan" in self.backends:
+            icd = self._lavapipe_icd()
+            vulkan = ("# Vulkan: Mesa's lavapipe from the unpacked tree only (no system ICDs)\n"
+                      f'export VK_DRIVER_FILES="{icd}" VK_ICD_FILENAMES="{icd}"\n')
+        _write(self.launcher, f"""#!/bin/sh
+# Debian {self.suite}'s Blender {self.version} unpacked in this checkout (written by build.py setup).
+# VOXEL_BLENDER_USER: the user folder (preferences, extensions); default {home.name}/user.
+H="{home}"
 R="$H/root"
 U="${{VOXEL_BLENDER_USER:-$H/user}}"
 export BLENDER_SYSTEM_RESOURCES="$R/usr/share/blender"
@@ -254,60 +438,111 @@ export BLENDER_USER_RESOURCES="$U" XDG_CONFIG_HOME="$U/config" XDG_CACHE_HOME="$
 export LIBGL_DRIVERS_PATH="$R/usr/lib/x86_64-linux-gnu/dri"
 export __EGL_VENDOR_LIBRARY_DIRS="$R/usr/share/glvnd/egl_vendor.d"
 export FONTCONFIG_FILE="$H/fonts.conf"
-# llvmpipe compiles every shader Blender's UI uses (~20 s per start); kept across user
+{vulkan}# llvmpipe compiles every shader Blender's UI uses (~20 s per start); kept across user
 # folders, a start with fresh preferences takes a few seconds
 export MESA_SHADER_CACHE_DIR="${{MESA_SHADER_CACHE_DIR:-$H/mesa-cache}}"
 export POCL_CACHE_DIR="${{POCL_CACHE_DIR:-$U/cache/pocl}}"
 export PYOPENCL_CACHE_DIR="${{PYOPENCL_CACHE_DIR:-$U/cache/pyopencl}}"
-export VOXEL_BLENDER="{LAUNCHER}"
+export VOXEL_BLENDER="{self.launcher}" VOXEL_BLENDER_SITE="{self.site}"
 unset PYTHONPATH PYTHONHOME
 exec "{loader}" --library-path "{libs}" "$R/usr/bin/blender" "$@"
-""")
-    LAUNCHER.chmod(0o755)
+""", 0o755)
+
+    def _lavapipe_icd(self) -> Path:
+        """lavapipe's ICD file with its library as an absolute path into the unpacked
+        tree (Debian's names the system path, which the loader would try first)."""
+        src = self.root / "usr/share/vulkan/icd.d/lvp_icd.json"
+        data = json.loads(src.read_text())
+        lib = Path(data["ICD"]["library_path"])
+        data["ICD"]["library_path"] = str(self.root / "usr/lib/x86_64-linux-gnu" / lib.name)
+        dest = self.home / "lvp_icd.json"
+        _write(dest, json.dumps(data, indent=1))
+        return dest
 
 
-def _stamp_of(debs: list[Path]) -> str:
-    return hashlib.sha256("\n".join(sorted(d.name for d in debs)).encode()).hexdigest()
+def _migrate() -> None:
+    """The one-Blender layout (.blender/root, .blender/blender, ...) was trixie's: move it
+    into .blender/trixie/ rather than unpack it again."""
+    if not (HOME / ".stamp").exists():
+        return
+    dest = HOME / "trixie"
+    dest.mkdir(parents=True, exist_ok=True)
+    for name in ("root", "python", "site", "user", "mesa-cache", "gui-user", "fonts.conf", ".stamp"):
+        if (HOME / name).exists() or (HOME / name).is_symlink():
+            if (dest / name).exists():
+                _remove(HOME / name)
+            else:
+                (HOME / name).rename(dest / name)
+    (HOME / "blender").unlink(missing_ok=True)
+    (HOME / ".stamp").unlink(missing_ok=True)
 
 
-def _config() -> str:
-    return hashlib.sha256(f"{SUITE} {PACKAGES} {SKIP}".encode()).hexdigest()
+def _write(path: Path, text: str, mode: int = 0o644) -> None:
+    """A new file at PATH (never written in place: a running Blender may read the old
+    one, and a copy of .blender made with hard links must not change with this one)."""
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.unlink(missing_ok=True)
+    tmp.write_text(text)
+    tmp.chmod(mode)
+    os.replace(tmp, path)
 
 
-def installed() -> bool:
-    stamp = HOME / ".stamp"
-    return (stamp.exists() and stamp.read_text().split("\n")[0] == _config()
-            and (HOME / "root").is_dir())
+def _remove(path: Path) -> None:
+    if path.is_dir() and not path.is_symlink():
+        shutil.rmtree(path)
+    else:
+        path.unlink(missing_ok=True)
+
+
+def all_apps() -> list[App]:
+    """Every application the set-up installs, newest suite first."""
+    return [App(s) for s in SPECS]
+
+
+def apps() -> list[App]:
+    """The installed applications, newest Blender first."""
+    found = [a for a in all_apps() if a.launcher.exists() and a.version]
+    return sorted(found, key=lambda a: tuple(int(x) for x in a.version.split(".")), reverse=True)
+
+
+def get(name: str | App | None = None) -> App:
+    """The application NAME (a suite or a Blender version, e.g. "sid", "4.3"); None:
+    $VOXEL_BLENDER_APP, else the newest installed (sid's before set-up)."""
+    if isinstance(name, App):
+        return name
+    name = name or os.environ.get(APP_ENV) or ""
+    known = apps()
+    if not name or name == "newest":
+        return known[0] if known else all_apps()[0]
+    for a in [*known, *all_apps()]:
+        if name == a.suite or (a.version and (name == a.version or a.version.startswith(name + "."))):
+            return a
+    names = ", ".join(f"{a.suite} ({a.version})" for a in known) or "none installed"
+    raise SetupError(f"blender: no application {name!r} (there are: {names})")
 
 
 def setup() -> None:
-    """Install (once); later runs only rewrite the launchers (paths of this checkout)."""
-    stamp, root = HOME / ".stamp", HOME / "root"
-    if installed():
-        _write_launchers(root)
-        return
-    missing = [t for t in ("apt-get", "dpkg-deb", "tar", "cp") if not shutil.which(t)]
-    if missing:
-        raise SystemExit(f"blender: {', '.join(missing)} not found (set-up needs a Debian "
-                         "system to fetch Debian's Blender)")
-    debs = download()
-    want = _config() + "\n" + _stamp_of(debs)
-    if not (stamp.exists() and stamp.read_text() == want and root.is_dir()):
-        HOME.mkdir(exist_ok=True)
-        tmp = Path(tempfile.mkdtemp(prefix="root.", dir=HOME))
-        shutil.rmtree(tmp)
-        if not _link_unpacked(hashlib.sha256(want.encode()).hexdigest()[:16], debs, tmp):
-            log(f"unpacking {len(debs)} packages into {root}")
-            _unpack(debs, tmp)
-        if root.exists():
-            shutil.rmtree(root)
-        tmp.rename(root)
-    _write_launchers(root)
-    stamp.write_text(want)
+    """Install every suite's Blender (once) and point .blender/blender at the newest."""
+    HOME.mkdir(exist_ok=True)
+    _migrate()
+    for a in reversed(all_apps()):  # the older first: it is what a machine already has
+        a.setup()
+    newest = get("newest")
+    launcher = HOME / "blender"
+    _write(launcher, f'#!/bin/sh\n# The newest Blender here: {newest.suite}\'s '
+                     f'{newest.version}\nexec "{newest.launcher}" "$@"\n', 0o755)
 
 
-def site_packages() -> Path:
-    return HOME / "site"
+def site_packages(app=None) -> Path:
+    return get(app).site
+
+
+def __getattr__(name):  # LAUNCHER, PYVER: of the application chosen by $VOXEL_BLENDER_APP
+    if name == "LAUNCHER":
+        return get().launcher
+    if name == "PYVER":
+        return get().pyver
+    raise AttributeError(name)
 
 
 # -- running the GUI: a private X server, Blender in it, killed as a whole ---------------
@@ -321,14 +556,28 @@ class TimedOut(RuntimeError):
     pass
 
 
-def gui_missing() -> str | None:
-    """None when the Blender GUI can run here, else why not (one line)."""
-    if not LAUNCHER.exists():
-        return "no .blender/blender (run `python build.py setup`)"
+def gui_missing(app=None) -> str | None:
+    """None when the Blender GUI (of APP, see get) can run here, else why not (one line)."""
+    try:
+        a = get(app)
+    except SystemExit as e:
+        return str(e)
+    if not a.launcher.exists():
+        return f"no .blender/{a.suite}/blender (run `python build.py setup`)"
     for tool in GUI_TOOLS:
         if not shutil.which(tool):
             return f"{tool} missing (Debian packages xvfb, x11-apps, netpbm)"
     return None
+
+
+def backend(name: str | None = None, app=None) -> str:
+    """The GPU backend a GUI start asks for: NAME, else $VOXEL_GPU_BACKEND, else opengl."""
+    name = name or os.environ.get(BACKEND_ENV) or "opengl"
+    a = get(app)
+    if name not in a.backends:
+        raise SetupError(f"blender: backend {name!r} is not set up for {a.suite}'s Blender "
+                         f"(it has {', '.join(a.backends)})")
+    return name
 
 
 def app_env(user: Path | None = None, **extra) -> dict:
@@ -378,12 +627,14 @@ def kill(p: subprocess.Popen) -> None:
 
 @contextlib.contextmanager
 def start(args, *, display: str, log: Path, user: Path | None = None, size=SIZE,
-          simulate: bool = True, env: dict | None = None):
+          simulate: bool = True, env: dict | None = None, app=None, gpu: str | None = None):
     """The Blender window (SIZE, at the screen's corner) on DISPLAY with ARGS after the
     common flags; stdout and stderr go to LOG. simulate: --enable-event-simulate
-    (events come from the script, X input is ignored). Yields the Popen; its whole
-    process group is killed on exit."""
-    cmd = [str(LAUNCHER), "-p", "0", "0", str(size[0]), str(size[1]),
+    (events come from the script, X input is ignored). APP (see get) and GPU (see
+    backend): which Blender, which GPU backend. Yields the Popen; its whole process
+    group is killed on exit."""
+    a = get(app)
+    cmd = [str(a.launcher), "--gpu-backend", backend(gpu, a), "-p", "0", "0", str(size[0]), str(size[1]),
            *(["--enable-event-simulate"] if simulate else []), *map(str, args)]
     with open(log, "w") as f:
         p = subprocess.Popen(cmd, stdout=f, stderr=subprocess.STDOUT, cwd=ROOT,

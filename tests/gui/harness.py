@@ -8,6 +8,10 @@
     res.shot("open")    # its PNG path
     res.ys(y)           # window y (origin bottom-left, as Blender gives it) -> image row
 
+Which Blender and GPU backend: VOXEL_BLENDER_APP ("sid", "trixie", "5.2", "4.3";
+default the newest) and VOXEL_GPU_BACKEND ("opengl", default, or "vulkan"), read by
+tools/blender_app.py (build.py test sets them per layer).
+
 SCRIPT is a Python file run inside Blender by runner.py (see its docstring: a
 `run(gui)` generator; `yield` lets Blender handle events and redraw). A script that
 raises fails the test with the Blender-side traceback (GuiError); a run past its time
@@ -26,9 +30,7 @@ from pathlib import Path
 from tools import blender_app as app
 
 ROOT = app.ROOT
-BLENDER = app.LAUNCHER
 RUNNER = Path(__file__).with_name("runner.py")
-TEMPLATE = ROOT / ".blender" / "gui-user"  # preferences without the splash, made once
 SIZE = app.SIZE
 
 
@@ -37,21 +39,24 @@ class GuiError(AssertionError):
 
 
 def fresh_user(dest: Path) -> Path:
-    """A new Blender user folder whose preferences have the splash off."""
-    if not (TEMPLATE / "config" / "userpref.blend").exists():
-        tmp = Path(tempfile.mkdtemp(prefix="gui-user.", dir=TEMPLATE.parent))
+    """A new Blender user folder whose preferences have the splash off (saved once per
+    application: an older Blender does not read a newer one's preferences)."""
+    blender = app.get()
+    template = blender.gui_user
+    if not (template / "config" / "userpref.blend").exists():
+        tmp = Path(tempfile.mkdtemp(prefix="gui-user.", dir=template.parent))
         expr = ("import bpy; p = bpy.context.preferences; p.view.show_splash = False; "
                 "p.use_preferences_save = False; bpy.ops.wm.save_userpref()")
-        r = subprocess.run([str(BLENDER), "-b", "--python-expr", expr], env=app.app_env(tmp),
+        r = subprocess.run([str(blender.launcher), "-b", "--python-expr", expr], env=app.app_env(tmp),
                            capture_output=True, text=True, timeout=120)
         if r.returncode or not (tmp / "config" / "userpref.blend").exists():
             raise GuiError(f"could not save preferences:\n{r.stdout[-2000:]}{r.stderr[-2000:]}")
         try:
-            tmp.rename(TEMPLATE)
+            tmp.rename(template)
         except OSError:  # another run made it meanwhile
             shutil.rmtree(tmp, ignore_errors=True)
     dest.mkdir(parents=True, exist_ok=True)
-    shutil.copytree(TEMPLATE / "config", dest / "config", dirs_exist_ok=True)
+    shutil.copytree(template / "config", dest / "config", dirs_exist_ok=True)
     return dest
 
 

@@ -119,9 +119,10 @@ class Gui:
 
     def use_repo_addon(self):
         """Register the checkout's voxel_addon (not an installed zip), with the
-        Python 3.13 packages of .blender/site (pyopencl, moderngl, ...) importable."""
+        packages of this Blender's .blender/<suite>/site (pyopencl, moderngl, ...;
+        VOXEL_BLENDER_SITE) importable."""
         root = Path(__file__).resolve().parents[2]
-        for p in (root / ".blender" / "site", root):
+        for p in (Path(os.environ.get("VOXEL_BLENDER_SITE") or root / ".blender" / "site"), root):
             if str(p) not in sys.path and p.exists():
                 sys.path.insert(0, str(p))
         import voxel_addon

@@ -16,7 +16,8 @@ import time
 import traceback
 from pathlib import Path
 
-AREAS = ["storage", "generation", "light", "meshing", "bake", "render", "world", "viewport", "edit"]
+AREAS = ["storage", "generation", "light", "meshing", "bake", "render", "world", "viewport", "edit",
+         "far"]
 
 
 class Context:

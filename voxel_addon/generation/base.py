@@ -26,3 +26,11 @@ class Generator:
         The result for a key must not depend on which other keys are in the batch.
         """
         raise NotImplementedError
+
+    def surface(self, xy: np.ndarray) -> dict | None:
+        """The surface at block columns xy ((n, 2) ints) without making chunks, for far
+        terrain: {"height": top solid z, "top": its block id, "water": water surface z
+        or -1, "trees": canopy cover 0..1}, (n,) arrays each; None when this
+        generator cannot tell (far terrain then comes from stored chunks only).
+        Must agree with `generate` (the same height and block at those columns)."""
+        return None

@@ -51,8 +51,8 @@ class _Gen:
     vec = False
     ct = CT
 
-    def __init__(self, units):
-        self.units = units
+    def __init__(self, units, size=C.SIZE):
+        self.units, self.size = units, size  # size: a domain's side (execute.Runner)
         self.fields = {}  # name -> (type, halo)
         for u in units:
             if u.kind == "2d":
@@ -114,7 +114,7 @@ class _Gen:
 
     def read(self, name, dx, dy, a=(), reach=0):
         _, hf = self.fields[name]
-        wf = C.SIZE + 2 * hf
+        wf = self.size + 2 * hf
         if dx is None:
             dx = f"vx_imin(vx_imax({a[0]}, {-reach}), {reach})"
             dy = f"vx_imin(vx_imax({a[1]}, {-reach}), {reach})"
@@ -205,7 +205,7 @@ class _Gen:
         if u.kind == "2d":
             # the global size is padded to the work-group size: the tail recomputes
             # the last column into the buffer's padding instead of branching
-            w = C.SIZE + 2 * u.halo
+            w = self.size + 2 * u.halo
             out += ["    int gid = get_global_id(0);",
                     f"    int g = vx_imin(gid, n * {w * w} - 1);",
                     f"    int c = g / {w * w}, r = g - c * {w * w};",
@@ -374,8 +374,8 @@ def _lazy_blocks(order, roots):
     return lazy, owner
 
 
-def source(units) -> str:
-    g, gv = _Gen(units), _GenV(units)
+def source(units, size=C.SIZE) -> str:
+    g, gv = _Gen(units, size), _GenV(units)
     return resources.kernel("gen.cl") + "\n".join(
         (gv if vectorizable(u) else g).kernel(i, u) for i, u in enumerate(units))
 
@@ -383,14 +383,14 @@ def source(units) -> str:
 class Runner:
     """A compiled program; the OpenCL twin of execute.Runner (the same calls)."""
 
-    def __init__(self, units):
+    def __init__(self, units, size=C.SIZE):
         import pyopencl as cl
-        self.units = units
-        self.src = source(units)
+        self.units, self.size = units, int(size)
+        self.src = source(units, self.size)
         self.ctx, self.queue, _ = opencl.context()
         prog = opencl.build(self.src, OPTIONS)
         self.kernels = [cl.Kernel(prog, f"unit{i}") for i in range(len(units))]
-        self.gen = _Gen(units)
+        self.gen = _Gen(units, self.size)
         # fields each unit reads: walking the expression graph per batch cost ~5 % of
         # a batch's time in Python (the GIL the stream's light solve wants)
         self._reads = [self.gen.reads(u) for u in units]
@@ -431,16 +431,29 @@ class Runner:
     def _read_field(self, name, fields, n):
         import pyopencl as cl
         buf, h = fields[name]
-        w = C.SIZE + 2 * h
+        w, s = self.size + 2 * h, self.size
         t = np.float32 if self.gen.fields[name][0] == "f" else np.int32
         a = np.empty((n, w, w), t)
         cl.enqueue_copy(self.queue, a, buf)  # blocking
-        return a.transpose(0, 2, 1)[:, h:h + C.SIZE, h:h + C.SIZE]
+        return a.transpose(0, 2, 1)[:, h:h + s, h:h + s]
+
+    def at(self, org, seed32, perm, want=()):
+        """execute.Runner.at: 2D fields over the domains whose first column is org."""
+        if any(u.kind != "2d" for u in self.units):
+            raise ValueError("Runner.at evaluates 2D units only (lang.prune)")
+        org = np.asarray(org, np.int64).reshape(-1, 2)
+        _, got = self._go(org.T.astype(np.int32).copy(), seed32, perm, want)
+        return {k: np.ascontiguousarray(v) for k, v in got.items()}
 
     def run(self, keys, seed32, perm, want=()):
-        import pyopencl as cl
-        q, n = self.queue, len(keys)
+        if self.size != C.SIZE:
+            raise ValueError("Runner.run makes chunks: size must be 16")
         org = (np.array(keys, np.int64).reshape(-1, 2).T * C.SIZE).astype(np.int32).copy()
+        return self._go(org, seed32, perm, want)
+
+    def _go(self, org, seed32, perm, want):
+        import pyopencl as cl
+        q, n = self.queue, org.shape[1]
         borg = self._buf("org", org.nbytes)
         cl.enqueue_copy(q, borg, org)
         bperm = self._perm_buf(seed32, perm)
@@ -450,7 +463,7 @@ class Runner:
             k = self.kernels[i]
             args = [borg, bperm, np.uint32(seed32), np.int32(n)]
             if u.kind == "2d":
-                w = C.SIZE + 2 * u.halo
+                w = self.size + 2 * u.halo
                 size = _pad(n * w * w, LOCAL2D)
                 for name in u.outs:
                     fields[name] = (self._buf(f"f_{name}", 4 * size), u.halo)

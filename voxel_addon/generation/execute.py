@@ -18,20 +18,18 @@ DT = {"f": F, "i": I, "b": bool}
 
 class Runner:
     """Evaluates the units of one program for groups of chunk origins (cl.Runner is
-    its OpenCL twin, with the same calls)."""
+    its OpenCL twin, with the same calls). `size`: the side of one domain in columns;
+    chunks are 16, far terrain evaluates 2D units on 1-column domains (`at`)."""
 
-    def __init__(self, units: list[Unit]):
-        self.units = units
+    def __init__(self, units: list[Unit], size: int = C.SIZE):
+        self.units, self.size = units, int(size)
 
     def run(self, keys, seed32: int, perm: np.ndarray, want=()):
         """Blocks (n, 65536) uint16 in linear order, and the 2D fields named in want
         as (n, 16, 16) [c, x, y] arrays."""
-        self.seed, self.perm = seed32, perm
-        org = np.array(keys, np.int64).reshape(-1, 2) * C.SIZE
-        self.ox = org[:, 0].astype(I)
-        self.oy = org[:, 1].astype(I)
-        self.n = len(keys)
-        self.fields: dict[str, tuple[np.ndarray, int]] = {}
+        if self.size != C.SIZE:
+            raise ValueError("Runner.run makes chunks: size must be 16")
+        self._start(np.array(keys, np.int64).reshape(-1, 2) * C.SIZE, seed32, perm)
         blocks = None
         with np.errstate(all="ignore"):  # unselected branches may divide by zero
             for u in self.units:
@@ -45,15 +43,33 @@ class Runner:
         flat = blocks.transpose(0, 3, 2, 1).reshape(self.n, C.VOLUME)
         return flat, {k: self.field(k) for k in want}
 
+    def at(self, org, seed32: int, perm: np.ndarray, want=()):
+        """The 2D fields named in want, (n, size, size) [c, x, y], over the domains
+        whose first column is org (n, 2) (every unit must be 2D: lang.prune)."""
+        self._start(np.asarray(org, np.int64).reshape(-1, 2), seed32, perm)
+        with np.errstate(all="ignore"):
+            for u in self.units:
+                if u.kind != "2d":
+                    raise ValueError("Runner.at evaluates 2D units only (lang.prune)")
+                self._unit2d(u)
+        return {k: np.ascontiguousarray(self.field(k)) for k in want}
+
+    def _start(self, org, seed32, perm):
+        self.seed, self.perm = seed32, perm
+        self.ox = org[:, 0].astype(I)
+        self.oy = org[:, 1].astype(I)
+        self.n = len(org)
+        self.fields: dict[str, tuple[np.ndarray, int]] = {}
+
     def field(self, name):
-        """A 2D field over the chunk itself, (n, 16, 16) [c, x, y]."""
+        """A 2D field over the domain itself, (n, size, size) [c, x, y]."""
         a, h = self.fields[name]
-        return a[:, h:h + C.SIZE, h:h + C.SIZE]
+        return a[:, h:h + self.size, h:h + self.size]
 
     # ---- domains ----------------------------------------------------------
     def _unit2d(self, u: Unit):
         h, n = u.halo, self.n
-        w = C.SIZE + 2 * h
+        w = self.size + 2 * h
         lx = np.arange(w, dtype=I) - I(h)
         self.dom = dict(kind="2d", halo=h, w=w,
                         c=np.arange(n)[:, None, None], lx=lx[None, :, None], ly=lx[None, None, :],

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core import chunk
+from ..core import chunk, surface
 from ..core.blocks import REGISTRY
 from ..core.errors import VoxelError
 from .base import Generator
@@ -33,3 +33,11 @@ class FlatGenerator(Generator):
             a[:, :, :] = self._column
             out.append(a)
         return out
+
+    def surface(self, xy):
+        n = len(xy)
+        col = surface.columns(self._column)
+        return {"height": np.full(n, col["height"], np.int32),
+                "top": np.full(n, col["top"], np.int32),
+                "water": np.full(n, col["water"], np.int32),
+                "trees": np.full(n, float(col["tree"]), np.float32)}

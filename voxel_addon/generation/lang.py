@@ -514,7 +514,12 @@ def lower(prog: Program) -> list[Unit]:
         units.append(Unit("3d", {}, 0, blk, top))
         for name, v in p.outs.items():
             units.append(Unit("2d", {name: cse(_subst_z([v], p.at[name]))[0]}))
-    # Halos, last unit first: a field must cover every reader's domain plus reach.
+    return halos(units)
+
+
+def halos(units: list[Unit]) -> list[Unit]:
+    """Set each 2D unit's halo, last unit first: a field must cover every reader's
+    domain plus reach."""
     need: dict[str, int] = {}
     for u in reversed(units):
         if u.kind == "2d":
@@ -525,3 +530,21 @@ def lower(prog: Program) -> list[Unit]:
         if u.top is not None:
             need[u.top] = max(need.get(u.top, 0), 0)
     return units
+
+
+def prune(units: list[Unit], want) -> list[Unit]:
+    """The 2D units the fields `want` need, with halos for just those readers: e.g.
+    the height map and surface without the 3D passes and the wide halos that tree
+    crowns need (far terrain, far/README.md). A column output of a 3D pass is a 2D
+    unit already (lower: z := at), so no 3D unit is ever needed."""
+    need, keep = set(want), []
+    for u in reversed(units):
+        if u.kind != "2d" or not need & set(u.outs):
+            continue
+        keep.append(u)
+        need.update(e.k[0] for e in nodes(u.roots()) if e.op == "read")
+    missing = set(want) - {n for u in keep for n in u.outs}
+    if missing:
+        raise ValueError(f"no 2D pass writes {', '.join(sorted(missing))}")
+    return halos([Unit("2d", dict(u.outs)) for u in reversed(keep)])
+

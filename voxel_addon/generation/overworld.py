@@ -9,6 +9,8 @@ Everything depends only on world coordinates, so chunks are seamless in any orde
 """
 from __future__ import annotations
 
+import numpy as np
+
 from ..core.blocks import REGISTRY
 from .lang import (Program, absolute, clamp, clamp01, ifloor, irand2, max_, min_, octaves,
                    perlin2, perlin3, rand2, rand3, select, smoothstep, voronoi2)
@@ -19,6 +21,9 @@ TREE_CELL = 8      # tree grid (thesis: trees on a Voronoi grid, 0..N per cell)
 TREE_SLOTS = 2     # N
 TREE_REACH = 3     # crown radius bound: how far a tree reaches from its trunk
 KEEP = 3           # trees remembered per column
+# far terrain: share of a column's area under crowns per unit of treeRate (measured
+# on generated chunks: tests/far/test_consistency.py checks it stays close)
+TREE_COVER = 0.45
 
 
 class OverworldGenerator(PassGenerator):
@@ -33,6 +38,15 @@ class OverworldGenerator(PassGenerator):
         "caves": 1.0,         # 0 disables caves
         "rivers": 1.0,        # river width factor, 0 disables
     }
+
+    surface_fields = ("groundZ", "top", "treeRate")
+
+    def surface_from(self, f):
+        s = super().surface_from(f)
+        # trees grow on grass above the sea (pass 4)
+        ok = (s["top"] == B["grass"]) & (s["height"] > int(self.params["sea_level"]))
+        s["trees"] = np.where(ok, np.clip(f["treeRate"] * TREE_COVER, 0, 1), 0).astype(np.float32)
+        return s
 
     def program(self) -> Program:
         P = self.params

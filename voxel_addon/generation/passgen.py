@@ -5,12 +5,16 @@ class runs it with NumPy or OpenCL, in batches, and cuts the result into chunks.
 """
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 
 from .. import opencl
 from ..core import chunk as C
+from ..core.blocks import REGISTRY
 from . import noise
 from .base import Generator
+from .lang import prune
 
 BACKENDS = opencl.BACKENDS
 
@@ -18,6 +22,10 @@ BACKENDS = opencl.BACKENDS
 class PassGenerator(Generator):
     batch_cl = 64   # chunks per kernel launch
     batch_np = 4    # chunks per NumPy evaluation (bounds temporary memory)
+    # far terrain (surface): the 2D fields with the ground height and its block; a
+    # program without the first has no far surface, without the second it is grass
+    surface_fields = ("groundZ", "top")
+    surface_batch = {"opencl": 16384, "numpy": 2048}  # columns per evaluation
 
     def __init__(self, seed, params=None, backend=None):
         super().__init__(seed, params, backend)
@@ -27,6 +35,8 @@ class PassGenerator(Generator):
         self.perm = noise.perm_table(self.seed32)
         self.units = self.program().units()
         self._runner = None
+        self._surf = None
+        self._surf_lock = threading.Lock()
 
     def program(self):
         raise NotImplementedError
@@ -59,3 +69,46 @@ class PassGenerator(Generator):
             for n in names:
                 res[n] += list(np.ascontiguousarray(got[n]))
         return res
+
+    # ---- far terrain ----------------------------------------------------------
+    def surface_wants(self) -> list[str]:
+        """The 2D fields `surface_from` reads (present in the program)."""
+        have = {n for u in self.units if u.kind == "2d" for n in u.outs}
+        return [n for n in self.surface_fields if n in have]
+
+    def surface_from(self, f: dict) -> dict:
+        """Generator.surface's values from the fields of surface_wants at the columns.
+        Water: up to `sea_level` (when the generator has one) above lower ground."""
+        h = f[self.surface_fields[0]].astype(np.int32)
+        top = f.get(self.surface_fields[1])
+        top = np.full(h.shape, REGISTRY.id("grass"), np.int32) if top is None \
+            else top.astype(np.int32)
+        sea = self.params.get("sea_level")
+        water = np.full(h.shape, -1, np.int32) if sea is None \
+            else np.where(h < int(sea), np.int32(sea), np.int32(-1))
+        return {"height": h, "top": top, "water": water,
+                "trees": np.zeros(h.shape, np.float32)}
+
+    def surface(self, xy):
+        """Generator.surface from the 2D passes alone (lang.prune: no 3D pass, only
+        the halos the wanted fields need), evaluated on 1-column domains, so the
+        height and block are exactly those of the generated chunk's column."""
+        want = self.surface_wants()
+        if self.surface_fields[0] not in want:
+            return None
+        xy = np.asarray(xy, np.int64).reshape(-1, 2)
+        with self._surf_lock:
+            if self._surf is None:
+                units = prune(self.units, want)
+                if self.backend_used == "opencl":
+                    from .cl import Runner
+                else:
+                    from .execute import Runner
+                self._surf = Runner(units, 1)
+            step = self.surface_batch[self.backend_used]
+            parts = [self._surf.at(xy[i:i + step], self.seed32, self.perm, want)
+                     for i in range(0, len(xy), step)]
+        f = {n: np.concatenate([p[n].reshape(-1) for p in parts]) if parts
+             else np.zeros(0, np.int32) for n in want}
+        return self.surface_from(f)
+

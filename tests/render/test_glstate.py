@@ -72,7 +72,7 @@ def test_kept_restores_the_host_and_renders_as_on_a_fresh_context(gl):
     with glstate.kept():
         inside = glstate.snapshot()
         from voxel_addon.render.pipeline import Renderer
-        r = Renderer(gl, Settings(msaa=1, dof=False, godrays=False, shadows=True))
+        r = Renderer(gl, Settings(msaa=1, dof=False, godrays=False, shadows=True, clouds=False))
         r.set_area(blocks, light.solve(blocks), 0, 0)
         img = r.render(CAM, 12.0, SIZE)
         r.release()

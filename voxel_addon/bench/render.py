@@ -143,6 +143,8 @@ def run(ctx):
         sea = source.scene_sea_level(name)  # as the CLI renders it
         r = Renderer(gl, Settings(sea_level=sea))
         r.set_area(a.blocks, a.light, a.cx0, a.cy0, ring=True, light_at=a.light_at)
+        if not source.open_sea(r):  # as the CLI: a dry edge fades into the haze
+            sea = -1
         hours = daytime.parse_time(sc.time)
         for vname, eff in variants:
             r.s = Settings(sea_level=sea).with_effects(eff)

@@ -81,6 +81,9 @@ def run(args):
     r = Renderer(ctx, s)
     r.set_area(data.blocks, data.light, data.cx0, data.cy0, ring=True, method=args.aggregation,
                light_at=data.light_at)
+    asked = any(e.strip().lstrip("+-") == "sea" for e in (args.effects or "").split(","))
+    if not asked and not source.open_sea(r):
+        r.s.sea = False  # the area's edge is dry land: it fades into the haze
     img = r.render(Camera(*cam_args), hours, (w, h))
     rgba = np.dstack([img, np.full(img.shape[:2], 255, np.uint8)])
     args.out.parent.mkdir(parents=True, exist_ok=True)

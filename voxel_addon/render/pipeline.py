@@ -39,7 +39,7 @@ class Renderer:
         self.stats: dict = {}
         self.area = None             # (cx0, cy0, cx1, cy1): the box of the shown chunks
         self.edge_water = None       # set_area: the fraction of the area's edge that is
-                                     # open water (the sea beyond it only if it is)
+                                     # open water (source.open_sea)
         self.lights: dict = {}       # (cx, cy) -> its light (None: open daylight; or packed)
         self._vol_key = None         # the light window last made resident
         self._fs: dict = {}          # program -> empty VAO for fullscreen passes
@@ -342,7 +342,7 @@ class Renderer:
         sky_on = debug in (0, 6)  # debug views show black where there is no surface
         for k in ("zenith", "horizon", "halo", "disc"):
             F.set(**{f"sky_{k}": sp[k] if sky_on else (0.0, 0.0, 0.0)})
-        F.set(**sky_values(s, sp, hours, sky_on, debug, camera, self.area, h, self.edge_water))
+        F.set(**sky_values(s, sp, hours, sky_on, debug, camera, self.area, h))
         F.set(vp=vp, inv_vp=inv_vp, cam_pos=(draw_cam.x, draw_cam.y, draw_cam.z),
               cam_fwd=draw_cam._fwd(), ortho=draw_cam.ortho,
               far_dist=camera.far, shadow_eye=(camera.x, camera.y, camera.z),
@@ -584,10 +584,10 @@ def _close(blocks: np.ndarray) -> np.ndarray:
 
 
 def sky_values(s: Settings, sp: dict, hours: float, sky_on: bool, debug: int, camera,
-               area, h: int, edge_water: float | None = None) -> dict:
+               area, h: int) -> dict:
     """The frame block's sky, haze, clouds, sea, fade and display values (issue 20).
-    The sea beyond the area shows where the world has one (sea_level) and, for an area
-    set at once, where a tenth of its edge is open water (a desert fades into the sky)."""
+    The sea beyond the area shows where the world has one (Settings.sea_level; the CLI
+    also asks source.open_sea whether the shown area's edge is at sea)."""
     zero = np.full((sky.NE * sky.NA, 4), math.log(sky.EPS))
     fade_end = s.fade_distance or (s.distance + 0.5) * 16.0
     box = [16.0 * v for v in area] if area else [0.0, 0.0, 0.0, 0.0]
@@ -605,7 +605,7 @@ def sky_values(s: Settings, sp: dict, hours: float, sky_on: bool, debug: int, ca
         fade_end=fade_end if s.fade else 2e9,
         display=(2 if s.tonemap else 1) if debug in (0, 6) else (1 if debug in (1, 4) else 0),
         clouds=s.clouds and sky_on, cloud_shadows=s.cloud_shadows,
-        sea=s.sea and sky_on and s.sea_level >= 0 and (edge_water is None or edge_water > 0.1),
+        sea=s.sea and sky_on and s.sea_level >= 0,
         water_fx=s.water and debug in (0, 6))
 
 

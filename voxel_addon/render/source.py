@@ -34,6 +34,13 @@ def sea_level(generator) -> int:
     return int(getattr(generator, "params", {}).get("sea_level", -1))
 
 
+def open_sea(renderer) -> bool:
+    """Whether a sea beyond an area set with set_area(ring=True) belongs there: a tenth
+    of the area's edge is open water (a desert or a mountain range fades into the haze
+    instead). The CLI, the bench and the golden images switch Settings.sea by it."""
+    return renderer.edge_water is None or renderer.edge_water > 0.1
+
+
 def scene_sea_level(name: str) -> int:
     """sea_level of a reference scene's generator (meshing.scenes)."""
     from ..generation import make_generator

@@ -22,7 +22,10 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / ".blender" / "site"))  # moderngl for the voxel view (Python 3.13)
+# moderngl for the voxel view: the site of the Blender that runs this (build.py and
+# tools/blender_app.py set VOXEL_BLENDER_SITE since the .blender/sid, .blender/trixie layout)
+for _p in filter(None, [str(ROOT / ".blender" / "site"), os.environ.get("VOXEL_BLENDER_SITE")]):
+    sys.path.insert(0, _p)
 
 import bpy  # noqa: E402
 from mathutils import Quaternion, Vector  # noqa: E402

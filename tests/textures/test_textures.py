@@ -11,7 +11,7 @@ from voxel_addon.textures import paint
 
 
 def test_every_name_has_its_own_painter():
-    assert set(REGISTRY.texture_names) <= set(paint.PAINTERS)
+    assert set(REGISTRY.texture_names) <= set(T.PAINTERS)
     arr = T.texture_array()
     assert arr.shape == (len(REGISTRY.texture_names), 16, 16, 4) and arr.dtype == np.uint8
     assert T.glow_array().shape == arr.shape[:3]

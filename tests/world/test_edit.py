@@ -281,3 +281,21 @@ def test_opening_a_deep_shaft_relights_far_below(world_path):
             edit(w, (x, y, z + 1, b))
             model[(x, y, z + 1)] = (b, 0)
             assert check_against_full(w, world_path, model, 0, 0, 3, 3) >= 9
+
+
+def test_coloured_voxels_mesh_by_colour(world_path):
+    """The `color` block's faces follow its data through streaming (build) and edits:
+    two neighbours of different colours are two quads, the same colour one."""
+    color = REGISTRY.id("color")
+    with World.create(world_path, seed=1, generator="flat", loader=False) as w:
+        w.set_block(3, 3, 100, color, 5)
+        w.set_block(4, 3, 100, color, 6)
+        from voxel_addon.world import build
+        build.light_and_mesh(w, 0, 0, 1, 1)
+        m = w.chunk_at(0, 0).mesh
+        top = m.quads[(m.quads["block"] == color) & (m.quads["face"] == 5)]
+        assert sorted(top["color"].tolist()) == [5, 6] and m.colors is not None
+        edit(w, (4, 3, 100, color, 5))                     # same colour now: one quad
+        m = w.chunk_at(0, 0).mesh
+        top = m.quads[(m.quads["block"] == color) & (m.quads["face"] == 5)]
+        assert top["color"].tolist() == [5] and top["w"].tolist() == [2]

@@ -1,6 +1,8 @@
 """Streaming with the real worker thread, real SQLite, real OpenCL (and NumPy)."""
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import pytest
 
@@ -169,3 +171,30 @@ def test_tiles_cover_the_range_without_thin_strips(t):
             assert width.max() <= 2 * t
             if len(width) > 1:
                 assert 2 * width.min() >= t, (lo, hi, width)
+
+
+def test_stored_chunks_reach_a_live_stream(world_path):
+    """World.store_chunks (an import into the world a view shows) replaces the active
+    chunk and the stream hands out its new mesh without being told."""
+    from voxel_addon.core import chunk as C
+    from voxel_addon.core.blocks import REGISTRY
+    with World.create(world_path, seed=SEED, generator="flat") as w:
+        with Stream(w, 1) as s:
+            s.set_view(8, 8)
+            assert s.wait_ready(60)
+            old = {p.key: p for p in s.drain(1.0)[0]}
+            assert (0, 0) in old
+            tower = C.empty()
+            tower[:, :, :3] = REGISTRY.id("stone")
+            tower[4:8, 4:8, 3:100] = REGISTRY.id("bricks")
+            w.store_chunks([((0, 0), tower, None)])
+            assert w.chunk_at(0, 0).get(5, 5, 50) == REGISTRY.id("bricks")
+            end = time.monotonic() + 60
+            new = None
+            while new is None and time.monotonic() < end:
+                new = next((p for p in s.drain(1.0)[0] if p.key == (0, 0)), None)
+                time.sleep(0.05)
+            assert new is not None and new.version > old[(0, 0)].version
+            assert (new.mesh.quads["block"] == REGISTRY.id("bricks")).any()
+    with World.open(world_path, loader=False) as w:
+        assert w.get_block(5, 5, 50) == REGISTRY.id("bricks")

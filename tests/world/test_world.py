@@ -125,3 +125,15 @@ def test_stored_edits_keep_data_values_both_ways(world_path):
     with World.open(world_path, loader=False) as w:
         blocks, data = w.file.read_chunk((1, 0))
         assert blocks[4, 4, 100] == REGISTRY.id("glass") and data[4, 4, 100] == 9
+
+
+def test_colour_palette_follows_the_file(world_path):
+    from voxel_addon.core import colors
+    with World.create(world_path, seed=1, generator="flat", loader=False) as w:
+        assert w.colors().tolist() == [[255, 255, 255]]
+        pal, idx = colors.add(w.colors(), [(1, 2, 3), (255, 255, 255)])
+        assert idx.tolist() == [1, 0]
+        w.file.set_meta(colors.KEY, colors.dump(pal))
+        assert w.colors().tolist() == [[255, 255, 255], [1, 2, 3]]
+    with World.open(world_path, loader=False, readonly=True) as w:
+        assert w.colors()[1].tolist() == [1, 2, 3]

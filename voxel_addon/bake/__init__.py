@@ -43,6 +43,7 @@ class MaterialSpec:
     render: str         # "opaque" | "alpha_test" | "blend"
     glow: float         # emission strength (block's glow); texture glow mask says where
     double_sided: bool
+    tint: tuple | None = None  # sRGB 0..1 the texture is multiplied by (the `color` block)
 
 
 @dataclass
@@ -102,9 +103,25 @@ def region_of(world, x0, y0, x1, y1) -> np.ndarray:
     return np.asfortranarray(b[ox:ox + x1 - x0, oy:oy + y1 - y0])
 
 
+def colors_of(world, x0, y0, x1, y1):
+    """(small data of the region or None, the world's palette): what `color` voxels
+    need (their colour is their data)."""
+    from ..core import colors
+    cx0, cy0, cx1, cy1 = x0 >> 4, y0 >> 4, ((x1 - 1) >> 4) + 1, ((y1 - 1) >> 4) + 1
+    got = world.load([(cx, cy) for cy in range(cy0, cy1) for cx in range(cx0, cx1)])
+    pieces = [(k, c.data) for k, c in got.items() if c.data is not None]
+    if not pieces:
+        return None, None
+    d = C.paste(pieces, cx0, cy0, cx1, cy1)
+    ox, oy = x0 - cx0 * C.SIZE, y0 - cy0 * C.SIZE
+    return np.asfortranarray(d[ox:ox + x1 - x0, oy:oy + y1 - y0]), colors.parse(world.file.meta)
+
+
 def bake_world(world, x0, y0, x1, y1, **kw) -> Bake:
     x0, y0, x1, y1 = check_region(x0, y0, x1, y1)
-    return bake_blocks(region_of(world, x0, y0, x1, y1), origin=(x0, y0, 0), **kw)
+    data, palette = colors_of(world, x0, y0, x1, y1)
+    return bake_blocks(region_of(world, x0, y0, x1, y1), origin=(x0, y0, 0), data=data,
+                       palette=palette, **kw)
 
 
 def _materials():
@@ -131,6 +148,33 @@ def _materials():
 
 
 LIGHTS = ("atlas", "vertex")
+COLOR = REGISTRY.id("color")
+
+
+def _tints(table, specs, quad_lists, palette):
+    """(table, specs + one spec per colour of `color` quads, {palette index: spec})."""
+    used = sorted({int(c) for q in quad_lists for c in np.unique(q["color"][q["block"] == COLOR])})
+    if not used:
+        return table, specs, {}
+    pal = np.array([[255, 255, 255]], np.uint8) if palette is None else np.asarray(palette)
+    base = specs[int(table[COLOR, 5])]
+    out, tinted = list(specs), {}
+    for c in used:
+        rgb = pal[min(c, len(pal) - 1)]
+        tinted[c] = len(out)
+        out.append(MaterialSpec("color_%02x%02x%02x" % tuple(int(v) for v in rgb), base.texture,
+                                base.layer, base.render, base.glow, base.double_sided,
+                                tuple(float(v) / 255 for v in rgb)))
+    # two palette entries of one colour share a material
+    names = {}
+    for c, i in list(tinted.items()):
+        tinted[c] = names.setdefault(out[i].name, i)
+    keep = sorted(set(tinted.values()))
+    if len(keep) < len(used):
+        remap = {old: len(specs) + k for k, old in enumerate(keep)}
+        out = list(specs) + [out[i] for i in keep]
+        tinted = {c: remap[i] for c, i in tinted.items()}
+    return table, out, tinted
 
 
 def bake_blocks(blocks: np.ndarray, origin=(0, 0, 0), **kw) -> Bake:
@@ -149,10 +193,12 @@ def run(gen):
 
 def steps(blocks: np.ndarray, origin=(0, 0, 0), *, per: str = "region", method: str = "greedy",
           instances: bool = False, light: str = "atlas", backend: str | None = None,
-          progress=None, tile: int = 64):
+          progress=None, tile: int = 64, data=None, palette=None):
     """The bake as a generator of short steps (yields (stage, fraction)) that returns
     the Bake: a modal operator runs one step per timer tick and can stop in between.
-    per "tile" cuts the region into `tile`×`tile` objects."""
+    per "tile" cuts the region into `tile`×`tile` objects. `data` (the region's small
+    data) and `palette` ((n, 3) uint8, core.colors): `color` voxels get one material
+    per colour (the texture tinted), so a .vox keeps its colours in Blender and glTF."""
     from .. import meshing
     if per not in ("region", "chunk", "tile"):
         raise VoxelError(f"per must be 'region', 'chunk' or 'tile', not {per!r}")
@@ -180,12 +226,17 @@ def steps(blocks: np.ndarray, origin=(0, 0, 0), *, per: str = "region", method: 
     shape_ids = np.flatnonzero(REGISTRY.shape >= 2)  # x and hash
 
     ring = padded[PAD - 1:PAD + W + 1, PAD - 1:PAD + H + 1]  # region + 1-voxel air ring
+    dring = None
+    if data is not None:
+        dring = np.zeros(ring.shape, np.uint16, order="F")
+        dring[1:-1, 1:-1] = data
     wins = windows(per, ox, oy, W, H, tile)
     meshed = []  # (name, quads, x, y, (the light near them, its offset))
     for i, (name, x, y, w, h) in enumerate(wins):
         yield stage("mesh", i / len(wins))
         q = meshing.quads(np.asfortranarray(ring[x:x + w + 2, y:y + h + 2]), border="context",
-                          method=method, backend=backend or "numpy")
+                          method=method, backend=backend or "numpy",
+                          data=None if dring is None else dring[x:x + w + 2, y:y + h + 2])
         if instances:
             q = q[~np.isin(q["block"], shape_ids)]
         if not len(q):
@@ -206,10 +257,14 @@ def steps(blocks: np.ndarray, origin=(0, 0, 0), *, per: str = "region", method: 
         texels = np.zeros((AH, AW, 4), np.float32)
         faces = np.full((AH, AW), A.EMPTY, np.uint8)
         starts = np.cumsum([0] + [len(m[1]) for m in meshed])
+    mat_table, specs, tinted = _tints(mat_table, specs, [m[1] for m in meshed], palette)
     parts = []
     for i, (name, q, x, y, near) in enumerate(meshed):
         yield stage("parts", i / len(meshed))
         p = _part(name, q, (ox + x, oy + y, oz), *near, mat_table)
+        if tinted:
+            sel = q["block"] == COLOR
+            p.material[sel] = [tinted[int(c)] for c in q["color"][sel]]
         if texels is not None:
             sl = slice(starts[i], starts[i + 1])
             A.fill(texels, faces, q, px[sl], py[sl], *near)

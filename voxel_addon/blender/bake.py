@@ -200,6 +200,11 @@ def gltf_group() -> bpy.types.ShaderNodeTree:
     return g
 
 
+def _linear(c: float) -> float:
+    """sRGB 0..1 -> linear (node colours are scene-linear)."""
+    return c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4
+
+
 def material(spec, style: str, light=None) -> bpy.types.Material:
     """The material of `spec`; `light` is the bake's light atlas image (light_images)
     or None when light travels in colour attributes."""
@@ -221,6 +226,13 @@ def material(spec, style: str, light=None) -> bpy.types.Material:
     tex = _node(t, "ShaderNodeTexImage", -450, 100, image=image(spec.texture),
                 interpolation="Closest", extension="REPEAT")
     t.links.new(uv.outputs[0], tex.inputs[0])
+    colour = tex.outputs["Color"]
+    if spec.tint is not None:  # a coloured voxel: its colour times the neutral tile
+        mul = _node(t, "ShaderNodeMix", -150, 300, data_type="RGBA", blend_type="MULTIPLY")
+        mul.inputs["Factor"].default_value = 1.0
+        t.links.new(colour, mul.inputs[6])
+        mul.inputs[7].default_value = (*(_linear(c) for c in spec.tint), 1.0)
+        colour = mul.outputs[2]
     if light is not None:
         luv = _node(t, "ShaderNodeUVMap", -700, -350, uv_map=LIGHT_UV)
         ltex = _node(t, "ShaderNodeTexImage", -450, -350, image=light,
@@ -231,17 +243,17 @@ def material(spec, style: str, light=None) -> bpy.types.Material:
             attr = _node(t, "ShaderNodeVertexColor", -450, -200, layer_name="shade")
             mul = _node(t, "ShaderNodeMix", 100, 200, data_type="RGBA", blend_type="MULTIPLY")
             mul.inputs["Factor"].default_value = 1.0
-            t.links.new(tex.outputs["Color"], mul.inputs[6])
+            t.links.new(colour, mul.inputs[6])
             t.links.new(attr.outputs["Color"], mul.inputs[7])
             t.links.new(mul.outputs[2], bsdf.inputs["Base Color"])
         else:
-            t.links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
+            t.links.new(colour, bsdf.inputs["Base Color"])
             sep = _node(t, "ShaderNodeSeparateColor", -150, -350)
             t.links.new(ltex.outputs["Color"], sep.inputs[0])
             grp = _node(t, "ShaderNodeGroup", 500, -450, node_tree=gltf_group())
             t.links.new(sep.outputs[0], grp.inputs["Occlusion"])
     else:
-        t.links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
+        t.links.new(colour, bsdf.inputs["Base Color"])
         grp = _node(t, "ShaderNodeGroup", -150, -250, node_tree=shade_group())
         if light is None:
             for i, name in enumerate(("light", "daylight")):
@@ -252,7 +264,7 @@ def material(spec, style: str, light=None) -> bpy.types.Material:
             t.links.new(ltex.outputs["Alpha"], grp.inputs["Daylight"])
         emi = _node(t, "ShaderNodeMix", 100, -200, data_type="RGBA", blend_type="MULTIPLY")
         emi.inputs["Factor"].default_value = 1.0
-        t.links.new(tex.outputs["Color"], emi.inputs[6])
+        t.links.new(colour, emi.inputs[6])
         t.links.new(grp.outputs[0], emi.inputs[7])
         glow_sock = emi.outputs[2]
     if spec.glow > 0:

@@ -79,6 +79,21 @@ BLOCKS: tuple[Block, ...] = (
     Block("lamp_blue", emission=(0, 0, 15), glow=1.0),
     Block("lamp_white", emission=(15, 15, 15), glow=1.0),
     Block("lamp_yellow", emission=(15, 12, 0), glow=1.0),
+    # building materials for imported Minecraft worlds (issue 21)
+    Block("planks"),
+    Block("cobblestone"),
+    Block("stone_bricks"),
+    Block("bricks"),
+    Block("deepslate"),
+    Block("gravel"),
+    Block("clay"),
+    Block("sandstone"),
+    Block("obsidian"),
+    Block("lava", emission=(15, 9, 3), glow=0.9),
+    _plant("torch", animation="none", emission=(14, 11, 6), glow=1.0),
+    # a voxel whose colour is its small data: an index into the world's colour
+    # palette (core.colors); .vox models and Minecraft's dyed blocks
+    Block("color"),
 )
 
 

@@ -158,11 +158,8 @@ class Chunk:
         return int(self.blocks[lx, ly, z])
 
     def set(self, lx: int, ly: int, z: int, block: int, data: int = 0) -> None:
-        self.blocks[lx, ly, z] = block
-        if data or self.data is not None:
-            if self.data is None:
-                self.data = empty()
-            self.data[lx, ly, z] = data
+        """put() and mark the chunk changed, its light and mesh stale."""
+        self.data = put(self.blocks, self.data, lx, ly, z, block, data)
         self.dirty = True
         self.light = self.mesh = None  # stale now
 
@@ -173,6 +170,18 @@ class Chunk:
             if a is not None:
                 n += a.nbytes
         return n
+
+
+def put(blocks, data, lx: int, ly: int, z: int, block: int, value: int):
+    """The one place that writes voxels' block ids and small data (scalars, or index
+    arrays and values): `data` is allocated on the first non-zero value (None while
+    all zero); returns it."""
+    blocks[lx, ly, z] = block
+    if data is not None or np.any(value):
+        if data is None:
+            data = empty()
+        data[lx, ly, z] = value
+    return data
 
 
 def pack_layers(a: np.ndarray) -> tuple:

@@ -9,6 +9,7 @@ from ..core.errors import VoxelError
 GENERATORS = {
     "flat": "flat:FlatGenerator",
     "overworld": "overworld:OverworldGenerator",
+    "empty": "empty:EmptyGenerator",  # air: worlds an import creates (issue 21)
 }
 DEFAULT = "overworld"
 

@@ -14,7 +14,7 @@ from . import aggregate
 from .mesh import SIDE
 
 QUAD = np.dtype([("x", "u2"), ("y", "u2"), ("z", "u2"), ("face", "u1"), ("w", "u2"),
-                 ("h", "u2"), ("block", "u2"), ("layer", "u2")])
+                 ("h", "u2"), ("block", "u2"), ("layer", "u2"), ("color", "u2")])
 METHODS = tuple(aggregate.METHODS)
 BORDERS = ("context", "air")
 X_FACES = (6, 7)
@@ -211,6 +211,7 @@ def to_quads(r):
     for c in COLS[1:]:
         q[c] = r[c]
     q["layer"] = REGISTRY.face_texture[r["block"], SIDE[r["face"]]]
+    q["color"] = r["color"] if "color" in r else 0  # the `color` block's palette index
     return q
 
 

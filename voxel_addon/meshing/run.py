@@ -6,7 +6,7 @@ import numpy as np
 
 from .. import opencl
 from ..core.errors import VoxelError
-from . import cl, faces
+from . import cl, faces, tint
 from .faces import BORDERS, METHODS, area, sort_key, to_quads
 
 
@@ -38,11 +38,14 @@ def rects(P, tile, *, method="greedy", backend="numpy", z0=0, z1=256, split=0):
 
 
 def quads(blocks, *, border="context", method="greedy", backend="numpy", z0=0, z1=256,
-          split=0):
-    """The quad list of a block window (README.md): dtype QUAD, sorted by (face, z, y, x)."""
+          split=0, data=None):
+    """The quad list of a block window (README.md): dtype QUAD, sorted by (face, z, y, x).
+    `data`: the window's small data, so `color` voxels of different colours stay apart."""
     blocks = np.asarray(blocks)
     backend = check(blocks, border, method, backend, z0, z1)
     P = area(blocks, border)
     r = rects(P, (P.shape[0] - 2, P.shape[1] - 2), method=method, backend=backend,
               z0=z0, z1=z1, split=split)
+    if data is not None:
+        r = tint.split(r, area(data, border), (P.shape[0] - 2, P.shape[1] - 2), 1)
     return to_quads(r)[np.argsort(sort_key(r))]

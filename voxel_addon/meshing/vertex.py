@@ -10,6 +10,7 @@ from ..core.blocks import ANIMATIONS, REGISTRY, RENDERS
 from ..core.errors import VoxelError
 from .faces import area, sort_key, to_quads
 from .run import check, rects
+from . import tint
 from .mesh import CORNERS, T1, T2, quad_indices  # noqa: F401  (the index pattern: meshing API)
 
 # Bench (region-height trade-off, cf. table 6.5): 64 builds fastest (one meshing call per
@@ -100,6 +101,8 @@ class ChunkMesh:
     ranges: np.ndarray     # (n_regions, n_passes, 2) int32: first vertex, vertex count
     region_h: int
     quads: np.ndarray      # the QUAD list, in vertex order (debug views, counts)
+    colors: np.ndarray | None = None  # (V,) uint16 palette index per vertex (the `color`
+    # block; core.colors), None when the chunk has none: the packed vertex has no bits left
 
 
 def _check_region(region_h):
@@ -108,13 +111,14 @@ def _check_region(region_h):
 
 
 def build_chunks(blocks, origin=(0, 0), *, method="greedy", backend="numpy",
-                 region_h=REGION_H, keys=None, regions=None) -> dict:
+                 region_h=REGION_H, keys=None, regions=None, data=None) -> dict:
     """Viewport data of every chunk of an area in one batch: `blocks` is
     (16*nx + 2, 16*ny + 2, 256), the chunks plus a one-voxel ring of neighbours;
     `origin` = (cx, cy) of its first chunk. Returns {(cx, cy): ChunkMesh}; `keys`
     optionally limits the result to those chunks (the whole area is still meshed).
     `regions` = (r0, r1): mesh only render regions r0..r1-1 (the others come out
-    empty; `splice` puts them into a full mesh)."""
+    empty; `splice` puts them into a full mesh). `data`: the small data of the same
+    window (or None): `color` voxels of different colours are not merged."""
     blocks = np.asarray(blocks)
     W, H = blocks.shape[0] - 2, blocks.shape[1] - 2
     if blocks.ndim != 3 or blocks.shape[2] != 256 or W <= 0 or H <= 0 or W % 16 or H % 16:
@@ -126,6 +130,7 @@ def build_chunks(blocks, origin=(0, 0), *, method="greedy", backend="numpy",
     r0, r1 = regions or (0, 256 // region_h)
     r = rects(area(blocks, "context"), (16, 16), method=method, backend=backend, split=region_h,
               z0=r0 * region_h, z1=r1 * region_h)
+    r = tint.split(r, data, (16, 16), nx)
     region = r["z"] // region_h
     ps = PASS_OF[r["block"]]
     order = np.argsort(sort_key(r, (region, 8), (ps, 2), xy_bits=5))
@@ -150,7 +155,9 @@ def build_chunks(blocks, origin=(0, 0), *, method="greedy", backend="numpy",
         if want is not None and key not in want:
             continue
         a, b = qstart[i], qstart[i + 1]
-        out[key] = ChunkMesh(verts[4 * a:4 * b], ranges[i], region_h, q[a:b])
+        col = q["color"][a:b]
+        out[key] = ChunkMesh(verts[4 * a:4 * b], ranges[i], region_h, q[a:b],
+                             np.repeat(col, 4) if col.any() else None)
     return out
 
 
@@ -167,7 +174,9 @@ def splice(old: ChunkMesh, new: ChunkMesh, r0: int, r1: int) -> ChunkMesh:
     first = (np.cumsum(flat) - flat).reshape(counts.shape)
     verts = np.concatenate([old.vertices[:a], new.vertices[n0:n1], old.vertices[b:]])
     quads = np.concatenate([old.quads[:a // 4], new.quads[n0 // 4:n1 // 4], old.quads[b // 4:]])
-    return ChunkMesh(verts, np.stack([first, counts], -1).astype(np.int32), old.region_h, quads)
+    col = quads["color"]
+    return ChunkMesh(verts, np.stack([first, counts], -1).astype(np.int32), old.region_h, quads,
+                     np.repeat(col, 4) if col.any() else None)
 
 
 def build_chunk(blocks, method="greedy", backend="numpy", region_h=REGION_H) -> ChunkMesh:

@@ -39,21 +39,41 @@ def encode(codec: str, raw: bytes) -> bytes:
 
 
 def decode(codec: str, blob: bytes, size: int) -> bytes:
-    """Decompress; raises ValueError on damaged data or a wrong size."""
+    """Decompress exactly `size` bytes; raises ValueError on damaged data or a wrong
+    size. Hostile input: never more than `size` + 1 bytes are inflated (a 65 KB zstd
+    frame can declare 2 GiB of zeros, a zlib stream 1000x its size)."""
     if codec == "zlib":
-        try:
-            raw = zlib.decompress(blob)
-        except zlib.error as e:
-            raise ValueError(str(e)) from None
-    elif codec == "zstd":
+        return inflate(blob, size)
+    if codec == "zstd":
         if _zstd is None:
             raise VoxelError("this world uses zstd; install the 'zstandard' package")
-        try:
-            raw = _zstd_pair()[1].decompress(blob, max_output_size=size)
-        except _zstd.ZstdError as e:
-            raise ValueError(str(e)) from None
-    else:
-        raise ValueError(f"unknown codec {codec!r}")
+        return unzstd(blob, size)
+    raise ValueError(f"unknown codec {codec!r}")
+
+
+def inflate(blob, size: int, wbits: int = zlib.MAX_WBITS) -> bytes:
+    """zlib (or with wbits 31 gzip) data that must hold exactly `size` bytes."""
+    d = zlib.decompressobj(wbits)
+    try:
+        raw = d.decompress(blob, size + 1)
+    except zlib.error as e:
+        raise ValueError(str(e)) from None
+    if len(raw) != size or not d.eof:
+        raise ValueError(f"decoded {len(raw)}{'' if d.eof else '+'} bytes, expected {size}")
+    return raw
+
+
+def unzstd(blob, size: int) -> bytes:
+    """One zstd frame that must hold exactly `size` bytes. A frame declaring another
+    size is refused before decoding (python-zstandard allocates what the header says
+    and ignores max_output_size then); one declaring none is decoded into `size` + 1."""
+    try:
+        declared = _zstd.frame_content_size(blob)
+        if declared not in (-1, size):
+            raise ValueError(f"frame declares {declared} bytes, expected {size}")
+        raw = _zstd_pair()[1].decompress(blob, max_output_size=size + 1)
+    except _zstd.ZstdError as e:
+        raise ValueError(str(e)) from None
     if len(raw) != size:
         raise ValueError(f"decoded {len(raw)} bytes, expected {size}")
     return raw

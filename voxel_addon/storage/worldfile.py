@@ -110,6 +110,10 @@ class WorldFile:
     def _map_ids(self, file_names: dict[int, str]) -> None:
         """Lookup tables file id <-> registry id; new registry blocks get file ids."""
         names = REGISTRY.names()
+        bad = [i for i in file_names if not 0 <= i <= 0xFFFF]
+        if bad:  # block ids are uint16: a larger one would size the lookup table
+            raise VoxelError(f"{self.path} has block type id {bad[0]} outside 0..65535; "
+                             "it is not a readable world file")
         unknown = [n for n in file_names.values() if n not in names]
         if unknown:
             raise VoxelError(f"{self.path} uses block types this version does not know: "
@@ -199,10 +203,10 @@ class WorldFile:
         except ValueError as e:
             raise CorruptChunk(f"chunk ({key[0]}, {key[1]}) in {self.path} is damaged ({e}); "
                                "it was left untouched") from None
+        if blocks.max() >= len(self._to_reg):  # checked always: tables are indexed by id
+            raise CorruptChunk(f"chunk ({key[0]}, {key[1]}) in {self.path} has block ids "
+                               "missing from block_types; it was left untouched")
         if not self._identity:
-            if blocks.max() >= len(self._to_reg):
-                raise CorruptChunk(f"chunk ({key[0]}, {key[1]}) in {self.path} has block ids "
-                                   "missing from block_types; it was left untouched")
             blocks = self._to_reg[blocks]
         if not light:
             return blocks, data
@@ -258,11 +262,12 @@ class WorldFile:
     def edits_in(self, key) -> list[tuple[int, int, int, int, int]]:
         """(x, y, z, block, data) edits inside chunk `key`, in registry ids."""
         x0, y0 = key[0] * C.SIZE, key[1] * C.SIZE
-        with self._lock:
+        with self._lock:  # rows outside the world's ranges (a hostile file) are left out
             rows = self.db.execute(
-                "SELECT x, y, z, block, data FROM edits WHERE x>=? AND x<? AND y>=? AND y<?",
-                (x0, x0 + C.SIZE, y0, y0 + C.SIZE)).fetchall()
-        return [(x, y, z, int(self._to_reg[b]) if b < len(self._to_reg) else 0, d)
+                "SELECT x, y, z, block, data FROM edits WHERE x>=? AND x<? AND y>=? AND y<? "
+                "AND z>=0 AND z<? AND data>=0 AND data<=65535",
+                (x0, x0 + C.SIZE, y0, y0 + C.SIZE, C.HEIGHT)).fetchall()
+        return [(x, y, z, int(self._to_reg[b]) if 0 <= b < len(self._to_reg) else 0, d)
                 for x, y, z, b, d in rows]
 
     def edit_count(self) -> int:

@@ -24,10 +24,11 @@ from pathlib import Path
 import numpy as np
 
 from ..core.blocks import REGISTRY
-from . import paint
+from . import built, paint
 
 SIZE = paint.N
 SEED = 2019
+PAINTERS = {**paint.PAINTERS, **built.PAINTERS}  # every texture name -> its painter
 
 
 def _rng(seed: int, name: str):
@@ -38,7 +39,7 @@ def _rng(seed: int, name: str):
 def image(name: str, seed: int = SEED) -> tuple[np.ndarray, np.ndarray]:
     """(rgba (16,16,4), glow (16,16)) of one texture; read-only, cached."""
     rng = _rng(seed, name)
-    fn = paint.PAINTERS.get(name)
+    fn = PAINTERS.get(name)
     rgba, glow = fn(rng) if fn else paint.fallback(rng, name)
     rgba.setflags(write=False)
     glow.setflags(write=False)

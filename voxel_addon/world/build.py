@@ -36,19 +36,25 @@ def keys_of(cx0: int, cy0: int, cx1: int, cy1: int) -> list[tuple[int, int]]:
     return [(x, y) for y in range(cy0, cy1) for x in range(cx0, cx1)]
 
 
-def snapshot(world, cx0: int, cy0: int, cx1: int, cy1: int):
+def snapshot(world, cx0: int, cy0: int, cx1: int, cy1: int, data: bool = False):
     """(blocks, ticks): active chunks of [cx0, cx1) x [cy0, cy1) as one array (air
-    where a chunk is not active, e.g. corrupt) and {key: block tick} at copy time."""
+    where a chunk is not active, e.g. corrupt) and {key: block tick} at copy time;
+    with data=True (blocks, ticks, small data or None when no chunk has any)."""
     out = C.empty(width=C.SIZE * (cx1 - cx0), depth=C.SIZE * (cy1 - cy0))
+    small = None
     ticks = {}
-    with world._lock:
+    with world.locked():
         for k in keys_of(cx0, cy0, cx1, cy1):
             ticks[k] = world.bver.get(k, 0)
             c = world.chunks.get(k)
             if c is not None:
                 x, y = (k[0] - cx0) * C.SIZE, (k[1] - cy0) * C.SIZE
                 out[x:x + C.SIZE, y:y + C.SIZE] = c.blocks
-    return out, ticks
+                if data and c.data is not None:
+                    if small is None:
+                        small = np.zeros_like(out)
+                    small[x:x + C.SIZE, y:y + C.SIZE] = c.data
+    return (out, ticks, small) if data else (out, ticks)
 
 
 def _run(backend, fn, *a, **kw):
@@ -67,13 +73,14 @@ def light_and_mesh(world, cx0: int, cy0: int, cx1: int, cy1: int, *, backends_=N
     ring = keys_of(cx0 - 1, cy0 - 1, cx1 + 1, cy1 + 1)
     if load:
         world.load(ring)
-    blocks, ticks = snapshot(world, cx0 - 1, cy0 - 1, cx1 + 1, cy1 + 1)
-    with world._lock:  # light stored in the file (loaded with the blocks) is final
+    blocks, ticks, data = snapshot(world, cx0 - 1, cy0 - 1, cx1 + 1, cy1 + 1, data=True)
+    with world.locked():  # light stored in the file (loaded with the blocks) is final
         need = any(c is not None and c.light is None
                    for c in map(world.chunks.get, keys_of(cx0, cy0, cx1, cy1)))
     # one solve for the whole rectangle: its ring is the only overhead
     lit = _run(lb, light.region_light, blocks, tile=max(cx1 - cx0, cy1 - cy0)) if need else None
-    meshes = _run(mb, meshing.build_chunks, blocks[15:-15, 15:-15], (cx0, cy0))
+    meshes = _run(mb, meshing.build_chunks, blocks[15:-15, 15:-15], (cx0, cy0),
+                  data=None if data is None else data[15:-15, 15:-15])
     return store(world, cx0, cy0, cx1, cy1, lit, meshes, ticks)
 
 
@@ -84,7 +91,7 @@ def store(world, cx0, cy0, cx1, cy1, lit, meshes, ticks) -> list[Payload]:
     is saved with it (reloading then skips the solve)."""
     out = []
     s = C.SIZE
-    with world._lock:
+    with world.locked():
         for k in keys_of(cx0, cy0, cx1, cy1):
             c = world.chunks.get(k)
             if c is None:
@@ -107,7 +114,7 @@ def store(world, cx0, cy0, cx1, cy1, lit, meshes, ticks) -> list[Payload]:
 
 def payload(world, key) -> Payload | None:
     """The current payload of an active chunk whose light and mesh are known."""
-    with world._lock:
+    with world.locked():
         c = world.chunks.get(key)
         if c is None or c.light is None or c.mesh is None:
             return None

@@ -33,6 +33,7 @@ import numpy as np
 from ..core import chunk as C
 from ..core.blocks import REGISTRY
 from ..core.errors import VoxelError
+from ..meshing import tint
 from . import build
 from .payload import Payload
 
@@ -51,7 +52,7 @@ def edit(world, changes, write: bool = True):
     """Apply a stroke; returns (payloads, Record). write=False keeps the change in
     memory (shown, saved by the next `write`, flush or close): the parts of one
     drag, written together when it ends."""
-    items = _check(world, changes)
+    items = check(world, changes)
     return _apply(world, items, write)
 
 
@@ -68,7 +69,9 @@ def redo(world, record: Record) -> list[Payload]:
     return _apply(world, [(*v, *a) for v, a in zip(record.voxels, record.after)])[0]
 
 
-def _check(world, changes) -> list[tuple[int, int, int, int, int]]:
+def check(world, changes) -> list[tuple[int, int, int, int, int]]:
+    """(x, y, z, id, data) of every change, or a VoxelError before anything changes
+    (World.set_block checks the same way)."""
     if world.readonly:
         raise VoxelError(f"{world.file.path} is open read-only")
     if isinstance(changes, tuple) or (isinstance(changes, list) and changes
@@ -104,7 +107,7 @@ def _ensure_lit(world, keys) -> list[Payload]:
     returns the payloads of the chunks it lit."""
     out = []
     for _ in range(8):  # chunks may be unloaded meanwhile: try again
-        with world._lock:
+        with world.locked():
             todo = [k for k in keys if k not in world.corrupt and (
                 world.chunks.get(k) is None or not world.chunks[k].has_light
                 or world.chunks[k].mesh is None)]
@@ -167,126 +170,169 @@ def _light_layers(world, items):
     return max(z0 - incremental.R - 1, 0), min(z1, C.HEIGHT)
 
 
-def _apply(world, items, write=True):
-    from .. import light, meshing
-    if not items:
-        return [], Record((), (), ())
-    keys = {C.key_of(x, y) for x, y, _, _, _ in items}
-    near = _around(keys, 1)
-    fresh = {p.key: p for p in _ensure_lit(world, near)}
-    # window: every voxel's relight box with its rim, and the chunks that may be
-    # remeshed (a changed voxel's chunk and face neighbours') with their mesh ring
+class _Window(NamedTuple):
+    """The voxel columns [x0, x1) x [y0, y1) an edit reads: every voxel's relight box
+    with its rim, and the chunks it may remesh (`remesh`: a changed voxel's chunk and
+    its face neighbours') with their one-voxel mesh ring."""
+    x0: int
+    y0: int
+    x1: int
+    y1: int
+    remesh: set
+
+
+def _window(items) -> _Window:
     from ..light.incremental import R
     remesh = {C.key_of(x + i, y + j) for x, y, _, _, _ in items for i, j in
               ((0, 0), (-1, 0), (1, 0), (0, -1), (0, 1))}
-    x0 = min(min(x for x, _, _, _, _ in items) - R - 1, min(k[0] for k in remesh) * S - 1)
-    y0 = min(min(y for _, y, _, _, _ in items) - R - 1, min(k[1] for k in remesh) * S - 1)
-    x1 = max(max(x for x, _, _, _, _ in items) + R + 2, max(k[0] for k in remesh) * S + S + 1)
-    y1 = max(max(y for _, y, _, _, _ in items) + R + 2, max(k[1] for k in remesh) * S + S + 1)
-    with world._lock:
-        missing = [k for k in near if k not in world.corrupt and (
-            world.chunks.get(k) is None or not world.chunks[k].has_light)]
-        if missing:  # unloaded between _ensure_lit and here: rare, start over
-            payloads, rec = _apply(world, items, write)
-            return sorted({**fresh, **{p.key: p for p in payloads}}.values()), rec
-        blocks = _gather(world, x0, y0, x1, y1, "blocks")
-        lit = _gather(world, x0, y0, x1, y1, "light", *_light_layers(world, items))
-        first: dict = {}
-        last: dict = {}
-        steps = []  # (x, y, z, new id, old id) of every block change, in order
-        for x, y, z, b, d in items:
-            c = world.chunks[C.key_of(x, y)]
-            lx, ly = x & 15, y & 15
-            old = (int(c.blocks[lx, ly, z]), 0 if c.data is None else int(c.data[lx, ly, z]))
-            if old == (b, d):
+    xs, ys = [it[0] for it in items], [it[1] for it in items]
+    return _Window(min(min(xs) - R - 1, min(k[0] for k in remesh) * S - 1),
+                   min(min(ys) - R - 1, min(k[1] for k in remesh) * S - 1),
+                   max(max(xs) + R + 2, max(k[0] for k in remesh) * S + S + 1),
+                   max(max(ys) + R + 2, max(k[1] for k in remesh) * S + S + 1), remesh)
+
+
+def _apply(world, items, write=True):
+    """The stroke in named steps, all under the world's lock once its 3x3 is lit:
+    set the voxels, remesh, relight, keep what changed, hand out payloads, write."""
+    if not items:
+        return [], Record((), (), ())
+    near = _around({C.key_of(x, y) for x, y, _, _, _ in items}, 1)
+    win = _window(items)
+    fresh: dict = {}
+    for _ in range(8):  # a chunk unloaded between lighting and locking: light again
+        fresh.update({p.key: p for p in _ensure_lit(world, near)})
+        with world.locked():
+            if any(k not in world.corrupt and (world.chunks.get(k) is None
+                                               or not world.chunks[k].has_light)
+                   for k in near):
                 continue
-            first.setdefault((x, y, z), old)
-            last[(x, y, z)] = (b, d)
-            c.blocks[lx, ly, z] = b
-            if d or c.data is not None:
-                if c.data is None:
-                    c.data = C.empty()
-                c.data[lx, ly, z] = d
-            if old[0] != b:
-                steps.append((x, y, z, b, old[0]))
-        changed = {C.key_of(x, y) for x, y, _ in last}
-        voxels = [v for v in last if first[v] != last[v]]
-        if not changed:
-            return sorted(fresh.values()), Record((), (), ())
-        t = world.tick()
-        for k in changed:
-            world.bver[k] = t
-            world.chunks[k].dirty = True
-        # meshes: chunks holding a changed voxel or one of its face neighbours, only
-        # the render regions (64 layers) that hold a changed voxel's faces
-        remesh = {C.key_of(x + i, y + j) for x, y, _ in last for i, j in
-                  ((0, 0), (-1, 0), (1, 0), (0, -1), (0, 1))}
-        rx0, ry0 = min(k[0] for k in remesh), min(k[1] for k in remesh)
-        rx1, ry1 = max(k[0] for k in remesh) + 1, max(k[1] for k in remesh) + 1
-        i, j = rx0 * S - 1 - x0, ry0 * S - 1 - y0
-        sub = np.array(blocks[i:i + (rx1 - rx0) * S + 2, j:j + (ry1 - ry0) * S + 2], order="F")
-        for (x, y, z), (b, _) in last.items():
-            if 0 <= x - x0 - i < sub.shape[0] and 0 <= y - y0 - j < sub.shape[1]:
-                sub[x - x0 - i, y - y0 - j, z] = b
-        zs = [z for _, _, z in last]
-        r0 = max(min(zs) - 1, 0) // meshing.REGION_H
-        r1 = min(max(zs) + 1, C.HEIGHT - 1) // meshing.REGION_H + 1
-        whole = any(world.chunks.get(k) is not None and world.chunks[k].mesh is None
-                    for k in remesh)
-        regions = None if whole else (r0, r1)
-        meshes = _mesh(meshing, sub, (rx0, ry0), remesh, regions)
-        # light: relight voxel by voxel (each update starts from the exact light of
-        # the blocks before it), then keep what changed inside the relit boxes
-        lo = [x1 - x0, y1 - y0, C.HEIGHT]  # union of the relit boxes
-        hi = [0, 0, 0]
-        for x, y, z, b, old in steps:
-            wx, wy = x - x0, y - y0
-            blocks[wx, wy, z] = b
-            box = light.update(blocks, lit, wx, wy, z, old)
-            lo = [min(v, sl.start) for v, sl in zip(lo, box)]
-            hi = [max(v, sl.stop) for v, sl in zip(hi, box)]
-        # light: only the relit boxes can differ (outside them lit holds the old light)
-        relit = set()
-        if hi[0] > lo[0]:
-            for cx in range((lo[0] + x0) >> 4, ((hi[0] + x0 - 1) >> 4) + 1):
-                for cy in range((lo[1] + y0) >> 4, ((hi[1] + y0 - 1) >> 4) + 1):
-                    c = world.chunks.get((cx, cy))
-                    if (cx, cy) not in near or c is None:
-                        continue
-                    i0, j0 = max(lo[0], cx * S - x0), max(lo[1], cy * S - y0)
-                    i1, j1 = min(hi[0], cx * S + S - x0), min(hi[1], cy * S + S - y0)
-                    box = (slice(i0 + x0 - cx * S, i1 + x0 - cx * S),
-                           slice(j0 + y0 - cy * S, j1 + y0 - cy * S), slice(lo[2], hi[2]))
-                    new = lit[i0:i1, j0:j1, lo[2]:hi[2]]
-                    if not np.array_equal(new, c.light[box]):
-                        c.light = c.light.copy(order="F")  # payloads out there keep theirs
-                        c.light[box] = new
-                        c.dirty = True
-                        relit.add((cx, cy))
-        remeshed = set()
-        for k in remesh:
-            c = world.chunks.get(k)
-            if c is None or k in world.corrupt:
-                continue
-            m = meshes[k] if regions is None else meshing.splice(c.mesh, meshes[k], r0, r1)
-            if _same(c.mesh, m):
-                continue  # e.g. a hidden face stayed hidden: no new payload
-            c.mesh = m
-            remeshed.add(k)
-        payloads = []
-        for k in sorted(relit | remeshed):
-            c = world.chunks[k]
-            v = world.pver[k] = world.tick()
-            payloads.append(Payload(k, c.mesh, c.light, v))
-            fresh.pop(k, None)
+            blocks = _gather(world, win.x0, win.y0, win.x1, win.y1, "blocks")
+            lit = _gather(world, win.x0, win.y0, win.x1, win.y1, "light",
+                          *_light_layers(world, items))
+            first, last, steps = _set_voxels(world, items)
+            if not last:
+                return sorted(fresh.values()), Record((), (), ())
+            changed = {C.key_of(x, y) for x, y, _ in last}
+            t = world.tick()
+            for k in changed:
+                world.bver[k] = t
+                world.chunks[k].dirty = True
+            remeshed = _remesh(world, blocks, last, win)
+            relit = _relight(world, blocks, lit, steps, near, win)
+            payloads = []
+            for k in sorted(relit | remeshed):
+                c = world.chunks[k]
+                v = world.pver[k] = world.tick()
+                payloads.append(Payload(k, c.mesh, c.light, v))
+                fresh.pop(k, None)
+        break
+    else:
+        raise VoxelError("could not light the chunks around the edit (they keep unloading)")
     rows = [(x, y, z, *last[(x, y, z)]) for x, y, z in last]
     # the changed chunks are written with their new light; relit neighbours' stored
     # light is dropped now and saved again with them later (marked changed)
     for s in list(world.streams):
         s.offer(payloads)
     (world.commit if write else world.hold)(changed, rows, stale_light=relit - changed)
+    voxels = [v for v in last if first[v] != last[v]]
     rec = Record(tuple(voxels), tuple(first[v] for v in voxels), tuple(last[v] for v in voxels))
     return sorted(payloads + list(fresh.values())), rec
+
+
+def _set_voxels(world, items):
+    """Write the stroke into the chunks; returns ({voxel: (id, data) before},
+    {voxel: (id, data) after}, [(x, y, z, new id, old id) of each block change in
+    order]) for the voxels that really changed."""
+    first: dict = {}
+    last: dict = {}
+    steps = []
+    for x, y, z, b, d in items:
+        c = world.chunks[C.key_of(x, y)]
+        lx, ly = x & 15, y & 15
+        old = (int(c.blocks[lx, ly, z]), 0 if c.data is None else int(c.data[lx, ly, z]))
+        if old == (b, d):
+            continue
+        first.setdefault((x, y, z), old)
+        last[(x, y, z)] = (b, d)
+        c.data = C.put(c.blocks, c.data, lx, ly, z, b, d)
+        if old[0] != b:
+            steps.append((x, y, z, b, old[0]))
+    return first, last, steps
+
+
+def _remesh(world, blocks, last, win) -> set:
+    """Mesh the window's chunks again, only the render regions (64 layers) that hold
+    a changed voxel's faces; keep the meshes that differ. `blocks` is the window
+    from before the stroke. Returns the keys whose mesh changed."""
+    from .. import meshing
+    x0, y0, remesh = win.x0, win.y0, win.remesh
+    rx0, ry0 = min(k[0] for k in remesh), min(k[1] for k in remesh)
+    rx1, ry1 = max(k[0] for k in remesh) + 1, max(k[1] for k in remesh) + 1
+    i, j = rx0 * S - 1 - x0, ry0 * S - 1 - y0
+    sub = np.array(blocks[i:i + (rx1 - rx0) * S + 2, j:j + (ry1 - ry0) * S + 2], order="F")
+    for (x, y, z), (b, _) in last.items():
+        if 0 <= x - x0 - i < sub.shape[0] and 0 <= y - y0 - j < sub.shape[1]:
+            sub[x - x0 - i, y - y0 - j, z] = b
+    data = None
+    if (sub == tint.COLOR).any():  # coloured voxels: their colour is their data (after the stroke)
+        gx, gy = x0 + i, y0 + j
+        data = np.array(_gather(world, gx, gy, gx + sub.shape[0], gy + sub.shape[1], "data"),
+                        order="F")
+    zs = [z for _, _, z in last]
+    r0 = max(min(zs) - 1, 0) // meshing.REGION_H
+    r1 = min(max(zs) + 1, C.HEIGHT - 1) // meshing.REGION_H + 1
+    whole = any(world.chunks.get(k) is not None and world.chunks[k].mesh is None
+                for k in remesh)
+    regions = None if whole else (r0, r1)
+    meshes = _mesh(meshing, sub, (rx0, ry0), remesh, regions, data)
+    out = set()
+    for k in remesh:
+        c = world.chunks.get(k)
+        if c is None or k in world.corrupt:
+            continue
+        m = meshes[k] if regions is None else meshing.splice(c.mesh, meshes[k], r0, r1)
+        if _same(c.mesh, m):
+            continue  # e.g. a hidden face stayed hidden: no new payload
+        c.mesh = m
+        out.add(k)
+    return out
+
+
+def _relight(world, blocks, lit, steps, near, win) -> set:
+    """Relight voxel by voxel (each update starts from the exact light of the blocks
+    before it; `blocks` and `lit` are the window, changed in place), then keep what
+    changed inside the relit boxes on the chunks. Returns the keys relit."""
+    from .. import light
+    x0, y0 = win.x0, win.y0
+    lo = [win.x1 - x0, win.y1 - y0, C.HEIGHT]  # union of the relit boxes
+    hi = [0, 0, 0]
+    for x, y, z, b, old in steps:
+        wx, wy = x - x0, y - y0
+        blocks[wx, wy, z] = b
+        box = light.update(blocks, lit, wx, wy, z, old)
+        lo = [min(v, sl.start) for v, sl in zip(lo, box)]
+        hi = [max(v, sl.stop) for v, sl in zip(hi, box)]
+    relit = set()
+    if hi[0] <= lo[0]:
+        return relit
+    # only the relit boxes can differ (outside them lit holds the old light)
+    for cx in range((lo[0] + x0) >> 4, ((hi[0] + x0 - 1) >> 4) + 1):
+        for cy in range((lo[1] + y0) >> 4, ((hi[1] + y0 - 1) >> 4) + 1):
+            c = world.chunks.get((cx, cy))
+            if (cx, cy) not in near or c is None:
+                continue
+            i0, j0 = max(lo[0], cx * S - x0), max(lo[1], cy * S - y0)
+            i1, j1 = min(hi[0], cx * S + S - x0), min(hi[1], cy * S + S - y0)
+            box = (slice(i0 + x0 - cx * S, i1 + x0 - cx * S),
+                   slice(j0 + y0 - cy * S, j1 + y0 - cy * S), slice(lo[2], hi[2]))
+            new = lit[i0:i1, j0:j1, lo[2]:hi[2]]
+            if not np.array_equal(new, c.light[box]):
+                c.light = c.light.copy(order="F")  # payloads out there keep theirs
+                c.light[box] = new
+                c.dirty = True
+                relit.add((cx, cy))
+    return relit
 
 
 def _same(a, b) -> bool:
@@ -294,13 +340,14 @@ def _same(a, b) -> bool:
         np.array_equal(a.ranges, b.ranges)
 
 
-def _mesh(meshing, blocks, origin, keys, regions=None):
+def _mesh(meshing, blocks, origin, keys, regions=None, data=None):
     """build_chunks on OpenCL when no stream batch holds it, else NumPy (same output)."""
     blocks = np.asfortranarray(blocks)
     if build.backends()[1] == "opencl" and build.CL_LOCK.acquire(blocking=False):
         try:
             return meshing.build_chunks(blocks, origin, backend="opencl", keys=keys,
-                                        regions=regions)
+                                        regions=regions, data=data)
         finally:
             build.CL_LOCK.release()
-    return meshing.build_chunks(blocks, origin, backend="numpy", keys=keys, regions=regions)
+    return meshing.build_chunks(blocks, origin, backend="numpy", keys=keys, regions=regions,
+                                data=data)

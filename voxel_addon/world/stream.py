@@ -284,7 +284,7 @@ class Stream:
             xs, ys = [k[0] for k in rest], [k[1] for k in rest]
             done += build.light_and_mesh(world, min(xs), min(ys), max(xs) + 1, max(ys) + 1,
                                          backends_=backends)
-        with world._lock:  # compact now: _maintain's sweep over all chunks is throttled
+        with world.locked():  # compact now: _maintain's sweep over all chunks is throttled
             for p in done:
                 c = world.chunks.get(p.key)
                 if c is not None:
@@ -303,7 +303,7 @@ class Stream:
             return
         self._kept = ((cx, cy), now)
         far = []
-        with world._lock:
+        with world.locked():
             for k, c in world.chunks.items():
                 if max(abs(k[0] - cx), abs(k[1] - cy)) > keep:
                     far.append(k)
@@ -311,7 +311,7 @@ class Stream:
                     c.last_use = now
                     c.compact()  # light an edit read or set (see Chunk.light)
         if far:
-            world._evict(far)
+            world.evict(far)
 
 
 def _tiling(lo: int, hi: int, t: int):

@@ -83,6 +83,10 @@ class World:
         wf = WorldFile(path, readonly=readonly)
         try:
             gen = make_generator(wf.generator, wf.seed, wf.generator_params, backend)
+        except (ValueError, TypeError, KeyError, IndexError, AttributeError) as e:
+            wf.close()  # a hostile or damaged meta row: one line, not a traceback
+            raise VoxelError(f"{path}: its generator settings are damaged "
+                             f"({type(e).__name__}: {e})") from None
         except BaseException:
             wf.close()
             raise
@@ -97,6 +101,17 @@ class World:
     @property
     def seed(self) -> int:
         return self.file.seed
+
+    def colors(self):
+        """The world's colour palette ((n, 3) uint8, core.colors): the `color` block's
+        data indexes it (meshes carry the index per vertex, ChunkMesh.colors). Parsed
+        once per change of the file's meta value."""
+        from ..core import colors
+        raw = self.file.meta.get(colors.KEY)
+        cached = getattr(self, "_colors", None)
+        if cached is None or cached[0] != raw:
+            cached = self._colors = (raw, colors.parse(self.file.meta))
+        return cached[1]
 
     def tick(self) -> int:
         """A new number, larger than every one before (versions, block changes)."""
@@ -132,30 +147,41 @@ class World:
         return self.chunk_at(x >> 4, y >> 4).get(x & 15, y & 15, z)
 
     def set_block(self, x: int, y: int, z: int, block: int | str, data: int = 0) -> int:
-        """Place (or, with air, clear) a block; returns the id that was there."""
-        if self.readonly:
-            raise VoxelError(f"{self.file.path} is open read-only")
-        C.check_z(z)
-        bid = REGISTRY.id(block) if isinstance(block, str) else int(block)
-        if not 0 <= bid < len(REGISTRY):
-            raise VoxelError(f"unknown block id {bid}")
+        """Place (or, with air, clear) a block; returns the id that was there.
+
+        The bulk form of world.edit.edit: the same checks and the same write, kept
+        like an edit until the next flush, but no relight and no undo record: the
+        light and meshes of the 3x3 around are dropped and made again by whoever
+        needs them (streams, build.light_and_mesh), as for a chunk loaded without
+        light. Tests and importers set many voxels this way; strokes use edit()."""
+        from .edit import check
+        ((x, y, z, bid, data),) = check(self, [(x, y, z, block, data)])
         with self._lock:
             c = self.chunk_at(x >> 4, y >> 4)
             old = c.get(x & 15, y & 15, z)
             c.set(x & 15, y & 15, z, bid, data)
             self.bver[c.key] = self.tick()
             self._edits[(x, y, z)] = (bid, data)
-            # light and meshes around are stale: streams make them again
-            # (world.edit.edit relights and remeshes them at once instead)
+            self.drop_light(c.key)
+        return old
+
+    def drop_light(self, key) -> None:
+        """Light and meshes of the 3x3 around chunk `key` no longer hold (in memory
+        and in the file); streams make them again."""
+        with self._lock:
             for i in (-1, 0, 1):
                 for j in (-1, 0, 1):
-                    k = (c.key[0] + i, c.key[1] + j)
+                    k = (key[0] + i, key[1] + j)
                     self.pver.pop(k, None)
                     self._stale.add(k)
                     n = self.chunks.get(k)
                     if n is not None:
                         n.light = n.mesh = None
-        return old
+
+    def locked(self):
+        """The world's lock, for code that reads or changes active chunks together
+        (`with world.locked(): ...`); re-entrant."""
+        return self._lock
 
     def region_blocks(self, cx0: int, cy0: int, cx1: int, cy1: int) -> np.ndarray:
         """Blocks of chunks [cx0, cx1) x [cy0, cy1) as one (W, H, 256) array."""
@@ -245,11 +271,7 @@ class World:
         """The file's edits inside chunk `key` applied to freshly generated arrays
         (in place, data values included: the one place that does it); (blocks, data)."""
         for x, y, z, b, d in self.file.edits_in(key):
-            blocks[x & 15, y & 15, z] = b
-            if d or data is not None:
-                if data is None:
-                    data = C.empty()
-                data[x & 15, y & 15, z] = d
+            data = C.put(blocks, data, x & 15, y & 15, z, b, d)
         return blocks, data
 
     def _report_corrupt(self, key, msg: str) -> None:
@@ -282,9 +304,11 @@ class World:
         now = time.monotonic() if now is None else now
         with self._lock:
             idle = [k for k, c in self.chunks.items() if now - c.last_use > self.idle_timeout]
-        return self._evict(idle)
+        return self.evict(idle)
 
-    def _evict(self, keys) -> int:
+    def evict(self, keys) -> int:
+        """Save (if changed) and drop chunks `keys` from memory; returns how many
+        were asked. A chunk asked for again meanwhile comes back with every edit."""
         if not keys:
             return 0
         with self._lock:
@@ -372,7 +396,7 @@ class World:
     def unload_all(self) -> None:
         with self._lock:
             keys = list(self.chunks)
-        self._evict(keys)
+        self.evict(keys)
 
     def close(self) -> None:
         """Stop streams and the loader, save everything, close the file. Safe to
@@ -414,6 +438,65 @@ class World:
             if progress:
                 progress(done, len(todo))
         return len(todo)
+
+    def store_chunks(self, items) -> None:
+        """Write whole chunks ((key, blocks, data-or-None) triples: an import) in one
+        transaction, in place of what the file and memory held; the stored light of
+        their 3x3 is dropped. Active copies are replaced, so a live view shows them."""
+        if self.readonly:
+            raise VoxelError(f"{self.file.path} is open read-only")
+        items = [(tuple(k), b, d) for k, b, d in items]
+        rows = [self.file.encode_chunk(k, b, d) for k, b, d in items]
+        stale = {(k[0] + i, k[1] + j) for k, _, _ in items for i in (-1, 0, 1)
+                 for j in (-1, 0, 1)}
+        with self._flush_lock:
+            self.file.save(rows, stale_light=stale)
+            with self._lock:
+                for k, b, d in items:
+                    self._saving.pop(k, None)
+                    self.corrupt.pop(k, None)
+                    c = self.chunks.get(k)
+                    if c is not None:
+                        c.blocks, c.data, c.dirty = b.copy(order="F"), \
+                            None if d is None else d.copy(order="F"), False
+                    self.bver[k] = self.tick()
+                for k, _, _ in items:
+                    self.drop_light(k)
+                self._stale -= stale  # the file's light rows are gone already
+
+    def set_blocks(self, xyz, ids, data=None) -> None:
+        """set_block for many voxels at once ((n, 3) positions, n ids, n data values
+        or None), kept like edits until the next flush or commit (a .vox stamp)."""
+        if self.readonly:
+            raise VoxelError(f"{self.file.path} is open read-only")
+        xyz = np.asarray(xyz, np.int64).reshape(-1, 3)
+        ids = np.asarray(ids, np.uint16)
+        vals = np.zeros(len(ids), np.uint16) if data is None else np.asarray(data, np.uint16)
+        if len(xyz) and (xyz[:, 2].min() < 0 or xyz[:, 2].max() >= C.HEIGHT):
+            raise VoxelError(f"z outside the world (0..{C.HEIGHT - 1})")
+        if len(ids) and int(ids.max()) >= len(REGISTRY):
+            raise VoxelError(f"unknown block id {int(ids.max())}")
+        keys = np.stack([xyz[:, 0] >> 4, xyz[:, 1] >> 4], 1)
+        for k in {tuple(v) for v in keys.tolist()}:
+            if k in self.corrupt:
+                raise VoxelError(f"chunk {k} is damaged in the file; it cannot be edited")
+        order = np.lexsort((keys[:, 1], keys[:, 0]))
+        xyz, ids, vals, keys = xyz[order], ids[order], vals[order], keys[order]
+        cut = np.flatnonzero(np.any(np.diff(keys, axis=0) != 0, axis=1)) + 1
+        for part in np.split(np.arange(len(ids)), cut):
+            if not len(part):
+                continue
+            k = tuple(int(v) for v in keys[part[0]])
+            with self._lock:
+                c = self.chunk_at(*k)
+                lx, ly, z = xyz[part, 0] & 15, xyz[part, 1] & 15, xyz[part, 2]
+                c.data = C.put(c.blocks, c.data, lx, ly, z, ids[part], vals[part])
+                c.dirty = True
+                self.bver[k] = self.tick()
+                for (x, y, zz), b, d in zip(xyz[part].tolist(), ids[part].tolist(),
+                                            vals[part].tolist()):
+                    self._edits[(x, y, zz)] = (b, d)
+                self.drop_light(k)
 
     def recreate(self, keep_edits: bool = True) -> None:
         """Forget every generated chunk (they regenerate on demand from the seed)."""

@@ -55,6 +55,9 @@ class VoxelEditSettings(bpy.types.PropertyGroup):
     box: BoolProperty(name="Box", default=False,
                       description="Click one corner, then the opposite one: fills (or, with "
                                   "Shift, clears) the box between them")
+    use_stamp: BoolProperty(name="Stamp", default=False,
+                            description="A click places the .vox model (ui/formats.py)")
+    stamp: StringProperty(name="Model", subtype="FILE_PATH", description="MagicaVoxel model")
 
 
 def _changes(cells, bid):
@@ -140,6 +143,9 @@ class VOXEL_OT_edit_stroke(bpy.types.Operator):
                 self.report({"WARNING"}, t.message)
                 return {"CANCELLED"}
             cell = self._cell(t.hit)
+            if s.use_stamp and self.mode == "PLACE":  # a .vox model, one stroke
+                from .formats import stamp_at
+                return {"FINISHED"} if stamp_at(context, s.stamp, cell) else {"CANCELLED"}
             if s.box:
                 if _Hover.corner is None:
                     _Hover.corner = cell
@@ -370,6 +376,9 @@ class VoxelEditTool(bpy.types.WorkSpaceTool):
         layout.prop(s, "shape", text="")
         layout.prop(s, "remove")
         layout.prop(s, "box")
+        layout.prop(s, "use_stamp")
+        if s.use_stamp:
+            layout.prop(s, "stamp", text="")
         # what the mouse points at (updated by the hover gizmo)
         h = _Hover.hit
         if h is not None:

@@ -1,0 +1,113 @@
+"""File › Import › Minecraft World / MagicaVoxel and File › Export › MagicaVoxel in
+the real bpy (and, through tests/run.py, the real Blender): the operators write into
+the scene's world (or a new empty world beside the source), the scene then shows
+that world, and a .vox goes out and in again voxel for voxel."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tests.formats import mcfiles as mc
+from tests.formats import voxfiles as vf
+
+
+@pytest.fixture
+def addon(bpy):
+    import voxel_addon
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    voxel_addon.register()
+    yield bpy
+    voxel_addon.unregister()
+
+
+def _save(tmp_path):
+    secs = {0: np.full((16, 16, 16), "minecraft:air", object)}
+    secs[0][3, 4, 5] = "minecraft:bricks"           # y 3, z 4, x 5
+    save = tmp_path / "My World"
+    mc.write_region(save / "region", {(0, 0): mc.chunk_nbt(0, 0, secs),
+                                      (1, 0): mc.chunk_nbt(1, 0, secs)}, 2)
+    mc.level_dat(save, 3953)
+    return save
+
+
+def test_import_minecraft_operator(addon, tmp_path):
+    bpy = addon
+    from voxel_addon.blender import session
+    from voxel_addon.core.blocks import REGISTRY
+    save = _save(tmp_path)
+    bpy.context.scene.voxel.path = ""
+    r = bpy.ops.import_scene.voxel_minecraft(filepath=str(save / "level.dat"))
+    assert r == {"FINISHED"}
+    path = bpy.context.scene.voxel.path
+    assert path == str(save) + ".sqlite"              # a new world beside the save
+    w = session.world(path)
+    assert w.file.generator == "empty" and sorted(w.file.chunk_keys()) == [(0, -1), (1, -1)]
+    assert REGISTRY[w.get_block(5, -1 - 4, 3 + 64)].name == "bricks"
+    # again into the same world: refused without Replace, done with it
+    with pytest.raises(RuntimeError, match="Replace"):
+        bpy.ops.import_scene.voxel_minecraft(filepath=str(save / "region" / "r.0.0.mca"))
+    r = bpy.ops.import_scene.voxel_minecraft(filepath=str(save / "region" / "r.0.0.mca"),
+                                             replace=True, use_y_min=True, y_min=0)
+    assert r == {"FINISHED"}
+    assert REGISTRY[w.get_block(5, -5, 3)].name == "bricks"
+
+
+def test_vox_import_and_export_operators(addon, tmp_path):
+    bpy = addon
+    from voxel_addon.blender import session
+    from voxel_addon.formats import vox
+    from voxel_addon.world import World
+    world = tmp_path / "w.sqlite"
+    World.create(world, seed=0, generator="flat", loader=False).close()
+    bpy.context.scene.voxel.path = str(world)
+    rng = np.random.default_rng(3)
+    pal = rng.integers(0, 256, (255, 3))
+    vs = [(x, y, z, int(rng.integers(1, 256))) for x in range(4) for y in range(3)
+          for z in range(5) if (x + y + z) % 2]
+    src = tmp_path / "m.vox"
+    src.write_bytes(vf.file(vf.model((4, 3, 5), vs) + vf.rgba(pal)))
+    r = bpy.ops.import_scene.voxel_vox(filepath=str(src), location=(10, 20, 70))
+    assert r == {"FINISHED"}
+    out = tmp_path / "out.vox"
+    r = bpy.ops.export_scene.voxel_vox(filepath=str(out), box=(10, 20, 70, 14, 23, 75))
+    assert r == {"FINISHED"}
+    scene = vox.read(out.read_bytes())
+    xyz, col, size = vox.voxels(scene)
+    got = {tuple(p.tolist()): tuple(scene.palette[c, :3].tolist()) for p, c in zip(xyz, col)}
+    assert got == {(x, y, z): tuple(int(v) for v in pal[i - 1]) for x, y, z, i in vs}
+    assert session.world(str(world)).file.generator == "flat"   # the scene's own world
+    with pytest.raises(RuntimeError, match="missing.vox"):
+        bpy.ops.import_scene.voxel_vox(filepath=str(tmp_path / "missing.vox"))
+
+
+def test_stamp_is_one_undo_step(bpy, tmp_path):
+    """voxel.stamp (a click of the edit tool with Stamp on) places the model centred
+    on the cell, its bottom at the cell's z, as one stroke: one Ctrl+Z removes it."""
+    import voxel_addon
+    from voxel_addon.blender import session, strokes
+    from voxel_addon.core import colors
+    from voxel_addon.core.blocks import REGISTRY
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    voxel_addon.register()
+    try:
+        sc = bpy.context.scene
+        sc.voxel.path, sc.voxel.seed, sc.voxel.generator = str(tmp_path / "w.sqlite"), 3, "flat"
+        assert bpy.ops.voxel.world_new() == {"FINISHED"}
+        sc.voxel_edit.step = 0
+        src = tmp_path / "tree.vox"
+        vs = [(1, 1, z, 3) for z in range(4)] + [(x, y, 4, 7) for x in range(3) for y in range(3)]
+        src.write_bytes(vf.file(vf.model((3, 3, 5), vs)))
+        r = bpy.ops.voxel.stamp("EXEC_DEFAULT", True, filepath=str(src), location=(20, 30, 64))
+        assert r == {"FINISHED"} and sc.voxel_edit.step == 1
+        w = session.world(sc.voxel.path)
+        color = REGISTRY.id("color")
+        pal = colors.parse(w.file.meta)
+        assert w.get_block(20, 30, 64) == color and w.get_block(19, 29, 68) == color
+        assert tuple(pal[w.chunk_at(1, 1).data[20 & 15, 30 & 15, 64]]) == (255, 255, 153)  # default palette index 3
+        sc.voxel_edit.step = 0                     # Ctrl+Z
+        strokes.on_undo_redo(sc)
+        assert w.get_block(20, 30, 64) == 0 and w.get_block(19, 29, 68) == 0
+    finally:
+        sc.property_unset("voxel")
+        sc.property_unset("voxel_edit")
+        voxel_addon.unregister()

@@ -1,0 +1,74 @@
+"""import: a Minecraft Java world, region files or a MagicaVoxel .vox into a world
+(SPEC §5, issue 21). A world it creates uses the empty generator (air) unless
+--generator names another, so its file holds exactly what was imported."""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from ..core.errors import VoxelError
+from .common import Progress, add_world, note
+
+
+def add_parser(sub):
+    p = sub.add_parser("import", help="import a Minecraft Java world or a .vox model")
+    add_world(p, help="world file (.sqlite), created if missing")
+    p.add_argument("--from", dest="source", required=True, type=Path, metavar="PATH",
+                   help="Minecraft save folder, folder of .mca files, one .mca, or a .vox")
+    p.add_argument("--y-min", type=int, metavar="N",
+                   help="Minecraft y that becomes z 0 (default -64 for 1.18+, else 0)")
+    p.add_argument("--at", type=int, nargs=3, metavar=("X", "Y", "Z"), default=(0, 0, 0),
+                   help=".vox: where the model's bounding box corner goes (default 0 0 0)")
+    p.add_argument("--area", type=int, nargs=4, metavar=("X0", "Z0", "X1", "Z1"),
+                   help="Minecraft: only chunks touching blocks [X0, X1) x [Z0, Z1)")
+    p.add_argument("--replace", action="store_true",
+                   help="Minecraft: overwrite chunks the world already has")
+    p.add_argument("--generator", help="generator of a new world (default: empty)")
+    p.add_argument("--seed", type=int, default=0, help="seed of a new world (default 0)")
+    return p
+
+
+def _open(args):
+    from ..world import World
+    if args.world.exists():
+        if args.generator:
+            raise VoxelError("--generator is for a new world; this one exists")
+        return World.open(args.world, loader=False)
+    if not args.world.parent.is_dir():
+        raise VoxelError(f"folder {args.world.parent} does not exist")
+    return World.create(args.world, seed=args.seed, generator=args.generator or "empty",
+                        loader=False)
+
+
+def run(args):
+    src = args.source
+    if not src.exists():
+        raise VoxelError(f"{src} does not exist")
+    is_vox = src.is_file() and src.suffix.lower() == ".vox"
+    if is_vox and (args.area or args.replace or args.y_min is not None):
+        raise VoxelError("--area, --replace and --y-min are for Minecraft worlds")
+    if not is_vox and tuple(args.at) != (0, 0, 0):
+        raise VoxelError("--at is for .vox files (Minecraft chunks keep their place)")
+    if args.area and not (args.area[0] < args.area[2] and args.area[1] < args.area[3]):
+        raise VoxelError("--area X0 Z0 X1 Z1 needs X0 < X1 and Z0 < Z1")
+    if is_vox:
+        from ..formats import magica
+        scene = magica.read_file(src)  # a bad file is refused before the world opens
+        del scene
+    else:
+        from ..formats import minecraft
+        minecraft.regions_of(src)
+    t0 = time.perf_counter()
+    with _open(args) as world:
+        if is_vox:
+            r = magica.import_vox(world, src, args.at)
+            note(f"{r['voxels']} voxels from {r['models']} models ({r['instances']} placed) "
+                 f"into box {' '.join(map(str, r['box']))} in {time.perf_counter() - t0:.2f} s")
+            return 0
+        rep = minecraft.import_world(world, src, y_min=args.y_min, area=args.area,
+                                     replace=args.replace, progress=Progress("importing"))
+    dt = time.perf_counter() - t0
+    lines = rep.lines()
+    lines[0] += f" in {dt:.2f} s ({rep.chunks / max(dt, 1e-9):.0f} chunks/s)"
+    print("\n".join(lines))
+    return 0

@@ -1,0 +1,120 @@
+"""A Minecraft Java chunk's NBT -> its block sections (palette + 4096 indices).
+
+1.18+ (DataVersion >= 2844): root `sections[]` with `Y` and `block_states {palette,
+data}`, root `Status`. 1.13-1.17 (1451..2843): `Level.Sections[]` with `Palette` and
+`BlockStates`, `Level.Status`; before 1.16 (DataVersion 2529) indices run on across
+longs, since then a long holds 64 // bits whole indices. Older worlds (numeric ids)
+are refused. Index order in a section: y * 256 + z * 16 + x.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from . import nbt
+
+V_FLATTENING = 1451  # 17w47a: block names and palettes (1.13)
+V_PACKED = 2529      # 20w17a: indices never span two longs
+V_NO_LEVEL = 2844    # 21w43a: no Level wrapper, y from -64 (1.18)
+DONE = {"full", "minecraft:full", "postprocessed", "fullchunk"}
+_SECTION = {"Y": None, "block_states": {"palette": {"Name": None}, "data": None},
+            "Palette": {"Name": None}, "BlockStates": None}
+KEEP = {"DataVersion": None, "Status": None, "sections": _SECTION,
+        "Level": {"Status": None, "Sections": _SECTION}}
+
+
+class ChunkError(ValueError):
+    pass
+
+
+class Section(NamedTuple):
+    y: int                  # section index: blocks 16*y .. 16*y + 15
+    palette: list           # block names (properties dropped)
+    indices: np.ndarray | None  # (4096,) uint16 into palette; None: all palette[0]
+
+
+class Chunk(NamedTuple):
+    version: int
+    status: str
+    sections: list
+
+
+def read(payload: bytes) -> Chunk:
+    root = nbt.parse(payload, keep=KEEP)
+    version = root.get("DataVersion")
+    if not isinstance(version, int):
+        raise ChunkError("no DataVersion (a world from before 1.13 is not supported; "
+                         "open and save it in Minecraft 1.13 or newer first)")
+    if version < V_FLATTENING:
+        raise ChunkError(f"DataVersion {version} is before 1.13 (numeric block ids); "
+                         "open and save the world in Minecraft 1.13 or newer first")
+    level = root if version >= V_NO_LEVEL else root.get("Level")
+    if not isinstance(level, dict):
+        raise ChunkError("no Level compound")
+    status = level.get("Status", "full" if version >= V_NO_LEVEL else "")
+    if not isinstance(status, str):
+        raise ChunkError("Status is not a string")
+    raw = level.get("sections" if version >= V_NO_LEVEL else "Sections", [])
+    if not isinstance(raw, list):
+        raise ChunkError("sections is not a list")
+    sections = []
+    for s in raw:
+        if not isinstance(s, dict) or not isinstance(s.get("Y"), int):
+            raise ChunkError("a section without Y")
+        if version >= V_NO_LEVEL:
+            states = s.get("block_states")
+            if states is None:
+                continue
+            if not isinstance(states, dict):
+                raise ChunkError("block_states is not a compound")
+            palette, data = states.get("palette"), states.get("data")
+        else:
+            palette, data = s.get("Palette"), s.get("BlockStates")
+            if palette is None:
+                continue
+        if not isinstance(palette, list) or not palette:
+            raise ChunkError(f"section {s['Y']}: empty or damaged palette")
+        names = []
+        for p in palette:
+            name = p.get("Name") if isinstance(p, dict) else None
+            if not isinstance(name, str):
+                raise ChunkError(f"section {s['Y']}: a palette entry without Name")
+            names.append(name)
+        idx = None
+        if data is not None:
+            if not isinstance(data, np.ndarray) or data.dtype != np.dtype(">i8"):
+                raise ChunkError(f"section {s['Y']}: block data is not a long array")
+            idx = unpack(data, len(names), spanning=version < V_PACKED)
+            if int(idx.max()) >= len(names):
+                raise ChunkError(f"section {s['Y']}: index {int(idx.max())} outside its "
+                                 f"palette of {len(names)}")
+        elif len(names) > 1:
+            raise ChunkError(f"section {s['Y']}: {len(names)} palette entries and no data")
+        sections.append(Section(int(s["Y"]), names, idx))
+    return Chunk(version, status, sections)
+
+
+def bits_for(n: int) -> int:
+    return max(4, (n - 1).bit_length())
+
+
+def unpack(longs: np.ndarray, palette_size: int, spanning: bool = False) -> np.ndarray:
+    """4096 indices of `bits_for(palette_size)` bits from big-endian longs."""
+    bits = bits_for(palette_size)
+    words = longs.astype(">u8").astype(np.uint64)
+    if spanning:  # one little-endian bit stream over all longs
+        need = -(-4096 * bits // 64)
+        if len(words) != need:
+            raise ChunkError(f"{len(words)} longs of block data, expected {need}")
+        b = np.unpackbits(words.view(np.uint8), bitorder="little")  # native little-endian
+        w = b[:4096 * bits].reshape(4096, bits).astype(np.uint16)
+        return (w << np.arange(bits, dtype=np.uint16)).sum(1, dtype=np.uint16)
+    per = 64 // bits
+    need = -(-4096 // per)
+    if len(words) != need:
+        raise ChunkError(f"{len(words)} longs of block data, expected {need} "
+                         f"({bits} bits per block)")
+    shifts = (np.arange(per, dtype=np.uint64) * np.uint64(bits))
+    out = (words[:, None] >> shifts[None, :]) & np.uint64((1 << bits) - 1)
+    return out.reshape(-1)[:4096].astype(np.uint16)

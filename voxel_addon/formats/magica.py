@@ -1,0 +1,137 @@
+"""A .vox model into a world, a box of a world out to a .vox (issue 21).
+
+Import: every voxel of the scene (vox.voxels: placed by its scene graph, the
+bounding box corner at `at`) becomes a `color` block whose data is the voxel's
+colour in the world's palette (core.colors), exact, so an export gives the same
+colours back. The voxels are kept like edits (they survive a regeneration) and
+written in one transaction. Export: the box's non-air voxels, coloured by their
+own colour (`color` blocks) or their block's texture average, quantised to 255
+colours.
+"""
+from __future__ import annotations
+
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from ..core import chunk as C
+from ..core import colors
+from ..core.blocks import REGISTRY
+from ..core.errors import VoxelError
+from . import vox
+
+COLOR = REGISTRY.id("color")
+MAX_FILE = 256 << 20
+
+
+def read_file(path) -> vox.Scene:
+    path = Path(path)
+    try:
+        size = path.stat().st_size
+        if size > MAX_FILE:
+            raise VoxelError(f"{path} is larger than {MAX_FILE >> 20} MiB")
+        return vox.read(path.read_bytes())
+    except OSError as e:
+        raise VoxelError(f"cannot read {path} ({e.strerror})") from None
+    except vox.VoxError as e:
+        raise VoxelError(f"{path.name} is not a readable .vox file ({e})") from None
+
+
+def stamp(scene: vox.Scene, at, palette: np.ndarray):
+    """(positions (n, 3) in the world, data values (n,), new world palette) of a
+    scene placed with its bounding box corner at `at`."""
+    xyz, col, size = vox.voxels(scene)
+    xyz = xyz + np.asarray(at, np.int64)
+    if len(xyz) and (xyz[:, 2].min() < 0 or xyz[:, 2].max() >= C.HEIGHT):
+        raise VoxelError(f"the model spans z {int(xyz[:, 2].min())}..{int(xyz[:, 2].max())}, "
+                         f"outside the world (0..{C.HEIGHT - 1}); choose another --at Z")
+    used = np.unique(col)
+    palette, idx = colors.add(palette, scene.palette[used, :3])
+    lut = np.zeros(256, np.int64)
+    lut[used] = idx
+    return xyz, lut[col].astype(np.uint16), palette
+
+
+def import_vox(world, path, at=(0, 0, 0)) -> dict:
+    """Place a .vox into `world` (one transaction); returns a small report."""
+    return place(world, read_file(path), at)
+
+
+def place(world, scene: vox.Scene, at=(0, 0, 0)) -> dict:
+    """Place a read scene into `world`, its bounding box corner at `at`, kept like
+    edits and written in one transaction; returns a small report."""
+    pal = colors.parse(world.file.meta)
+    xyz, data, pal = stamp(scene, at, pal)
+    world.file.set_meta(colors.KEY, colors.dump(pal))
+    world.set_blocks(xyz, np.full(len(xyz), COLOR, np.uint16), data)
+    world.flush()
+    lo = xyz.min(0).tolist() if len(xyz) else list(at)
+    hi = (xyz.max(0) + 1).tolist() if len(xyz) else list(at)
+    return {"voxels": int(len(xyz)), "models": len(scene.models),
+            "instances": len(scene.instances), "box": lo + hi}
+
+
+@lru_cache(maxsize=None)
+def block_colors() -> np.ndarray:
+    """(n blocks, 3) uint8: each block's side texture averaged (alpha-weighted)."""
+    from .. import textures
+    out = np.zeros((len(REGISTRY), 3), np.uint8)
+    for i, b in enumerate(REGISTRY.blocks):
+        if b.shape == "none":
+            continue
+        img = textures.image(b.texture("-x"))[0].astype(np.float64)
+        a = img[..., 3:4] / 255
+        out[i] = np.rint((img[..., :3] * a).sum((0, 1)) / max(a.sum(), 1e-9))
+    return out
+
+
+def box_colors(world, box) -> np.ndarray:
+    """(X, Y, Z, 3) uint8 colours of box [x0, x1) x [y0, y1) x [z0, z1), and a
+    mask of its non-air voxels."""
+    x0, y0, z0, x1, y1, z1 = box
+    if not (x0 < x1 and y0 < y1 and z0 < z1):
+        raise VoxelError(f"--box {' '.join(map(str, box))} is empty (X0 < X1, Y0 < Y1, Z0 < Z1)")
+    if z0 < 0 or z1 > C.HEIGHT:
+        raise VoxelError(f"--box z {z0}..{z1} outside the world (0..{C.HEIGHT})")
+    if (x1 - x0) * (y1 - y0) * (z1 - z0) > 1 << 28:
+        raise VoxelError("--box holds more than 2^28 voxels")
+    pal = colors.parse(world.file.meta)
+    bcol = block_colors()
+    cx0, cy0, cx1, cy1 = x0 >> 4, y0 >> 4, ((x1 - 1) >> 4) + 1, ((y1 - 1) >> 4) + 1
+    blocks = np.zeros((x1 - x0, y1 - y0, z1 - z0), np.uint16)
+    data = np.zeros_like(blocks)
+    for cx in range(cx0, cx1):
+        for cy in range(cy0, cy1):
+            c = world.chunk_at(cx, cy)
+            ax0, ay0 = max(x0, 16 * cx), max(y0, 16 * cy)
+            ax1, ay1 = min(x1, 16 * cx + 16), min(y1, 16 * cy + 16)
+            src = (slice(ax0 - 16 * cx, ax1 - 16 * cx), slice(ay0 - 16 * cy, ay1 - 16 * cy),
+                   slice(z0, z1))
+            dst = (slice(ax0 - x0, ax1 - x0), slice(ay0 - y0, ay1 - y0))
+            blocks[dst] = c.blocks[src]
+            if c.data is not None:
+                data[dst] = c.data[src]
+    rgb = bcol[blocks]
+    own = blocks == COLOR
+    rgb[own] = pal[np.minimum(data[own], len(pal) - 1)]
+    return rgb, blocks != 0
+
+
+def export_vox(world, box, out) -> dict:
+    rgb, solid = box_colors(world, box)
+    code = (rgb[..., 0].astype(np.int64) << 16) | (rgb[..., 1].astype(np.int64) << 8) | rgb[..., 2]
+    uniq, inv, counts = np.unique(code[solid], return_inverse=True, return_counts=True)
+    ucol = np.stack([(uniq >> 16) & 255, (uniq >> 8) & 255, uniq & 255], 1)
+    pal, lab = vox.quantise(ucol, counts)
+    grid = np.zeros(solid.shape, np.uint8)
+    grid[solid] = (lab[inv] + 1).astype(np.uint8)
+    full = np.zeros((256, 3), np.uint8)
+    full[1:len(pal) + 1] = pal
+    data = vox.write(grid, full)
+    try:
+        Path(out).write_bytes(data)
+    except OSError as e:
+        raise VoxelError(f"cannot write {out} ({e.strerror})") from None
+    return {"voxels": int(solid.sum()), "colors": int(len(pal)), "exact": len(ucol) <= 255,
+            "models": -(-solid.shape[0] // 256) * -(-solid.shape[1] // 256) * -(-solid.shape[2] // 256)}

@@ -1,0 +1,247 @@
+"""Import a Minecraft Java world (or region files) into a world (issue 21).
+
+Minecraft block (x, y, z) becomes voxel (x, -1-z, y - y_min): not mirrored, north
+(-z) is +y, chunk (cx, cz) is chunk (cx, -cz-1); layers outside z 0..255 are dropped
+and counted. Chunks Minecraft has not finished (Status other than full) are skipped
+and counted; a damaged chunk is skipped with its one-line reason. Chunks go to the
+file in batches, each one transaction: an interrupted import keeps every finished
+batch, and no chunk is ever half-written.
+"""
+from __future__ import annotations
+
+import gzip
+from collections import Counter
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..core import chunk as C
+from ..core import colors
+from ..core.blocks import REGISTRY
+from ..core.errors import VoxelError
+from . import anvil, mapping, nbt
+from .region import External, Region, RegionError
+
+BATCH = 32
+LAYOUTS = ("dimensions/minecraft/overworld/region", "region")  # 26.1 first, then older
+
+
+@dataclass
+class Report:
+    chunks: int = 0                      # imported
+    unfinished: Counter = field(default_factory=Counter)   # skipped, by Status
+    damaged: list = field(default_factory=list)            # one-line reasons
+    external: int = 0                    # in .mcc files, not read
+    dropped: int = 0                     # non-air voxels outside z 0..255
+    blocks: dict = field(default_factory=dict)  # mc name -> [block, how, count]
+    y_min: int = 0
+    version: int | None = None
+
+    def lines(self) -> list[str]:
+        out = [f"{self.chunks} chunks imported (y_min {self.y_min}"
+               f"{'' if self.version is None else f', DataVersion {self.version}'})"]
+        if self.unfinished:
+            out.append("skipped, not finished by Minecraft: " + ", ".join(
+                f"{n} {s or '?'}" for s, n in self.unfinished.most_common()))
+        if self.external:
+            out.append(f"skipped, stored in external .mcc files: {self.external}")
+        if self.damaged:
+            out.append(f"skipped, damaged: {len(self.damaged)}")
+            out += [f"  {m}" for m in self.damaged[:10]]
+        if self.dropped:
+            out.append(f"dropped outside z 0..255: {self.dropped} voxels")
+        out.append("blocks (minecraft name -> block, how, voxels):")
+        for name, (b, how, n) in sorted(self.blocks.items(), key=lambda kv: -kv[1][2]):
+            out.append(f"  {name} -> {b} ({how}) {n}")
+        return out
+
+
+def regions_of(path) -> list[Path]:
+    """The region files of a save folder (both layouts), a folder of .mca files or
+    one .mca file."""
+    path = Path(path)
+    if path.is_file():
+        if path.suffix != ".mca":
+            raise VoxelError(f"{path} is not a region file (.mca)")
+        return [path]
+    if not path.is_dir():
+        raise VoxelError(f"{path} does not exist")
+    for sub in LAYOUTS:
+        if (path / sub).is_dir():
+            path = path / sub
+            break
+    files = sorted(p for p in path.glob("r.*.mca") if p.is_file())
+    if not files:
+        raise VoxelError(f"no region files (r.X.Z.mca) in {path} (nor in region/ or "
+                         "dimensions/minecraft/overworld/region/)")
+    return files
+
+
+def level_version(path) -> int | None:
+    """DataVersion from a save folder's level.dat, or None."""
+    f = Path(path) / "level.dat"
+    if not f.is_file():
+        return None
+    try:
+        with gzip.open(f) as g:
+            raw = g.read(64 << 20)
+        data = nbt.parse(raw).get("Data", {})
+    except (OSError, EOFError, ValueError):
+        return None
+    v = data.get("DataVersion") if isinstance(data, dict) else None
+    return v if isinstance(v, int) else None
+
+
+def to_key(cx: int, cz: int) -> tuple[int, int]:
+    return (cx, -cz - 1)
+
+
+class _Palettes:
+    """Minecraft names -> (block id, data) with the world's colour palette."""
+
+    def __init__(self, world, report: Report):
+        self.world, self.report = world, report
+        self.colors = colors.parse(world.file.meta)
+        self.ids: dict = {}
+        self.changed = False
+
+    def of(self, name: str) -> tuple[int, int]:
+        got = self.ids.get(name)
+        if got is None:
+            block, rgb, how = mapping.lookup(name)
+            d = 0
+            if rgb is not None:
+                self.colors, idx = colors.add(self.colors, [rgb])
+                d = int(idx[0])
+                self.changed = True
+            got = self.ids[name] = (REGISTRY.id(block), d)
+            self.report.blocks.setdefault(name, [block, how, 0])
+        return got
+
+    def save(self) -> None:
+        if self.changed:
+            self.world.file.set_meta(colors.KEY, colors.dump(self.colors))
+            self.changed = False
+
+
+def convert(ch: anvil.Chunk, y_min: int, pal: _Palettes):
+    """(blocks, data or None, dropped voxels) of one chunk in world axes."""
+    blocks, data, dropped = C.empty(), None, 0
+    counts = pal.report.blocks
+    for s in ch.sections:
+        got = [pal.of(n) for n in s.palette]
+        ids = np.array([g[0] for g in got], np.uint16)
+        vals = np.array([g[1] for g in got], np.uint16)
+        n = np.bincount(s.indices, minlength=len(got)) if s.indices is not None \
+            else np.array([4096] + [0] * (len(got) - 1))
+        for name, k in zip(s.palette, n.tolist()):
+            if k:
+                counts[name][2] += k
+        z0 = 16 * s.y - y_min
+        lo, hi = max(z0, 0), min(z0 + 16, C.HEIGHT)
+        if lo >= hi:
+            dropped += int(n[ids != 0].sum())
+            continue
+        if s.indices is None:
+            blocks[:, :, lo:hi] = ids[0]
+            if vals[0]:
+                if data is None:
+                    data = C.empty()
+                data[:, :, lo:hi] = vals[0]
+        else:
+            # [y][z][x] -> [x][15 - z][y]
+            sec = s.indices.reshape(16, 16, 16).transpose(2, 1, 0)[:, ::-1, lo - z0:hi - z0]
+            blocks[:, :, lo:hi] = ids[sec]
+            if vals.any():
+                if data is None:
+                    data = C.empty()
+                data[:, :, lo:hi] = vals[sec]
+            if hi - lo < 16:
+                keep = np.zeros(len(ids), bool)
+                outside = np.ones(16, bool)
+                outside[lo - z0:hi - z0] = False
+                cut = s.indices.reshape(16, 4096 // 16)[outside].ravel()
+                keep[:] = ids != 0
+                dropped += int(keep[cut].sum())
+    return blocks, data, dropped
+
+
+def plan(path, area=None) -> list[tuple[Region, int, int]]:
+    """(region, cx, cz) of every stored chunk in `area` (Minecraft blocks x0 z0 x1 z1,
+    half-open: chunks that touch it)."""
+    out = []
+    for f in regions_of(path):
+        try:
+            reg = Region(f)
+        except (OSError, RegionError) as e:
+            raise VoxelError(f"{f}: {e}") from None
+        for cx, cz in reg.chunks():
+            if area is not None:
+                x0, z0, x1, z1 = area
+                if not (16 * cx < x1 and 16 * cx + 16 > x0 and 16 * cz < z1 and 16 * cz + 16 > z0):
+                    continue
+            out.append((reg, cx, cz))
+    return out
+
+
+def import_world(world, path, *, y_min=None, area=None, replace=False, progress=None,
+                 cancelled=None) -> Report:
+    """Import the chunks of a save folder / region files into `world` (see the
+    module docstring). `progress(done, total)`; `cancelled()` -> True stops after
+    the batch in hand (what was written stays)."""
+    report = Report()
+    for done, total in steps(world, path, report, y_min=y_min, area=area, replace=replace):
+        if progress:
+            progress(done, total)
+        if cancelled is not None and cancelled():
+            break  # the batches written so far stay
+    return report
+
+
+def steps(world, path, report: Report, *, y_min=None, area=None, replace=False):
+    """The import as a generator of (chunks done, total), one step per batch written,
+    filling `report`. Closing it early keeps every batch written so far."""
+    todo = plan(path, area)
+    keys = {to_key(cx, cz) for _, cx, cz in todo}
+    have = keys & set(world.file.chunk_keys())
+    if have and not replace:
+        raise VoxelError(f"{len(have)} of the {len(keys)} chunks are already in "
+                         f"{world.file.path} (imported before, or generated); "
+                         "import with --replace (Blender: Replace) to overwrite them")
+    version = level_version(path) if Path(path).is_dir() else None
+    pal = _Palettes(world, report)
+    batch = []
+    for done, (reg, cx, cz) in enumerate(todo, 1):
+        try:
+            ch = anvil.read(reg.payload(cx, cz))
+        except External:
+            report.external += 1
+            ch = None
+        except (RegionError, anvil.ChunkError, nbt.NbtError) as e:
+            msg = str(e)
+            if "before 1.13" in msg:
+                raise VoxelError(f"{reg.path.name} chunk ({cx}, {cz}): {msg}") from None
+            report.damaged.append(msg if msg.startswith(reg.path.name)
+                                  else f"{reg.path.name} chunk ({cx}, {cz}): {msg}")
+            ch = None
+        if ch is not None:
+            if report.version is None:
+                report.version = version if version is not None else ch.version
+                report.y_min = y_min if y_min is not None else (
+                    -64 if report.version >= anvil.V_NO_LEVEL else 0)
+            if ch.status not in anvil.DONE:
+                report.unfinished[ch.status] += 1
+            else:
+                blocks, data, dropped = convert(ch, report.y_min, pal)
+                report.dropped += dropped
+                batch.append((to_key(cx, cz), blocks, data))
+        if len(batch) >= BATCH or (done == len(todo) and batch):
+            pal.save()
+            world.store_chunks(batch)
+            report.chunks += len(batch)
+            batch = []
+            yield done, len(todo)
+    if report.version is None:
+        report.y_min = y_min if y_min is not None else 0
+    yield len(todo), len(todo)

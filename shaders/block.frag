@@ -2,12 +2,13 @@
 // SHADOW (depth only), DEBUG_AGG (colour by merged quad), SMOOTH_MAG (edge-aware
 // magnification), MSAA_ALPHA (alpha test per sample), OIT (forward-shaded weighted
 // blended order-independent transparency: accumulation instead of a G-buffer).
-// Albedo is written as linear reflectance (the textures are sRGB); water (glow_scale
-// < 0 on its layers, render/pipeline.py) is marked by glow 1 (other glow stays below)
-// and, as the nearest peeled layer, takes its colour and opacity from its depth.
+// Albedo stays sRGB-encoded as the textures are (8 bits hold it better; shade.glsl
+// decodes it once per shaded sample, not per fragment of every overdrawn layer);
+// water (glow_scale < 0 on its layers, render/pipeline.py) is marked by glow 1 (other
+// glow stays below) and, as the nearest peeled layer, takes its colour and opacity
+// from its depth.
 #include "include/common.glsl"
 #include "include/frame.glsl"
-#include "include/tonemap.glsl"
 #ifdef OIT
 #include "include/shade.glsl"
 #endif
@@ -74,10 +75,12 @@ void oit(vec4 c) {
 #endif
 
 // Water over `s` blocks of depth (to the opaque floor): more of its own colour and
-// less of the floor the deeper it is (Beer-Lambert, one grey transmittance).
+// less of the floor the deeper it is (Beer-Lambert, one grey transmittance). The
+// factors are on linear light; c is encoded, so they are too (^(1/2.2)).
 vec4 water_body(vec4 c, float s) {
     float k = 1.0 - exp(-s * 0.25);
-    return vec4(c.rgb * mix(vec3(0.5, 0.6, 0.5), vec3(0.08, 0.2, 0.16), k), mix(0.3, 0.95, k));
+    vec3 f = mix(vec3(0.5, 0.6, 0.5), vec3(0.08, 0.2, 0.16), k);
+    return vec4(c.rgb * pow(f, vec3(1.0 / 2.2)), mix(0.3, 0.95, k));
 }
 
 void main() {
@@ -95,7 +98,6 @@ void main() {
     c.a = 1.0;
 #endif
 #ifndef SHADOW
-    c.rgb = srgb_decode(c.rgb);
     vec3 n = gl_FrontFacing ? g_normal : -g_normal;  // double-sided passes
     float scale = glow_scale[int(g_layer)];
     float glow = scale < 0.0 ? 1.0 : min(texture(glow_tex, vec3(g_uv, g_layer)).r * scale, 0.99);

@@ -41,7 +41,7 @@ vec4 cloud_layer(vec3 ro, vec3 d) {
     float t = (cloud_z - ro.z) / d.z;
     if (t > 40000.0) return vec4(0.0);
     vec2 xy = ro.xy + d.xy * t;
-    int n = t < 1500.0 ? 5 : (t < 5000.0 ? 4 : 3);
+    int n = t < 1500.0 ? 4 : (t < 5000.0 ? 3 : 2);
     float a = cloud_density(xy, n);
     if (a <= 0.001) return vec4(0.0);
     vec3 l = sky_light_dir;

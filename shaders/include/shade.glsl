@@ -4,12 +4,13 @@
 // with PCF (§5.4.1) and the clouds' shadows, water and glass reflecting the sky
 // (include/water.glsl), haze thinning with altitude (§5.4.3, include/atmosphere.glsl),
 // the fade into the sky at the edge of the shown area, the debug views.
-// Colours are the scene's linear light (block.frag decodes the textures; final.frag
-// tone-maps). Defines: SHADOWS, FOG, LAYER or OIT (blended surfaces), DEBUG (1 albedo,
+// Colours are the scene's linear light (albedo arrives sRGB-encoded, as the textures
+// are, and is decoded here; final.frag tone-maps). Defines: SHADOWS, FOG, LAYER or OIT (blended surfaces), DEBUG (1 albedo,
 // 2 normal, 3 depth, 4 light, 5 aggregation).
 #include "include/lightvol.glsl"
 #include "include/eye.glsl"
 #include "include/sky.glsl"
+#include "include/tonemap.glsl"
 
 #ifndef DEBUG
 #define DEBUG 0
@@ -90,7 +91,7 @@ vec4 shade_surface(vec4 albedo, vec3 p, vec3 n, float glow) {
 #if DEBUG == 4
     vec3 c = shade_light_day(vec3(1.0), p, n, glow, day);
 #else
-    vec3 c = shade_light_day(albedo.rgb, p, n, glow, day);
+    vec3 c = shade_light_day(srgb_decode(albedo.rgb), p, n, glow, day);
 #endif
     vec4 o = vec4(c * albedo.a, albedo.a);
 #if (defined(LAYER) || defined(OIT)) && DEBUG == 0

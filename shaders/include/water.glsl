@@ -5,7 +5,7 @@
 #define WATER_GLSL
 #include "include/clouds.glsl"
 
-// deep water's colour: block.frag's water_body of the water texture, deep
+// deep water's colour: block.frag's water_body of the water texture, deep (linear)
 #define WATER_DEEP vec3(0.0018, 0.029, 0.08)
 
 // Slopes of a few directional waves (world xy, seconds), fading out with distance so

@@ -603,7 +603,8 @@ def sky_values(s: Settings, sp: dict, hours: float, sky_on: bool, debug: int, ca
         star_px=2.0 * math.tan(math.radians(fov) / 2.0) / max(h, 1),
         fade_start=fade_end * (1.0 - s.fade_width) if s.fade else 1e9,
         fade_end=fade_end if s.fade else 2e9,
-        display=(2 if s.tonemap else 1) if debug in (0, 6) else (1 if debug in (1, 4) else 0),
+        # (the albedo views show the G-buffer's encoded colours as they are)
+        display=(2 if s.tonemap else 1) if debug in (0, 6) else (1 if debug == 4 else 0),
         clouds=s.clouds and sky_on, cloud_shadows=s.cloud_shadows,
         sea=s.sea and sky_on and s.sea_level >= 0,
         water_fx=s.water and debug in (0, 6))

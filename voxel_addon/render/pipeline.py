@@ -303,7 +303,8 @@ class Renderer:
         aniso = max(1.0, min(float(s.anisotropy), self.max_anisotropy))
         if aniso != self._aniso:
             self.tex.anisotropy = self._aniso = aniso
-        sp = sky.params(hours, s.exposure)
+        # (the sky in steps of 15 s of the day: a dragged slider reuses the cached table)
+        sp = sky.params(round(hours * 240.0) / 240.0, s.exposure)
         debug = DEBUG_VIEWS.index(s.debug)
         vp, inv_vp = cull_vp, _ = camera.matrices()
         draw_cam = camera

@@ -1,17 +1,20 @@
 """Task runner for Voxel Worlds (plain Python 3.11, no bpy import).
 
     python build.py setup       install what is missing (apt when root, .venv, npm tools,
-                                the real Blender application in .blender/)
+                                the real Blender applications in .blender/: Debian
+                                sid's, the newest, and trixie's 4.3)
     python build.py blender [NAME] [-- ARGS]
                                 run a real Blender with ARGS: the newest (Debian sid's,
                                 5.2 today), or NAME: a version or suite (4.3 or trixie,
                                 5.2 or sid)
-    python build.py test [ARGS] setup, then the three test layers: pytest under bpy, the
-                                Blender-facing tests inside the real Blender, the GUI
-                                tests (with ARGS: only pytest under bpy, with ARGS)
+    python build.py test [ARGS] setup, then every test layer: pytest under bpy, the
+                                Blender-facing tests inside each real Blender (and
+                                once without OpenCL), the GUI tests in each Blender
+                                and backend (with ARGS: only pytest under bpy, with
+                                ARGS)
     python build.py demo        setup, then generate a world, render a picture, bake a .glb
     python build.py bench [DIR] setup, then `python -m voxel_addon bench --out DIR`
-    python build.py extension   setup, then build the Blender extension zip into dist/
+    python build.py extension   setup, then one extension zip per platform into dist/
     python build.py dev         editor stubs (fake-bpy-module) in their own .venv-dev,
                                 so they can never shadow the real bpy the tests use
 
@@ -143,25 +146,53 @@ def task_blender(args) -> int:
 
 
 GUI_TESTS = "tests/gui"
+# The GUI tests of what draws or moves with the GPU backend and the Blender version
+# (the live view, the edit tool, the first minute) and the installed zip: these run in
+# every real Blender and, in the newest, on Vulkan too; the rest of tests/gui runs in
+# the newest Blender on OpenGL (CI time: see README, Tests).
+GUI_EVERYWHERE = ["tests/gui/test_viewport.py", "tests/gui/test_edit_tool.py",
+                  "tests/gui/test_first_minute.py", "tests/gui/test_installed.py"]
+GUI_VULKAN = GUI_EVERYWHERE[:3]
 
 
-def _layers(user: str) -> list[tuple[str, list, dict]]:
-    """The three test layers: (name, command, extra environment); user: an empty
-    folder for the real Blender's preferences and extensions."""
-    app = "trixie"  # until the live view draws in 5.2 (issue 19), the layers run in 4.3
-    return [
-        ("pytest under the bpy module", [PY, "-m", "pytest", "tests", f"--ignore={GUI_TESTS}"], {}),
-        ("the Blender-facing tests inside the real Blender",
-         [_app().get(app).launcher, "-b", "--factory-startup", "--python-exit-code", "1",
-          "-P", ROOT / "tests" / "run.py"], {"VOXEL_BLENDER_USER": user}),
-        ("GUI tests (the real Blender under Xvfb)", [PY, "-m", "pytest", GUI_TESTS],
-         {"VOXEL_BLENDER_APP": app}),
-    ]
+def _blender_facing(app, user: Path, **extra) -> tuple[list, dict]:
+    return ([app.launcher, "-b", "--factory-startup", "--python-exit-code", "1",
+             "-P", ROOT / "tests" / "run.py"], {"VOXEL_BLENDER_USER": str(user), **extra})
+
+
+def _layers(user: Path) -> list[tuple[str, list, dict]]:
+    """The test layers: (name, command, extra environment); user: an empty folder for
+    the real Blenders' preferences and extensions (one below it per run)."""
+    apps = _app().apps()  # newest first
+    newest = apps[0]
+    gui = [PY, "-m", "pytest"]
+    layers = [("pytest under the bpy module",
+               [PY, "-m", "pytest", "tests", f"--ignore={GUI_TESTS}"], {})]
+    for a in apps:
+        layers.append((f"Blender-facing tests in Blender {a.version}",
+                       *_blender_facing(a, user / a.suite)))
+    layers.append((f"Blender-facing tests without OpenCL (VOXEL_OPENCL=0), Blender {newest.version}",
+                   *_blender_facing(newest, user / "no-opencl", VOXEL_OPENCL="0")))
+    layers.append((f"GUI tests in Blender {newest.version}, OpenGL", [*gui, GUI_TESTS],
+                   {"VOXEL_BLENDER_APP": newest.suite, "VOXEL_GPU_BACKEND": "opengl"}))
+    if "vulkan" in newest.backends:
+        layers.append((f"GUI tests (live view, edit tool) in Blender {newest.version}, Vulkan",
+                       [*gui, *_present(GUI_VULKAN)],
+                       {"VOXEL_BLENDER_APP": newest.suite, "VOXEL_GPU_BACKEND": "vulkan"}))
+    for a in apps[1:]:
+        layers.append((f"GUI tests (live view, edit tool, installed zip) in Blender {a.version}, "
+                       "OpenGL", [*gui, *_present(GUI_EVERYWHERE)],
+                       {"VOXEL_BLENDER_APP": a.suite, "VOXEL_GPU_BACKEND": "opengl"}))
+    return layers
+
+
+def _present(paths: list[str]) -> list[str]:
+    return [p for p in paths if (ROOT / p).exists()]
 
 
 def task_test(args) -> int:
-    """test [PYTEST_ARGS]: with arguments, pytest under bpy with them; without, all
-    three layers (each runs even when an earlier one failed), timed."""
+    """test [PYTEST_ARGS]: with arguments, pytest under bpy with them; without, every
+    layer (each runs even when an earlier one failed), timed."""
     import time
     setup()
     if args:
@@ -169,13 +200,14 @@ def task_test(args) -> int:
     import tempfile
     results = []
     with tempfile.TemporaryDirectory(prefix="voxel-blender-user-") as user:
-        for name, cmd, extra in _layers(user):
+        for name, cmd, extra in _layers(Path(user)):
             log(f"layer: {name}")
             t0 = time.monotonic()
             code = subprocess.run([str(c) for c in cmd], cwd=ROOT, env={**env(), **extra}).returncode
             results.append((name, code, time.monotonic() - t0))
     for name, code, secs in results:
         log(f"{'ok    ' if code == 0 else 'FAILED'} {secs:6.0f} s  {name}")
+    log(f"{sum(s for *_, s in results):.0f} s in all")
     return next((code for _, code, _ in results if code), 0)
 
 
@@ -219,16 +251,24 @@ def task_bench(args) -> int:
                           cwd=ROOT, env=env()).returncode
 
 
-# Wheels bundled into the extension (Blender ships numpy): pyopencl with its pocl
-# CPU device, moderngl and zstandard, with their pure-Python dependencies, for the
-# Pythons of the Blenders we support: 3.11 (official 4.2-5.0 builds) and 3.13 (newer
-# builds, Linux distributions' Blender). Blender installs only the matching ones.
-WHEELS = ["pyopencl==2026.1.4", "pocl-binary-distribution==3.0", "pytools", "platformdirs",
-          "typing_extensions", "siphash24", "moderngl==5.13.0", "glcontext==3.1.0",
-          "zstandard==0.25.0"]
-WHEEL_PYTHONS = ["3.11", "3.13"]
-WHEEL_PLATFORMS = {"linux-x64": ["manylinux_2_17_x86_64", "manylinux2014_x86_64",
-                                 "manylinux_2_28_x86_64"]}
+# Wheels bundled into the extension (Blender ships numpy; Debian's Blenders do not ship
+# zstandard, so it comes along): pyopencl (on Linux with its pocl CPU device; Windows
+# and macOS have no pocl wheel: there pyopencl's loader finds the vendor's driver, else
+# the NumPy path runs), moderngl and zstandard, with their dependencies. Per Blender
+# platform, for the Pythons of the Blenders that run there: 3.11 (official 4.3-5.0),
+# 3.13 (official 5.1+, Debian trixie's 4.3), 3.14 on Linux (Debian sid's 5.2) and
+# whatever Python an installed real Blender has. No macos-x64: Intel Macs run Blender
+# up to 4.5 LTS, but moderngl 5.13 has no x86_64 macOS wheel.
+WHEELS = ["pyopencl==2026.1.4", "pytools", "platformdirs", "typing_extensions", "siphash24",
+          "moderngl==5.13.0", "glcontext==3.1.0", "zstandard==0.25.0"]
+MAC_ARM = [f"macosx_{v}_0_arm64" for v in range(11, 16)] + \
+    [f"macosx_10_{v}_universal2" for v in range(9, 16)] + [f"macosx_{v}_0_universal2" for v in range(11, 16)]
+WHEEL_PLATFORMS = {  # Blender platform -> (pip platform tags, Pythons, its own extra wheels)
+    "linux-x64": (["manylinux_2_17_x86_64", "manylinux2014_x86_64", "manylinux_2_28_x86_64"],
+                  ["3.11", "3.13", "3.14"], ["pocl-binary-distribution==3.0"]),
+    "windows-x64": (["win_amd64"], ["3.11", "3.13"], []),
+    "macos-arm64": (MAC_ARM, ["3.11", "3.13"], []),
+}
 WHEEL_DIR = ROOT / ".cache" / "wheels"
 # Test tools for the real Blender's Python (.blender/site), versions as in requirements.txt;
 # with their dependencies but not numpy (Blender's own must be the one imported).
@@ -243,27 +283,29 @@ def _pip_for(python: str, tags, *args) -> None:
          *[a for t in tags for a in ("--platform", t)], *args[1:]], env=env())
 
 
-def _linux_pythons() -> list[str]:
-    """The Pythons the Linux wheels are for: WHEEL_PYTHONS and every installed real
-    Blender's (Debian sid's moves: 3.14 today)."""
-    return sorted({*WHEEL_PYTHONS, *(a.pyver for a in _app().apps())},
-                  key=lambda v: tuple(map(int, v.split("."))))
+def wheel_pythons(platform: str) -> list[str]:
+    """The Pythons PLATFORM's wheels are for (on Linux also every installed real
+    Blender's: Debian sid's moves)."""
+    tags, pythons, _ = WHEEL_PLATFORMS[platform]
+    if platform == "linux-x64":
+        pythons = [*pythons, *(a.pyver for a in _app().apps())]
+    return sorted(set(pythons), key=lambda v: tuple(map(int, v.split("."))))
 
 
 def setup_wheels() -> None:
     """The extension's wheels in .cache/wheels/<platform> (downloaded once), and each
     real Blender's .blender/<suite>/site: pytest and the wheels for its Python."""
-    pythons = _linux_pythons()
-    want = hashlib.sha256(f"{WHEELS} {pythons} {WHEEL_PLATFORMS}".encode()).hexdigest()
+    targets = {p: wheel_pythons(p) for p in WHEEL_PLATFORMS}
+    want = hashlib.sha256(f"{WHEELS} {targets} {WHEEL_PLATFORMS}".encode()).hexdigest()
     stamp = WHEEL_DIR / ".stamp"
     if not (stamp.exists() and stamp.read_text() == want):
-        for platform, tags in WHEEL_PLATFORMS.items():
+        for platform, (tags, _, extra) in WHEEL_PLATFORMS.items():
             dest = WHEEL_DIR / platform
             shutil.rmtree(dest, ignore_errors=True)  # no stale versions next to new ones
             dest.mkdir(parents=True)
-            for python in pythons:
+            for python in targets[platform]:
                 log(f"pip download wheels for {platform}, Python {python}")
-                _pip_for(python, tags, "download", "--no-deps", "-d", dest, *WHEELS)
+                _pip_for(python, tags, "download", "--no-deps", "-d", dest, *WHEELS, *extra)
         stamp.write_text(want)
     for app in _app().apps():
         _setup_site(app, want)
@@ -276,26 +318,35 @@ def _setup_site(app, wheels_stamp: str) -> None:
     if (site / ".stamp").exists() and (site / ".stamp").read_text() == want_site:
         return
     shutil.rmtree(site, ignore_errors=True)
-    tags = WHEEL_PLATFORMS["linux-x64"]
+    tags, _, extra = WHEEL_PLATFORMS["linux-x64"]
     log(f"pip install pytest, matplotlib and the extension's wheels into {site} "
         f"(Python {app.pyver})")
     _pip_for(app.pyver, tags, "install", "--target", site, *BLENDER_TEST_PACKAGES)
     _pip_for(app.pyver, tags, "install", "--target", site, "--no-deps", *BLENDER_TEST_NODEPS)
     _pip_for(app.pyver, tags, "install", "--target", site, "--no-deps", "--no-index",
-             "--find-links", WHEEL_DIR / "linux-x64", *[w.split("=")[0] for w in WHEELS])
+             "--find-links", WHEEL_DIR / "linux-x64", *[w.split("=")[0] for w in WHEELS + extra])
     (site / ".stamp").write_text(want_site)
 
 
 def task_extension(args) -> int:
-    """extension [--no-wheels]: dist/voxel_worlds-<version>.zip (Linux x64 wheels bundled)."""
+    """extension [--no-wheels]: one zip per platform in dist/
+    (voxel_worlds-<version>-<platform>.zip, that platform's wheels bundled), built and
+    validated by the newest real Blender's own extension tool; --no-wheels: one zip
+    without wheels."""
     setup()
-    extra = []
+    extra = ["--blender", _app().get().launcher]
     if "--no-wheels" not in args:
         for platform in WHEEL_PLATFORMS:
             extra += ["--wheels", WHEEL_DIR / platform, "--platform", platform]
     rest = [a for a in args if a != "--no-wheels"]
-    return subprocess.run([PY, ROOT / "tools" / "extension.py", *extra, *rest], cwd=ROOT,
-                          env=env()).returncode
+    r = subprocess.run([PY, ROOT / "tools" / "extension.py", *extra, *rest], cwd=ROOT,
+                       env=env(), capture_output=True, text=True)
+    sys.stderr.write(r.stderr)
+    for line in r.stdout.split():
+        z = Path(line)
+        log(f"{z.relative_to(ROOT) if z.is_relative_to(ROOT) else z}: "
+            f"{z.stat().st_size / 2**20:.1f} MiB")
+    return r.returncode
 
 
 def task_dev(args) -> int:

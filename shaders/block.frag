@@ -1,56 +1,51 @@
 // G-buffer writer. Defines: ALPHA_TEST, PEEL (discard at/before the previous layer),
-// SHADOW (depth only), DEBUG_AGG (colour by merged quad), SMOOTH_MAG (edge-aware
-// magnification), MSAA_ALPHA (alpha test per sample), OIT (forward-shaded weighted
-// blended order-independent transparency: accumulation instead of a G-buffer).
+// SHADOW (depth only), DEBUG_AGG (colour by merged quad), MSAA_ALPHA (alpha test per
+// sample), OIT (forward-shaded weighted blended order-independent transparency:
+// accumulation instead of a G-buffer). (SMOOTH_MAG, the edge-aware magnification of
+// fig. 6.3, moved texel borders under a nearest magnification filter, which made it
+// the nearest texel again: it had no visible effect and is not applied here.)
 // Albedo stays sRGB-encoded as the textures are (8 bits hold it better; shade.glsl
 // decodes it once per shaded sample, not per fragment of every overdrawn layer);
-// water (glow_scale < 0 on its layers, render/pipeline.py) is marked by glow 1 (other
-// glow stays below) and, as the nearest peeled layer, takes its colour and opacity
-// from its depth.
+// water (its glow texels are 1, render/blocktex.py; other glow stays below) is marked
+// by glow 1 and, as the nearest peeled layer, takes its colour and opacity from its depth.
 #include "include/common.glsl"
 #include "include/frame.glsl"
 #ifdef OIT
 #include "include/shade.glsl"
 #endif
 
-uniform sampler2DArray tex;
-uniform sampler2DArray glow_tex;
-uniform float glow_scale[64];
-#ifdef PEEL
-uniform GSAMPLER opaque_depth;
-uniform GSAMPLER prev_depth;
-#endif
+//@ sampler sampler2DArray tex       // per layer the mip chain side by side (texel())
+//@ sampler sampler2DArray glow_tex  // 16x16 per layer: the mask times its blocks' glow
+//@ sampler sampler2D palette        // the world's colours, 256 a row (`color` blocks)
+//@ sampler gdepth2D opaque_depth   if PEEL
+//@ sampler gdepth2D prev_depth     if PEEL
+//@ out 0 vec4 out_accum            if OIT  // sum of w * premultiplied colour, sum of w * alpha
+//@ out 1 vec4 out_reveal           if OIT  // r: sum of -log(1 - alpha)
+//@ out 0 vec4 out_albedo           if !defined(OIT) && !defined(SHADOW)
+//@ out 1 vec4 out_normal           if !defined(OIT) && !defined(SHADOW)
 
-#if defined(MSAA_ALPHA) && SAMPLES > 1
-sample in vec2 g_uv;
-#else
-in vec2 g_uv;
-#endif
-in vec3 g_world;
-flat in float g_layer;
-flat in vec3 g_normal;
-flat in uint g_quad;
-
-#if defined(OIT)
-layout(location = 0) out vec4 out_accum;   // sum of w * premultiplied colour, sum of w * alpha
-layout(location = 1) out vec4 out_reveal;  // r: sum of -log(1 - alpha)
-#elif !defined(SHADOW)
-layout(location = 0) out vec4 out_albedo;
-layout(location = 1) out vec4 out_normal;
-#endif
+// Texels with no sampler state (Blender's gpu module binds textures nearest, clamped,
+// without mipmaps): a layer holds the 16x16 texture and its mip levels side by side
+// (level l, 16 >> l wide, at x = 32 - (32 >> l)); the texel index wraps (merged quads
+// repeat the texture), and GL's NEAREST_MIPMAP_LINEAR is done here: the level from the
+// derivatives, the nearest texel in the two levels around it, blended.
+vec4 level_texel(vec2 t, int l) {  // t: level-0 texel coordinates
+    int size = 16 >> l;
+    ivec2 i = ivec2(floor(t / float(1 << l))) & (size - 1);  // (two's complement: wraps)
+    return texelFetch(tex, ivec3(i.x + 32 - (32 >> l), i.y, int(g_layer)), 0);
+}
 
 vec4 texel(vec2 uv) {
-#ifdef SMOOTH_MAG
-    // Linear blend only across texel borders, as wide as one screen pixel (fig. 6.3).
     vec2 t = uv * 16.0;
-    vec2 w = max(fwidth(t), vec2(1e-4));
-    vec2 f = fract(t - 0.5);
-    vec2 s = clamp((f - 0.5) / w + 0.5, 0.0, 1.0);
-    vec2 q = (floor(t - 0.5) + s + 0.5) / 16.0;
-    return textureGrad(tex, vec3(q, g_layer), dFdx(uv), dFdy(uv));
-#else
-    return texture(tex, vec3(uv, g_layer));
+#ifdef SHADOW
+    return level_texel(t, 0);  // casters: the alpha test of the texture itself
 #endif
+    vec2 dx = dFdx(t), dy = dFdy(t);
+    float lod = 0.5 * log2(max(dot(dx, dx), dot(dy, dy)));  // GL's: log2 of the longer
+    if (!(lod > 0.0)) return level_texel(t, 0);  // magnified (or a degenerate derivative)
+    lod = min(lod, 4.0);
+    int l = min(int(lod), 3);
+    return mix(level_texel(t, l), level_texel(t, l + 1), lod - float(l));
 }
 
 #ifdef OIT
@@ -97,12 +92,14 @@ void main() {
     if (c.a < 0.5) discard;
     c.a = 1.0;
 #endif
+    if (g_color != 0u)  // a `color` block: its texture tinted by the palette colour
+        c.rgb *= texelFetch(palette, ivec2(int(g_color & 255u), int(g_color >> 8)), 0).rgb;
 #ifndef SHADOW
     vec3 n = gl_FrontFacing ? g_normal : -g_normal;  // double-sided passes
-    float scale = glow_scale[int(g_layer)];
-    float glow = scale < 0.0 ? 1.0 : min(texture(glow_tex, vec3(g_uv, g_layer)).r * scale, 0.99);
+    ivec2 gi = ivec2(floor(g_uv * 16.0)) & 15;  // nearest, repeated
+    float glow = texelFetch(glow_tex, ivec3(gi, int(g_layer)), 0).r;  // (mask x block glow)
 #if defined(PEEL) && PEEL == 1
-    if (scale < 0.0 && water_fx) {
+    if (glow > 0.999 && water_fx) {  // water (blocktex.py's mark), the nearest layer
         float d = FETCH(opaque_depth, pc, gl_SampleID).r;
         vec2 uv = gl_FragCoord.xy / vec2(textureSize(opaque_depth MS_ARG));
         c = water_body(c, d < 1.0 ? distance(g_world, world_pos(inv_vp, uv, d)) : 64.0);

@@ -1,15 +1,13 @@
 // Separable 9-tap Gaussian. BILATERAL: the distance blur of §5.4.3 (σ 2, samples
 // weighted down across depth edges; alpha carries distance). Otherwise the SSAO
 // blur (σ 3, 9x9 over two passes). VERTICAL: the second pass.
-uniform sampler2D src;
+//@ sampler sampler2D src
+//@ out 0 vec4 out_color
 #ifdef VERTICAL
 const vec2 step_px = vec2(0.0, 1.0);
 #else
 const vec2 step_px = vec2(1.0, 0.0);
 #endif
-in vec2 v_uv;
-out vec4 out_color;
-
 void main() {
 #ifdef BILATERAL
     const float sigma = 2.0;

@@ -5,17 +5,13 @@
 #include "include/eye.glsl"
 #include "include/sky.glsl"
 
-uniform sampler2D opaque;
-uniform sampler2D front;
-uniform sampler2D layer0;
-uniform sampler2D layer1;
-uniform sampler2D layer2;
-#ifdef SSAO
-uniform sampler2D ao;
-#endif
-
-in vec2 v_uv;
-out vec4 out_color;
+//@ sampler sampler2D opaque
+//@ sampler sampler2D front
+//@ sampler sampler2D layer0  if LAYERS > 0
+//@ sampler sampler2D layer1  if LAYERS > 1
+//@ sampler sampler2D layer2  if LAYERS > 2
+//@ sampler sampler2D ao      if SSAO
+//@ out 0 vec4 out_color
 
 float godrays(vec2 p) {
     // Mitchell/Wesley screen-space rays with an emission that is zero outside the

@@ -3,12 +3,9 @@
 // Defines: DOF.
 #include "include/frame.glsl"
 #include "include/tonemap.glsl"
-uniform sampler2D sharp;
-#ifdef DOF
-uniform sampler2D blurred;
-#endif
-in vec2 v_uv;
-out vec4 out_color;
+//@ sampler sampler2D sharp
+//@ sampler sampler2D blurred  if DOF
+//@ out 0 vec4 out_color
 
 void main() {
     vec4 c = texture(sharp, v_uv);

@@ -1,5 +1,5 @@
 // One triangle covering the screen; v_uv in [0, 1].
-out vec2 v_uv;
+//@ vary smooth vec2 v_uv
 void main() {
     vec2 p = vec2(float((gl_VertexID & 1) << 2) - 1.0, float((gl_VertexID & 2) << 1) - 1.0);
     v_uv = p * 0.5 + 0.5;

@@ -4,10 +4,9 @@
 // against the opaque depth), then averaged. Defines: SAMPLES.
 #include "include/common.glsl"
 
-uniform GSAMPLER accum;
-uniform GSAMPLER reveal;
-
-out vec4 out_color;
+//@ sampler gsampler2D accum
+//@ sampler gsampler2D reveal
+//@ out 0 vec4 out_color
 
 vec4 resolve(ivec2 c, int s) {
     vec4 a = FETCH(accum, c, s);

@@ -1,9 +1,8 @@
 // Screen-space ambient occlusion (§5.4.2): 2–8 samples by distance in the normal
 // hemisphere on a spiral, compared against the front distance buffer.
 #include "include/eye.glsl"
-uniform sampler2D front;
-in vec2 v_uv;
-out vec4 out_ao;
+//@ sampler sampler2D front
+//@ out 0 vec4 out_ao
 
 void main() {
     vec4 f = texture(front, v_uv);

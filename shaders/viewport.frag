@@ -1,4 +1,4 @@
-// The pipeline's frame into Blender's viewport (blender/viewport.py): colour of the
+// The pipeline's frame into Blender's viewport (blender/liveview/composite.py): colour of the
 // final pass, depth converted to Blender's projection so the depth test (LEQUAL,
 // set by the caller) mixes voxels and Blender's objects both ways. Where the
 // pipeline drew no surface the sky goes at the far plane (only where Blender drew
@@ -9,21 +9,15 @@
 #include "include/common.glsl"
 #include "include/frame.glsl"
 
-uniform sampler2D color;       // final pass, display values
-uniform GSAMPLER g_depth;
-#if LAYERS > 0
-uniform GSAMPLER prev_depth;   // first depth-peeling layer
-#endif
-uniform mat4 host_vp;          // Blender's perspective_matrix (window @ view)
-uniform vec2 host_range;       // glDepthRange of Blender's context
-uniform bool host_zero_one;    // glClipControl ZERO_TO_ONE
-uniform bool sky;
-
-in vec2 v_uv;
-out vec4 out_color;
-#if KEEP
-layout(location = 1) out float out_depth;
-#endif
+//@ sampler sampler2D color        // final pass, display values
+//@ sampler gdepth2D g_depth
+//@ sampler gdepth2D prev_depth   if LAYERS > 0  // first depth-peeling layer
+//@ push mat4 host_vp             // Blender's perspective_matrix (window @ view)
+//@ push bool sky
+//@ push int srgbTarget           // set by Blender (common.glsl, to_target)
+//@ out 0 vec4 out_color
+//@ out 1 float out_depth         if KEEP
+//@ depth_write                   if !KEEP
 
 float nearest(ivec2 c) {
     float d = 1.0;
@@ -50,14 +44,15 @@ void main() {
             discard;
 #endif
         }
-        z = host_range.y;
+        z = 1.0;
     } else {
+        // Blender keeps GL's conventions on every backend: NDC depth -1..1 -> 0..1
         vec4 c = host_vp * vec4(world_pos(inv_vp, v_uv, d), 1.0);
-        float ndc = clamp(c.z / c.w, -1.0, 1.0);
-        float z01 = host_zero_one ? max(ndc, 0.0) : ndc * 0.5 + 0.5;
-        z = mix(host_range.x, host_range.y, z01);
+        z = clamp(c.z / c.w, -1.0, 1.0) * 0.5 + 0.5;
     }
-    out_color = vec4(texture(color, v_uv).rgb, 1.0);
+    // (draft frames are smaller); into Blender's sRGB framebuffer or the kept frame's
+    // sRGB texture: both encode what is written
+    out_color = vec4(to_target(bilinear(color, v_uv).rgb, srgbTarget), 1.0);
 #if KEEP
     out_depth = z;
 #else

@@ -76,6 +76,25 @@ def test_imports_follow_the_table():
     assert not bad, "\n".join(bad)
 
 
+def test_every_allowed_dependency_is_used():
+    """The table lists only dependencies the code has: an allowed import nobody makes
+    (or a `(x.py only)` file that does not make it) is a stale row."""
+    rules = table()
+    used: dict[str, dict[str, set]] = {}
+    for path in sorted(PKG.rglob("*.py")):
+        unit = unit_of(path)
+        for dep in imports(path) - {unit}:
+            used.setdefault(unit, {}).setdefault(dep, set()).add(path.name)
+    stale = []
+    for unit, allowed in rules.items():
+        for dep, only in allowed.items():
+            files = used.get(unit, {}).get(dep, set())
+            if not files or (only is not None and only not in files):
+                stale.append(f"{unit} may import {dep}{f' ({only} only)' if only else ''}: "
+                             "nothing does")
+    assert not stale, "\n".join(stale)
+
+
 def test_the_check_can_fail():
     """The reader sees relative, absolute and lazy imports."""
     text = ("def f():\n    from ..world import World\n    import voxel_addon.render.camera\n"

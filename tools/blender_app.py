@@ -12,16 +12,12 @@ application by suite ("sid", "trixie") or by the version its Blender has ("5.2",
 "4.3"); without NAME, $VOXEL_BLENDER_APP, else the newest. GUI starts use the GPU
 backend $VOXEL_GPU_BACKEND ("opengl", the default, or "vulkan").
 
-The packages come from the Debian archive the system's apt already uses, resolved by
-apt with a private state per suite (own sources list, lists, cache and an EMPTY dpkg
-status, so apt fetches the whole closure, glibc included) and never touch /etc/apt or
-the system. The downloaded .debs stay in `$XDG_CACHE_HOME/voxel-worlds/<suite>/apt`
-(default ~/.cache), so another clone of the repository does not fetch them again.
-Every .deb is unpacked (as `dpkg -x` does) once into `.../<suite>/unpacked`, and
-`.blender/<suite>/root` is a tree of hard links to it (a copy where they cannot be
-made); the suites' glibc is newer than the system's, so everything starts through the
-suite's own dynamic loader (`patchelf` does not help: the libraries carry absolute
-RUNPATHs).
+The packages come from tools/debian_apt.py (apt with a private state per suite, the
+.debs and their unpacked tree cached in `$XDG_CACHE_HOME/voxel-worlds/<suite>/`, so
+another clone does not fetch them again); `.blender/<suite>/root` is a tree of hard
+links to the unpacked packages (a copy where they cannot be made). The suites' glibc
+is newer than the system's, so everything starts through the suite's own dynamic
+loader (`patchelf` does not help: the libraries carry absolute RUNPATHs).
 
     .blender/blender              the newest application's launcher
     .blender/<suite>/blender      the launcher (a shell script: loader, library path, env)
@@ -54,11 +50,23 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import NamedTuple
 
-try:
-    import fcntl
-except ImportError:  # not on Windows: set-up needs Debian's apt anyway
-    fcntl = None
 
+def _sibling(name: str):
+    """tools/NAME.py, loaded by path: this module is imported as tools.blender_app, as
+    blender_app, or from its file (bench), and a plain `import` would miss in one."""
+    import importlib.util
+    import sys
+    mod = sys.modules.get(f"voxel_{name}")
+    if mod is None:
+        spec = importlib.util.spec_from_file_location(f"voxel_{name}", Path(__file__).with_name(f"{name}.py"))
+        mod = importlib.util.module_from_spec(spec)
+        sys.modules[spec.name] = mod
+        spec.loader.exec_module(mod)
+    return mod
+
+
+debian = _sibling("debian_apt")  # apt's private state, downloads, the unpacked trees
+SetupError, log, _write = debian.SetupError, debian.log, debian.write
 ROOT = Path(__file__).resolve().parent.parent
 HOME = ROOT / ".blender"
 APP_ENV = "VOXEL_BLENDER_APP"       # which application (suite or version)
@@ -75,8 +83,6 @@ EXT_MANAGER = ("python3-cattr", "python3-requests")
 # Folders of the unpacked tree that hold shared libraries Blender loads.
 LIB_DIRS = ["usr/lib/x86_64-linux-gnu", "usr/lib", "usr/lib/x86_64-linux-gnu/pulseaudio",
             "usr/lib/x86_64-linux-gnu/blas", "usr/lib/x86_64-linux-gnu/lapack"]
-# Parts of the packages nobody reads here: skipped when unpacking (saves seconds).
-SKIP = ["./usr/share/doc/*", "./usr/share/man/*", "./usr/share/locale/*", "./usr/share/info/*"]
 
 
 @dataclass(frozen=True)
@@ -88,84 +94,6 @@ class Spec:
 
 # Newest first: the first installed one is the default.
 SPECS = (Spec("sid", BASE + VULKAN + EXT_MANAGER, BACKENDS), Spec("trixie", BASE))
-
-
-class SetupError(SystemExit):
-    """A one-line set-up failure naming its cause."""
-
-
-def log(msg: str) -> None:
-    print(f"[build] {msg}", flush=True)
-
-
-def cache_base() -> Path:
-    """Outside the clone: the caller's XDG_CACHE_HOME (build.py's own default for
-    children is inside the checkout, so this reads the caller's environment)."""
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "voxel-worlds"
-
-
-def _mirror() -> tuple[str, str]:
-    """(URI, signed-by keyring) of the Debian archive in the system's apt sources."""
-    files = [Path("/etc/apt/sources.list"), *sorted(Path("/etc/apt/sources.list.d").glob("*"))]
-    for f in files:
-        if not f.is_file() or not f.name.endswith((".list", ".sources")):
-            continue
-        text = f.read_text(errors="replace")
-        if f.name.endswith(".sources"):
-            for stanza in re.split(r"\n\s*\n", text):
-                fields = dict(re.findall(r"^([\w-]+):\s*(.*)$", stanza, re.M))
-                suites = fields.get("Suites", "").split()
-                if "main" in fields.get("Components", "").split() and \
-                        any("-" not in s for s in suites) and "security" not in fields.get("URIs", ""):
-                    return fields["URIs"].split()[0], fields.get("Signed-By", "")
-        else:
-            for line in text.splitlines():
-                m = re.match(r"\s*deb\s+(\[[^]]*\]\s+)?(\S+)\s+(\S+)\s+(.*)", line)
-                if m and "-" not in m.group(3) and "main" in m.group(4).split() \
-                        and "security" not in m.group(2):
-                    key = re.search(r"signed-by=(\S+?)[\s\]]", m.group(1) or "")
-                    return m.group(2), key.group(1) if key else ""
-    raise SetupError("blender: no Debian archive (a 'main' component) in the apt sources")
-
-
-def _cause(text: str) -> str:
-    """The line of apt's output that says why it failed."""
-    lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
-    for pick in (lambda ln: ln.startswith("E:") and "Unable to correct" not in ln,
-                 lambda ln: " Depends: " in ln or "has no installation candidate" in ln,
-                 lambda ln: ln.startswith(("E:", "W:", "Err:"))):
-        hit = [ln for ln in lines if pick(ln)]
-        if hit:
-            return hit[0]
-    return lines[-1] if lines else "no output"
-
-
-@contextlib.contextmanager
-def _locked(path: Path):
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with open(path, "w") as f:
-        if fcntl:
-            fcntl.flock(f, fcntl.LOCK_EX)  # another clone may set up at the same time
-        yield
-
-
-def _unpack(debs: list[Path], dest: Path) -> None:
-    """dpkg -x every package into dest (docs, man pages and locales skipped)."""
-    dest.mkdir(parents=True)
-    excl = [f"--exclude={p}" for p in SKIP]
-
-    def one(deb):
-        deb_p = subprocess.Popen(["dpkg-deb", "--fsys-tarfile", str(deb)], stdout=subprocess.PIPE)
-        tar = subprocess.run(["tar", "-x", "-C", str(dest), "--no-same-owner",
-                              "--keep-directory-symlink", *excl], stdin=deb_p.stdout)
-        deb_p.stdout.close()
-        if deb_p.wait() or tar.returncode:
-            raise SetupError(f"blender: could not unpack {deb.name}")
-
-    from concurrent.futures import ThreadPoolExecutor
-    with ThreadPoolExecutor(os.cpu_count() or 2) as pool:
-        list(pool.map(one, debs))
 
 
 def _python_of(binary: Path) -> str:
@@ -183,7 +111,8 @@ def _version_of(launcher: Path) -> str:
     r = subprocess.run([str(launcher), "--version"], capture_output=True, text=True, timeout=120)
     m = re.search(r"Blender (\d+\.\d+(?:\.\d+)?)", r.stdout)
     if not m:
-        raise SetupError(f"blender: {launcher} --version failed: {_cause(r.stdout + r.stderr)}")
+        raise SetupError(f"blender: {launcher} --version failed: "
+                         f"{debian.cause(r.stdout + r.stderr)}")
     return m.group(1)
 
 
@@ -221,7 +150,8 @@ class App:
         return self.info().get("python", "")
 
     def config(self) -> str:
-        return hashlib.sha256(f"{self.suite} {list(self.spec.packages)} {SKIP}".encode()).hexdigest()
+        return hashlib.sha256(f"{self.suite} {list(self.spec.packages)} {debian.SKIP}"
+                              .encode()).hexdigest()
 
     def installed(self) -> bool:
         stamp = self.home / ".stamp"
@@ -229,8 +159,8 @@ class App:
                 and self.root.is_dir())
 
     # -- set-up --
-    def cache(self) -> Path:
-        return cache_base() / self.suite / "apt"
+    def archive(self):
+        return debian.Archive(self.suite, self.spec.packages)
 
     def setup(self) -> None:
         """Install (once); later runs only rewrite the launchers (paths of this checkout)."""
@@ -244,7 +174,8 @@ class App:
         if missing:
             raise SetupError(f"blender: {', '.join(missing)} not found (set-up needs a Debian "
                              "system to fetch Debian's Blender)")
-        debs = self.download()
+        archive = self.archive()
+        debs = archive.download()
         stamp = self.home / ".stamp"
         want = self.config() + "\n" + hashlib.sha256(
             "\n".join(sorted(d.name for d in debs)).encode()).hexdigest()
@@ -252,9 +183,9 @@ class App:
             self.home.mkdir(parents=True, exist_ok=True)
             tmp = Path(tempfile.mkdtemp(prefix="root.", dir=self.home))
             shutil.rmtree(tmp)
-            if not self._link_unpacked(hashlib.sha256(want.encode()).hexdigest()[:16], debs, tmp):
+            if not archive.link_unpacked(hashlib.sha256(want.encode()).hexdigest()[:16], debs, tmp):
                 log(f"unpacking {len(debs)} packages into {self.root}")
-                _unpack(debs, tmp)
+                debian.unpack(debs, tmp)
             if self.root.exists():
                 shutil.rmtree(self.root)
             tmp.rename(self.root)
@@ -269,137 +200,6 @@ class App:
         info["version"] = _version_of(self.launcher)
         _write(self.home / "app.json", json.dumps(info))
         self._write_launchers()
-
-    def _apt_args(self) -> list[str]:
-        state = self.cache()
-        args = [f"-o=Dir::Etc::sourcelist={state / 'sources.list'}",
-                f"-o=Dir::Etc::sourceparts={state / 'sources.list.d'}",
-                f"-o=Dir::Etc::preferencesparts={state / 'preferences.d'}",
-                f"-o=Dir::State={state / 'state'}", f"-o=Dir::State::status={state / 'status'}",
-                f"-o=Dir::Cache={state / 'cache'}", "-o=Debug::NoLocking=1",
-                "-o=APT::Get::Assume-Yes=1", "-q"]
-        if os.geteuid() == 0:  # the cache may sit in a home _apt cannot enter
-            args.append("-o=APT::Sandbox::User=root")
-        return args
-
-    def _apt(self, *cmd) -> str:
-        r = subprocess.run(["apt-get", *self._apt_args(), *cmd], text=True,
-                           capture_output=True, env=dict(os.environ, LC_ALL="C"))
-        if r.returncode:
-            raise subprocess.CalledProcessError(r.returncode, ["apt-get", *cmd], r.stdout, r.stderr)
-        return r.stdout
-
-    def _prepare_state(self) -> None:
-        state = self.cache()
-        legacy = cache_base() / "apt"  # before the suites sat side by side: trixie's
-        if not state.exists() and (legacy / "sources.list").exists() and \
-                f" {self.suite} main" in (legacy / "sources.list").read_text():
-            state.parent.mkdir(parents=True, exist_ok=True)
-            subprocess.run(["cp", "-al", str(legacy), str(state)], check=False)
-            old = cache_base() / "unpacked"
-            if old.is_dir():
-                subprocess.run(["cp", "-al", str(old), str(state.parent / "unpacked")], check=False)
-        for d in ("sources.list.d", "preferences.d", "state/lists/partial", "cache/archives/partial"):
-            (state / d).mkdir(parents=True, exist_ok=True)
-        (state / "status").touch()
-        uri, key = _mirror()
-        opt = f"[signed-by={key}] " if key and Path(key).exists() else ""
-        _write(state / "sources.list", f"deb {opt}{uri} {self.suite} main\n")
-
-    def _selection(self) -> list[Path]:
-        """The .deb files apt chose (simulated install over the empty status). Resolving
-        takes apt seconds of CPU, so the answer is kept for the same lists and packages."""
-        state = self.cache()
-        lists = sorted((state / "state" / "lists").glob("*_InRelease"))
-        key = hashlib.sha256(f"{list(self.spec.packages)}".encode()
-                             + b"".join(f.read_bytes() for f in lists)).hexdigest()
-        memo = state / "selection.txt"
-        if memo.exists():
-            head, *names = memo.read_text().split("\n")
-            if head == key and names:
-                return [state / "cache" / "archives" / n for n in names]
-        out = self._apt("install", "-s", "--no-install-recommends", *self.spec.packages)
-        names = [f"{name}_{ver.replace(':', '%3a')}_{arch}.deb"
-                 for name, ver, arch in re.findall(r"^Inst (\S+) \((\S+) .*\[(\S+)\]\)", out, re.M)]
-        if not names:
-            raise SetupError(f"blender ({self.suite}): apt selected no packages")
-        _write(memo, "\n".join([key, *names]))
-        return [state / "cache" / "archives" / n for n in names]
-
-    def download(self) -> list[Path]:
-        """The selected .debs, fetched into the cache unless already there. A failure
-        is one line naming apt's reason."""
-        try:
-            return self._download()
-        except subprocess.CalledProcessError as e:
-            raise SetupError(f"blender ({self.suite}): {' '.join(e.cmd[:2])} failed: "
-                             f"{_cause((e.stdout or '') + (e.stderr or ''))}") from None
-
-    def _download(self) -> list[Path]:
-        state = self.cache()
-        with _locked(state.parent / "lock"):
-            self._prepare_state()
-            fresh = False
-            if not list((state / "state" / "lists").glob(f"*_{self.suite}_InRelease")):
-                log(f"apt-get update for {self.suite} (private state in {state})")
-                self._apt("update")
-                fresh = True
-                if not list((state / "state" / "lists").glob(f"*_{self.suite}_InRelease")):
-                    raise SetupError(f"blender ({self.suite}): apt-get update fetched no "
-                                     f"package list for {self.suite}")
-            try:
-                debs = self._selection()
-            except subprocess.CalledProcessError:
-                if fresh:
-                    raise
-                log(f"{self.suite}: cached package lists do not resolve: apt-get update")
-                self._apt("update")
-                fresh = True
-                debs = self._selection()
-            if all(d.exists() for d in debs):
-                return debs
-            try:
-                log(f"apt-get install --download-only for {self.suite} "
-                    f"({len(debs)} packages, ~300 MB, once)")
-                self._apt("install", "--download-only", "--no-install-recommends",
-                          *self.spec.packages)
-            except subprocess.CalledProcessError:
-                if fresh:
-                    raise
-                # stale lists name versions the archive dropped (sid daily, a point release)
-                log("download failed with cached package lists: apt-get update and retry")
-                self._apt("update")
-                debs = self._selection()
-                self._apt("install", "--download-only", "--no-install-recommends",
-                          *self.spec.packages)
-            missing = [d.name for d in debs if not d.exists()]
-            if missing:
-                raise SetupError(f"blender ({self.suite}): apt did not download {missing[:3]}")
-            return debs
-
-    def _link_unpacked(self, key: str, debs: list[Path], dest: Path) -> bool:
-        """dest as hard links to the unpacked tree kept next to the .debs (unpacked there
-        once): another clone gets its Blender in seconds. False when the cache is on
-        another file system (the caller unpacks into dest itself)."""
-        cache = self.cache().parent / "unpacked"
-        tree = cache / key
-        with _locked(cache / "lock"):
-            if not (tree / ".complete").exists():
-                for old in cache.glob("*"):
-                    if old.is_dir():
-                        shutil.rmtree(old)  # an older package set: only one tree is kept
-                tmp = cache / f"{key}.tmp"
-                shutil.rmtree(tmp, ignore_errors=True)
-                log(f"unpacking {len(debs)} packages into {tree}")
-                _unpack(debs, tmp)
-                (tmp / ".complete").touch()
-                tmp.rename(tree)
-            r = subprocess.run(["cp", "-al", str(tree), str(dest)], capture_output=True)
-        if r.returncode:
-            shutil.rmtree(dest, ignore_errors=True)
-            return False
-        (dest / ".complete").unlink()
-        return True
 
     def _write_launchers(self) -> None:
         root, home, pyver = self.root, self.home, self.pyver
@@ -475,16 +275,6 @@ def _migrate() -> None:
                 (HOME / name).rename(dest / name)
     (HOME / "blender").unlink(missing_ok=True)
     (HOME / ".stamp").unlink(missing_ok=True)
-
-
-def _write(path: Path, text: str, mode: int = 0o644) -> None:
-    """A new file at PATH (never written in place: a running Blender may read the old
-    one, and a copy of .blender made with hard links must not change with this one)."""
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.unlink(missing_ok=True)
-    tmp.write_text(text)
-    tmp.chmod(mode)
-    os.replace(tmp, path)
 
 
 def _remove(path: Path) -> None:
@@ -570,9 +360,14 @@ def gui_missing(app=None) -> str | None:
     return None
 
 
+def backend_name() -> str:
+    """The GPU backend GUI starts ask for by default: $VOXEL_GPU_BACKEND, else opengl."""
+    return os.environ.get(BACKEND_ENV) or "opengl"
+
+
 def backend(name: str | None = None, app=None) -> str:
     """The GPU backend a GUI start asks for: NAME, else $VOXEL_GPU_BACKEND, else opengl."""
-    name = name or os.environ.get(BACKEND_ENV) or "opengl"
+    name = name or backend_name()
     a = get(app)
     if name not in a.backends:
         raise SetupError(f"blender: backend {name!r} is not set up for {a.suite}'s Blender "

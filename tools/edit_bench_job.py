@@ -73,24 +73,24 @@ def steps():
         t = time.perf_counter()
         FRAMES.append(t)
         vers: dict = {}
-        for g in viewport._gpus.values():
+        for g in LIVE.panes.values():
             vers.update(g.versions)
         DRAWN.append((t, vers))
-    viewport.OVERLAYS.append(frame_end)
+    LIVE.overlays.append(frame_end)
     R["region"] = [region.width, region.height]
     for i in range(8):  # the view fills in; the first click of a new window is lost
         ev("MOUSEMOVE", "NOTHING", (region.width // 2 + i, region.height // 2))
         yield 0.3
     ev("LEFTMOUSE", "PRESS", (5, 5))
     ev("LEFTMOUSE", "RELEASE", (5, 5))
-    while viewport.STATUS["drawn"] < viewport.STATUS["wanted"] or not viewport.STATUS["wanted"]:
+    while LIVE.stats["drawn"] < LIVE.stats["wanted"] or not LIVE.stats["wanted"]:
         yield 0.2
     sc.voxel_edit.block = "stone"
     rng = random.Random(1)
     lat, own, gap, first = [], [], [], 0
 
     def drawn(key):
-        return max((g.versions.get(key, -1) for g in viewport._gpus.values()), default=-1)
+        return max((g.versions.get(key, -1) for g in LIVE.panes.values()), default=-1)
 
     for _ in range(CLICKS):
         at = (rng.randrange(region.width // 4, 3 * region.width // 4),
@@ -121,7 +121,7 @@ def steps():
     gap.sort()
     R.update(clicks=len(lat), click_median_ms=lat[len(lat) // 2],
              click_p90_ms=lat[min(len(lat) - 1, int(len(lat) * 0.9))],
-             stroke_median_ms=own[len(own) // 2], frame_ms=viewport.STATUS["ms"],
+             stroke_median_ms=own[len(own) // 2], frame_ms=LIVE.stats["ms"],
              first_frame_shows=first, edit_to_frame_ms=gap[len(gap) // 2])
     # a fast drag: all move events queued at once, as a quick hand gives them
     y = region.height // 2 + 41

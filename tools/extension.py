@@ -1,12 +1,18 @@
-"""Build the Blender extension zip into dist/ (called by `python build.py extension`).
+"""Build the Blender extension zip(s) into dist/ (called by `python build.py extension`).
 
 Plain Python, no bpy import: stages blender_manifest.toml, a generated root
-__init__.py, voxel_addon/, gpu/ and shaders/ (and any *.whl given with --wheels)
-into a temp dir, then runs Blender's own `blender_ext.py build` and `validate`
-(found inside the venv's bpy package) on it.
+__init__.py, voxel_addon/, gpu/ and shaders/ (and any *.whl given with --wheels,
+one folder per platform) into a temp dir, then runs Blender's own extension tool:
+`blender --command extension build` and `validate` of the real Blender when
+--blender names its launcher (`build.py extension` passes the newest), else
+`blender_ext.py` from the venv's bpy package (the same tool, without starting
+Blender; test fixtures use it). With wheels for several platforms the manifest lists
+them all and `build --split-platforms` makes one zip per platform, each holding that
+platform's wheels (and the platform-independent ones): voxel_worlds-0.1.0-linux_x64.zip.
 
-    python tools/extension.py [--out DIR] [--wheels DIR] [--keep-stage DIR]
-Prints the zip's path on stdout.
+    python tools/extension.py [--out DIR] [--blender LAUNCHER]
+                              [--wheels DIR --platform NAME]... [--keep-stage DIR]
+Prints the zips' paths on stdout, one a line.
 """
 from __future__ import annotations
 
@@ -47,7 +53,7 @@ def blender_ext() -> Path:
     sys.exit("extension: blender_ext.py not found (is bpy installed in .venv? run build.py setup)")
 
 
-def stage(dest: Path, wheels: Path | None = None, platforms=()) -> Path:
+def stage(dest: Path, wheels=None, platforms=()) -> Path:
     dest.mkdir(parents=True, exist_ok=True)
     manifest = (ROOT / "blender_manifest.toml").read_text()
     shutil.copy2(ROOT / "blender_manifest.toml", dest)
@@ -55,7 +61,9 @@ def stage(dest: Path, wheels: Path | None = None, platforms=()) -> Path:
     for d in ("voxel_addon", "gpu", "shaders"):
         if (ROOT / d).is_dir():
             shutil.copytree(ROOT / d, dest / d, ignore=IGNORE, dirs_exist_ok=True)
-    whls = sorted(wheels.glob("*.whl")) if wheels else []
+    if isinstance(wheels, (str, Path)):
+        wheels = [Path(wheels)]
+    whls = sorted({w.name: w for d in (wheels or []) for w in Path(d).glob("*.whl")}.values())
     if whls:
         (dest / "wheels").mkdir(exist_ok=True)
         for w in whls:
@@ -70,37 +78,68 @@ def stage(dest: Path, wheels: Path | None = None, platforms=()) -> Path:
     return dest
 
 
-def _ext(*args) -> None:
-    r = subprocess.run([sys.executable, str(blender_ext()), *map(str, args)],
-                       capture_output=True, text=True)
+def _ext(*args, blender: Path | None = None) -> str:
+    """Blender's extension tool: the real Blender's `--command extension`, or
+    blender_ext.py in this interpreter."""
+    if blender:
+        cmd = [str(blender), "-b", "--factory-startup", "--quiet", "--command", "extension"]
+    else:
+        cmd = [sys.executable, str(blender_ext())]
+    r = subprocess.run([*cmd, *map(str, args)], capture_output=True, text=True)
     if r.returncode:
         sys.stderr.write(r.stdout + r.stderr)
-        sys.exit(f"extension: blender_ext {args[0]} failed (exit {r.returncode})")
+        sys.exit(f"extension: {args[0]} failed (exit {r.returncode})")
+    return r.stdout
 
 
-def build(out: Path, wheels: Path | None = None, keep: Path | None = None, platforms=()) -> Path:
+def build(out: Path, wheels=None, keep: Path | None = None, platforms=(),
+          blender: Path | None = None) -> Path:
+    """The one zip (all WHEELS, a folder, for PLATFORMS); see build_all for several."""
+    zips = build_all(out, {p: wheels for p in platforms} if wheels else {}, keep, blender,
+                     split=False)
+    return zips[0]
+
+
+def build_all(out: Path, wheels: dict, keep: Path | None = None, blender: Path | None = None,
+              split: bool = True) -> list[Path]:
+    """WHEELS: platform -> folder of its wheels. One zip per platform (split) or one
+    for all, each validated; their paths."""
     out.mkdir(parents=True, exist_ok=True)
+    folders = list(dict.fromkeys(wheels.values()))
     with tempfile.TemporaryDirectory(prefix="voxel-ext-") as tmp:
-        src = stage(keep or Path(tmp) / "voxel_worlds", wheels, platforms)
-        _ext("validate", src)
+        src = stage(keep or Path(tmp) / "voxel_worlds", folders, list(wheels))
+        _ext("validate", src, blender=blender)
         version = next(line.split("=")[1].strip().strip('"')
                        for line in (src / "blender_manifest.toml").read_text().splitlines()
                        if line.startswith("version"))
-        zip_path = out / f"voxel_worlds-{version}.zip"
-        _ext("build", "--source-dir", src, "--output-filepath", zip_path)
-    _ext("validate", zip_path)
-    return zip_path
+        if split and len(wheels) > 1:
+            for old in out.glob(f"voxel_worlds-{version}-*.zip"):
+                old.unlink()  # a platform dropped since must not linger
+            _ext("build", "--split-platforms", "--source-dir", src, "--output-dir", out,
+                 blender=blender)
+            zips = sorted(out.glob(f"voxel_worlds-{version}-*.zip"))
+        else:
+            zips = [out / f"voxel_worlds-{version}.zip"]
+            _ext("build", "--source-dir", src, "--output-filepath", zips[0], blender=blender)
+    for z in zips:
+        _ext("validate", z, blender=blender)
+    return zips
 
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--out", type=Path, default=ROOT / "dist")
-    p.add_argument("--wheels", type=Path, help="folder of .whl files to bundle")
+    p.add_argument("--blender", type=Path, help="the real Blender's launcher runs the tool")
+    p.add_argument("--wheels", type=Path, action="append", default=[],
+                   help="folder of .whl files for the --platform after it (repeatable)")
     p.add_argument("--platform", action="append", default=[],
-                   help="Blender platform the wheels are for, e.g. linux-x64 (repeatable)")
+                   help="Blender platform of the --wheels before it, e.g. linux-x64")
     p.add_argument("--keep-stage", type=Path, help="stage into this folder and keep it")
     a = p.parse_args(argv)
-    print(build(a.out, a.wheels, a.keep_stage, a.platform))
+    if len(a.wheels) != len(a.platform):
+        p.error("give one --platform per --wheels")
+    for z in build_all(a.out, dict(zip(a.platform, a.wheels)), a.keep_stage, a.blender):
+        print(z)
     return 0
 
 

@@ -3,8 +3,8 @@ imported): runs in the real Blender GUI under Xvfb, started as a script (`__main
 
     blender --factory-startup -P tools/viewport_bench_job.py -- OUT.json WORLD EMPTY_WORLD QUICK
 
-Frame times come from the draw handler itself (viewport.FRAMES) with the GPU
-finished inside each frame (viewport._SYNC), so they are what a redraw costs.
+Frame times come from the draw handler itself (LIVE.frames) with the GPU
+finished inside each frame (LIVE.finish), so they are what a redraw costs.
 """
 from __future__ import annotations
 
@@ -44,28 +44,28 @@ def look(yaw):
 
 def frames(n, timeout=300.0):
     """Generator: n more redraws of the voxel view (the last frame's entries)."""
-    from voxel_addon.blender import viewport
-    start = viewport.STATUS["frames"]
+    from voxel_addon.blender.liveview import LIVE
+    start = LIVE.stats["frames"]
     t0 = time.time()
-    while viewport.STATUS["frames"] < start + n:
+    while LIVE.stats["frames"] < start + n:
         if time.time() - t0 > timeout:
-            raise RuntimeError(f"no frames: {viewport.STATUS}")
+            raise RuntimeError(f"no frames: {LIVE.stats}")
         area().tag_redraw()
         yield 0.01
-    return list(viewport.FRAMES)[-n:]
+    return list(LIVE.frames)[-n:]
 
 
 def all_drawn(timeout):
     """Generator: redraw until every wanted chunk is drawn; returns the seconds."""
-    from voxel_addon.blender import viewport
+    from voxel_addon.blender.liveview import LIVE
     t0 = time.perf_counter()
     while True:
-        s = viewport.STATUS
+        s = LIVE.stats
         n = (2 * bpy.context.scene.voxel_view.distance + 1) ** 2
         if s["wanted"] == n and s["drawn"] >= s["wanted"]:
             return time.perf_counter() - t0
-        if s["error"]:
-            raise RuntimeError(s["error"])
+        if LIVE.error:
+            raise RuntimeError(LIVE.error)
         if time.perf_counter() - t0 > timeout:
             raise RuntimeError(f"not all drawn after {timeout} s: {s}")
         area().tag_redraw()
@@ -110,8 +110,8 @@ def still(sc, vv):
     """A still view: whole-region redraws that reuse the kept frame (measured as the
     baked mesh is), the handler's own time for them, and a full frame that keeps
     itself (time of day nudged so each one runs the pipeline)."""
-    from voxel_addon.blender import viewport
-    viewport.REUSE = True
+    from voxel_addon.blender.liveview import LIVE
+    LIVE.reuse = True
     h = vv.hours
     keep = []
     for i in range(3):
@@ -125,9 +125,9 @@ def still(sc, vv):
     R["still_python_ms"] = statistics.median(f[1] for f in kept if f[5])
     R["still_draw_ms"] = region_draw_ms(3)
     R["still_cpu_ms"] = region_draw_cpu_ms(3)
-    if not viewport.FRAMES[-1][5]:
+    if not LIVE.frames[-1][5]:
         raise RuntimeError("a still redraw ran the pipeline")
-    viewport.REUSE = False
+    LIVE.reuse = False
     R["live_cpu_ms"] = region_draw_cpu_ms(3)
     vv.show = False  # the floor of both: Blender's own redraw of that region
     yield 0.3
@@ -138,7 +138,7 @@ def still(sc, vv):
 
 def run():
     import voxel_addon
-    from voxel_addon.blender import viewport
+    from voxel_addon.blender.liveview import LIVE
     voxel_addon.register()
     sc = bpy.context.scene
     sp = area().spaces.active
@@ -152,8 +152,8 @@ def run():
     R["region"] = [r.width, r.height]
     vv.show = True
     R["show8_s"] = yield from all_drawn(300)
-    viewport._SYNC = True
-    viewport.REUSE = False  # these rows: the pipeline on every redraw (still() reuses)
+    LIVE.finish = True
+    LIVE.reuse = False  # these rows: the pipeline on every redraw (still() reuses)
     vv.quality = "full"
     yield from frames(2)
     n = 3 if QUICK else 6
@@ -170,7 +170,7 @@ def run():
     R["view_draw_ms"] = region_draw_ms(3)
     yield from still(sc, vv)
     vv.quality = "auto"
-    viewport._SYNC, viewport.REUSE = False, True
+    LIVE.finish, LIVE.reuse = False, True
     for key, path in (("generated", WORLD), ("empty", EMPTY)):
         if QUICK and key == "empty":
             continue
@@ -180,14 +180,14 @@ def run():
         vv.distance = 16
         look(30)
         yield 0.2
-        viewport.FRAMES.clear()
-        viewport.STATUS.update(drawn=0, wanted=0)  # (the last file's counts until a frame)
+        LIVE.frames.clear()
+        LIVE.stats.update(drawn=0, wanted=0)  # (the last file's counts until a frame)
         vv.show = True
         R[f"show16_{key}_s"] = yield from all_drawn(600)
-        R[f"max_redraw_{key}_ms"] = max(f[0] for f in viewport.FRAMES)
-        R[f"max_upload_{key}_ms"] = max(f[4] for f in viewport.FRAMES)
-        R[f"frames16_{key}"] = len(viewport.FRAMES)
-        R["chunks16"] = viewport.STATUS["wanted"]
+        R[f"max_redraw_{key}_ms"] = max(f[0] for f in LIVE.frames)
+        R[f"max_upload_{key}_ms"] = max(f[4] for f in LIVE.frames)
+        R[f"frames16_{key}"] = len(LIVE.frames)
+        R["chunks16"] = LIVE.stats["wanted"]
     voxel_addon.unregister()
 
 

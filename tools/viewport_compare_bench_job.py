@@ -110,7 +110,8 @@ def setup(world, d):
 
 # ---------------------------------------------------------------------- live
 def live(world, d):
-    from voxel_addon.blender import session, viewport
+    from voxel_addon.blender import session
+    from voxel_addon.blender.liveview import LIVE
     sc = setup(world, d)
     vv = sc.voxel_view
     yield 0.5
@@ -130,40 +131,41 @@ def live(world, d):
     t1 = time.perf_counter()
     vv.quality = "auto"
     vv.show = True
-    yield from frames_until_gpu(viewport)
+    yield from frames_until_gpu()
     step("moderngl context, Renderer, first targets (first frame)")
     yield from V.all_drawn(900)
     t2 = time.perf_counter()
     R["first_picture_s"], R["show_s"] = t2 - t0, t2 - t1
     step(f"all {R['chunks']} chunks streamed and drawn (draft)")
-    viewport._SYNC = True
+    LIVE.finish = True
     vv.quality = "full"
     yield from V.frames(2)
     step("full-quality frames")
     # a still view redraws from its kept frame; the pipeline on every redraw (REUSE
     # off) is what a redraw costs when something in the picture changed; draft is a
     # redraw while the view moves
-    viewport.REUSE = False
+    LIVE.reuse = False
     R["redraw_pipeline_ms"] = V.region_draw_ms(3)
     vv.quality = "draft"
     R["redraw_draft_ms"] = V.region_draw_ms(3)
-    vv.quality, viewport.REUSE = "full", True
+    vv.quality, LIVE.reuse = "full", True
     yield from V.frames(2)
     R["redraw_ms"] = V.region_draw_ms(3)
     R["rss_mb"] = step("region redraws")
     R["peak_mb"] = mem()[1] - step.base
-    R["bytes"] = accounted(w, viewport)
+    R["bytes"] = accounted(w)
     R["trimmed_mb"] = trimmed(step)
-    viewport._SYNC = False
+    LIVE.finish = False
     yield 0.1
 
 
-def frames_until_gpu(viewport):
+def frames_until_gpu():
     """Redraw until the view's GL objects exist (the first frame made them)."""
+    from voxel_addon.blender.liveview import LIVE
     t0 = time.perf_counter()
-    while not viewport._gpus:
-        if viewport.STATUS["error"]:
-            raise RuntimeError(viewport.STATUS["error"])
+    while not LIVE.panes:
+        if LIVE.error:
+            raise RuntimeError(LIVE.error)
         if time.perf_counter() - t0 > 120:
             raise RuntimeError("no voxel frame in 120 s")
         V.area().tag_redraw()
@@ -188,10 +190,11 @@ def _fields(c, name):
     return (getattr(c, name),)
 
 
-def accounted(w, viewport) -> dict:
+def accounted(w) -> dict:
     """MB of what the live view keeps, each array counted once: the world's chunks
     (blocks, light, CPU meshes), payload light held only by the view, the GL objects
     (bytes that llvmpipe allocates in RAM)."""
+    from voxel_addon.blender.liveview import LIVE
     seen, out = set(), {}
 
     def add(name, arrays):
@@ -211,49 +214,22 @@ def accounted(w, viewport) -> dict:
     add("meshes: vertices", (c.mesh.vertices for c in chunks if c.mesh is not None))
     add("meshes: quads", (c.mesh.quads for c in chunks if c.mesh is not None))
     add("meshes: ranges", (c.mesh.ranges for c in chunks if c.mesh is not None))
-    feed = viewport._feed
+    feed = LIVE.feed
     if feed is not None:
         ps = list(feed.chunks.values())
         add("light (view's payloads)", (a for p in ps for a in _arrays(p.light)))
         add("meshes (view's payloads)", (a for p in ps for a in (p.mesh.vertices, p.mesh.quads)))
-    for g in viewport._gpus.values():
+    for g in LIVE.panes.values():
         r = g.r
         add("light (renderer)", (a for v in r.lights.values() for a in _arrays(v)))
-        geo = r.geo
-        bufs = [b for b in (geo.vbo, geo.ibo, geo.obo, geo._boxes) if b is not None]
-        bufs += [b[0] for b in geo.bufs.values() if b[0] is not None]
-        out["GL vertex/index/command buffers"] = sum(b.size for b in bufs) / MB
-        out["GL light volume"] = r.vol.tex.width * r.vol.tex.height * r.vol.tex.depth * 2 / MB
-        out["GL render targets"] = _targets_mb(r.targets)
-        out["GL block textures"] = (r.tex.width * r.tex.height * r.tex.layers * 4 * 4 / 3
-                                    + r.glow.width * r.glow.height * r.glow.layers) / MB
-        out["targets key"] = list(r.targets.get("key", ()))
+        out["GL vertex buffers"] = r.geo.nbytes / MB
+        out["GL light volume"] = r.vol.tex.nbytes / MB
+        out["GL render targets"] = r.targets.nbytes / MB if r.targets else 0.0
+        out["GL block textures"] = (r.blocks.tex.nbytes + r.blocks.glow.nbytes) / MB
+        out["targets key"] = str(r.targets.shape) if r.targets else ""
     return out
 
 
-def _targets_mb(T) -> float:
-    """Bytes of the render targets' textures (per sample), each object once."""
-    import moderngl
-    size = {"f1": 1, "u1": 1, "f2": 2, "u2": 2, "f4": 4, "u4": 4, "i4": 4}
-    seen, n = set(), 0
-
-    def walk(x):
-        nonlocal n
-        if isinstance(x, dict):
-            for v in x.values():
-                walk(v)
-        elif isinstance(x, (list, tuple)):
-            for v in x:
-                walk(v)
-        elif isinstance(x, moderngl.Texture) and x.glo not in seen:
-            seen.add(x.glo)
-            b = 4 if x.depth else x.components * size.get(x.dtype, 4)
-            n += x.width * x.height * b * max(1, x.samples)
-    walk({k: v for k, v in T.items() if k != "key"})
-    return n / MB
-
-
-# ---------------------------------------------------------------------- baked
 def baked(world, d, limit):
     from voxel_addon.blender import session
     sc = setup(world, d)

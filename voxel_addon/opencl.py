@@ -5,6 +5,9 @@ pyopencl is imported lazily so the add-on registers where it is missing. The pip
 pocl ICD, and `create_some_context()` would pick whichever comes first, so the
 platform is chosen explicitly: VOXEL_CL_PLATFORM (substring) if set, else a pocl
 platform that is not the distro one, else the first with a device.
+
+VOXEL_OPENCL=0 (or off, no, false) makes this module report no device, as on a Mac
+or a Windows machine without an OpenCL driver: everything runs the NumPy path.
 """
 from __future__ import annotations
 
@@ -36,8 +39,11 @@ def _bundled_pocl_for_host_loader(cl) -> None:
     pyopencl's calls bind to that one, which never looks next to pyopencl for the pocl
     its wheel bundles (found only through PYOPENCL_HOME by the wheel's own loader):
     no platform at all. Name that pocl to the host's loader (OCL_ICD_VENDORS) before
-    the first query; a process without a foreign loader is left alone."""
-    if os.environ.get("OCL_ICD_VENDORS"):
+    the first query; a process without a foreign loader is left alone. Linux only
+    (ocl-icd, /proc, .so names): Windows and macOS have no pocl wheel, their loader
+    finds the vendor's driver."""
+    import sys
+    if os.environ.get("OCL_ICD_VENDORS") or not sys.platform.startswith("linux"):
         return
     from pathlib import Path
     libs = Path(cl.__file__).parent / ".libs"
@@ -58,9 +64,19 @@ def _bundled_pocl_for_host_loader(cl) -> None:
     os.environ["OCL_ICD_VENDORS"] = str(vendors)
 
 
+SWITCH = "VOXEL_OPENCL"
+
+
+def switched_off() -> bool:
+    """Whether VOXEL_OPENCL turns OpenCL off (0, off, no, false)."""
+    return os.environ.get(SWITCH, "").strip().lower() in ("0", "off", "no", "false")
+
+
 @lru_cache(maxsize=1)
 def context():
     """(context, queue, device) of the chosen platform; raises NoOpenCL."""
+    if switched_off():
+        raise NoOpenCL(f"OpenCL is switched off ({SWITCH}={os.environ[SWITCH]})")
     try:
         import pyopencl as cl
     except ImportError as e:  # pragma: no cover - depends on the machine
@@ -115,6 +131,15 @@ def pick(backend: str | None = None, what: str = "") -> str:
 def describe() -> str:
     ctx, _, dev = context()
     return f"{dev.platform.name.strip()} / {dev.name.strip()}"
+
+
+def why_not() -> str:
+    """Why there is no OpenCL device ("" when there is one)."""
+    try:
+        context()
+        return ""
+    except NoOpenCL as e:
+        return str(e)
 
 
 @lru_cache(maxsize=None)

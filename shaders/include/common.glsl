@@ -17,8 +17,38 @@ vec3 hash_color(uint h) {
     return vec3(float(h & 255u), float((h >> 8) & 255u), float((h >> 16) & 255u)) / 255.0;
 }
 
+// Linear filtering by hand (devices bind textures nearest): four texels, clamped.
+vec4 bilinear(sampler2D t, vec2 uv) {
+    ivec2 size = textureSize(t, 0);
+    vec2 p = uv * vec2(size) - 0.5;
+    ivec2 b = ivec2(floor(p));
+    vec2 f = p - floor(p);
+    ivec2 hi = size - 1;
+    vec4 a = mix(texelFetch(t, clamp(b, ivec2(0), hi), 0),
+                 texelFetch(t, clamp(b + ivec2(1, 0), ivec2(0), hi), 0), f.x);
+    vec4 c = mix(texelFetch(t, clamp(b + ivec2(0, 1), ivec2(0), hi), 0),
+                 texelFetch(t, clamp(b + ivec2(1, 1), ivec2(0), hi), 0), f.x);
+    return mix(a, c, f.y);
+}
+
+// Display colours into a host's framebuffer: Blender's viewport framebuffer is sRGB
+// (the GPU encodes what is written), and Blender sets its builtin `srgbTarget` then (a
+// `//@ push int srgbTarget` is filled by Blender, 0 elsewhere): decode ours first, as
+// Blender's own shaders do (blender_srgb_to_framebuffer_space).
+vec3 to_target(vec3 c, int srgb) {
+    if (srgb == 0) return c;
+    c = max(c, vec3(0.0));
+    return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), step(vec3(0.04045), c));
+}
+
+// linear -> sRGB display values (a target that does not encode what is written)
+vec3 srgb_encode(vec3 c) {
+    c = max(c, vec3(0.0));
+    return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(vec3(0.0031308), c));
+}
+
 // World position of a depth-buffer value at normalised screen coordinate uv.
-vec3 world_pos(mat4 inv_vp, vec2 uv, float depth) {
-    vec4 p = inv_vp * vec4(uv * 2.0 - 1.0, depth * 2.0 - 1.0, 1.0);
+vec3 world_pos(mat4 inv_m, vec2 uv, float depth) {
+    vec4 p = inv_m * vec4(uv * 2.0 - 1.0, depth * 2.0 - 1.0, 1.0);
     return p.xyz / p.w;
 }

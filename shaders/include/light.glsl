@@ -7,9 +7,9 @@
 //   unpacked and normalized (e.g. RGBA8 UNORM of level*17, or float level/15).
 //   Only texelFetch is used, so any filter mode works.
 //   `origin` is the world position of texel (0, 0, 0)'s voxel corner.
-//   Other layouts (the renderer's toroidal usampler3D) define LIGHT_VOLUME (the
-//   sampler type) and LIGHT_FETCH(vol, i) -> vec4 (R, G, B, D) in 0..1 of voxel index
-//   i (relative to origin, unclamped) before including this file.
+//   Other layouts define LIGHT_VOLUME (the sampler type) and LIGHT_FETCH(vol, i) ->
+//   vec4 (R, G, B, D) in 0..1 of voxel index i (relative to origin, unclamped) before
+//   including this file (the renderer's own volume: include/lightvol.glsl).
 //
 // light_sample(vol, origin, p, n): world point p on a face with unit normal n ->
 //   vec4 (R, G, B, D) in 0..1: offset half a voxel along n, then trilinear

@@ -1,23 +1,54 @@
-// The light of the whole view in one camera-centred toroidal 3D texture (no bindless
-// textures needed): voxel (x, y, z) lives at texel (x mod S, y mod S, z) as the packed
-// SPEC §3 uint16. Outside the resident box [vol_lo, vol_hi) the light is open daylight.
-// Sampling and eq. 4.1 are light.glsl's; this file only plugs the lookup into it
-// (call light_sample(light_vol, vec3(0.0), p, n): voxel indices are world coordinates).
-uniform usampler3D light_vol;
-uniform int vol_size;
-uniform ivec2 vol_lo;
-uniform ivec2 vol_hi;
+// The light of the whole view in one camera-centred toroidal texture (no bindless
+// textures needed): chunk (cx, cy) lives in layer (cx mod N) + N (cy mod N) of a 2D
+// array of 256x256 layers, its voxel (x, y, z) at texel (x + 16 (z & 15), y + 16 (z >> 4))
+// as the packed SPEC §3 uint16 in a 16-bit unorm (exact). A layer is one chunk, so a
+// changed chunk is one layer's upload (or one draw where a device cannot write part of
+// a texture). Outside the resident box [vol_lo, vol_hi) the light is open daylight.
+// light_volume(p, n) is light.glsl's light_sample for this volume (the reference and
+// the equation 4.1 shading are light.glsl's), with each of the four voxel columns'
+// addresses worked out once for its two voxels.
+#include "include/frame.glsl"
+#include "include/light.glsl"
+//@ sampler sampler2DArray light_vol
+// (frame.glsl: vol_n slots per side, the resident box [vol_lo, vol_hi) in blocks)
 
-vec4 light_torus(usampler3D vol, ivec3 v) {
-    uint l;
-    if (v.z > 255) l = 0xF000u;
-    else if (v.z < 0) l = 0u;
-    else if (any(lessThan(v.xy, vol_lo)) || any(greaterThanEqual(v.xy, vol_hi))) l = 0xF000u;
-    // GLSL leaves % of negative ints undefined; float mod floors (exact below 2^24)
-    else l = texelFetch(vol, ivec3(ivec2(mod(vec2(v.xy), float(vol_size))), v.z), 0).r;
+vec4 unpack_light(uint l) {
     return vec4(float(l & 15u), float((l >> 4) & 15u), float((l >> 8) & 15u), float(l >> 12)) / 15.0;
 }
 
-#define LIGHT_VOLUME usampler3D
-#define LIGHT_FETCH(vol, i) light_torus(vol, i)
-#include "include/light.glsl"
+// voxel z of a resident column: its layer and texel (x, y) in the chunk's tile
+uint light_voxel(ivec2 t, int layer, int z) {
+    if (z > 255) return 0xF000u;  // above the world: open daylight
+    if (z < 0) return 0u;
+    return uint(texelFetch(light_vol, ivec3(t + 16 * ivec2(z & 15, z >> 4), layer), 0).r * 65535.0 + 0.5);
+}
+
+// World point p on a face with unit normal n -> vec4 (R, G, B, D) in 0..1: offset half
+// a voxel along n, then trilinear between the 8 nearest voxel centres.
+vec4 light_volume(vec3 p, vec3 n) {
+    vec3 q = p + 0.5 * n - 0.5;
+    vec3 b = floor(q);
+    vec3 f = q - b;
+    ivec3 i0 = ivec3(b);
+    vec4 acc = vec4(0.0);
+    for (int k = 0; k < 4; k++) {
+        ivec2 d = ivec2(k & 1, k >> 1);
+        ivec2 v = i0.xy + d;
+        vec2 w = mix(1.0 - f.xy, f.xy, vec2(d));
+        uint l0, l1;
+        if (any(lessThan(v, vol_lo)) || any(greaterThanEqual(v, vol_hi))) {
+            l0 = i0.z < 0 ? 0u : 0xF000u;  // outside the window: open daylight
+            l1 = i0.z + 1 < 0 ? 0u : 0xF000u;
+        } else {
+            // GLSL leaves % of negative ints undefined; float floor and mod are exact here
+            ivec2 c = ivec2(floor(vec2(v) / 16.0));
+            ivec2 s = ivec2(mod(vec2(c), float(vol_n)));
+            int layer = s.x + vol_n * s.y;
+            ivec2 t = v - 16 * c;
+            l0 = light_voxel(t, layer, i0.z);
+            l1 = light_voxel(t, layer, i0.z + 1);
+        }
+        acc += w.x * w.y * mix(unpack_light(l0), unpack_light(l1), f.z);
+    }
+    return acc;
+}

@@ -5,8 +5,8 @@
 // (include/water.glsl), haze thinning with altitude (§5.4.3, include/atmosphere.glsl),
 // the fade into the sky at the edge of the shown area, the debug views.
 // Colours are the scene's linear light (albedo arrives sRGB-encoded, as the textures
-// are, and is decoded here; final.frag tone-maps). Defines: SHADOWS, FOG, LAYER or OIT (blended surfaces), DEBUG (1 albedo,
-// 2 normal, 3 depth, 4 light, 5 aggregation).
+// are, and is decoded here; final.frag tone-maps). Defines: SHADOWS, FOG, LAYER or OIT
+// (blended surfaces), DEBUG (1 albedo, 2 normal, 3 depth, 4 light, 5 aggregation).
 #include "include/lightvol.glsl"
 #include "include/eye.glsl"
 #include "include/sky.glsl"
@@ -16,9 +16,7 @@
 #define DEBUG 0
 #endif
 
-#ifdef SHADOWS
-uniform sampler2DShadow shadow_map;
-#endif
+//@ sampler depth2D shadow_map  if SHADOWS
 
 float shadow_at(vec3 p, vec3 n) {
 #ifdef SHADOWS
@@ -31,11 +29,13 @@ float shadow_at(vec3 p, vec3 n) {
     s.xyz /= s.w;
     if (any(lessThan(s.xy, vec2(0.0))) || any(greaterThan(s.xy, vec2(1.0)))) return 1.0;
     float ref = s.z - shadow_bias;
-    // 2x2 PCF in one gather, bilinearly weighted (§5.4.1)
+    // 2x2 PCF in one gather, bilinearly weighted (§5.4.1): the four depths (a gather
+    // neither filters nor needs a compare mode, only the clamp every device binds),
+    // compared here as a shadow sampler's gather would
     vec2 size = vec2(textureSize(shadow_map, 0));
     vec2 t = s.xy * size - 0.5;
     vec2 f = fract(t);
-    vec4 g = textureGather(shadow_map, (floor(t) + 1.0) / size, ref);
+    vec4 g = vec4(lessThanEqual(vec4(ref), textureGather(shadow_map, (floor(t) + 1.0) / size)));
     float lit = mix(mix(g.w, g.z, f.x), mix(g.x, g.y, f.x), f.y);
     return mix(lit, 1.0, clamp(dist / shadow_fade, 0.0, 1.0));
 #else
@@ -48,12 +48,13 @@ float shadow_at(vec3 p, vec3 n) {
 // linear light is level^2.2 (so a scene looks as it did before the tone curve).
 // `day` returns the point's linear daylight level (how much sky it sees).
 vec3 shade_light_day(vec3 albedo, vec3 p, vec3 n, float glow, out float day) {
-    vec4 l = light_sample(light_vol, vec3(0.0), p, n);
-    // the shown area's outer wall (closed by Renderer.set_area) looks out of the lit
-    // volume: a dim cut instead of open daylight
+    vec4 l = light_volume(p, n);
+    // the shown area's outer wall (closed by Renderer.set_area, or include/walls.glsl)
+    // looks out of the lit volume: lit as a cliff open to the sky (its faces' positions
+    // come back from the depth buffer within a few hundredths of a block)
     vec2 lo = abs(p.xy - area_box.xy), hi = abs(p.xy - area_box.zw);
-    if ((lo.x < 1e-3 && n.x < -0.5) || (hi.x < 1e-3 && n.x > 0.5) ||
-        (lo.y < 1e-3 && n.y < -0.5) || (hi.y < 1e-3 && n.y > 0.5)) l = vec4(0.0, 0.0, 0.0, 0.6);
+    if ((lo.x < 0.02 && n.x < -0.5) || (hi.x < 0.02 && n.x > 0.5) ||
+        (lo.y < 0.02 && n.y < -0.5) || (hi.y < 0.02 && n.y > 0.5)) l = vec4(0.0, 0.0, 0.0, 0.85);
     l = pow(l, vec4(2.2));
     day = l.a;
     float direct = l.a > 0.0 && dot(n, sky_light_dir) > 0.0 ? shadow_at(p, n) * cloud_shadow(p) : 1.0;

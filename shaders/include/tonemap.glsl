@@ -5,11 +5,7 @@
 // sRGB transfer function with clipping, 0 the values as they are (debug views).
 #ifndef TONEMAP_GLSL
 #define TONEMAP_GLSL
-
-vec3 srgb_encode(vec3 c) {
-    c = clamp(c, 0.0, 1.0);
-    return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
-}
+#include "include/common.glsl"
 
 // the textures are sRGB-encoded: their linear reflectance (a fast power law)
 vec3 srgb_decode(vec3 c) { return pow(c, vec3(2.2)); }
@@ -36,7 +32,7 @@ vec3 agx(vec3 c) {
 
 vec3 to_display(vec3 c, int mode) {
     if (mode == 2) return agx(c);
-    if (mode == 1) return srgb_encode(c);
+    if (mode == 1) return srgb_encode(min(c, vec3(1.0)));
     return clamp(c, 0.0, 1.0);
 }
 #endif

@@ -90,6 +90,9 @@ def test_box_and_brush(bpy, addon):
     assert on_file(path, 4, 1, 100) == "air"
     assert bpy.ops.voxel.edit(location=(30, 30, 130), size=2, block="sand") == {"FINISHED"}
     assert on_file(path, 31, 31, 131) == "sand" and on_file(path, 29, 30, 130) == "air"
+    # remove (the Redo panel's checkbox): the same cells cleared, whatever the block
+    assert bpy.ops.voxel.edit(location=(30, 30, 130), size=2, block="sand", remove=True) == {"FINISHED"}
+    assert on_file(path, 31, 31, 131) == "air" and on_file(path, 30, 30, 130) == "air"
 
 
 def test_random_strokes_undo_redo_jumps_equal_a_model(bpy, addon):

@@ -59,7 +59,7 @@ def test_zip_contents(zip_path):
     init = zipfile.ZipFile(zip_path).read("__init__.py").decode()
     assert "from .voxel_addon import register, unregister" in init
     man = zipfile.ZipFile(zip_path).read("blender_manifest.toml").decode()
-    assert 'id = "voxel_worlds"' in man and 'blender_version_min = "4.2.0"' in man
+    assert 'id = "voxel_worlds"' in man and 'blender_version_min = "4.3.0"' in man
 
 
 def test_repo_package_registers_and_unregisters(bpy):

@@ -1,8 +1,14 @@
-"""The pipeline on Blender's own GL context (blender/offscreen.View) draws what it
-draws on its standalone EGL context, and Blender draws right afterwards.
+"""One frame, two devices: the live view's device (Blender's gpu module) draws the
+reference scenes as the moderngl device does on its standalone EGL context (same
+scene, same camera, MSAA 1), and Blender draws as before right afterwards and finds
+its GPU state as it left it.
 
-The Blender side runs in a fresh process (view_job.py): bpy's GL context and this
-process's EGL contexts stay apart. The EGL frame is rendered here, on the `gl` fixture.
+The Blender side runs in a fresh process (view_job.py): bpy's GPU context and this
+process's EGL context stay apart. The moderngl frames are rendered here, on the `gl`
+fixture. Tolerance: the two differ where llvmpipe rounds differently (depth 24-bit on
+moderngl, 32-bit float in Blender; derivatives at triangle edges): measured at most
+mean 0.25 and 99th percentile 3 levels (of 255) over the four scenes on OpenGL and
+Vulkan; a broken pass (sky, light, shadows, water, fog) moves the mean by tens.
 """
 from __future__ import annotations
 
@@ -18,17 +24,15 @@ from matplotlib.image import imread
 from tests.host import python_cmd
 
 JOB = Path(__file__).with_name("view_job.py")
-SCENE, SIZE = "landscape", (160, 90)  # trees, plants, shadows: most passes have work
-# Both contexts are the same driver here (Mesa llvmpipe), so the frames are identical;
-# on a GPU Blender's context may differ a little (e.g. its own MSAA limit): the
-# golden test's tolerance, which a broken pass (sky, light, shadows...) exceeds.
-MEAN_TOL, P99_TOL = 0.75, 12.0
+SIZE = (160, 90)
+MEAN_TOL, P99_TOL = 0.5, 4.0
+SCENES = ("cave", "desert", "landscape", "ocean")
 
 
 def _job(out: Path, *extra) -> dict:
     out.mkdir()
-    r = subprocess.run(python_cmd(JOB, out, SCENE, *SIZE, *extra),
-                       capture_output=True, text=True, timeout=600)
+    r = subprocess.run(python_cmd(JOB, out, *SIZE, *extra),
+                       capture_output=True, text=True, timeout=900)
     assert r.returncode == 0, r.stderr[-3000:]
     load = {p.stem: np.load(p) for p in out.glob("*.npy")}
     load.update({p.stem: imread(p) for p in out.glob("wb_*.png")})
@@ -36,22 +40,17 @@ def _job(out: Path, *extra) -> dict:
     return load
 
 
-def _egl(gl):
+def _moderngl(gl, name):
     from voxel_addon.light import daytime
     from voxel_addon.meshing import scenes
     from voxel_addon.render import Camera, Settings, source
     from voxel_addon.render.pipeline import Renderer
-    sc, a = scenes.SCENES[SCENE], source.scene_area(SCENE)
-    r = Renderer(gl, Settings())
+    sc, a = scenes.SCENES[name], source.scene_area(name)
+    r = Renderer(gl, Settings(msaa=1))
     r.set_area(a.blocks, a.light, a.cx0, a.cy0, ring=True, light_at=a.light_at)
     img = r.render(Camera(*sc.camera), daytime.parse_time(sc.time), SIZE)
     r.release()
     return img
-
-
-def _close(a, b) -> bool:
-    d = np.abs(a.astype(float) - b)
-    return d.mean() <= MEAN_TOL and np.percentile(d, 99) <= P99_TOL
 
 
 def _blender_ok(res) -> bool:
@@ -61,36 +60,52 @@ def _blender_ok(res) -> bool:
 
 
 @pytest.fixture(scope="module")
-def egl_frame(gl):
-    return _egl(gl)
+def blender(bpy, tmp_path_factory):
+    return _job(tmp_path_factory.mktemp("view") / "view")
 
 
-def test_blender_context_renders_like_egl_and_blender_still_draws(bpy, egl_frame, tmp_path):
-    res = _job(tmp_path / "view")
-    info = res["info"]
-    assert info["backend"] == "OPENGL" and info["version_code"] >= 410, info
-    frame = res["view"]
+@pytest.mark.parametrize("name", SCENES)
+def test_gpu_module_frame_equals_moderngl_frame(gl, blender, name):
+    frame, want = blender[name], _moderngl(gl, name)
     assert frame.shape == (SIZE[1], SIZE[0], 3) and frame.std() > 10  # a picture, not a fill
-    assert _close(frame, egl_frame), np.abs(frame.astype(float) - egl_frame).mean()
-    # what a draw handler shows: the offscreen's colour texture holds the same frame
-    assert np.array_equal(res["shown"], frame)
+    d = np.abs(frame.astype(float) - want)
+    assert d.mean() <= MEAN_TOL and np.percentile(d, 99) <= P99_TOL, (d.mean(), np.percentile(d, 99))
+
+
+def test_the_comparison_can_fail(gl, blender):
+    """A frame of another hour (a broken sky or light would look like this) is far
+    outside the tolerance."""
+    from voxel_addon.light import daytime
+    from voxel_addon.meshing import scenes
+    from voxel_addon.render import Camera, Settings, source
+    from voxel_addon.render.pipeline import Renderer
+    sc, a = scenes.SCENES["desert"], source.scene_area("desert")
+    r = Renderer(gl, Settings(msaa=1))
+    r.set_area(a.blocks, a.light, a.cx0, a.cy0, ring=True, light_at=a.light_at)
+    other = r.render(Camera(*sc.camera), daytime.parse_time(sc.time) + 3.0, SIZE)
+    r.release()
+    assert np.abs(blender["desert"].astype(float) - other).mean() > 5 * MEAN_TOL
+
+
+def test_blender_draws_and_finds_its_state_after_our_frames(blender):
+    info = blender["info"]
+    assert info["backend"] in ("OPENGL", "VULKAN", "METAL"), info
     # Blender's draws before our frames have the expected colours (the checks see real
     # pixels: texture left, 50 % blue over black right) and are unchanged after them
-    b = res["before"].astype(int)
+    b = blender["before"].astype(int)
     assert (b[8, 4] == (200, 40, 90, 255)).all()
     assert np.abs(b[8, 28, :3] - np.array((0.2, 0.6, 1.0)) * 0.5 * 255).max() <= 2
-    assert _blender_ok(res), np.abs(res["after"].astype(int) - res["before"]).mean()
-    wb = res["wb_before"][8, 12, :3]  # single colour (0.2, 0.5, 0.8) flat, sRGB encoded
+    assert _blender_ok(blender), np.abs(blender["after"].astype(int) - blender["before"]).mean()
+    wb = blender["wb_before"][8, 12, :3]  # single colour (0.2, 0.5, 0.8) flat, sRGB encoded
     assert np.abs(wb - (0.485, 0.735, 0.906)).max() < 0.01, wb
+    assert info["state_after"] == info["state_before"], info
+    assert info["state_before"]["blend"] == "ALPHA"  # (a host's state, not the defaults)
 
 
-def test_a_pipeline_leaving_its_state_is_caught(bpy, egl_frame, tmp_path):
-    """The same frame straight on Blender's context without glstate.kept(): our state
-    spoils Blender's next draw, so the check above would fail. (Our own frame comes
-    out right even so: every pass sets its framebuffer, switches, textures and the
-    frame block itself.)"""
+def test_a_pipeline_leaving_its_state_is_caught(bpy, tmp_path):
+    """The same frames without liveview.host.kept(): the state check above fails."""
     res = _job(tmp_path / "dirty", "--dirty")
-    assert not _blender_ok(res)
+    assert res["info"]["state_after"] != res["info"]["state_before"]
 
 
 def test_render_view_operator_draws_the_world_from_the_scene_camera(tmp_path):

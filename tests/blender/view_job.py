@@ -1,13 +1,15 @@
-"""Run in a fresh process by test_view.py (bpy and other GL contexts of the pytest
-process stay apart): render a reference scene on Blender's GL context and check that
-Blender still draws right afterwards.
+"""Run in a fresh process by test_view.py (bpy and the test's own EGL context stay
+apart): render the reference scenes with the live view's device (Blender's gpu module,
+on whatever backend this Blender runs) and check that Blender still draws right
+afterwards and finds its GPU state as it left it.
 
-    python tests/blender/view_job.py OUT_DIR SCENE W H [--dirty]
+    python tests/blender/view_job.py OUT_DIR W H [--dirty]
 
-Writes OUT_DIR/view.npy (the frame), before.npy / after.npy (Blender's own draws
+Writes OUT_DIR/<scene>.npy (the frames), before.npy / after.npy (Blender's own draws
 before and after our frames), wb_before.png / wb_after.png (Workbench renders) and
-info.json. --dirty runs the pipeline on Blender's context without glstate.kept() (to
-show that the checks catch a pipeline that leaves its GL state behind).
+info.json (backend, the gpu.state values before and after). --dirty renders without
+liveview.host.kept() (to show that the state check catches a pipeline that leaves
+its state behind).
 """
 from __future__ import annotations
 
@@ -79,88 +81,65 @@ def workbench(path):
     bpy.ops.render.render(scene=sc.name, write_still=True)
 
 
+# a host's state when our frames run (a draw handler finds Blender's, not the defaults)
+HOST_STATE = {"blend": "ALPHA", "depth_test": "LESS_EQUAL", "depth_mask": True, "line_width": 2.0}
+
+
 def main():
-    out, scene, w, h = Path(sys.argv[1]), sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
+    out, w, h = Path(sys.argv[1]), int(sys.argv[2]), int(sys.argv[3])
     dirty = "--dirty" in sys.argv
     import bpy  # noqa: F401
     import gpu
-    from voxel_addon.blender import offscreen
+    from voxel_addon.blender.liveview import host
+    from voxel_addon.blender.liveview.still import Still
     from voxel_addon.light import daytime
     from voxel_addon.meshing import scenes
     from voxel_addon.render import Camera, Settings, source
 
-    offscreen.start_gpu()
+    host.start_gpu()
     info = {"backend": gpu.platform.backend_type_get(), "renderer": gpu.platform.renderer_get(),
-            "version": gpu.platform.version_get()}
+            "version": gpu.platform.version_get(), "ms": {}}
     probe = gpu.types.GPUOffScreen(32, 16)
     data = gpu.types.Buffer("FLOAT", 4 * 4 * 4, [c / 255 for _ in range(16) for c in IMG])
     tex = gpu.types.GPUTexture((4, 4), format="RGBA8", data=data)
     workbench(out / "wb_before.png")
-
-    sc = scenes.SCENES[scene]
-    area = source.scene_area(scene)
-    cam, hours = Camera(*sc.camera), daytime.parse_time(sc.time)
+    stills = {}
+    for name in sorted(scenes.SCENES):  # first frames: programs compile, meshes upload
+        st = stills[name] = Still(Settings(msaa=1))
+        st.set_area(source.scene_area(name))
+        sc = scenes.SCENES[name]
+        st.render(Camera(*sc.camera), daytime.parse_time(sc.time), (w, h))
     # our frames run between Blender's draws into the same bound framebuffer, as a
-    # draw handler's would: Blender must find its framebuffer, program, textures and
-    # blend/cull state as it left them (it skips binds it thinks are redundant).
-    # The View (its GPUOffScreen) is made outside: Blender itself loses its bound
-    # framebuffer when an offscreen is created inside a bind.
-    v = None
-    if dirty:
-        global _DIRTY_OFF
-        _DIRTY_OFF = gpu.types.GPUOffScreen(w, h)
-    else:
-        v = offscreen.View(Settings())
-        v.set_area(area)
-        v.render(cam, hours, (w, h))  # first frame: programs compile, meshes upload
+    # draw handler's would: Blender must draw the same after them and find its state
     with probe.bind():
         before = blender_draw(probe, tex)
-        frame, shown = _frames(v, area, cam, hours, (w, h), info)
+        s = gpu.state
+        s.blend_set(HOST_STATE["blend"])
+        s.depth_test_set(HOST_STATE["depth_test"])
+        s.depth_mask_set(HOST_STATE["depth_mask"])
+        s.line_width_set(HOST_STATE["line_width"])
+        info["state_before"] = host.state()
+        for name, st in stills.items():
+            sc = scenes.SCENES[name]
+            cam, hours = Camera(*sc.camera), daytime.parse_time(sc.time)
+            if dirty:
+                img = st.r.render(cam, hours, (w, h))  # no host.kept()
+            else:
+                img = st.render(cam, hours, (w, h))
+                info["ms"][name] = st.ms
+            np.save(out / f"{name}.npy", img)
+        info["state_after"] = host.state()
+        s.blend_set("NONE")
+        s.depth_test_set("NONE")
+        s.depth_mask_set(False)
+        s.line_width_set(1.0)
         after = blender_draw(probe, tex)
-    if v is not None:
-        v.release()
-    np.save(out / "view.npy", frame)
-    if shown is not None:
-        np.save(out / "shown.npy", shown)
+    for st in stills.values():
+        st.release()
     workbench(out / "wb_after.png")
     np.save(out / "before.npy", before)
     np.save(out / "after.npy", after)
     (out / "info.json").write_text(json.dumps(info))
-
-
-def _frames(v, area, cam, hours, size, info):
-    if v is None:
-        return _dirty_frame(area, cam, hours, size), None
-    ms = []
-    for _ in range(2):
-        frame = v.render(cam, hours, size)
-        ms.append(v.ms)
-    info.update(v.info, ms=min(ms), cpu_ms=v.r.stats["cpu_ms"])
-    return frame, _offscreen_pixels(v.off)  # what a draw handler would show
-
-
-def _offscreen_pixels(off):
-    buf = off.texture_color.read()
-    buf.dimensions = off.width * off.height * 4
-    return np.array(buf.to_list(), np.uint8).reshape(off.height, off.width, 4)[::-1, :, :3]
-
-
-_DIRTY_OFF = None
-
-
-def _dirty_frame(area, cam, hours, size):
-    """The pipeline straight on Blender's context, no state kept: what must be caught."""
-    import gpu
-    import moderngl
-    from _moderngl import DefaultLoader
-    from voxel_addon.render import Settings
-    from voxel_addon.render.pipeline import Renderer
-    off = _DIRTY_OFF
-    with off.bind():
-        ctx = moderngl.create_context(context=DefaultLoader())
-        r = Renderer(ctx, Settings())
-        r.set_area(area.blocks, area.light, area.cx0, area.cy0, ring=True, light_at=area.light_at)
-        return r.render(cam, hours, size)
 
 
 if __name__ == "__main__":

@@ -13,6 +13,20 @@ from tools import blender_app
 ROOT = Path(__file__).resolve().parents[2]
 
 
+# GUI tests known to fail on a backend until an issue lands, by node id prefix. Strict
+# xfail: a test that passes there fails the run until its entry goes. (Empty since the
+# live view draws with Blender's gpu module, issue 19: on Vulkan too.)
+PENDING: dict = {}
+
+
+def pytest_collection_modifyitems(config, items):
+    pending = PENDING.get(blender_app.backend_name(), ())
+    for item in items:
+        if item.nodeid.startswith(pending):
+            item.add_marker(pytest.mark.xfail(
+                strict=True, reason=f"known to fail on {blender_app.backend_name()}"))
+
+
 @pytest.fixture(scope="session")
 def app():
     """tools/blender_app.py, or a skip (a failure in CI) without Blender or Xvfb: the
@@ -58,8 +72,8 @@ WHEELS = ROOT / ".cache" / "wheels" / "linux-x64"  # build.py setup downloads th
 
 @pytest.fixture(scope="session")
 def ext_zip_wheels(tmp_path_factory):
-    """The extension zip as `build.py extension` makes it: Linux x64 wheels for
-    Python 3.11 and 3.13 bundled."""
+    """The Linux zip as `build.py extension` makes it: Linux x64 wheels for Python
+    3.11, 3.13 and 3.14 (and any real Blender's Python) bundled."""
     if not list(WHEELS.glob("*cp313*.whl")):
         pytest.skip(f"no wheels in {WHEELS} (run `python build.py setup`)")
     return _tool().build(tmp_path_factory.mktemp("dist"), WHEELS, platforms=["linux-x64"])

@@ -48,10 +48,12 @@ def sidebar_tabs(img: np.ndarray, rect, scale: float) -> list[tuple[int, int]]:
     """Image rows [start, end) of the category tab labels at the sidebar's right edge.
 
     The labels are vertical bright text on the darker tab strip; each label is one
-    run of rows holding text pixels, labels are separated by the tabs' margins."""
+    run of rows holding text pixels, labels are separated by the tabs' margins. Text is
+    what stands out from the strip (4.x draws inactive labels near white, 5.x mid
+    grey, ~145 on ~65)."""
     x0, r0, x1, r1 = rect_rows(rect, img.shape[0])
     strip = img[r0:r1, x1 - int(22 * scale):x1 - int(3 * scale)].max(axis=2)
-    text = (strip > 150).sum(axis=1) >= 1
+    text = (strip > min(150, np.median(strip) + 50)).sum(axis=1) >= 1
     return [(r0 + a, r0 + b) for a, b in runs(text, min_len=int(8 * scale), max_gap=int(5 * scale))]
 
 

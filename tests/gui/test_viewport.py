@@ -136,6 +136,7 @@ def _cli(world, size, hours=12.0):
     """The CLI's renderer from the job's camera, on a standalone EGL context."""
     from voxel_addon.world import World
     from voxel_addon.render import Camera, Settings, source
+    from voxel_addon.render.device import mgl
     from voxel_addon.render.pipeline import Renderer
     s = Settings(distance=4, light_radius=4, fov=CAM[5], dof=False)  # as the viewport
     w = World.open(world, readonly=True, loader=False)
@@ -144,7 +145,7 @@ def _cli(world, size, hours=12.0):
         s.sea_level = source.sea_level(w.generator)  # as the viewport (the world's sea)
     finally:
         w.close()
-    ctx = source.context()
+    ctx = mgl.context()
     try:
         r = Renderer(ctx, s)
         r.set_area(a.blocks, a.light, a.cx0, a.cy0, ring=True, light_at=a.light_at)
@@ -168,6 +169,21 @@ def test_camera_view_shows_what_the_cli_renders(run, world):
     assert d.mean() < 12 and np.percentile(d, 50) < 8, (d.mean(), np.percentile(d, 50))
     # and not just similar colours: a shifted picture is much further away
     assert np.abs(shot[:, 20:] - ref[:, :-20]).mean() > d.mean() * 1.3
+
+
+def test_side_view_from_outside_sees_a_closed_wall_not_caves(run):
+    """Orthographic, from outside the shown area, level with its underground: with the
+    outer wall closed (the default) every pixel below the terrain shows the wall (none
+    shows the sky through the slab, as the control without it does)."""
+    def sky_share(step):
+        img = _img(step)
+        sky = np.array([img[int(y), int(x)] for x, y in step["sky"]], float)
+        band = np.array([img[int(y), int(x)] for x, y in step["band"]], float)
+        near = np.abs(band[:, None, :] - sky[None, :, :]).max(-1).min(-1) < 12
+        return near.mean(), sky.mean(0), band.mean(0)
+    closed, open_ = sky_share(run["steps"]["side"]), sky_share(run["steps"]["side_open"])
+    assert closed[0] < 0.02, closed
+    assert open_[0] > 0.1, open_  # the control: the sky shows through the open side
 
 
 def test_ortho_top_view_shows_the_rivers_where_the_world_has_water(run, world):
@@ -240,14 +256,15 @@ def _green(img) -> float:
 def test_a_second_window_shows_voxels_and_closing_it_releases_its_share(run):
     w = run["steps"]["window1"]
     assert w["windows"] == 2 and w["windows_drawn"] == 2, w
-    # one GPU set per GL context (Blender 4.3 on X11 draws every window with one)
-    assert w["gpus_open"] == w["contexts"] >= 1, w
+    # a Pane per window (framebuffers belong to one GL context; a platform may give
+    # each window its own)
+    assert w["gpus_open"] == 2, w
     assert w["regions_open"] >= 2, w
     r = w["rect2"]  # the second window's 3D viewport, the top view: grass
     crop = _img({"png": w["png2"]})[r["y"] + r["h"] // 5:r["y"] + 4 * r["h"] // 5,
                                    r["x"] + r["w"] // 5:r["x"] + 4 * r["w"] // 5]
     assert _green(crop) > 0.3, _green(crop)
-    # closed: its region is forgotten, one set stays (the first window's), one
+    # closed: its region is forgotten, one Pane stays (the first window's), one
     # Renderer alive, no error, and the first window still draws voxels
     assert w["windows_closed"] == 1 and w["regions_closed"] == w["regions_open"] - 1, w
     assert w["gpus_closed"] == 1 and w["renderers"] == 1, w

@@ -67,25 +67,40 @@ def set_view(loc, rot_euler, dist, persp="PERSP"):
 
 
 def status():
-    from voxel_addon.blender import viewport
-    return dict(viewport.STATUS)
+    from voxel_addon.blender.liveview import LIVE
+    return {**LIVE.stats, "error": LIVE.error}
 
 
 def wait_frames(n=2, full=True, timeout=120.0):
     """Generator: redraw until n more frames were drawn, all chunks are in and (full)
     the last frame was full quality."""
-    from voxel_addon.blender import viewport
+    from voxel_addon.blender.liveview import LIVE
     t0 = time.time()
-    start = viewport.STATUS["frames"]
+    start = LIVE.stats["frames"]
     while time.time() - t0 < timeout:
         _, area, _ = view3d()
         area.tag_redraw()
-        s = viewport.STATUS
+        s = LIVE.stats
         if (s["frames"] >= start + n and s["drawn"] >= s["wanted"] > 0
                 and (not full or s["quality"] == "full")):
+            # one frame more before a screenshot: on Vulkan (lavapipe's X11 swapchain)
+            # the screen may still show an image presented a frame earlier
+            yield from one_more_frame(area)
             return
+        why = LIVE.problem(bpy.context)  # what the panel says, e.g. the wrong backend:
+        if why and time.time() - t0 > 10:  # not a passing state, no use waiting longer
+            raise RuntimeError(f"the live view cannot draw: {why}")
         yield 0.1
-    raise RuntimeError(f"timed out waiting for frames: {viewport.STATUS}")
+    raise RuntimeError(f"timed out waiting for frames: {LIVE.stats}")
+
+
+def one_more_frame(area, timeout=30.0):
+    """Generator: redraw until the voxel view has drawn one more frame."""
+    from voxel_addon.blender.liveview import LIVE
+    n, t0 = LIVE.stats["frames"], time.time()
+    while LIVE.stats["frames"] <= n and time.time() - t0 < timeout:
+        area.tag_redraw()
+        yield 0.05
 
 
 def settle(n=3):
@@ -167,20 +182,20 @@ def step_top():
 def _since(n0):
     """What the frames after frame number n0 did: how many ran the pipeline (fresh),
     how many there were, whether the last one redrew from the kept frame."""
-    from voxel_addon.blender import viewport
-    k = viewport.STATUS["frames"] - n0
-    fr = list(viewport.FRAMES)[-k:] if k > 0 else []
+    from voxel_addon.blender.liveview import LIVE
+    k = LIVE.stats["frames"] - n0
+    fr = list(LIVE.frames)[-k:] if k > 0 else []
     return {"frames": k, "fresh": sum(not f[5] for f in fr), "last_reused": bool(fr and fr[-1][5])}
 
 
 def until_fresh(n0, timeout=120.0):
     """Generator: redraw until a frame after frame number n0 ran the pipeline, then
     until the view is full again and a redraw reused that frame."""
-    from voxel_addon.blender import viewport
+    from voxel_addon.blender.liveview import LIVE
     t0 = time.time()
     while not _since(n0)["fresh"]:
         if time.time() - t0 > timeout:
-            raise RuntimeError(f"no fresh frame after a change: {viewport.STATUS}")
+            raise RuntimeError(f"no fresh frame after a change: {LIVE.stats}")
         view3d()[1].tag_redraw()
         yield 0.1
     # a view change draws drafts first, then one full frame once still (later on a
@@ -196,40 +211,40 @@ def step_still():
     """A still view redraws from its kept frame: the same picture as the pipeline's;
     an edit, the time of day and a view change make a new frame; Blender's objects
     moving on a still view keep mixing by depth (no new frame needed)."""
-    from voxel_addon.blender import viewport
+    from voxel_addon.blender.liveview import LIVE
     sc = bpy.context.scene
     vv = sc.voxel_view
     vv.show, vv.hours = True, 12.0
     set_view((24.0, 16.0, 80.0), (0, 0, 0), 140.0)
     yield from wait_frames()
-    n0 = viewport.STATUS["frames"]
+    n0 = LIVE.stats["frames"]
     yield from wait_frames(3)
     record("still_kept", **_since(n0))
-    viewport.REUSE = False   # the pipeline and the direct composite on every redraw
-    n0 = viewport.STATUS["frames"]
+    LIVE.reuse = False   # the pipeline and the direct composite on every redraw
+    n0 = LIVE.stats["frames"]
     try:
         yield from wait_frames(2)
     finally:
-        viewport.REUSE = True
+        LIVE.reuse = True
     record("still_fresh", **_since(n0))
     block = (24, 40, 110)
     for name, b in (("still_edit", "stone"), ("still_unedit", "air")):
-        n0 = viewport.STATUS["frames"]
+        n0 = LIVE.stats["frames"]
         assert bpy.ops.voxel.edit(location=block, block=b, size=6) == {"FINISHED"}
         yield from until_fresh(n0)
         record(name, **_since(n0), block=project((24.5, 40.5, 113.0)))
-    n0 = viewport.STATUS["frames"]
+    n0 = LIVE.stats["frames"]
     vv.hours = 18.0
     yield from until_fresh(n0)
     record("still_hours", **_since(n0))
     cube = bpy.data.objects["Cube"]
     for name, z in (("still_cube", 120.0), ("still_buried", 20.0)):
-        n0 = viewport.STATUS["frames"]
+        n0 = LIVE.stats["frames"]
         cube.location = (30.0, 0.0, z)
         yield from wait_frames(3)
         record(name, **_since(n0), moved=project((30.0, 0.0, z + 4.0)))
     cube.location = (8.0, 8.0, 120.0)
-    n0 = viewport.STATUS["frames"]
+    n0 = LIVE.stats["frames"]
     set_view((24.0, 16.0, 80.0), (0, 0, 15), 140.0)
     yield from until_fresh(n0)
     record("still_view", **_since(n0))
@@ -268,37 +283,56 @@ def step_camera():
     record("ortho", corners=corners)
 
 
+def step_side():
+    """An orthographic front view of the whole shown area from outside (its y0 side),
+    with the outer wall closed (Settings.walls) and open (the control)."""
+    from voxel_addon.blender.liveview import LIVE
+    sc = bpy.context.scene
+    sc.voxel_view.show = True
+    sc.voxel_view.hours = 12.0
+    set_view((8.0, 8.0, 60.0), (90, 0, 0), 420.0, "ORTHO")
+    for on in (True, False):
+        sc.voxel_view.walls = on
+        yield from wait_frames()
+        cx0, cy0, cx1, cy1 = next(iter(LIVE.panes.values())).r.area
+        xs = [16 * cx0 + (16 * (cx1 - cx0)) * (i + 0.5) / 24 for i in range(24)]
+        record("side" if on else "side_open", area=[cx0, cy0, cx1, cy1],
+               band=[project((x, 16.0 * cy0, z)) for x in xs for z in (8.0, 16.0, 24.0, 32.0, 40.0)],
+               sky=[project((x, 16.0 * cy0, 200.0)) for x in xs])
+    sc.voxel_view.walls = True
+
+
 def step_stream():
     """Moving the view by 6 chunks brings in new chunks."""
-    from voxel_addon.blender import viewport
+    from voxel_addon.blender.liveview import LIVE
     sc = bpy.context.scene
     sc.voxel_view.show = True
     set_view((8.0, 8.0, 80.0), (60, 0, 0), 80.0)
     yield from wait_frames()
-    before = viewport._feed.centre if viewport._feed.stream is None else sorted(viewport._feed.chunks)
+    before = LIVE.feed.centre if LIVE.feed.stream is None else sorted(LIVE.feed.chunks)
     record("stream0")
     set_view((8.0 + 96.0, 8.0, 80.0), (60, 0, 0), 80.0)
     yield from wait_frames()
-    after = viewport._feed.centre if viewport._feed.stream is None else sorted(viewport._feed.chunks)
+    after = LIVE.feed.centre if LIVE.feed.stream is None else sorted(LIVE.feed.chunks)
     record("stream1", moved=before != after)
 
 
 def step_redraws():
     """100 redraws while orbiting (draft) and still; Python errors go to the log."""
-    from voxel_addon.blender import viewport
+    from voxel_addon.blender.liveview import LIVE
     sc = bpy.context.scene
     sc.voxel_view.show = True
-    n0 = viewport.STATUS["frames"]
+    n0 = LIVE.stats["frames"]
     for i in range(100):
         set_view((8.0, 8.0, 80.0), (60, 0, 3.6 * i), 80.0)
         yield 0.0
     yield from wait_frames()
-    RESULT["steps"]["redraws"] = {"frames": viewport.STATUS["frames"] - n0,
-                                  "error": viewport.STATUS["error"]}
+    RESULT["steps"]["redraws"] = {"frames": LIVE.stats["frames"] - n0,
+                                  "error": LIVE.error}
 
 
 def step_quad():
-    """Quad view: four regions, each its own frame (one GPU object set)."""
+    """Quad view: four regions, each its own frame (one Pane for the window)."""
     sc = bpy.context.scene
     sc.voxel_view.show = True
     sc.voxel_view.hours = 12.0
@@ -311,30 +345,29 @@ def step_quad():
     regions = [r for r in area.regions if r.type == "WINDOW"]
     rects = [{"x": r.x, "y": win.height - (r.y + r.height), "w": r.width, "h": r.height}
              for r in regions]
-    from voxel_addon.blender import viewport
+    from voxel_addon.blender.liveview import LIVE
     RESULT["steps"]["quad"] = {"png": shot("quad"), "rects": rects, "status": status(),
-                               "gpus": len(viewport._gpus), "regions": len(viewport._regions)}
+                               "gpus": len(LIVE.panes), "regions": len(LIVE.regions)}
     with bpy.context.temp_override(window=win, area=area, region=regions[0]):
         bpy.ops.screen.region_quadview()
     yield 0.5
 
 
 def step_window():
-    """A second main window (another GL context) with a 3D viewport: both windows
-    draw voxels, each context gets its own GPU set; closing the window releases its
-    set (from the first window's next frame) and the first window draws on."""
+    """A second main window with a 3D viewport: both windows draw voxels, each with
+    its own Pane (renderer, targets); closing the window releases its Pane (from the
+    first window's next frame) and the first window draws on."""
     import gc
-    from voxel_addon.blender import viewport
+    from voxel_addon.blender.liveview import LIVE
     from voxel_addon.render.pipeline import Renderer
     sc = bpy.context.scene
     sc.voxel_view.show, sc.voxel_view.hours = True, 12.0
     set_view((24.0, 16.0, 80.0), (0, 0, 0), 140.0)
     yield from wait_frames()
-    from voxel_addon.blender.offscreen import _native
-    seen = set()  # (window, GL context) pairs that drew a 3D viewport
+    seen = set()  # windows that drew a 3D viewport
 
     def spy():
-        seen.add((bpy.context.window.as_pointer(), _native()))
+        seen.add(bpy.context.window.as_pointer())
     h = bpy.types.SpaceView3D.draw_handler_add(spy, (), "WINDOW", "POST_VIEW")
     win, area, _ = view3d()
     with bpy.context.temp_override(window=win, area=area):
@@ -353,7 +386,7 @@ def step_window():
         area.tag_redraw()
         area2.tag_redraw()
         yield 0.25
-        if len(viewport._gpus) >= 2 and viewport.STATUS["quality"] == "full":
+        if len(LIVE.panes) >= 2 and LIVE.stats["quality"] == "full":
             break
     yield from wait_frames()
     area2.tag_redraw()
@@ -363,15 +396,15 @@ def step_window():
            "win2": {"x": win2.x, "y": win2.y, "w": win2.width, "h": win2.height},
            "rect2": {"x": win2.x + reg2.x, "y": win2.y + win2.height - (reg2.y + reg2.height),
                      "w": reg2.width, "h": reg2.height},
-           "gpus_open": len(viewport._gpus), "regions_open": len(viewport._regions),
-           "contexts": len({c for _, c in seen}), "windows_drawn": len({w for w, _ in seen})}
+           "gpus_open": len(LIVE.panes), "regions_open": len(LIVE.regions),
+           "windows_drawn": len(seen)}
     bpy.types.SpaceView3D.draw_handler_remove(h, "WINDOW")
     with bpy.context.temp_override(window=win2):
         bpy.ops.wm.window_close()
     yield 0.5
     yield from wait_frames()
     gc.collect()
-    got.update(gpus_closed=len(viewport._gpus), regions_closed=len(viewport._regions),
+    got.update(gpus_closed=len(LIVE.panes), regions_closed=len(LIVE.regions),
                renderers=sum(isinstance(o, Renderer) for o in gc.get_objects()),
                windows_closed=len(bpy.context.window_manager.windows))
     record("window1", **got)
@@ -379,12 +412,12 @@ def step_window():
 
 def step_problem():
     """No world file: the panel's sentence, no error, Blender's own image."""
-    from voxel_addon.blender import viewport
+    from voxel_addon.blender.liveview import LIVE
     sc = bpy.context.scene
     sc.voxel_view.show = True
     sc.voxel.path = str(OUT / "missing.sqlite")
     yield from settle()
-    RESULT["steps"]["problem"] = {"sentence": viewport.problem(bpy.context),
+    RESULT["steps"]["problem"] = {"sentence": LIVE.problem(bpy.context),
                                   "status": status()}
     sc.voxel.path = WORLD
     yield from wait_frames(1, full=False)
@@ -393,18 +426,18 @@ def step_problem():
 def step_newfile():
     """File > New while the view shows: handler, stream and GL objects go; the new
     file draws plain Blender; the old file's view comes back when it is shown again."""
-    from voxel_addon.blender import viewport
+    from voxel_addon.blender.liveview import LIVE
     sc = bpy.context.scene
     sc.voxel_view.show = True
     yield from wait_frames(1, full=False)
-    feed = viewport._feed
+    feed = LIVE.feed
     bpy.ops.wm.read_homefile(use_empty=False)
     yield 0.5
     yield from settle()
     RESULT["steps"]["newfile"] = {
-        "handle": viewport._handle is not None, "feed": viewport._feed is not None,
+        "handle": LIVE.handle is not None, "feed": LIVE.feed is not None,
         "old_stream_alive": feed is not None and feed.stream.running,
-        "gpus": len(viewport._gpus), "show": bpy.context.scene.voxel_view.show}
+        "gpus": len(LIVE.panes), "show": bpy.context.scene.voxel_view.show}
     setup_gen = setup()
     yield from setup_gen
     bpy.context.scene.voxel_view.show = True
@@ -510,7 +543,7 @@ def step_leak():
     import gc
     import threading
     import voxel_addon
-    from voxel_addon.blender import viewport
+    from voxel_addon.blender.liveview import LIVE
     from voxel_addon.render.pipeline import Renderer
     sc = bpy.context.scene
     threads0 = threading.active_count()
@@ -527,9 +560,9 @@ def step_leak():
     gc.collect()
     RESULT["steps"]["leak"] = {
         "renderers": sum(isinstance(o, Renderer) for o in gc.get_objects()),
-        "gpus": len(viewport._gpus), "feed": viewport._feed is not None,
-        "handle": viewport._handle is not None,
-        "timer": bpy.app.timers.is_registered(viewport._tick),
+        "gpus": len(LIVE.panes), "feed": LIVE.feed is not None,
+        "handle": LIVE.handle is not None,
+        "timer": bpy.app.timers.is_registered(LIVE._tick_fn),
         "load_pre": sum(getattr(f, "__name__", "") == "_load_pre" for f in bpy.app.handlers.load_pre),
         "threads": threading.active_count() - threads0}
     yield from settle()
@@ -582,6 +615,7 @@ def run():
 
 
 STEPS = {"top": step_top, "still": step_still, "sky": step_sky, "camera": step_camera,
+         "side": step_side,
          "stream": step_stream, "redraws": step_redraws, "quad": step_quad, "window": step_window,
          "problem": step_problem,
          "newfile": step_newfile, "animation": step_animation, "leak": step_leak}

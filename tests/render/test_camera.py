@@ -42,14 +42,13 @@ def test_closed_form_matrices_match_numpy():
         assert np.allclose(p[:2] / p[3], 0.0, atol=1e-6) and -1 < p[2] / p[3] < 1
 
 
-def test_shadow_matrix_matches_numpy_reference(gl):
+def test_shadow_matrix_matches_numpy_reference():
     """The light matrix in Python floats equals the NumPy formulation: ortho fitted to
     the frustum corners (from the inverse view-projection) in light space, the near
     plane reaching back to the top of the area."""
-    from voxel_addon.render import Settings
-    from voxel_addon.render.pipeline import Renderer
-    r = Renderer(gl, Settings())
-    r.area = (-3, -2, 4, 5)
+    from voxel_addon.render import Settings, shadow
+    s = Settings()
+    area = (-3, -2, 4, 5)
     rng = np.random.default_rng(3)
     for _ in range(20):
         cam = C.Camera(*rng.uniform(-40, 40, 2), rng.uniform(60, 120), rng.uniform(0, 360),
@@ -57,9 +56,9 @@ def test_shadow_matrix_matches_numpy_reference(gl):
         d = rng.normal(size=3)
         d[2] = abs(d[2]) + 0.1
         d /= np.linalg.norm(d)
-        got, texel, bias = r._shadow_matrix(cam, d)
+        got, texel, bias = shadow.fit(cam, d, area, s.shadow_fade, s.shadow_size)
         near_cam = C.Camera(cam.x, cam.y, cam.z, cam.yaw, cam.pitch, cam.fov, cam.aspect,
-                            cam.near, r.s.shadow_fade + 2.0)
+                            cam.near, s.shadow_fade + 2.0)
         corners = C.frustum_corners(np.linalg.inv(near_cam.view_proj()))
         assert np.allclose(sorted(near_cam.corners()), sorted(map(tuple, corners)), atol=1e-6)
         view = C.look_at(corners.mean(0), -d)
@@ -70,43 +69,62 @@ def test_shadow_matrix_matches_numpy_reference(gl):
         near, far = -top - 1.0, -lo[2] + 1.0
         want = C.ortho(lo[0], hi[0], lo[1], hi[1], near, far) @ view
         assert np.allclose(got, want, atol=1e-9)
-        assert np.isclose(texel, max(hi[0] - lo[0], hi[1] - lo[1]) / r.s.shadow_size)
+        assert np.isclose(texel, max(hi[0] - lo[0], hi[1] - lo[1]) / s.shadow_size)
         assert np.isclose(bias, 0.05 / (far - near))
-    r.release()
 
 
-def test_gpu_culling_matches_numpy(gl):
-    """shaders/cull.comp (instance count per indirect command) keeps exactly the
-    regions camera.visible_boxes keeps, up to float rounding on a plane."""
+def test_batches_draw_every_visible_region_once(gl):
+    """Region batches (geometry.py) against brute force: for random cameras, every
+    quad of every chunk region whose own box may be in view is drawn, each once, and
+    what is drawn lies between the first and the last visible region of its batch."""
+    from collections import Counter
     from voxel_addon import meshing
     from voxel_addon.core import chunk
     from voxel_addon.core.blocks import REGISTRY as R
-    from voxel_addon.render.geometry import Geometry
+    from voxel_addon.render.device.mgl import MglDevice
+    from voxel_addon.render.geometry import PASSES, Geometry
     rng = np.random.default_rng(7)
     b = chunk.empty(width=16 * 6 + 2, depth=16 * 6 + 2)
     b[:, :, :40] = R.id("stone")
     b[:, :, 40:200][rng.random((98, 98, 160)) < 0.002] = R.id("stone")  # scattered regions
     b[rng.random(b.shape) < 0.0005] = R.id("water")
-    geo = Geometry(gl)
-    geo.set_chunks(meshing.build_chunks(b, (-3, -3), backend="numpy"))
-    assert len(geo.origin) > 50 and geo.gpu
+    meshes = meshing.build_chunks(b, (-3, -3), backend="numpy")
+    dev = MglDevice(gl)
+    geo = Geometry(dev)
+    geo.set_chunks(meshes)
+    geo.commit()
+    words = {}  # device mesh -> its words (read back)
+    h = geo.region_h
     checked = culled = 0
     for _ in range(30):
         cam = C.Camera(*rng.uniform(-80, 80, 2), rng.uniform(0, 250), rng.uniform(0, 360),
                        rng.uniform(-89, 89), rng.uniform(30, 100), rng.uniform(0.5, 2.5))
         vp = cam.view_proj()
-        gpu = geo.gpu_batches(vp, geo.parts)
-        geo.barrier()
-        cmd = np.frombuffer(geo.bufs["view"][0].read(), np.uint32).reshape(-1, 5)
-        cpu = geo.batches(geo.cull(vp), geo.parts)
-        d = (C.planes(vp)[:, :3] @ geo.boxes[0:3] + np.abs(C.planes(vp)[:, :3]) @ geo.boxes[3:6]
-             + C.planes(vp)[:, 3:]).min(0)  # the binding plane's margin per region (float64)
-        for name, (_, _, _, first, n, _) in gpu.items():
-            on_gpu = set(np.flatnonzero(cmd[first:first + n, 1]) + first)
-            on_cpu = set(cpu[name][1].tolist()) if cpu[name] else set()
-            for i in on_gpu ^ on_cpu:  # disagreements only where a box touches a plane
-                assert abs(d[cmd[i, 4]]) < 1e-3 * (1 + abs(vp).max()), (name, i, d[cmd[i, 4]])
-            checked += n
-            culled += n - len(on_gpu)
+        drawn = geo.batches(geo.cull(vp), PASSES)
+        for p, name in enumerate(PASSES):
+            got = []
+            for mesh, first, n, origin in drawn[name] or ():
+                if id(mesh) not in words:
+                    words[id(mesh)] = np.frombuffer(mesh.vbo.read(), np.uint32).reshape(-1, 2)
+                w = words[id(mesh)][4 * first:4 * (first + n)]
+                ox, oy = origin[0] // 16 + (w[:, 1] & 3), origin[1] // 16 + ((w[:, 1] >> 2) & 3)
+                got += list(zip(ox.tolist(), oy.tolist(), ((w[:, 1] >> 4) & 255).tolist(),
+                                w[:, 0].tolist()))
+            want, every = [], []
+            for (cx, cy), m in meshes.items():
+                for r in range(geo.nreg):
+                    f, n = m.ranges[r, p]
+                    v = [(cx, cy, r, x) for x in m.vertices[f:f + n].tolist()]
+                    every += v
+                    box = C.visible(vp, np.array([[cx * 16 - .5, cy * 16 - .5, r * h - .5]]),
+                                    np.array([[cx * 16 + 16.5, cy * 16 + 16.5, r * h + h + .5]]))
+                    if box[0]:
+                        want += v
+            cg, cw, call = Counter(got), Counter(want), Counter(every)
+            assert not cw - cg, (name, "a visible region was not drawn")
+            assert not cg - call, (name, "drawn twice, or not a shown quad")
+            checked += len(every) // 4
+            culled += (len(every) - len(got)) // 4
     assert checked > 1000 and 0 < culled < checked
     geo.release()
+    dev.close()

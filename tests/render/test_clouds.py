@@ -10,47 +10,45 @@ import numpy as np
 import pytest
 
 from voxel_addon import resources
-from voxel_addon.render import clouds, frame, programs, sky
+from voxel_addon.render import clouds, frame, glsl, sky
 from voxel_addon.render.pipeline import sky_values
 from voxel_addon.render.settings import Settings
 
 
 class _Cam:
     fov = 70.0
+    ortho = False
 
 
 def evaluate(gl, points, expr: str, hours: float = 12.0, include: str = "include/clouds.glsl",
              **settings) -> np.ndarray:
     """GLSL `expr` (vec3, of `vec3 d`) for each row of points (n, 3), one pixel each."""
     n = len(points)
-    block = frame.FrameBlock(gl)
+    block = frame.FrameBlock()
     sp = sky.params(hours)
     s = Settings(**settings)
-    block.set(**sky_values(s, sp, hours, True, 0, _Cam(), None, 360))
+    block.set(**sky_values(s, sp, hours, True, _Cam(), None, 360))
     block.set(sky_light_dir=sp["light_dir"], sky_stars=sp["stars"], sky_disc=sp["disc"],
               day_ambient=sp["ambient"], day_direct=sp["direct"])
-    block.upload()
-    body = programs.source(include, {}, 410).split("\n", 1)[1]
+    frag = (f'#include "include/frame.glsl"\n#include "{include}"\n'
+            "//@ sampler sampler2D points\n//@ out 0 vec4 o\n"
+            "void main() { vec3 d = texelFetch(points, ivec2(gl_FragCoord.xy), 0).xyz;\n"
+            f"    o = vec4({expr}, 1.0); }}\n")
+    p = glsl.program("fullscreen.vert", "probe.frag", texts=(None, frag))
+    prog = gl.program(vertex_shader=glsl.source(p, "vert"), fragment_shader=glsl.source(p, "frag"))
+    prog[glsl.FRAME_BLOCK].binding = frame.BINDING
+    buf = gl.buffer(block.pack())
+    buf.bind_to_uniform_block(frame.BINDING)
     data = np.c_[np.asarray(points, np.float32), np.zeros(n, np.float32)].astype("f4")
     tex = gl.texture((n, 1), 4, data.tobytes(), dtype="f4")
-    prog = gl.program(
-        vertex_shader="""#version 410 core
-            void main() { vec2 p = vec2(float((gl_VertexID & 1) << 2) - 1.0,
-                                        float((gl_VertexID & 2) << 1) - 1.0);
-                          gl_Position = vec4(p, 0.0, 1.0); }""",
-        fragment_shader="#version 410 core\n" + body + """
-            uniform sampler2D points; out vec4 o;
-            void main() { vec3 d = texelFetch(points, ivec2(gl_FragCoord.xy), 0).xyz;
-                          o = vec4(""" + expr + """, 1.0); }""")
-    prog["Frame"].binding = frame.BINDING
-    block.buf.bind_to_uniform_block(frame.BINDING)
+    tex.filter = (gl.NEAREST, gl.NEAREST)
     tex.use(0)
     prog["points"].value = 0
     fbo = gl.framebuffer([gl.renderbuffer((n, 1), 4, dtype="f4")])
     fbo.use()
     gl.vertex_array(prog, []).render(vertices=3)
     out = np.frombuffer(fbo.read(components=4, dtype="f4"), "f4").reshape(n, 4)[:, :3].copy()
-    for x in (fbo, tex, prog, block):
+    for x in (fbo, tex, prog, buf):
         x.release()
     return out
 

@@ -1,14 +1,11 @@
-"""The per-frame uniform block: the offsets frame.py reads from frame.glsl by the std140
-rules must be where the real GL driver puts the members (a shader reads every member
-back out)."""
+"""The per-frame uniform block: frame.py packs every member where the real GL driver
+reads it through the struct and accessors render/glsl.py generates (a shader reads
+every member back out)."""
 from __future__ import annotations
-
-import re
 
 import numpy as np
 
-from voxel_addon import resources
-from voxel_addon.render import frame
+from voxel_addon.render import frame, glsl
 
 
 def test_block_layout_matches_the_driver(gl):
@@ -17,24 +14,23 @@ def test_block_layout_matches_the_driver(gl):
     # one output pixel per vec4 / matrix column, generated from the member list
     lines, want, k = [], [], 0
     rng = np.random.default_rng(5)
-    block = frame.FrameBlock(gl)
-    bools = set(re.findall(r"\bbool\s+(\w+)\s*;", resources.shader("include/frame.glsl")))
-    assert {"waving", "sun_visible", "ortho"} <= bools
-    arrays = frame.arrays()
-    assert arrays.get("sky_a", 0) > 0
+    block = frame.FrameBlock()
+    kinds = {n: kind for n, (_, _, kind) in members.items()}
+    assert {"waving", "sun_visible", "ortho"} <= {n for n, kd in kinds.items() if kd == "b"}
+    assert kinds.get("sky_a") == "a"  # vec4 arrays: one pixel per element
     for name, (_, n, kind) in members.items():
-        if name in arrays:  # vec4 NAME[N]: one pixel per element
-            v = rng.uniform(-10, 10, (arrays[name], 4))
+        if kind == "a":
+            v = rng.uniform(-10, 10, (n // 4, 4))
             block.set(**{name: v})
-            for i in range(arrays[name]):
+            for i in range(n // 4):
                 lines.append(f"if (k == {k}) r = {name}[{i}];")
                 want.append(v[i])
                 k += 1
             continue
-        if kind == "i":
+        if kind == "b":  # bools: true for any non-zero
+            v = rng.integers(0, 2, n)
+        elif kind == "i":
             v = rng.integers(-100, 100, n)
-            if name in bools:  # bools: GLSL gives true for any non-zero
-                v = rng.integers(0, 2, n)
         else:
             v = rng.uniform(-10, 10, n)
         block.set(**{name: v.reshape(4, 4) if n == 16 else v[0] if n == 1 else v})
@@ -49,19 +45,14 @@ def test_block_layout_matches_the_driver(gl):
             lines.append(f"if (k == {k}) r = vec4({expr}{', 0.0' * (4 - n)});")
             want.append(np.r_[v, np.zeros(4 - n)])
             k += 1
-    block.upload()
-    src = resources.shader("include/frame.glsl")
-    prog = gl.program(
-        vertex_shader="""#version 410 core
-            void main() { vec2 p = vec2(float((gl_VertexID & 1) << 2) - 1.0,
-                                        float((gl_VertexID & 2) << 1) - 1.0);
-                          gl_Position = vec4(p, 0.0, 1.0); }""",
-        fragment_shader="#version 410 core\n" + src + """
-            out vec4 o;
-            void main() { int k = int(gl_FragCoord.x); vec4 r = vec4(-1.0);
-            """ + "\n".join(lines) + " o = r; }")
-    prog["Frame"].binding = frame.BINDING
-    block.buf.bind_to_uniform_block(frame.BINDING)
+    frag = ('#include "include/frame.glsl"\n//@ out 0 vec4 o\n'
+            "void main() { int k = int(gl_FragCoord.x); vec4 r = vec4(-1.0);\n"
+            + "\n".join(lines) + " o = r; }")
+    p = glsl.program("fullscreen.vert", "probe.frag", texts=(None, frag))
+    prog = gl.program(vertex_shader=glsl.source(p, "vert"), fragment_shader=glsl.source(p, "frag"))
+    prog[glsl.FRAME_BLOCK].binding = frame.BINDING
+    buf = gl.buffer(block.pack())
+    buf.bind_to_uniform_block(frame.BINDING)
     fbo = gl.framebuffer([gl.renderbuffer((k, 1), 4, dtype="f4")])
     fbo.use()
     gl.vertex_array(prog, []).render(vertices=3)
@@ -69,4 +60,29 @@ def test_block_layout_matches_the_driver(gl):
     assert np.allclose(got, np.array(want), atol=1e-5)
     fbo.release()
     prog.release()
-    block.release()
+    buf.release()
+
+
+def test_conditions_follow_the_preprocessor():
+    c = glsl.condition
+    assert c("defined(A) && B > 1", {"A": 1, "B": 2}) and not c("defined(A) && B > 1", {"B": 2})
+    assert c("!(defined(A) && B > 1)", {"B": 2}) and c("!defined(X) || Y", {"X": 1, "Y": 1})
+    assert not c("LAYERS > 0", {}) and c("LAYERS > 0", {"LAYERS": 2})
+
+
+def test_interface_follows_the_defines():
+    p = glsl.program("block.vert", "block.frag", {"OIT": 1})
+    assert [o[2] for o in p.iface.outputs] == ["out_accum", "out_reveal"]
+    assert not [o for o in glsl.program("block.vert", "block.frag", {"SHADOW": 1}).iface.outputs]
+    p = glsl.program("block.vert", "block.frag", {})
+    assert [o[2] for o in p.iface.outputs] == ["out_albedo", "out_normal"]
+    assert ("smooth", "vec2", "g_uv") in p.iface.varyings and p.iface.frame
+
+
+def test_compiler_messages_name_the_file(gl):
+    import pytest
+    frag = '#include "include/common.glsl"\n//@ out 0 vec4 o\nvoid main() { o = nope; }\n'
+    p = glsl.program("fullscreen.vert", "broken.frag", texts=(None, frag))
+    with pytest.raises(Exception) as e:
+        gl.program(vertex_shader=glsl.source(p, "vert"), fragment_shader=glsl.source(p, "frag"))
+    assert "broken.frag:3" in p.where(str(e.value)), p.where(str(e.value))

@@ -1,6 +1,6 @@
 """Chunks in and out one at a time (Renderer.update_chunks / remove_chunks) draw the
-same frame as the one-shot full rebuild, on every culling path; the other chunks'
-vertices stay where they were; cameras from host matrices (perspective and
+same frame as the one-shot full rebuild; an update builds only its chunks' batches
+again; cameras from host matrices (perspective and
 orthographic) draw what the parametric camera draws, and orthographic frames look
 like orthographic projections."""
 from __future__ import annotations
@@ -17,7 +17,6 @@ from voxel_addon.render import Camera, Settings
 from voxel_addon.render import camera as C
 
 SIZE = (96, 64)
-PATHS = [(True, True), (True, False), (False, False)]  # (indirect, GPU culling)
 
 
 class Chunk(NamedTuple):
@@ -57,11 +56,9 @@ def area():
     return _area()
 
 
-def _renderer(gl, indirect, gpu, **kw):
+def _renderer(gl, **kw):
     from voxel_addon.render.pipeline import Renderer
-    r = Renderer(gl, Settings(**{"msaa": 1, "waving": False, **kw}))
-    r.geo.indirect_ok, r.geo.gpu_cull = indirect, gpu
-    return r
+    return Renderer(gl, Settings(**{"msaa": 1, "waving": False, **kw}))
 
 
 CAMS = [Camera(-12, -14, 80, 45, -25), Camera(8, 8, 100, 200, -60), Camera(30, -10, 66, 120, -5)]
@@ -75,10 +72,9 @@ def _frames(r, hours=12.0):
     return out
 
 
-@pytest.mark.parametrize("indirect,gpu", PATHS)
-def test_incremental_equals_full_rebuild(gl, area, indirect, gpu):
+def test_incremental_equals_full_rebuild(gl, area):
     b, L, meshes, lights = area
-    full = _renderer(gl, indirect, gpu)
+    full = _renderer(gl)
     # (closed=False: the meshes with their real ring, as update_chunks gets them)
     full.set_area(b, L, -1, -1, ring=True, backend="numpy", closed=False)
     want = _frames(full)
@@ -87,7 +83,7 @@ def test_incremental_equals_full_rebuild(gl, area, indirect, gpu):
 
     rng = np.random.default_rng(5)
     keys = list(meshes)
-    r = _renderer(gl, indirect, gpu)
+    r = _renderer(gl)
     # arrive in a shuffled order, in small batches, with frames in between
     order = [keys[i] for i in rng.permutation(len(keys))]
     for i in range(0, len(order), 2):
@@ -125,51 +121,45 @@ def _same(got, want):
     return True
 
 
-def test_other_chunks_stay_where_they_are(gl, area):
-    """An update writes only its own chunks: every other chunk keeps its vertex block,
-    its commands and the contents of the vertex buffer there."""
+def test_an_update_builds_only_its_batches(gl, area):
+    """Chunks far apart land in different batches: updating one builds its batch again
+    (new vertex buffers) and leaves the others' buffers as they were."""
+    from voxel_addon.render.geometry import BATCH
     b, L, meshes, lights = area
-    r = _renderer(gl, True, True)
+    r = _renderer(gl)
+    k0 = (-1, -1)
+    far = (k0[0] + 3 * BATCH, k0[1])
     r.update_chunks(Chunk(k, m, lights[k]) for k, m in meshes.items())
+    r.update_chunks([Chunk(far, meshes[k0], None)])
+    r.render(CAMS[0], 12.0, SIZE)
     geo = r.geo
-    before = {k: tuple(geo._slots[s][1:3]) for k, s in geo.slot_of.items()}
-    vbo = geo.vbo
-    k0, k1 = (-1, -1), (0, 0)
-    r.update_chunks([Chunk(k0, meshes[k1], lights[k1])])   # smaller or larger: moves
-    r.remove_chunks([(1, 1)])
-    data = np.frombuffer(geo.vbo.read(), np.uint32)
-    for k, s in geo.slot_of.items():
-        start, nq = geo._slots[s][1:3]
-        if k != k0:
-            assert (start, nq) == before[k]
-        m = meshes[k1] if k == k0 else meshes[k]
-        assert np.array_equal(data[4 * start:4 * (start + nq)], m.vertices)
-    assert geo.vbo is vbo  # no regrowth needed: nothing was copied
-    # commands of the rows still shown point into their own chunk's block
-    for p in range(len(meshing.PASSES)):
-        for row in np.flatnonzero(geo.at[p] >= 0):
-            cmd = geo.cmd[geo.at[p, row]]
-            start, nq = geo._slots[row // geo.nreg][1:3]
-            assert cmd[4] == row and cmd[0] > 0 and cmd[3] == 4 * start
-            assert cmd[2] + cmd[0] <= 6 * nq
+    before = {k: list(bt.meshes) for k, bt in geo._batches.items()}
+    assert len(before) >= 2
+    r.update_chunks([Chunk(k0, meshes[(0, 0)], lights[k0])])
+    r.render(CAMS[0], 12.0, SIZE)
+    mine = (k0[0] // BATCH, k0[1] // BATCH)
+    for k, bt in geo._batches.items():
+        same = [x is y for x, y in zip(bt.meshes, before[k])]
+        assert all(same) if k != mine else not any(s for s, m in zip(same, bt.meshes) if m), k
     r.release()
 
 
-def test_growing_buffers_keep_what_was_there(gl, area):
-    """Chunks arriving one by one grow the buffers (copied on the GPU) and still draw
-    the frame of one upload of them all."""
+def test_chunks_one_by_one_draw_the_frame_of_one_upload(gl, area):
+    """Chunks arriving one by one (far copies too, removed again) draw the frame of one
+    upload of them all."""
     b, L, meshes, lights = area
-    r = _renderer(gl, True, True)
+    r = _renderer(gl)
     r.update_chunks(Chunk(k, m, lights[k]) for k, m in meshes.items())
     want = _frames(r)
     r.release()
-    r = _renderer(gl, True, True)
+    r = _renderer(gl)
     many = {(cx + 10 * i, cy): m for i in range(4) for (cx, cy), m in meshes.items()}
-    for k, m in many.items():  # far away copies: only to make the buffers grow
+    for k, m in many.items():  # far away copies, each with a frame
         r.update_chunks([Chunk(k, m, None)])
+        r.render(CAMS[1], 12.0, SIZE)
     r.update_chunks(Chunk(k, m, lights[k]) for k, m in meshes.items())
     r.remove_chunks([k for k in many if k not in meshes])
-    assert r.geo._vbo_q >= r.geo._verts.end and len(r.geo.keys) == len(meshes)
+    assert len(r.geo.keys) == len(meshes)
     assert _same(_frames(r), want)
     r.release()
 
@@ -183,7 +173,7 @@ def test_light_window_follows_the_camera(gl):
     b[:, :, :60] = R.id("stone")
     meshes = meshing.build_chunks(b, (0, 0), backend="numpy")
     dark = np.zeros((16, 16, 256), np.uint16)
-    r = _renderer(gl, True, True, light_radius=1)
+    r = _renderer(gl, light_radius=1)
     r.update_chunks(Chunk(k, m, dark) for k, m in meshes.items())
     r.render(Camera(8, 8, 80, 45, -30), 12.0, SIZE)
     assert r.vol.n == 3 and r.vol.lo == (0, 0) and r.vol.hi == (32, 32)
@@ -201,7 +191,7 @@ def test_light_window_follows_the_camera(gl):
 
 def test_prepare_leaves_the_callers_camera_alone(gl, area):
     b, L, meshes, lights = area
-    r = _renderer(gl, True, True)
+    r = _renderer(gl)
     r.set_area(b, L, -1, -1, ring=True, backend="numpy")
     cam = Camera(-12, -14, 80, 45, -25, fov=50.0, aspect=3.0, near=0.5, far=99.0)
     keep = (cam.x, cam.y, cam.z, cam.yaw, cam.pitch, cam.fov, cam.aspect, cam.near, cam.far)
@@ -242,10 +232,9 @@ def test_from_matrices_orthographic():
     assert np.isclose(np.linalg.norm(c[2] - c[0]), 40)
 
 
-@pytest.mark.parametrize("indirect,gpu", PATHS)
-def test_from_matrices_draws_the_same_frame(gl, area, indirect, gpu):
+def test_from_matrices_draws_the_same_frame(gl, area):
     b, L, meshes, lights = area
-    r = _renderer(gl, indirect, gpu, ssao=True)
+    r = _renderer(gl, ssao=True)
     r.set_area(b, L, -1, -1, ring=True, backend="numpy")
     for cam in CAMS:
         want = r.render(cam, 9.0, SIZE).astype(int)
@@ -268,7 +257,7 @@ def test_orthographic_from_above_shows_footprints(gl):
     b[:, :, :60] = R.id("stone")
     b[:, :, 60] = R.id("grass")
     b[13:21, 9:17, 61:100] = R.id("stone")  # 8 x 8 blocks, 39 high: x 12..20, y 8..16
-    r = _renderer(gl, True, True, debug="depth")
+    r = _renderer(gl, debug="depth")
     r.set_area(b, light.solve(b), 0, 0, ring=True, backend="numpy")
     cam = _ortho_top(16, 16, 16)
     img = r.render(cam, 12.0, (128, 128)).astype(int)[..., 0]
@@ -298,7 +287,7 @@ def test_orthographic_frames_with_every_effect_look_sane(gl, area):
     cam = Camera.from_matrices(view, C.ortho(-36, 36, -24, 24, -100.0, 400.0))
     out = {}
     for shadows in (False, True):
-        r = _renderer(gl, True, True, ssao=True, shadows=shadows, godrays=True, fog=True)
+        r = _renderer(gl, ssao=True, shadows=shadows, godrays=True, fog=True)
         r.set_area(b, light.solve(b), -1, -1, ring=True, backend="numpy")
         out[shadows] = r.render(cam, 9.0, (96, 64)).astype(float)
         r.s.debug = "albedo"
@@ -323,14 +312,14 @@ def test_frame_tells_a_host_what_to_composite(gl, area):
     """prepare() returns what a host compositing the frame itself reads: the final
     colour, the opaque depth and, when peeling drew water, its depth in front of it."""
     b, L, meshes, lights = area
-    r = _renderer(gl, True, True)
+    r = _renderer(gl)
     r.set_area(b, L, -1, -1, ring=True, backend="numpy")
     cam = Camera(16, 20, 75, 0, -89)  # straight down onto the pool
     f = r.prepare(cam, 12.0, SIZE)
     r.submit(f)
     assert f.layers == 3 and not f.use_oit and f.color.size == SIZE
-    d = np.frombuffer(f.depth.read(), "f4").reshape(SIZE[1], SIZE[0])
-    w = np.frombuffer(f.blend_depth.read(), "f4").reshape(SIZE[1], SIZE[0])
+    d = r.dev.read(f.depth)[..., 0]
+    w = r.dev.read(f.blend_depth)[..., 0]
     water = w < 1.0
     assert water.sum() > 50 and (w[water] < d[water]).all()  # the surface lies in front
     r.s.transparency = "oit"
@@ -362,7 +351,7 @@ def test_region_height_is_one_for_all_shown(gl, area):
     once nothing is (the region table starts over)."""
     b, L, meshes, lights = area
     other = meshing.build_chunks(b, (-1, -1), backend="numpy", region_h=32)
-    r = _renderer(gl, True, True)
+    r = _renderer(gl)
     r.update_chunks(Chunk(k, m, lights[k]) for k, m in meshes.items())
     with pytest.raises(ValueError, match="region height"):
         r.update_chunks([Chunk((0, 0), other[0, 0], lights[0, 0])])

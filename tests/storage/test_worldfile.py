@@ -118,3 +118,17 @@ def test_not_a_world_file(tmp_path):
     assert p.read_bytes() == b""
     with pytest.raises(VoxelError, match="no world file"):
         WorldFile(tmp_path / "missing.sqlite")
+
+
+def test_readonly_open_of_a_path_with_uri_characters(tmp_path):
+    """Read-only opens go through an SQLite URI: #, ?, % and spaces in a folder name
+    (and Windows drive letters) must not be read as URI syntax."""
+    path = tmp_path / "my worlds #2 ?100%" / "w.sqlite"
+    path.parent.mkdir()
+    with World.create(path, seed=4, generator="flat") as w:
+        w.set_block(1, 2, 100, "stone")
+    wf = WorldFile(path, readonly=True)
+    try:
+        assert wf.seed == 4 and wf.read_chunk((0, 0)) is not None
+    finally:
+        wf.close()

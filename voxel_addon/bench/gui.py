@@ -18,10 +18,21 @@ def app():
     path = TOOLS / "blender_app.py"
     if not path.exists():
         return None
-    spec = importlib.util.spec_from_file_location("voxel_blender_app", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
+    import sys
+    mod = sys.modules.get("voxel_blender_app")
+    if mod is None:
+        spec = importlib.util.spec_from_file_location("voxel_blender_app", path)
+        mod = importlib.util.module_from_spec(spec)
+        sys.modules[spec.name] = mod  # (its dataclasses look their module up there)
+        spec.loader.exec_module(mod)
     return mod
+
+
+def variants() -> list[tuple[str, str]]:
+    """(application, backend) of every installed Blender and each GPU backend it is
+    set up for, e.g. [("5.2", "opengl"), ("5.2", "vulkan"), ("4.3", "opengl")]."""
+    a = app()
+    return [(x.version, b) for x in a.apps() for b in x.backends]
 
 
 def missing() -> str | None:
@@ -30,10 +41,13 @@ def missing() -> str | None:
     return "not a checkout (no tools/blender_app.py)" if a is None else a.gui_missing()
 
 
-def run_job(area: str, args, result: Path, log: Path, timeout: float, simulate: bool) -> dict:
-    """tools/AREA_bench_job.py in the Blender GUI with ARGS; the JSON it wrote to RESULT."""
+def run_job(area: str, args, result: Path, log: Path, timeout: float, simulate: bool,
+            blender=None, gpu: str | None = None) -> dict:
+    """tools/AREA_bench_job.py in the Blender GUI with ARGS (BLENDER: which application,
+    e.g. "4.3"; GPU: its backend, "opengl" or "vulkan"; None: blender_app's defaults);
+    the JSON it wrote to RESULT."""
     app().run(["--factory-startup", "-P", TOOLS / f"{area}_bench_job.py", "--", *args],
-              log=log, timeout=timeout, simulate=simulate)
+              log=log, timeout=timeout, simulate=simulate, app=blender, gpu=gpu)
     if not result.exists():
         raise RuntimeError(f"the Blender job wrote nothing:\n{log.read_text(errors='replace')[-4000:]}")
     return json.loads(result.read_text())

@@ -131,8 +131,9 @@ def run(ctx):
     from ..meshing import scenes
     from ..light import daytime
     from ..render import Camera, Settings, source
+    from ..render.device import mgl
     from ..render.pipeline import Renderer
-    gl = source.context()
+    gl = mgl.context()
     size = (320, 180) if ctx.quick else (640, 360)
     variants = [v for v in VARIANTS if v[0] in QUICK] if ctx.quick else VARIANTS
     n = 1 if ctx.quick else 3
@@ -272,7 +273,7 @@ def _distance32(ctx, gl):
     for _ in range(reps):
         r.geo.cull(cam.view_proj())
     cull = (time.perf_counter() - t0) / reps * 1e3
-    regions = int((r.geo.at >= 0).any(0).sum())  # rows with faces in some pass
+    regions = int(r.geo.cull(cam.view_proj()).size)  # (batch, region) boxes
     # one chunk replaced (an edit, a streamed chunk arriving) while all the others stay
     from typing import NamedTuple
 
@@ -291,7 +292,7 @@ def _distance32(ctx, gl):
     r.remove_chunks([(cx, cy) for cx in range(-d, d + 1) for cy in (-d, d)])
     gl.finish()
     remove_row = (time.perf_counter() - t0) * 1e3
-    note = f"distance {d}: {len(meshes)} chunks, {regions} regions before culling"
+    note = f"distance {d}: {len(meshes)} chunks, {regions} batch regions before culling"
     yield (f"render_d{d}_python_ms", sorted(pys)[len(pys) // 2], "ms",
            f"CPU outside moderngl, median of {len(pys)} frames, camera moving; {note}")
     yield (f"render_d{d}_python_wall_ms", sorted(walls)[len(walls) // 2], "ms",
@@ -299,10 +300,10 @@ def _distance32(ctx, gl):
     yield (f"render_d{d}_python_static_ms", py_static, "ms", "camera still (no command upload)")
     yield (f"render_d{d}_python_idle_gl_ms", idle, "ms",
            "the same, camera at the sky (GL does ~nothing; median of 5)")
-    yield (f"render_d{d}_cull_ms", cull, "ms", "NumPy frustum culling of the region table, one matrix (the GL 4.1 path; "
-           "4.3+ culls on the GPU)")
+    yield (f"render_d{d}_cull_ms", cull, "ms", "NumPy frustum culling of the (batch, region) "
+           "boxes, one matrix")
     yield (f"render_d{d}_prepare_hot_ms", hot_ms, "ms",
-           "Renderer.prepare (values, culling, batching; camera moving) back to back, outside "
+           "Renderer.prepare (values, culling, draw lists; camera moving) back to back, outside "
            "moderngl calls: the Python work without the wake-up cost after GL waits")
     yield ("render_glclock_overhead_ms", calls * _OVERHEAD[0] * 1e3, "ms",
            f"subtracted per frame above: {calls} moderngl calls x {_OVERHEAD[0] * 1e6:.2f} us "

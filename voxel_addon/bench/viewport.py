@@ -69,6 +69,7 @@ def run(ctx):
                         ("blender", "view off: Blender's own drawing")):
             yield (f"viewport_redraw_{k}_cpu_ms", R[f"{k}_cpu_ms"], "ms",
                    f"process CPU per whole region redraw (all threads), {what}")
+    yield from backends(ctx, world)
     yield from compare(ctx, world, 8 if ctx.quick else 16)
     for key in ("generated", "empty"):
         if f"show16_{key}_s" in R:
@@ -78,6 +79,52 @@ def run(ctx):
                    f"longest redraw while streaming ({R[f'frames16_{key}']} redraws), {key} file")
             yield (f"viewport_max_upload_{key}_ms", R[f"max_upload_{key}_ms"], "ms",
                    "longest chunk upload within one redraw while streaming")
+
+
+def backends(ctx, world):
+    """The live view at distance 16 in every installed Blender on each GPU backend it is
+    set up for (tools/viewport_backends_bench_job.py; one fresh Blender each, from a copy
+    of the same file, the same view): frame full and draft (the pipeline every redraw,
+    GPU finished), our Python per redraw, draw calls, the still view's redraw from its
+    kept frame; ratios to the first OpenGL run (issue 19's targets: the gpu module on
+    OpenGL within 1.2x of the old moderngl path, our Python <= 2 ms per redraw)."""
+    import shutil
+    base = None
+    for blender, gpu in gui.variants():
+        tag = f"{blender.replace('.', '')}_{gpu}"
+        ctx.say(f"Blender {blender} GUI on {gpu}: the live view at distance 16")
+        copy = ctx.tmp / f"backend_{tag}.sqlite"
+        shutil.copy(world, copy)
+        out = ctx.tmp / f"backend_{tag}.json"
+        R = gui.run_job("viewport_backends", [out, copy], out, ctx.tmp / f"backend_{tag}.log",
+                        timeout=1800, simulate=False, blender=blender, gpu=gpu)
+        if not R.get("ok"):
+            raise RuntimeError(R.get("error"))
+        base = base or R
+        what = (f"Blender {R['blender']} {R['backend']} ({R['renderer']}), distance 16 "
+                f"({R['chunks']} chunks), region {'x'.join(map(str, R['region']))}")
+        for q in ("full", "draft"):
+            yield (f"viewport_frame_{q}_{tag}_ms", R[f"{q}_ms"], "ms",
+                   f"{q} quality, the pipeline every redraw, GPU finished (min of 6; median "
+                   f"{R[f'{q}_ms_median']:.0f}); {what}")
+            yield (f"viewport_python_{q}_{tag}_ms", R[f"{q}_python_ms"], "ms",
+                   f"our Python per {q} redraw outside the GPU calls (median)")
+            yield (f"viewport_submit_{q}_{tag}_ms", R[f"{q}_submit_ms"], "ms",
+                   "issuing the passes and the composite (Python + the backend's CPU work)")
+            yield (f"viewport_draw_calls_{q}_{tag}", R[f"{q}_draw_calls"], "",
+                   f"geometry draws per {q} frame (region batches, all passes)")
+            yield (f"viewport_frame_{q}_{tag}_ratio", R[f"{q}_ms"] / base[f"{q}_ms"], "",
+                   f"to Blender {base['blender']} {base['backend']} (<1: faster)")
+        yield (f"viewport_still_{tag}_ms", R["still_ms"], "ms",
+               "a still view's redraw from its kept frame (the handler, GPU finished)")
+        yield (f"viewport_python_still_{tag}_ms", R["still_python_ms"], "ms",
+               "our Python per redraw from the kept frame")
+        yield (f"viewport_redraw_still_{tag}_ms", R["still_region_ms"], "ms",
+               "whole region redraw of the still view (Blender's redraw_timer)")
+        yield (f"viewport_redraw_blender_only_{tag}_ms", R["blender_region_ms"], "ms",
+               "whole region redraw with the view off (Blender's own drawing)")
+        yield (f"viewport_show_d16_{tag}_s", R["show_s"], "s",
+               "tick Show -> every chunk of distance 16 drawn (generated file)")
 
 
 MATERIAL_LIMIT_S = {8: 90.0, 16: 240.0}  # EEVEE's shader compilation on llvmpipe

@@ -27,13 +27,13 @@ def _cpu() -> float:
     return t.user + t.system
 
 
-def _stream(world, distance, drains=None, workers=2):
+def _stream(world, distance, drains=None, workers=2, backends=None):
     """Time from set_view to every wanted payload drained; the consumer drains with a
     4 ms budget every 2 ms and drops the payloads (as an upload would). Returns
     (stream, wall seconds, process CPU seconds: all threads, pocl's included)."""
     c0 = _cpu()
     t0 = time.perf_counter()
-    s = Stream(world, distance, workers=workers)
+    s = Stream(world, distance, workers=workers, backends=backends)
     s.set_view(8.0, 8.0, direction=(1.0, 0.3, 0.0))
     while True:
         t = time.perf_counter()
@@ -58,6 +58,22 @@ def _warm(path):
         s.close()
 
 
+def _without_opencl(ctx):
+    """The live view's first fill at its default distance (8 chunks) from an empty
+    file, with OpenCL and without it (as on a Mac or a Windows machine without an
+    OpenCL driver: NumPy generates and meshes; light is NumPy either way)."""
+    from .. import opencl
+    dist = 4 if ctx.quick else 8
+    n = (2 * dist + 1) ** 2
+    for backend in opencl.usable():
+        with World.create(ctx.tmp / f"first_{backend}.sqlite", seed=SEED, backend=backend) as w:
+            s, dt, cpu = _stream(w, dist, backends=("numpy", backend))
+            s.close()
+        yield (f"stream_view{dist}_{backend}_s", dt, "s",
+               f"{n} chunks generated ({backend}), lit (numpy), meshed ({backend}) from an "
+               f"empty file: the first fill of a new world's view, {_load()}")
+
+
 def run(ctx):
     if os.environ.get(EDITS_ONLY):
         yield from _edits_only(ctx)
@@ -77,6 +93,8 @@ def run(ctx):
            f"{_load()}{note_q}")
     yield ("stream_view16_cpu_s", cpu, "s", "process CPU time of the same (all threads): the "
            "work, whatever else runs on the machine")
+
+    yield from _without_opencl(ctx)
 
     path = ctx.tmp / "world32.sqlite"
     proc = psutil.Process()

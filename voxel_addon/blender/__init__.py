@@ -45,10 +45,10 @@ def register():
 
 def unregister():
     import bpy
-    from . import session, viewport
+    from . import liveview, session
     while _hooked:
         _hooked.pop().unregister()
-    viewport.shutdown()
+    liveview.shutdown()
     session.close_all()
     for menu, fn in reversed(_menus):
         getattr(bpy.types, menu).remove(fn)

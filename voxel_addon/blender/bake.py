@@ -27,6 +27,8 @@ import math
 import bpy
 import numpy as np
 
+from . import compat
+
 GROUP = "Voxel Shade"
 
 
@@ -214,9 +216,7 @@ def material(spec, style: str, light=None) -> bpy.types.Material:
             return m
     m = bpy.data.materials.new(f"voxel_{spec.name}" + ("" if style == "blender" else f"_{style}"))
     m["voxel_key"] = key
-    if m.node_tree is None:  # before Blender 5 new materials had no tree yet
-        m.use_nodes = True
-    t = m.node_tree
+    t = compat.node_tree(m)
     t.nodes.clear()
     out = _node(t, "ShaderNodeOutputMaterial", 900, 0)
     bsdf = _node(t, "ShaderNodeBsdfPrincipled", 500, 0)

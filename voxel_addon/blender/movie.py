@@ -13,6 +13,7 @@ import shutil
 import bpy
 
 from ..core.errors import VoxelError
+from . import compat
 
 
 def check() -> None:
@@ -59,9 +60,7 @@ class Encoder:
         r.fps, r.fps_base = src.fps, src.fps_base
         sc.frame_start, sc.frame_end, sc.frame_step = 1, len(self.frames), 1
         im = r.image_settings
-        if hasattr(im, "media_type"):  # Blender 5: the kind first, then the format
-            im.media_type = "VIDEO"
-        im.file_format = "FFMPEG"
+        compat.video_output(im)
         _copy(src.image_settings, im, skip={"media_type", "file_format"})
         _copy(src.ffmpeg, r.ffmpeg)
         r.ffmpeg.audio_codec = "NONE"  # the frames have no sound
@@ -73,8 +72,7 @@ class Encoder:
         r.use_file_extension = src.use_file_extension
         r.filepath = os.path.join(os.path.dirname(self.frames[0]), "movie")
         se = sc.sequence_editor_create()
-        strips = se.strips if hasattr(se, "strips") else se.sequences  # 5.0 renamed it
-        s = strips.new_image("frames", self.frames[0], 1, 1)
+        s = compat.strips(se).new_image("frames", self.frames[0], 1, 1)
         for f in self.frames[1:]:
             s.elements.append(os.path.basename(f))
         return sc

@@ -2,12 +2,19 @@
 
 Opening is lazy and cached so the viewport, the edit tool and bake all see the same
 World (and its chunk map). Closed on unregister and when the path changes.
+
+A save that fails on closing (disk full, a file-size limit, a drive gone) is never
+silent: it is reported in the status bar and the console, the world's unsaved edits
+go into a file beside it (world/rescue.py; the temporary folder when that fails
+too), and the next open applies them. When no rescue file can be written either, the
+world stays open in memory (`unsaved`) so a later close retries.
 """
 from __future__ import annotations
 
 import os
 
 _worlds: dict[str, object] = {}
+unsaved: dict[str, object] = {}  # worlds whose save and rescue both failed (retried on close)
 
 
 def _key(path: str) -> str:
@@ -31,24 +38,77 @@ def world(path: str, *, create_seed: int | None = None, generator: str | None = 
     else:
         if not os.path.exists(key):
             raise VoxelError(f"world file {key} does not exist (use New)")
-        w = World.open(key)
+        w = unsaved.pop(key, None)
+        if w is None:
+            w = World.open(key)
     _worlds[key] = w
+    _restore(w, key)
     return w
 
 
-def close(path: str) -> None:
-    w = _worlds.pop(_key(path), None)
-    if w is not None:
+def _restore(w, key: str) -> None:
+    """Apply the edits a failed save left beside the world (world/rescue.py)."""
+    from ..world import rescue
+    if not any(p.exists() for p in rescue.places(key)):
+        return
+    try:
+        n, files = rescue.restore(w)
+    except Exception as e:  # noqa: BLE001 - the world still opens; the file stays for later
+        tell(f"could not apply the unsaved edits kept for {key}: {e}")
+        return
+    tell(f"{n} edits that could not be saved last time are back in {os.path.basename(key)} "
+         f"(from {', '.join(str(f) for f in files)})", "INFO")
+
+
+def close(path: str) -> str | None:
+    """Close the world at PATH; when its save fails, what the user was told."""
+    key = _key(path)
+    w = _worlds.pop(key, None) or unsaved.pop(key, None)
+    return None if w is None else _close(key, w)
+
+
+def close_all() -> list[str]:
+    """Close every world (unregister): one failing save does not stop the others,
+    and none fails silently. What the user was told, one line per failed save."""
+    todo = [*unsaved.items(), *_worlds.items()]
+    unsaved.clear()
+    _worlds.clear()
+    told = [_close(key, w) for key, w in todo]  # one try each: a failure may go back to unsaved
+    return [m for m in told if m]
+
+
+def _close(key: str, w) -> str | None:
+    try:
         w.close()
+        return None
+    except Exception as e:  # noqa: BLE001 - any failure to save must reach the user
+        return _save_failed(key, w, e)
 
 
-def close_all() -> None:
-    while _worlds:
-        _, w = _worlds.popitem()
+def _save_failed(key: str, w, error: Exception) -> str:
+    from ..world import rescue
+    n = len(w.unsaved_edits())
+    msg = f"could not save {key}: {error}"
+    if n:
         try:
-            w.close()
-        except Exception:  # closing on unregister must not stop the others closing
-            pass
+            where = rescue.write(w)
+            msg += f"; its {n} unsaved edits are in {where} and come back when it is opened again"
+        except OSError as e:
+            unsaved[key] = w  # memory is all that is left: close again to retry
+            msg += f"; its {n} unsaved edits could not be written anywhere ({e}): free space and save again"
+    tell(msg)
+    return msg
+
+
+def tell(msg: str, kind: str = "ERROR") -> None:
+    """MSG in the status bar (a report: also in the Info editor) and the console."""
+    import sys
+    print(f"Voxel Worlds: {msg}", file=sys.stderr, flush=True)
+    try:
+        import bpy
+        bpy.ops.voxel.report(kind=kind, message=msg)
+    except (RuntimeError, AttributeError):  # an ERROR report raises once it is filed;
+        pass  # no operator (unregistered): the console line is what is left
 
 
 def is_open(path: str) -> bool:

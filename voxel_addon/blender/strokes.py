@@ -209,8 +209,8 @@ def commit(scene, rec) -> None:
 def show(payloads) -> None:
     """Redraw the live viewport: world.edit already queued the payloads on every
     Stream of the world, so the viewport's next drain takes them in."""
-    from . import viewport
-    viewport._tag_redraw()
+    from . import liveview
+    liveview.redraw()
 
 
 def _reconcile(scene) -> None:

@@ -38,6 +38,7 @@ def run(args):
     from ..render import Camera, Settings
     from ..light import daytime
     from ..render import source
+    from ..render.device import mgl
     from ..render.pipeline import Renderer
     from ..textures import png_bytes
     import numpy as np
@@ -77,10 +78,12 @@ def run(args):
             world.close()
     if not any(i.startswith("sea_level=") for i in args.set):
         s.sea_level = sea
-    ctx = source.context()
+    ctx = mgl.context()
     r = Renderer(ctx, s)
     r.set_area(data.blocks, data.light, data.cx0, data.cy0, ring=True, method=args.aggregation,
-               light_at=data.light_at)
+               light_at=data.light_at, data=data.data)
+    if data.palette is not None:
+        r.set_palette(data.palette)
     asked = any(e.strip().lstrip("+-") == "sea" for e in (args.effects or "").split(","))
     if not asked and not source.open_sea(r):
         r.s.sea = False  # the area's edge is dry land: it fades into the haze

@@ -75,7 +75,7 @@ class Camera:
 
     @property
     def forward(self) -> np.ndarray:
-        return np.array(self._fwd())
+        return np.array(self.fwd())
 
     def view(self) -> np.ndarray:
         if self.view_m is not None:
@@ -97,8 +97,8 @@ class Camera:
         if self.proj_m is not None:
             vp = self.proj_m @ self.view_m
             return vp, np.linalg.inv(vp)
-        (sx, sy, sz, sw), (ux, uy, uz, uw), (bx, by, bz, bw) = _view_rows(
-            (self.x, self.y, self.z), self._fwd())
+        (sx, sy, sz, sw), (ux, uy, uz, uw), (bx, by, bz, bw) = view_rows(
+            (self.x, self.y, self.z), self.fwd())
         t = 1.0 / math.tan(math.radians(self.fov) / 2)
         a, b = t / self.aspect, t
         n, f = self.near, self.far
@@ -124,8 +124,8 @@ class Camera:
                  ((self.far if far is None else far) - a) / (b - a)]
             return [tuple(float(v) for v in c[i] + (c[i + 4] - c[i]) * k)
                     for k in t for i in range(4)]
-        (sx, sy, sz, _), (ux, uy, uz, _), (bx, by, bz, _) = _view_rows(
-            (self.x, self.y, self.z), self._fwd())
+        (sx, sy, sz, _), (ux, uy, uz, _), (bx, by, bz, _) = view_rows(
+            (self.x, self.y, self.z), self.fwd())
         t = math.tan(math.radians(self.fov) / 2)
         out = []
         for d in (self.near, self.far if far is None else far):
@@ -138,10 +138,11 @@ class Camera:
 
     def depth(self, p) -> float:
         """View depth of world point p (along the forward axis from the eye)."""
-        f = self._fwd()
+        f = self.fwd()
         return (p[0] - self.x) * f[0] + (p[1] - self.y) * f[1] + (p[2] - self.z) * f[2]
 
-    def _fwd(self):
+    def fwd(self) -> tuple:
+        """The unit view direction as three floats (`forward` as an array)."""
         if self.view_m is not None:
             r = self.view_m[2, :3]
             k = -1.0 / math.sqrt(float(r @ r))
@@ -156,10 +157,10 @@ def _is_ortho(P) -> bool:
 
 def look_at(eye, fwd, up=(0.0, 0.0, 1.0)) -> np.ndarray:
     """View matrix: camera at eye looking along fwd; x right, y up, -z forward."""
-    return np.array([*_view_rows(eye, fwd, up), (0.0, 0.0, 0.0, 1.0)])
+    return np.array([*view_rows(eye, fwd, up), (0.0, 0.0, 0.0, 1.0)])
 
 
-def _view_rows(eye, fwd, up=(0.0, 0.0, 1.0)):
+def view_rows(eye, fwd, up=(0.0, 0.0, 1.0)):
     """The first three rows of look_at as float tuples (right, up, back)."""
     fx, fy, fz = (float(v) for v in fwd)
     k = 1.0 / math.sqrt(fx * fx + fy * fy + fz * fz)

@@ -1,17 +1,21 @@
-"""The light of the whole view in one camera-centred toroidal 3D texture.
+"""The light of the whole view in one camera-centred toroidal texture
+(shaders/include/lightvol.glsl).
 
-Chunk (cx, cy) lives at texels ((16cx) mod S, (16cy) mod S, 0..255), S = 16(2r+1),
-so every chunk within r of the centre chunk has its own slot and moving the camera
-only re-uploads the chunks that came into range (no bindless textures, GL 3.3+).
+A 2D array of N x N layers of 256 x 256 texels: chunk (cx, cy) lives in layer
+(cx mod N) + N (cy mod N), its voxel (x, y, z) at texel (x + 16 (z & 15), y + 16 (z >> 4)),
+the packed uint16 in a 16-bit unorm. N = 2r + 1 slots per side, so every chunk within
+r of the centre chunk has its own layer and moving the camera only uploads the chunks
+that came into range; an edit uploads the layers of the chunks whose light changed.
+One layer is the unit of upload because a device may not write part of a texture
+(Blender's gpu module draws it in: blender/liveview/device.py).
 """
 from __future__ import annotations
 
 import numpy as np
 
 from ..core import chunk
-from .programs import set_uniforms
 
-_OPEN = None  # a chunk of open daylight (full daylight, no block light), as bytes
+_OPEN = None  # a layer of open daylight (full daylight, no block light)
 
 
 def window(area, radius: int):
@@ -23,14 +27,18 @@ def window(area, radius: int):
             min(cx1, mx + radius + 1), min(cy1, my + radius + 1))
 
 
+def layer_of(light: np.ndarray) -> np.ndarray:
+    """A chunk's (16, 16, 256) packed light as its (256, 256) layer (rows: y + 16 (z >> 4))."""
+    a = np.asarray(light, np.uint16).reshape(16, 16, 16, 16, order="F")  # x, y, z & 15, z >> 4
+    return np.ascontiguousarray(a.transpose(3, 1, 2, 0)).reshape(256, 256)
+
+
 class LightVolume:
-    def __init__(self, ctx, n: int):
+    def __init__(self, dev, n: int):
         """n chunk slots per side: 2r+1 for a view radius r."""
-        self.ctx = ctx
+        self.dev = dev
         self.n = n
-        self.size = chunk.SIZE * self.n
-        self.tex = ctx.texture3d((self.size, self.size, chunk.HEIGHT), 1, dtype="u2")
-        self.tex.filter = (0x2600, 0x2600)  # GL_NEAREST: integers, interpolated by hand
+        self.tex = dev.texture((256, 256), "r16", layers=n * n)
         self.slots: dict[tuple[int, int], tuple[int, int]] = {}  # slot -> resident key
         self.lo = (0, 0)
         self.hi = (0, 0)
@@ -44,12 +52,11 @@ class LightVolume:
             light = chunk.unpack_layers(*light)
         if light is None:
             if _OPEN is None:
-                _OPEN = np.full(16 * 16 * chunk.HEIGHT, 0xF000, np.uint16).tobytes()
+                _OPEN = np.full((256, 256), 0xF000, np.uint16)
             data = _OPEN
         else:
-            arr = np.asarray(light, dtype=np.uint16)
-            data = np.asfortranarray(arr).tobytes(order="F")
-        self.tex.write(data, viewport=(slot[0] * 16, slot[1] * 16, 0, 16, 16, chunk.HEIGHT))
+            data = layer_of(light)
+        self.dev.write_layer(self.tex, slot[0] + self.n * slot[1], data)
         self.slots[slot] = tuple(key)
 
     def resident(self, key) -> bool:
@@ -77,14 +84,9 @@ class LightVolume:
                     raise ValueError(f"chunk {(cx, cy)} is not resident")
         self.lo, self.hi = (cx0 * 16, cy0 * 16), (cx1 * 16, cy1 * 16)
 
-    def bind(self, prog, unit: int) -> None:
-        self.tex.use(unit)
-        set_uniforms(prog, light_vol=unit)
-        self.uniforms(prog)
-
-    def uniforms(self, prog) -> None:
-        """The window's uniforms (the texture itself is bound by the caller's scope)."""
-        set_uniforms(prog, vol_size=self.size, vol_lo=self.lo, vol_hi=self.hi)
+    def frame_values(self) -> dict:
+        """The frame block's members of the volume (include/lightvol.glsl)."""
+        return {"vol_n": self.n, "vol_lo": self.lo, "vol_hi": self.hi}
 
     def release(self):
-        self.tex.release()
+        self.dev.release(self.tex)

@@ -1,38 +1,29 @@
-"""The frame's passes as objects: each owns its target framebuffer, its GL switches,
-its input textures at their fixed units (programs.UNITS) and its program(s).
-`Renderer` builds them once per set of targets and switches (pipeline._graph) and a
-frame only runs them. `Transparency` is the one interface of the blend part's two
-ways: depth peeling (`Peel`, here) and weighted blended OIT (`oit.OIT`).
-
-(moderngl's scopes would bind a pass's textures in one call, but they bind them with
-a default sampler object, whose mipmap filter makes our textures incomplete.)
+"""The frame's passes as objects: each owns its target, its state, its input textures
+(by sampler name) and its program(s), on a device (render/device). The frame's graph
+(graph.py) builds them once per set of targets and switches and a frame only runs
+them. `Transparency` is the one interface of the blend part's two ways: depth peeling
+(`Peel`, here) and weighted blended OIT (`oit.OIT`).
 """
 from __future__ import annotations
 
-from .programs import UNITS
+from .device import State
+from .geometry import draw
 
 
 class Pass:
-    """A target, GL switches, input textures and a program; `run` binds them (and
-    clears the target when asked) and draws one fullscreen triangle."""
-    __slots__ = ("ctx", "fbo", "flags", "tex", "prog", "clear")
+    """A target, a state, input textures, values and a program; `run` draws one
+    fullscreen triangle (clearing the target first when asked)."""
+    __slots__ = ("dev", "target", "prog", "state", "clear", "tex", "values")
 
-    def __init__(self, ctx, fbo, prog=None, flags: int = 0, clear: bool = False, **tex):
-        self.ctx, self.fbo, self.prog, self.flags, self.clear = ctx, fbo, prog, flags, clear
-        self.tex = [(t, UNITS[k]) for k, t in tex.items()]
+    def __init__(self, dev, target, prog=None, state: State = State(), clear: bool = False,
+                 values: dict | None = None, **tex):
+        self.dev, self.target, self.prog, self.state = dev, target, prog, state
+        self.clear, self.values, self.tex = clear, values or {}, tex
 
-    def bind(self) -> None:
-        self.fbo.use()
-        self.ctx.enable_only(self.flags)
-        for t, unit in self.tex:
-            t.use(unit)
-        if self.clear:  # colour 0 and depth 1 (targets without depth ignore it)
-            self.fbo.clear(0, 0, 0, 0, depth=1.0)
-
-    def run(self, fullscreen) -> None:
-        """fullscreen: the renderer's attribute-less triangle draw (one VAO per program)."""
-        self.bind()
-        fullscreen(self.prog)
+    def run(self) -> None:
+        with self.dev.begin(self.target, self.state, self.clear):
+            self.dev.use(self.prog, self.tex, self.values)
+            self.dev.draw()
 
     def programs(self) -> list:
         return [self.prog] if self.prog is not None else []
@@ -43,20 +34,26 @@ class GeometryPass(Pass):
     double-sided plants (cutout2) are drawn without face culling."""
     __slots__ = ("progs",)
 
-    def __init__(self, ctx, fbo, progs, flags: int = 0, clear: bool = True, **tex):
-        super().__init__(ctx, fbo, None, flags, clear, **tex)
+    def __init__(self, dev, target, progs, state: State = State(), clear: bool = True,
+                 values: dict | None = None, **tex):
+        super().__init__(dev, target, None, state, clear, values, **tex)
         self.progs = progs
 
     @property
     def names(self) -> list[str]:
         return [name for name, _ in self.progs]
 
-    def draw(self, geo, batches: dict, stats, shadow: bool = False) -> None:
-        self.bind()
-        for name, prog in self.progs:
-            if name == "cutout2":
-                self.ctx.disable(self.ctx.CULL_FACE)
-            geo.draw(batches.get(name), prog, stats, shadow=shadow)
+    def draw(self, batches: dict, stats, shadow: bool = False) -> None:
+        dev = self.dev
+        with dev.begin(self.target, self.state, self.clear):
+            for name, prog in self.progs:
+                b = batches.get(name)
+                if not b:
+                    continue
+                if name == "cutout2" and self.state.cull:
+                    dev.state(State(self.state.depth, self.state.write, False, self.state.blend))
+                dev.use(prog, self.tex, self.values)
+                draw(dev, b, stats, shadow)
 
     def programs(self) -> list:
         return [p for _, p in self.progs]
@@ -66,17 +63,14 @@ class Transparency:
     """The blend part (water, glass): `geometry` runs before the opaque layer is shaded
     (peeling draws its G-buffers there), `shade` after it; both leave premultiplied
     layers in the layer targets, `layers` of them, which the composite blends back to
-    front. `volume_programs` read the light volume's window (set per frame)."""
+    front."""
     layers = 0
 
-    def geometry(self, geo, view: dict, stats) -> None:
+    def geometry(self, view: dict, stats) -> None:
         pass
 
-    def shade(self, geo, view: dict, stats, fullscreen) -> None:
+    def shade(self, view: dict, stats) -> None:
         pass
-
-    def volume_programs(self) -> list:
-        return []
 
     def programs(self) -> list:
         return []
@@ -87,21 +81,17 @@ class Peel(Transparency):
     into a peel G-buffer (the nearest blend surface behind the previous layer, in
     front of the opaque depth), each lit by deferred.frag (LAYER) into its layer."""
 
-    def __init__(self, draws: list[Pass], shades: list[Pass]):
+    def __init__(self, draws: list[GeometryPass], shades: list[Pass]):
         self.draws, self.shades = draws, shades
         self.layers = len(draws)
 
-    def geometry(self, geo, view, stats):
+    def geometry(self, view, stats):
         for p in self.draws:
-            p.bind()
-            geo.draw(view["blend"], p.prog, stats)
+            p.draw(view, stats)
 
-    def shade(self, geo, view, stats, fullscreen):
+    def shade(self, view, stats):
         for p in self.shades:
-            p.run(fullscreen)
-
-    def volume_programs(self):
-        return [p.prog for p in self.shades]
+            p.run()
 
     def programs(self):
-        return [p.prog for p in self.draws + self.shades]
+        return [x for p in self.draws for x in p.programs()] + [p.prog for p in self.shades]

@@ -9,7 +9,7 @@ DEBUG_VIEWS = ("none", "albedo", "normal", "depth", "light", "aggregation", "cul
 # effect name -> (field, value when switched on by --effects)
 EFFECTS = ("shadows", "ssao", "fog", "dof", "godrays", "waving", "smooth_mag",
            "fill_holes", "msaa_alpha", "per_sample", "tonemap", "clouds", "cloud_shadows",
-           "water", "sea", "fade", "stars")
+           "water", "sea", "fade", "stars", "walls")
 
 TRANSPARENCY = ("peel", "oit")
 
@@ -61,6 +61,8 @@ class Settings:
     fade_distance: float = 0.0    # blocks where the fade ends; 0: the view distance's edge
     fade_width: float = 0.3       # the fade's width, a fraction of its distance
     stars: bool = True
+    walls: bool = True            # the shown area's outer wall closed where its meshes are
+                                  # open (streamed chunks: render/walls.py)
 
     def with_effects(self, spec: str | None) -> "Settings":
         """Apply '--effects' text: 'all', 'none', or comma-separated [+-]name items."""

@@ -10,15 +10,6 @@ import numpy as np
 from ..core.errors import VoxelError
 
 
-def context():
-    """A standalone moderngl context (EGL, headless) for the CLI, tests and bench."""
-    import moderngl
-    try:
-        return moderngl.create_standalone_context(backend="egl")
-    except Exception as e:  # no EGL/GL here: a clear one-liner beats a C traceback
-        raise VoxelError(f"cannot open an OpenGL context (EGL): {e}") from None
-
-
 class Area(NamedTuple):
     """What Renderer.set_area(blocks, light, cx0, cy0, ring=True, light_at=...) takes."""
     blocks: np.ndarray      # (16w + 2, 16h + 2, 256): the chunks plus a one-voxel ring
@@ -26,6 +17,8 @@ class Area(NamedTuple):
     cx0: int
     cy0: int
     light_at: tuple[int, int]
+    data: np.ndarray | None = None     # the blocks' small data (the `color` block's colour)
+    palette: np.ndarray | None = None  # the world's colours, (n, 3) uint8 (core.colors)
 
 
 def sea_level(generator) -> int:
@@ -43,9 +36,8 @@ def open_sea(renderer) -> bool:
 
 def scene_sea_level(name: str) -> int:
     """sea_level of a reference scene's generator (meshing.scenes)."""
-    from ..generation import make_generator
     from ..meshing import scenes
-    return sea_level(make_generator(scenes.GENERATOR, scenes.scene(name).seed))
+    return scenes.sea_level(name)
 
 
 def world_area(world, x: float, y: float, distance: int, light_radius: int = 8) -> Area:
@@ -56,10 +48,27 @@ def world_area(world, x: float, y: float, distance: int, light_radius: int = 8) 
     cx, cy = math.floor(x) >> 4, math.floor(y) >> 4
     cx0, cy0, cx1, cy1 = cx - distance, cy - distance, cx + distance + 1, cy + distance + 1
     wide = world.region_blocks(cx0 - 1, cy0 - 1, cx1 + 1, cy1 + 1)
+    data = _small_data(world, cx0 - 1, cy0 - 1, cx1 + 1, cy1 + 1)
     lx0, ly0, lx1, ly1 = window((cx0, cy0, cx1, cy1), light_radius)
     i, j = 16 * (lx0 - cx0), 16 * (ly0 - cy0)  # wide starts one chunk before cx0
     light = lightmod.region_light(wide[i:i + 16 * (lx1 - lx0 + 2), j:j + 16 * (ly1 - ly0 + 2)])
-    return Area(np.asfortranarray(wide[15:-15, 15:-15]), light, cx0, cy0, (lx0, ly0))
+    return Area(np.asfortranarray(wide[15:-15, 15:-15]), light, cx0, cy0, (lx0, ly0),
+                None if data is None else np.asfortranarray(data[15:-15, 15:-15]),
+                world.colors() if hasattr(world, "colors") else None)
+
+
+def _small_data(world, cx0, cy0, cx1, cy1):
+    """The small data of chunks [cx0, cx1) x [cy0, cy1) as one array (the chunks
+    region_blocks just loaded), or None where no chunk has any."""
+    keys = [(cx, cy) for cy in range(cy0, cy1) for cx in range(cx0, cx1)]
+    out = None
+    for (cx, cy), c in world.load(keys).items():
+        d = getattr(c, "data", None)
+        if d is not None:
+            if out is None:
+                out = np.zeros((16 * (cx1 - cx0), 16 * (cy1 - cy0), 256), np.uint16, order="F")
+            out[16 * (cx - cx0):16 * (cx - cx0 + 1), 16 * (cy - cy0):16 * (cy - cy0 + 1)] = d
+    return out
 
 
 def scene_area(name: str):

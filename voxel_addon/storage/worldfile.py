@@ -58,7 +58,9 @@ class WorldFile:
             raise VoxelError(f"{self.path} already exists")
         try:
             if readonly:
-                uri = f"file:{self.path.resolve()}?mode=ro"
+                # as_uri escapes what a URI would misread (#, ?, %, spaces) and spells
+                # Windows paths file:///C:/...
+                uri = self.path.resolve().as_uri() + "?mode=ro"
                 self.db = sqlite3.connect(uri, uri=True, check_same_thread=False)
             else:
                 self.db = sqlite3.connect(self.path, check_same_thread=False, timeout=30)
@@ -299,8 +301,19 @@ class _Transaction:
         return self.wf.db
 
     def __exit__(self, exc_type, exc, tb):
+        db = self.wf.db
         try:
-            self.wf.db.execute("ROLLBACK" if exc_type else "COMMIT")
+            if exc_type:
+                db.execute("ROLLBACK")
+            else:
+                try:
+                    db.execute("COMMIT")
+                except sqlite3.Error:
+                    # a COMMIT that failed (disk full, I/O error) can leave the
+                    # transaction open: end it, so a later save can try again
+                    if db.in_transaction:
+                        db.execute("ROLLBACK")
+                    raise
         finally:
             self.wf._lock.release()
         return False

@@ -400,7 +400,9 @@ class World:
 
     def close(self) -> None:
         """Stop streams and the loader, save everything, close the file. Safe to
-        call twice."""
+        call twice. When the save fails (disk full, file-size limit, a vanished
+        drive) it raises and the file stays open with every unsaved edit kept in
+        memory (`unsaved_edits`): calling close again retries."""
         for s in list(self.streams):
             s.close()
         with self._lock:
@@ -410,10 +412,14 @@ class World:
             self._thread.join()
             self._thread = None
         if self.file.db is not None:
-            try:
-                self.flush()
-            finally:
-                self.file.close()
+            self.flush()
+            self.file.close()
+
+    def unsaved_edits(self) -> list[tuple[int, int, int, int, int]]:
+        """The user's edits (x, y, z, block id, data) not yet in the file. Generated
+        chunks and light are not listed: they come back from the seed."""
+        with self._lock:
+            return [(x, y, z, b, d) for (x, y, z), (b, d) in self._edits.items()]
 
     # ---- whole areas ------------------------------------------------------
     def generate_area(self, keys, progress=None) -> int:

@@ -1,6 +1,7 @@
 """GUI test script: the extension zip with its bundled wheels, installed into a fresh
 user folder of the real Blender, works from those wheels: it generates a world
-(OpenCL), renders a view (moderngl on Blender's GL context), bakes and exports a .glb."""
+(OpenCL), edits it, renders a view (moderngl on Blender's GL context), bakes and
+exports a .glb. (Showing it live: test_first_minute.py, from the same zip.)"""
 import math
 import os
 import sys
@@ -36,6 +37,10 @@ def run(gui):
     assert bpy.ops.voxel.world_new() == {"FINISHED"}
     w = sys.modules[MOD + ".voxel_addon.blender.session"].world(p["world"])
     out["backend"] = w.generator.backend
+    with gui.context(gui.area("VIEW_3D")):  # the edit tool's script form: one stroke
+        out["edit"] = sorted(bpy.ops.voxel.edit(location=(3, 4, 200), block="glass"))
+    blocks = sys.modules[MOD + ".voxel_addon.core.blocks"]
+    out["edited"] = blocks.REGISTRY[w.get_block(3, 4, 200)].name
     cam = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
     sc.collection.objects.link(cam)
     sc.camera = cam

@@ -39,18 +39,18 @@ def run(gui):
     r3.view_distance = 52.0
     vv = sc.voxel_view
     vv.distance, vv.hours, vv.show = 3, 10.5, True
-    from voxel_addon.blender import viewport
+    from voxel_addon.blender.liveview import LIVE
     t0 = time.monotonic()
     while time.monotonic() - t0 < 180:
         area.tag_redraw()
-        s = viewport.STATUS
+        s = LIVE.stats
         if s["frames"] > 3 and s["drawn"] >= s["wanted"] > 0 and s["quality"] == "full":
             break
         yield 0.2
     yield 1.0
     area.tag_redraw()
     yield 0.5
-    gui.result["status"] = {k: v for k, v in viewport.STATUS.items()
-                            if isinstance(v, (int, float, str))}
+    gui.result["status"] = {**{k: v for k, v in LIVE.stats.items()
+                               if isinstance(v, (int, float, str))}, "error": LIVE.error}
     gui.result["rect"] = gui.rect(gui.region(area))
     yield from gui.screenshot("minecraft")

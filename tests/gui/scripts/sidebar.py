@@ -24,8 +24,7 @@ def run(gui):
     yield 0.5
     ui = gui.region(area, "UI")
     rect, scale = gui.rect(ui), bpy.context.preferences.system.ui_scale
-    back = [round(c * 255) for c in bpy.context.preferences.themes[0].view_3d.space.panelcolors.back[:3]]
-    gui.result.update(ui=rect, scale=scale, back=back)
+    gui.result.update(ui=rect, scale=scale)
     yield from gui.screenshot("before")
     before = pixels.sidebar_tabs(gui.pixels("before"), rect, scale)
 
@@ -33,6 +32,9 @@ def run(gui):
         filepath=gui.params["zip"], repo="user_default", enable_on_install=True)
     gui.result["install"] = sorted(r)
     gui.result["enabled"] = "bl_ext.user_default.voxel_worlds" in bpy.context.preferences.addons
+    from bl_ext.user_default.voxel_worlds.voxel_addon.blender import compat
+    theme = bpy.context.preferences.themes[0]
+    gui.result["back"] = [round(c * 255) for c in compat.panel_back(theme)]
     yield 0.3
     yield from gui.screenshot("installed")
     after = pixels.sidebar_tabs(gui.pixels("installed"), rect, scale)

@@ -19,18 +19,20 @@ class _Job:
     """The frames left to render, and the View (GPU objects) they share."""
 
     def __init__(self, scene, job: bool = False):
-        from .. import offscreen, session, viewport
+        from .. import session
+        from ..liveview import settings_of
+        from ..liveview.still import Still
         from ...core.errors import VoxelError
         if scene.camera is None or scene.camera.type != "CAMERA":
             raise VoxelError("the scene has no camera")
         self.scene = scene
         self.world = session.world(scene.voxel.path)
-        self.settings = viewport.settings_of(scene.voxel_view, render=True)
+        self.settings = settings_of(scene.voxel_view, render=True)
         self.movie = scene.render.is_movie_format
         if self.movie:
             from .. import movie
             movie.check()
-        self.view = offscreen.View(self.settings)
+        self.view = Still(self.settings)
         self.frames = list(range(scene.frame_start, scene.frame_end + 1, scene.frame_step))
         self.done = 0
         self.centre = None
@@ -50,7 +52,7 @@ class _Job:
         """Render the next frame; False when none is left."""
         from ...render import source
         from ...textures import png_bytes
-        from ..viewport import hours_of
+        from ..liveview import hours_of
         from .view import camera_of
         import numpy as np
         if self.encoding:

@@ -75,7 +75,7 @@ class VOXEL_OT_edit(bpy.types.Operator):
     size: IntProperty(name="Size", default=1, min=1, max=8)
     shape: EnumProperty(name="Shape", items=SHAPE_ITEMS, default="CUBE")
     remove: BoolProperty(name="Remove", default=False,
-                         description="A click removes blocks, Shift-click places them")
+                         description="Clear the cells (air) instead of placing the block")
     box: BoolProperty(name="Box", default=False, description="Fill the box location..corner")
     corner: IntVectorProperty(name="Corner", size=3)
 
@@ -85,7 +85,7 @@ class VOXEL_OT_edit(bpy.types.Operator):
         from ...core.blocks import REGISTRY
         from ...core.errors import VoxelError
         try:
-            bid = REGISTRY.id(self.block)
+            bid = 0 if self.remove else REGISTRY.id(self.block)
             chunk.check_z(self.location[2])
             cells = brush.box(self.location, self.corner) if self.box else \
                 brush.cells(self.location, self.size, self.shape)
@@ -292,6 +292,7 @@ def draw_hover(context) -> None:
     region_size = (context.region.width, context.region.height)
     sh = gpu.shader.from_builtin("POLYLINE_UNIFORM_COLOR")
     batch = batch_for_shader(sh, "LINES", {"pos": pts})
+    depth, blend = gpu.state.depth_test_get(), gpu.state.blend_get()
     gpu.state.depth_test_set("LESS_EQUAL")
     gpu.state.blend_set("ALPHA")
     sh.bind()
@@ -299,8 +300,8 @@ def draw_hover(context) -> None:
     sh.uniform_float("lineWidth", 2.0)
     sh.uniform_float("color", (1.0, 1.0, 1.0, 0.9))
     batch.draw(sh)
-    gpu.state.blend_set("NONE")
-    gpu.state.depth_test_set("NONE")
+    gpu.state.blend_set(blend)  # Blender's state as it was
+    gpu.state.depth_test_set(depth)
 
 
 class VOXEL_GT_hover(bpy.types.Gizmo):
@@ -403,18 +404,18 @@ def _overlay(context):
 
 
 def register():
-    from .. import strokes, viewport
+    from .. import liveview, strokes
     strokes.register_handlers()
     bpy.utils.register_tool(VoxelEditTool, separator=True)
-    if _overlay not in viewport.OVERLAYS:
-        viewport.OVERLAYS.append(_overlay)
+    if _overlay not in liveview.LIVE.overlays:
+        liveview.LIVE.overlays.append(_overlay)
 
 
 def unregister():
     global _previews
-    from .. import strokes, viewport
-    if _overlay in viewport.OVERLAYS:
-        viewport.OVERLAYS.remove(_overlay)
+    from .. import liveview, strokes
+    if _overlay in liveview.LIVE.overlays:
+        liveview.LIVE.overlays.remove(_overlay)
     bpy.utils.unregister_tool(VoxelEditTool)
     strokes.unregister_handlers()
     strokes.forget()

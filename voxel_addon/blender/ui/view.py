@@ -11,22 +11,21 @@ IMAGE = "Voxel View"
 
 
 def _redraw(self, context):
-    from .. import viewport
-    viewport.sync(context)
+    from .. import liveview
+    liveview.sync(context)
 
 
 # The viewport is where people build: a distance blur hides what they point at, so it
 # starts off here (the CLI's renders keep Settings' default).
 VIEWPORT_OFF = ("dof",)
-
-
 def _effects():
-    """One bool per effect of render.settings (defaults from Settings(), but VIEWPORT_OFF)."""
-    from ...render.settings import EFFECTS, Settings
+    """One bool per effect (defaults from Settings(), but VIEWPORT_OFF)."""
+    from ...render.settings import Settings
+    from ..liveview.options import effects
     s = Settings()
     return {e: BoolProperty(name=e.replace("_", " ").title(),
                             default=getattr(s, e) and e not in VIEWPORT_OFF,
-                            update=_redraw) for e in EFFECTS}
+                            update=_redraw) for e in effects()}
 
 
 def _debug_items(self, context):
@@ -50,12 +49,6 @@ VoxelViewSettings = type("VoxelViewSettings", (bpy.types.PropertyGroup,), {"__an
         ("draft", "Draft", "Half resolution, no shadows, SSAO or distance blur"),
         ("full", "Full", "Every chosen effect at full resolution")]),
     **_effects(),
-    # off here like Blender's own viewport: on llvmpipe 2x multisampling made the full
-    # frame ~2.6x dearer (G-buffer 120 -> 545 ms, deferred light 105 -> 236 ms at
-    # distance 16, 1057x618) for softer leaf and block edges; renders keep theirs
-    "msaa": BoolProperty(name="MSAA", default=False, update=_redraw,
-                         description="2x multisampling in the viewport at full quality (smoother "
-                                     "edges, 2-3x the frame time on software GL); renders always use it"),
     "transparency": EnumProperty(name="Transparency", default="peel", update=_redraw, items=[
         ("peel", "Depth Peeling", "Exact, up to 3 layers"),
         ("oit", "Weighted OIT", "One pass, approximate order")]),
@@ -90,7 +83,9 @@ class VOXEL_OT_render_view(bpy.types.Operator):
                       f"into the image '{IMAGE}' (time of day and effects of the View panel)")
 
     def execute(self, context):
-        from .. import offscreen, session, viewport
+        from .. import session
+        from ..liveview import hours_of, settings_of
+        from ..liveview.still import Still, image_pixels
         from ...core.errors import VoxelError
         from ...render import source
         sc = context.scene
@@ -101,14 +96,14 @@ class VOXEL_OT_render_view(bpy.types.Operator):
             r = sc.render
             w = max(8, r.resolution_x * r.resolution_percentage // 100)
             h = max(8, r.resolution_y * r.resolution_percentage // 100)
-            s = viewport.settings_of(sc.voxel_view, render=True)
+            s = settings_of(sc.voxel_view, render=True)
             s.fov = fov
             world = session.world(sc.voxel.path)
             area = source.world_area(world, cam.x, cam.y, s.distance, s.light_radius)
-            view = offscreen.View(s)
+            view = Still(s)
             try:
                 view.set_area(area)
-                img = view.render(cam, viewport.hours_of(sc), (w, h))
+                img = view.render(cam, hours_of(sc), (w, h))
             finally:
                 view.release()
         except VoxelError as e:
@@ -119,7 +114,7 @@ class VOXEL_OT_render_view(bpy.types.Operator):
             if im is not None:
                 bpy.data.images.remove(im)
             im = bpy.data.images.new(IMAGE, w, h, alpha=False)
-        im.pixels.foreach_set(offscreen.image_pixels(img))
+        im.pixels.foreach_set(image_pixels(img))
         im.update()
         self.report({"INFO"}, f"rendered {w}x{h} into image '{IMAGE}'")
         return {"FINISHED"}
@@ -134,16 +129,17 @@ class VOXEL_PT_view(bpy.types.Panel):
     bl_order = 20
 
     def draw(self, context):
-        from .. import viewport
+        from ..liveview import LIVE
         v = context.scene.voxel_view
         col = self.layout.column()
         col.prop(v, "show", icon="HIDE_OFF" if v.show else "HIDE_ON")
+        col.operator("voxel.frame_world", icon="WORLD")
         if v.show:
-            problem = viewport.problem(context)
+            problem = LIVE.problem(context)
             if problem:
                 col.label(text=problem, icon="ERROR")
             else:
-                st = viewport.STATUS
+                st = LIVE.stats
                 col.label(text=f"chunks {st['drawn']} / {st['wanted']}"
                           + ("  loading…" if st["drawn"] < st["wanted"] else ""))
                 col.label(text=f"last frame {st['ms']:.0f} ms ({st['quality']})")
@@ -169,12 +165,12 @@ class VOXEL_PT_view_effects(bpy.types.Panel):
     bl_options = {"DEFAULT_CLOSED"}
 
     def draw(self, context):
-        from ...render.settings import EFFECTS
+        from ..liveview.options import effects
         v = context.scene.voxel_view
         col = self.layout.column(align=True)
-        for e in EFFECTS:
+        for e in effects():
             col.prop(v, e)
-        col.prop(v, "msaa")
+        col.label(text="MSAA: command-line renders only", icon="INFO")
         col.prop(v, "sky")
         for k in ("exposure", "haze", "cloud_cover"):
             col.prop(v, k)

@@ -11,11 +11,19 @@ def _generators(self, context):
     return [(n, n.capitalize(), f"{n} generator") for n in GENERATORS]
 
 
+def _default_generator() -> int:
+    """Overworld, as an index (a callback's items take an int default): a first world
+    has hills, water and trees, not a green plane."""
+    from ...generation import DEFAULT, GENERATORS
+    return list(GENERATORS).index(DEFAULT)
+
+
 class VoxelWorldSettings(bpy.types.PropertyGroup):
     path: StringProperty(name="File", subtype="FILE_PATH", default="//world.sqlite",
                          description="SQLite world file (// = next to the .blend)")
     seed: IntProperty(name="Seed", default=2019, min=0)
-    generator: EnumProperty(name="Generator", items=_generators)
+    generator: EnumProperty(name="Generator", items=_generators, default=_default_generator(),
+                            description="How the new world is generated")
     keep_edits: BoolProperty(name="Keep Edits", default=True,
                              description="Recreate keeps the blocks you placed or removed")
 
@@ -96,19 +104,37 @@ class VOXEL_OT_world_recreate(bpy.types.Operator):
         return {"FINISHED"}
 
 
+BACKEND_NAMES = {"opencl": "OpenCL", "numpy": "NumPy (CPU)"}
+
+
+def backend_line(backend: str | None = None) -> tuple:
+    """("info", "Generates with", NAME): the open world's generator's backend, or
+    (None) the one a new world would get, and why not OpenCL when it is NumPy."""
+    from ... import opencl
+    if backend is None:
+        backend = opencl.pick(None)
+    text = BACKEND_NAMES.get(backend, backend)
+    if backend == "numpy" and opencl.why_not():
+        text += ", no OpenCL"
+    return ("info", "Generates with", text)
+
+
 def lines(s: VoxelWorldSettings) -> list[tuple]:
     """What the panel shows under New / Open, by the state of the file at s.path:
-    open: its own seed and generator (read-only) and Recreate; missing: the settings
-    New creates it with; there but not open: a hint and Recreate."""
+    open: its own seed and generator (read-only), the backend it generates with and
+    Recreate; missing: the settings New creates it with and the backend it would use;
+    there but not open: a hint and Recreate."""
     import os
     from .. import session
     if session.is_open(s.path):
         w = session.world(s.path)
         gen = getattr(w.generator, "name", "?")
         return [("label", "Open", "CHECKMARK"), ("info", "Seed", str(w.seed)),
-                ("info", "Generator", gen.capitalize()), ("recreate",)]
+                ("info", "Generator", gen.capitalize()),
+                backend_line(getattr(w.generator, "backend", None)), ("recreate",)]
     if not s.path or not os.path.exists(bpy.path.abspath(s.path)):
-        return [("label", "New World:", "ADD"), ("prop", "seed"), ("prop", "generator")]
+        return [("label", "New World:", "ADD"), ("prop", "seed"), ("prop", "generator"),
+                backend_line()]
     return [("label", "Not open: Open it, or Show in Viewport", "INFO"), ("recreate",)]
 
 

@@ -1,0 +1,376 @@
+"""The world live in Blender's 3D viewports (issue 12; thesis §5.3.4–5.5), drawn with
+Blender's own gpu module on any backend (device.py).
+
+`LiveView` (one per Blender: `liveview.LIVE`) owns what the view needs: the draw
+handler, the feed of the shown world (feed.py, shared by every window), per window a
+`Pane` (a Renderer on the shared device, the chunk versions it uploaded, the kept
+frames of its regions), the regions' view state, the redraw timers and the stats the
+panel and the bench read. A SpaceView3D POST_VIEW handler runs per redraw and region:
+
+1. the feed takes the chunks that became ready within a small time budget;
+2. the window's Pane uploads what changed and runs the pipeline with the region's own
+   view and window matrices into its targets;
+3. the frame goes into Blender's framebuffer (composite.py), depth tested, so
+   Blender's objects in front hide voxels and voxels hide objects behind them;
+4. `overlays` run with Blender's state back and the voxels' depth in the depth buffer
+   (the edit tool's hover outline).
+
+Blender redraws a region for many reasons while its view rests (hover, gizmos, the
+UI, other areas). Once it rests the composite goes into the region's kept targets
+and from there into Blender's framebuffer; a redraw where nothing that shapes the
+picture changed (`look`: view, window, size, settings, time of day, uploaded chunks)
+draws only the kept frame. Draft quality while moving or loading, a timer asks for
+redraws while loading and for the full frame once still.
+
+Each window gets its own Pane: framebuffers belong to one GL context, and a platform
+may give each window its own (Blender 4.3/5.2 on X11 draw every window with one).
+"""
+from __future__ import annotations
+
+import time
+import traceback
+from collections import deque
+from dataclasses import astuple
+from typing import NamedTuple
+
+import numpy as np
+
+from ...core.errors import VoxelError
+from .. import firstview
+from . import composite, host
+from .feed import Feed
+from .options import hours_of, settings_of, view_camera
+
+DRAFT_SCALE = 0.5    # draft frames render at this fraction of the region's size
+STILL_S = 0.25       # the view is still this long after its last change: full quality
+BUDGET_S = 0.004     # CPU time per redraw for taking in streamed chunks
+KEPT_MAX = 8         # kept frames per window (one per region; quad view has four)
+
+
+class Frame(NamedTuple):
+    """One redraw of one region, as the bench reads it."""
+    ms: float           # the handler's wall time
+    python_ms: float    # our Python outside the GPU calls (prepare, bookkeeping): this
+                        # thread's CPU time (waits for the GIL, held by the world's
+                        # loader and saver threads, are not ours)
+    quality: str        # "full" or "draft"
+    drawn: int          # chunks drawn
+    upload_ms: float    # chunks uploaded in this redraw
+    reused: bool        # drawn from the kept frame
+    draw_calls: int     # geometry draws of the pipeline (0 when reused)
+    submit_ms: float    # issuing the passes (Python + the backend's CPU work)
+
+
+class Pane:
+    """What one window draws with: a Renderer on the shared device, which chunk
+    versions it uploaded, the kept frames of its regions."""
+
+    def __init__(self, dev):
+        from ...render.pipeline import Renderer
+        from ...render.settings import Settings
+        self.dev = dev
+        self.r = Renderer(dev, Settings())
+        self.versions: dict = {}
+        self.feed = None
+        self.kept: dict = {}     # region pointer -> composite.Kept
+        self.gen = 0             # bumped whenever the uploaded chunks change
+
+    def sync(self, feed) -> int:
+        """Upload what changed in the feed; returns the number of chunks drawn."""
+        r = self.r
+        if self.feed is not feed:  # another world or distance: nothing of ours stays
+            self.feed = feed
+            self.versions = {k: None for k in self.versions}
+        colors = getattr(feed.world, "colors", None)
+        if colors is not None:
+            r.set_palette(colors())  # (cached by the world; compared here)
+        gone = [k for k in self.versions if k not in feed.chunks]
+        new = [p for k, p in feed.chunks.items() if self.versions.get(k) != p.version]
+        if gone or new:
+            self.gen += 1
+        if gone:
+            r.remove_chunks(gone)
+            for k in gone:
+                del self.versions[k]
+        if new:
+            r.update_chunks(new)
+            for p in new:
+                self.versions[p.key] = p.version
+        return len(self.versions)
+
+    def kept_for(self, region, size) -> composite.Kept:
+        """The kept targets of a region (made or resized; the least recently used go
+        beyond KEPT_MAX: regions of closed areas)."""
+        k = self.kept.pop(region, None)
+        if k is not None and k.size != size:
+            k.release(self.dev)
+            k = None
+        self.kept[region] = k = k or composite.Kept(self.dev, size)
+        while len(self.kept) > KEPT_MAX:
+            self.kept.pop(next(iter(self.kept))).release(self.dev)
+        return k
+
+    def release(self) -> None:
+        for k in self.kept.values():
+            k.release(self.dev)
+        self.kept.clear()
+        if self.r is not None:
+            self.r.release()
+            self.r = None
+
+
+class _Region:
+    __slots__ = ("view", "changed", "quality")
+
+    def __init__(self):
+        self.view, self.changed, self.quality = None, 0.0, "full"
+
+
+class LiveView:
+    def __init__(self):
+        self.handle = None            # the SpaceView3D draw handler
+        self.feed: Feed | None = None
+        self.panes: dict = {}         # window pointer -> Pane
+        self.regions: dict = {}       # region pointer -> _Region
+        self.windows = frozenset()    # the windows open at the last frame (pointers)
+        self.lead = None              # the region whose view the stream follows
+        self.error: str | None = None  # the last frame's failure, for the panel
+        self.stats = {"drawn": 0, "wanted": 0, "wanted_shown": 0, "ms": 0.0, "python_ms": 0.0,
+                      "quality": "full", "frames": 0, "reused": 0, "draw_calls": 0}
+        self.frames: deque = deque(maxlen=512)  # the last redraws (Frame), for the bench
+        # f(context) after each voxel frame with Blender's state back and the voxels'
+        # depth in the depth buffer (draw with gpu.state.depth_test_set("LESS_EQUAL"))
+        self.overlays: list = []
+        self.reuse = True             # a still region redraws from its kept frame
+        self.finish = False           # bench: wait for the GPU so frame times are real
+        self._timer_on = False
+        self._tick_fn, self._tick_ui_fn = self._tick, self._tick_ui  # (one object each)
+
+    # ------------------------------------------------------------------ status
+    def problem(self, context) -> str | None:
+        """Why the view cannot run here, as one sentence, or None."""
+        import os
+        import bpy
+        why = host.problem()
+        if why:
+            return why
+        path = context.scene.voxel.path
+        if not path or not os.path.exists(bpy.path.abspath(path)):
+            return "no world open: create or open one in the World panel"
+        return self.error
+
+    # ------------------------------------------------------------------ handler
+    def _draw(self):
+        import bpy
+        context = bpy.context
+        scene = context.scene
+        vv = getattr(scene, "voxel_view", None)
+        if vv is None or not vv.show:
+            return
+        if not self.error and self.problem(context):
+            return
+        try:
+            with host.kept():
+                self._frame(context, scene, vv)
+            self.error = None
+        except VoxelError as e:
+            self.error = str(e)
+        except Exception as e:  # keep drawing Blender; say it once in the panel and console
+            if self.error is None:
+                traceback.print_exc()
+            self.error = f"voxel view failed: {e}"
+        for fn in list(self.overlays):
+            fn(context)
+
+    def _frame(self, context, scene, vv):
+        import gpu
+        t0, c0 = time.perf_counter(), time.thread_time()
+        region, rv3d, window = context.region, context.region_data, context.window
+        if region is None or rv3d is None or window is None:
+            return
+        wins = frozenset(w.as_pointer() for w in context.window_manager.windows)
+        if wins != self.windows:
+            self._prune(context, wins)
+        view = [tuple(r) for r in rv3d.view_matrix]
+        key = region.as_pointer()
+        st = self.regions.setdefault(key, _Region())
+        now = time.perf_counter()
+        if view != st.view:
+            if st.view is not None or self.lead not in self.regions:
+                self.lead = key  # the region being navigated leads the stream
+            st.view, st.changed = view, now
+        moving = now - st.changed < STILL_S
+        cam = view_camera(rv3d.view_matrix, rv3d.window_matrix, vv.distance * 16 * 1.5 + 256.0)
+        feed = self._feed_for(scene)
+        # the stream follows one region (quad view: the one last navigated): the eye of a
+        # perspective view, the pivot of an orthographic one (its eye is arbitrary)
+        at = None
+        if key == self.lead:
+            at = tuple(rv3d.view_location)[:2] if cam.ortho else (cam.x, cam.y)
+        loading = feed.update(at, cam.forward, BUDGET_S)
+        self.stats["wanted"] = feed.wanted
+        # draft while moving and while chunks stream in: a full frame holds the GIL for
+        # seconds on software GL and starves the stream's worker thread
+        draft = vv.quality == "draft" or (vv.quality == "auto" and (moving or loading))
+        s = settings_of(vv, draft)
+        if cam.ortho:
+            # distance fog needs an eye; an orthographic view's is arbitrary (it moves with
+            # the zoom), and a side view would show the far half of the area washed out
+            s.fog = False
+        else:
+            s.fov = min(150.0, max(10.0, cam.fov))
+        host_vp = np.array(rv3d.perspective_matrix, np.float64)
+        hours = hours_of(scene)
+        pane = self.panes.get(window.as_pointer())
+        if pane is None:
+            pane = self.panes[window.as_pointer()] = Pane(host.device())
+        t_py = time.thread_time() - c0
+        t1 = time.perf_counter()
+        drawn = pane.sync(feed)
+        t_sync = time.perf_counter() - t1
+        vw, vh = gpu.state.viewport_get()[2:]
+        # everything the picture depends on (Blender's objects are mixed in by depth
+        # on every redraw): the same again, and the kept frame is the frame
+        look = (tuple(view), tuple(map(tuple, rv3d.window_matrix)), (vw, vh), astuple(s), hours,
+                vv.sky, pane.gen)
+        k = pane.kept.get(key)
+        reused, calls, t_sub = False, 0, 0.0
+        if self.reuse and k is not None and k.look == look:
+            t1 = time.perf_counter()
+            composite.draw_kept(pane.dev, k)
+            t_sub = time.perf_counter() - t1
+            reused, draft = True, k.quality == "draft"
+        else:
+            pane.r.s = s
+            scale = DRAFT_SCALE if draft else 1.0
+            size = (max(8, int(vw * scale)), max(8, int(vh * scale)))
+            c1 = time.thread_time()
+            f = pane.r.prepare(cam, hours, size)
+            t_py += time.thread_time() - c1
+            t2 = time.perf_counter()
+            pane.r.submit(f)
+            # kept only once the view rests: a frame while moving or loading is the last
+            k = pane.kept_for(key, (vw, vh)) if self.reuse and not (moving or loading) else None
+            composite.composite(pane.dev, f, host_vp, vv.sky, k)
+            t_sub = time.perf_counter() - t2
+            if k is not None:
+                k.look, k.quality = look, "draft" if draft else "full"
+            calls = f.stats["draw_calls"]
+        if self.finish:
+            pane.dev.finish()
+        ms = (time.perf_counter() - t0) * 1e3
+        q = "draft" if draft else "full"
+        S = self.stats
+        if (drawn, S["wanted"], q) != (S["drawn"], S["wanted_shown"], S["quality"]):
+            self._panel_redraw()  # the sidebar shows progress and quality
+        S.update(drawn=drawn, ms=ms, python_ms=t_py * 1e3, quality=q, frames=S["frames"] + 1,
+                 wanted_shown=S["wanted"], reused=S["reused"] + reused, draw_calls=calls)
+        self.frames.append(Frame(ms, t_py * 1e3, q, drawn, t_sync * 1e3, reused, calls,
+                                 t_sub * 1e3))
+        st.quality = q
+        if loading or drawn < S["wanted"]:
+            # as long again as the frame took: the worker gets at least half the time
+            self._want_redraw(max(0.05, ms / 1e3))
+        elif draft and vv.quality == "auto":  # once the view is still: a full frame
+            self._want_redraw(max(0.02, STILL_S - (time.perf_counter() - st.changed)))
+
+    def _feed_for(self, scene) -> Feed:
+        from .. import session
+        vv = scene.voxel_view
+        world = session.world(scene.voxel.path)
+        f = self.feed
+        if f is None or f.world is not world or f.distance != vv.distance:
+            if f is not None:
+                f.close()
+            self.feed = Feed(scene.voxel.path, world, vv.distance)
+            self.stats.update(drawn=0, wanted=0)
+            firstview.shown(scene.voxel.path)  # the first minute: views underground come up
+        return self.feed
+
+    def _prune(self, context, wins) -> None:
+        """A window opened or closed: forget the regions that went, and the Pane of a
+        window that is no longer open."""
+        self.windows = wins
+        live = {r.as_pointer() for w in context.window_manager.windows
+                for a in w.screen.areas for r in a.regions}
+        for k in [k for k in self.regions if k not in live]:
+            del self.regions[k]
+        for w in [w for w in self.panes if w not in wins]:
+            self.panes.pop(w).release()
+
+    # ------------------------------------------------------------------ redraws
+    def _want_redraw(self, after: float) -> None:
+        import bpy
+        if not self._timer_on:
+            self._timer_on = True
+            bpy.app.timers.register(self._tick_fn, first_interval=after)
+
+    def _panel_redraw(self) -> None:
+        import bpy
+        if not bpy.app.timers.is_registered(self._tick_ui_fn):
+            bpy.app.timers.register(self._tick_ui_fn, first_interval=0.01)
+
+    def _tick_ui(self):
+        """Redraw the sidebars (not from inside a draw handler: that would loop)."""
+        import bpy
+        wm = bpy.context.window_manager
+        for win in (wm.windows if wm else ()):
+            for area in win.screen.areas:
+                if area.type == "VIEW_3D":
+                    for r in area.regions:
+                        if r.type == "UI":
+                            r.tag_redraw()
+        return None
+
+    def _tick(self):
+        """Redraw while chunks stream in or a region still shows a draft frame."""
+        self._timer_on = False
+        redraw()
+        return None
+
+    # ------------------------------------------------------------------ life cycle
+    def sync(self) -> None:
+        """Install the draw handler when a scene shows the view; redraw viewports."""
+        import bpy
+        show = any(getattr(getattr(s, "voxel_view", None), "show", False) for s in bpy.data.scenes)
+        if show and self.handle is None:
+            self.handle = bpy.types.SpaceView3D.draw_handler_add(self._draw, (), "WINDOW",
+                                                                 "POST_VIEW")
+        self.error = None
+        redraw()
+
+    def close(self) -> None:
+        """Drop the world's chunks, the handler and every GPU object (a new file,
+        unregister)."""
+        import bpy
+        if self.handle is not None:
+            bpy.types.SpaceView3D.draw_handler_remove(self.handle, "WINDOW")
+            self.handle = None
+        if self.feed is not None:
+            self.feed.close()
+            self.feed = None
+        self.regions.clear()
+        self.windows = frozenset()
+        for p in self.panes.values():
+            p.release()
+        self.panes.clear()
+        host.forget_device()
+        self.stats.update(drawn=0, wanted=0)
+        self.error = None
+
+    def stop_timers(self) -> None:
+        import bpy
+        for fn in (self._tick_fn, self._tick_ui_fn):
+            if bpy.app.timers.is_registered(fn):
+                bpy.app.timers.unregister(fn)
+        self._timer_on = False
+
+
+def redraw() -> None:
+    """Ask every 3D viewport to redraw (the view's picture changed: an edit, a setting)."""
+    import bpy
+    wm = bpy.context.window_manager
+    for win in (wm.windows if wm else ()):
+        for area in win.screen.areas:
+            if area.type == "VIEW_3D":
+                area.tag_redraw()

@@ -1,0 +1,117 @@
+"""The passes of a frame for one set of targets and one combination of switches:
+programs (compiled once per combination of defines by the device), targets and input
+textures bound to each pass. The renderer keeps one graph per `Switches` until the
+targets or the light volume change.
+
+Order: shadow map -> G-buffer -> transparency geometry (peel layers) -> deferred light
+-> transparency shading (peel layers lit, or OIT) -> SSAO and its blur -> composite
+(sky, layers, god rays) -> distance blur -> final (thesis fig. 5.15).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .device import State
+from .passes import GeometryPass, Pass, Peel
+from . import oit
+
+# a debug view's DEBUG define in the shaders (include/shade.glsl); "culling" draws the
+# normal picture from above
+DEBUG_DEFINE = {"none": 0, "albedo": 1, "normal": 2, "depth": 3, "light": 4,
+                "aggregation": 5, "culling": 0}
+SHADED = ("none", "culling")  # views with sky, shadows, SSAO and god rays
+DEPTH_LESS = State("less", True, True)
+
+
+@dataclass(frozen=True)
+class Switches:
+    """What decides a frame's passes and their programs."""
+    samples: int         # MSAA samples (1: none)
+    debug: str           # settings.DEBUG_VIEWS
+    shadows: bool
+    layers: int          # depth-peeling layers drawn (0 with OIT or nothing transparent)
+    ssao: bool
+    godrays: bool
+    dof: bool
+    smooth_mag: bool
+    msaa_alpha: bool
+    per_sample: bool
+    fog: bool
+    fill_holes: bool
+    oit: bool
+
+
+class Graph:
+    """A frame's passes (passes.py)."""
+    __slots__ = ("shadow", "g", "shade", "transparency", "post")
+
+    def programs(self) -> list:
+        return [p for x in (self.shadow, self.g, self.shade, self.transparency, *self.post)
+                if x is not None for p in x.programs()]
+
+
+def build(dev, T, sw: Switches, blocks, vol, walls) -> Graph:
+    """T: targets.Targets (with what sw needs), blocks: blocktex.BlockTextures, vol:
+    the light volume's texture, walls: the border columns' heights (walls.py)."""
+    ms, dbg = sw.samples, DEBUG_DEFINE[sw.debug]
+    cut = {"ALPHA_TEST": 1, "MSAA_ALPHA": sw.msaa_alpha}
+    g = {"SAMPLES": ms, "SMOOTH_MAG": sw.smooth_mag, "DEBUG_AGG": sw.debug == "aggregation"}
+    d = {"SAMPLES": ms, "PER_SAMPLE": sw.per_sample, "SHADOWS": sw.shadows,
+         "FOG": sw.fog and sw.debug == "none", "DEBUG": dbg}
+    parts = [("opaque", {}), ("cutout", cut), ("cutout2", cut)]
+    tex = blocks.bindings()
+
+    def block(defines):
+        return dev.program("block.vert", "block.frag", defines)
+
+    def full(frag, defines=None):
+        return dev.program("fullscreen.vert", frag, defines)
+
+    sm = {"shadow_map": T.shadow} if sw.shadows else {}
+
+    def gbuf(x):
+        return dict(g_depth=x.depth, g_albedo=x.albedo, g_normal=x.normal, light_vol=vol, **sm)
+
+    G = Graph()
+    G.shadow = GeometryPass(dev, T.shadow_fb, [
+        (n, block({"SHADOW": 1, "ALPHA_TEST": n != "opaque"})) for n, _ in parts],
+        DEPTH_LESS, **tex) if sw.shadows else None
+    G.g = GeometryPass(dev, T.g.target, [(n, block({**g, **x})) for n, x in parts], DEPTH_LESS,
+                       **tex)
+    G.shade = Pass(dev, T.shaded, full("deferred.frag", {**d, "FILL_HOLES": sw.fill_holes}),
+                   clear=True, wall_tops=walls, tex=tex["tex"], **gbuf(T.g))
+    if sw.oit:  # resolved into layer 0: the composite blends it as one peel layer
+        G.transparency = oit.OIT(
+            GeometryPass(dev, T.oit_fb, [("blend", block({**g, **d, "OIT": 1}))],
+                         State("less", False, False, "add"),
+                         light_vol=vol, **tex, **sm),
+            Pass(dev, T.layer_fb[0], full("oit_resolve.frag", {"SAMPLES": ms}),
+                 accum=T.accum, reveal=T.reveal))
+    else:  # no blending, the nearest remaining layer each time
+        layer = full("deferred.frag", {**d, "LAYER": 1}) if sw.layers else None
+        G.transparency = Peel(
+            [GeometryPass(dev, p.target, [("blend", block({**g, "PEEL": i + 1}))],
+                          State("less", True, False), opaque_depth=T.g.depth,
+                          prev_depth=T.peel[i - 1].depth if i else T.g.depth, **tex)
+             for i, p in enumerate(T.peel[:sw.layers])],
+            [Pass(dev, f, layer, clear=True, **gbuf(p))
+             for f, p in zip(T.layer_fb[:sw.layers], T.peel)])
+    post = []
+    if sw.ssao:
+        post += [Pass(dev, T.ao_fb[0], full("ssao.frag"), front=T.front),
+                 Pass(dev, T.ao_fb[1], full("blur.frag", {"VERTICAL": 0}), src=T.ao[0]),
+                 Pass(dev, T.ao_fb[0], full("blur.frag", {"VERTICAL": 1}), src=T.ao[1])]
+    # composite: sky, layers, god rays
+    post.append(Pass(dev, T.comp_fb, full("composite.frag", {
+        "LAYERS": G.transparency.layers, "SSAO": sw.ssao, "GODRAYS": sw.godrays}),
+        opaque=T.opaque, front=T.front, **({"ao": T.ao[0]} if sw.ssao else {}),
+        **{f"layer{i}": x for i, x in enumerate(T.layers)}))
+    if sw.dof:  # distance blur
+        post += [Pass(dev, T.blur_fb[0], full("blur.frag", {"BILATERAL": 1, "VERTICAL": 0}),
+                      src=T.comp),
+                 Pass(dev, T.blur_fb[1], full("blur.frag", {"BILATERAL": 1, "VERTICAL": 1}),
+                      src=T.blur[0])]
+    post.append(Pass(dev, T.out_fb, full("final.frag", {"DOF": sw.dof}), sharp=T.comp,
+                     **({"blurred": T.blur[1]} if sw.dof else {})))
+    G.post = post
+    return G

@@ -1,0 +1,90 @@
+"""The frame's render targets at one size: the ones every frame uses, and those of the
+effects a frame needs (peel layers, SSAO, distance blur, shadows, OIT), each made the
+first time a frame uses it and kept until the size or the switches that shape them
+change (the viewport's defaults leave a third of them unused: ~30 MB at 1057x618)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Shape:
+    """What the targets are made for."""
+    size: tuple          # (w, h)
+    samples: int         # MSAA samples of the G-buffers (1: none)
+    shadow_size: int
+    oit: bool            # weighted blended OIT's accumulation targets
+
+
+class GBuffer:
+    """Depth, albedo, normal (+ glow in alpha): a geometry pass's outputs."""
+
+    def __init__(self, dev, size, samples):
+        self.depth = dev.texture(size, "depth", samples=samples)
+        self.albedo = dev.texture(size, "rgba8", samples=samples)
+        self.normal = dev.texture(size, "rgba8", samples=samples)
+        self.target = dev.target([self.albedo, self.normal], self.depth)
+
+    def parts(self):
+        return [self.target, self.depth, self.albedo, self.normal]
+
+
+class Targets:
+    def __init__(self, dev, shape: Shape):
+        self.dev, self.shape = dev, shape
+        size, ms = shape.size, shape.samples
+        self.size, self.samples = size, ms
+        self.g = GBuffer(dev, size, ms)
+        self.peel: list[GBuffer] = []
+        self.opaque, self.front = dev.texture(size, "rgba16f"), dev.texture(size, "rgba32f")
+        self.shaded = dev.target([self.opaque, self.front])  # deferred light's outputs
+        self.comp = dev.texture(size, "rgba16f")
+        self.comp_fb = dev.target([self.comp])
+        self.out = dev.texture(size, "rgba8")              # the final image
+        self.out_fb = dev.target([self.out])
+        self.layers, self.layer_fb = [], []               # shaded peel layers (OIT: one)
+        self.ao = self.ao_fb = self.blur = self.blur_fb = None
+        self.shadow = self.shadow_fb = None
+        self.accum = self.reveal = self.oit_fb = None
+        if shape.oit:  # only while OIT is chosen: peeling frames never pay for its targets
+            self.accum = dev.texture(size, "rgba16f", samples=ms)
+            self.reveal = dev.texture(size, "r16f", samples=ms)
+            self.oit_fb = dev.target([self.accum, self.reveal], self.g.depth)
+
+    def need(self, layers: int, ssao: bool, dof: bool, shadows: bool) -> None:
+        """Add the targets of these effects that are not made yet."""
+        dev, size = self.dev, self.size
+        while len(self.peel) < layers:
+            self.peel.append(GBuffer(dev, size, self.samples))
+        while len(self.layers) < max(layers, 1 if self.shape.oit else 0):  # OIT: layer 0
+            self.layers.append(dev.texture(size, "rgba16f"))
+            self.layer_fb.append(dev.target([self.layers[-1]]))
+        if ssao and self.ao is None:
+            self.ao = [dev.texture(size, "r8"), dev.texture(size, "r8")]
+            self.ao_fb = [dev.target([t]) for t in self.ao]
+        if dof and self.blur is None:
+            self.blur = [dev.texture(size, "rgba16f"), dev.texture(size, "rgba16f")]
+            self.blur_fb = [dev.target([t]) for t in self.blur]
+        if shadows and self.shadow is None:
+            s = self.shape.shadow_size
+            self.shadow = dev.texture((s, s), "depth")
+            self.shadow_fb = dev.target([], self.shadow)
+
+    @property
+    def nbytes(self) -> int:
+        return sum(t.nbytes for t in self._textures())
+
+    def _textures(self):
+        for x in (self.g, *self.peel):
+            yield from (x.depth, x.albedo, x.normal)
+        for x in (self.opaque, self.front, self.comp, self.out, *self.layers, *(self.ao or ()),
+                  *(self.blur or ()), self.shadow, self.accum, self.reveal):
+            if x is not None:
+                yield x
+
+    def release(self) -> None:
+        fbs = [self.g.target, *(p.target for p in self.peel), self.shaded, self.comp_fb,
+               self.out_fb, *self.layer_fb, *(self.ao_fb or ()), *(self.blur_fb or ()),
+               self.shadow_fb, self.oit_fb]
+        self.dev.release(*fbs)
+        self.dev.release(*self._textures())

@@ -62,3 +62,4 @@
 //@ frame bool water_fx
 //@ frame bool walls            // close the shown area's outer wall (include/walls.glsl)
 //@ frame int wall_layer        // its texture (stone's, in the block textures)
+//@ frame bool ssr              // water reflects the scene on screen (include/ssr.glsl)

@@ -11,6 +11,9 @@
 #include "include/eye.glsl"
 #include "include/sky.glsl"
 #include "include/tonemap.glsl"
+#ifdef LAYER
+#include "include/ssr.glsl"
+#endif
 
 #ifndef DEBUG
 #define DEBUG 0
@@ -102,6 +105,13 @@ vec4 shade_surface(vec4 albedo, vec3 p, vec3 n, float glow) {
         float f = fresnel(water ? 0.02 : 0.04, dot(-v, m));
         float direct = day * (sky_light_dir.z > 0.0 ? shadow_at(p, n) * cloud_shadow(p) : 0.0);
         vec3 r = reflection(p, v, m, direct, true) * day;
+#ifdef LAYER
+        if (water && ssr) {  // the scene where the reflected ray meets it on screen
+            vec3 rd = reflect(v, m);
+            vec4 s = ssr_trace(p, normalize(vec3(rd.xy, max(rd.z, 1e-3))));
+            r = mix(r, s.rgb, s.a);
+        }
+#endif
         o = vec4(o.rgb * (1.0 - f) + r * f, o.a + f * (1.0 - o.a));
     }
 #endif

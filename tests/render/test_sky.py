@@ -70,6 +70,22 @@ def test_water_is_brighter_under_a_brighter_sky(gl):
     assert abs(lum(b[water]).mean() - lum(a[water]).mean()) < 1.5
 
 
+def test_water_reflects_the_terrain_on_screen(gl):
+    """A sand wall behind the pool, seen at a grazing angle: with the screen-space
+    reflection the water shows it (yellower than the sky it shows without)."""
+    from voxel_addon.core.blocks import REGISTRY
+    b = _pool("stone")
+    b[6:26, 25, 63:80] = REGISTRY.id("sand")
+    water = (slice(29, 34), slice(22, 74))
+    yellow = {}
+    for on in (True, False):
+        r = renderer(gl, b, clouds=False, shadows=False, ssr=on)
+        img = r.render(Camera(16, -2, 66, 90, -12), 10.0, SIZE).astype(float)[water]
+        r.release()
+        yellow[on] = (img[..., 0] + img[..., 1] - 2 * img[..., 2]).mean()
+    assert yellow[True] > yellow[False] + 40, yellow
+
+
 def test_clouds_drift_in_ten_minutes(gl):
     up = Camera(16, 16, 70, 30, 50)
     diffs = {}

@@ -94,7 +94,7 @@ def build(dev, T, sw: Switches, blocks, vol, walls) -> Graph:
                           State("less", True, False), opaque_depth=T.g.depth,
                           prev_depth=T.peel[i - 1].depth if i else T.g.depth, **tex)
              for i, p in enumerate(T.peel[:sw.layers])],
-            [Pass(dev, f, layer, clear=True, **gbuf(p))
+            [Pass(dev, f, layer, clear=True, ssr_color=T.opaque, ssr_front=T.front, **gbuf(p))
              for f, p in zip(T.layer_fb[:sw.layers], T.peel)])
     post = []
     if sw.ssao:

@@ -394,7 +394,7 @@ def sky_values(s: Settings, sp: dict, hours: float, sky_on: bool, camera, area,
         display=(2 if s.tonemap else 1) if sky_on else (1 if s.debug == "light" else 0),
         clouds=s.clouds and sky_on, cloud_shadows=s.cloud_shadows,
         sea=s.sea and sky_on and s.sea_level >= 0,
-        water_fx=s.water and sky_on)
+        water_fx=s.water and sky_on, ssr=s.water and s.ssr and sky_on)
 
 
 def _top_camera(camera: cam.Camera) -> cam.Camera:

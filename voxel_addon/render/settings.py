@@ -9,7 +9,7 @@ DEBUG_VIEWS = ("none", "albedo", "normal", "depth", "light", "aggregation", "cul
 # effect name -> (field, value when switched on by --effects)
 EFFECTS = ("shadows", "ssao", "fog", "dof", "godrays", "waving", "smooth_mag",
            "fill_holes", "msaa_alpha", "per_sample", "tonemap", "clouds", "cloud_shadows",
-           "water", "sea", "fade", "stars", "walls")
+           "water", "ssr", "sea", "fade", "stars", "walls")
 
 TRANSPARENCY = ("peel", "oit")
 
@@ -54,6 +54,7 @@ class Settings:
     cloud_shadows: bool = True
     water: bool = True            # water and glass: sky reflections, Fresnel, sun glint,
                                   # waves, colour by depth
+    ssr: bool = True              # water reflects the scene on screen (screen-space reflection)
     sea: bool = True              # a sea to the horizon beyond the shown area
     sea_level: int = -1           # the world's water level (its generator's, water up to
                                   # this z; source.sea_level); -1: no sea

@@ -4,7 +4,12 @@
 // accumulation instead of a G-buffer). (SMOOTH_MAG, the edge-aware magnification of
 // fig. 6.3, moved texel borders under a nearest magnification filter, which made it
 // the nearest texel again: it had no visible effect and is not applied here.)
+// Albedo stays sRGB-encoded as the textures are (8 bits hold it better; shade.glsl
+// decodes it once per shaded sample, not per fragment of every overdrawn layer);
+// water (its glow texels are 1, render/blocktex.py; other glow stays below) is marked
+// by glow 1 and, as the nearest peeled layer, takes its colour and opacity from its depth.
 #include "include/common.glsl"
+#include "include/frame.glsl"
 #ifdef OIT
 #include "include/shade.glsl"
 #endif
@@ -64,6 +69,15 @@ void oit(vec4 c) {
 }
 #endif
 
+// Water over `s` blocks of depth (to the opaque floor): more of its own colour and
+// less of the floor the deeper it is (Beer-Lambert, one grey transmittance). The
+// factors are on linear light; c is encoded, so they are too (^(1/2.2)).
+vec4 water_body(vec4 c, float s) {
+    float k = 1.0 - exp(-s * 0.25);
+    vec3 f = mix(vec3(0.5, 0.6, 0.5), vec3(0.08, 0.2, 0.16), k);
+    return vec4(c.rgb * pow(f, vec3(1.0 / 2.2)), mix(0.3, 0.95, k));
+}
+
 void main() {
 #ifdef PEEL
     // behind the opaque scene, or not behind the previous layer: not this layer's
@@ -84,6 +98,13 @@ void main() {
     vec3 n = gl_FrontFacing ? g_normal : -g_normal;  // double-sided passes
     ivec2 gi = ivec2(floor(g_uv * 16.0)) & 15;  // nearest, repeated
     float glow = texelFetch(glow_tex, ivec3(gi, int(g_layer)), 0).r;  // (mask x block glow)
+#if defined(PEEL) && PEEL == 1
+    if (glow > 0.999 && water_fx) {  // water (blocktex.py's mark), the nearest layer
+        float d = FETCH(opaque_depth, pc, gl_SampleID).r;
+        vec2 uv = gl_FragCoord.xy / vec2(textureSize(opaque_depth MS_ARG));
+        c = water_body(c, d < 1.0 ? distance(g_world, world_pos(inv_vp, uv, d)) : 64.0);
+    }
+#endif
 #ifdef DEBUG_AGG
     c.rgb = hash_color(g_quad * 7919u + uint(g_layer));  // one colour per merged quad
     glow = 0.0;

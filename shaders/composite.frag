@@ -1,4 +1,5 @@
-// First global pass (§5.4): sky behind the opaque layer, peel layers back to front,
+// First global pass (§5.4): sky (with clouds, or the sea beyond the shown area:
+// include/sky.glsl background) behind the opaque layer, peel layers back to front,
 // SSAO, god rays sampled across the whole sun disc (fixes fig. 5.23).
 // Defines: LAYERS (0..3), SSAO, GODRAYS.
 #include "include/eye.glsl"
@@ -37,10 +38,25 @@ float godrays(vec2 p) {
 void main() {
     vec2 size = vec2(textureSize(opaque, 0));
     vec3 dir = ray_dir(v_uv);
-    vec3 sky = sky_color(dir, sun_visible ? distance(gl_FragCoord.xy, sun_px) : 1e9, sun_radius);
+    vec3 ro = ortho ? world_pos(inv_vp, v_uv, 0.0) : cam_pos;
     vec4 o = texture(opaque, v_uv);
+    float front_d = texture(front, v_uv).r;
+    // the sea: behind what does not cover the pixel, and beyond the shown area in front
+    // of what of the area lies below its surface (one evaluation for both)
+    float t = sea_hit(ro, dir);
+    vec3 hit = ro + dir * t;
+    bool sea_front = t > 0.0 && front_d < 1e8 && eye_dist(hit) < front_d && !in_area(hit.xy);
+    bool sea_behind = t > 0.0 && o.a < 0.999;
+    vec3 sea_c = sea_front || sea_behind ? sea_color(ro, hit) : vec3(0.0);
+    // parallel rays all look one way: below the horizon (where no sea is) an
+    // orthographic view shows the sky as seen that far up, not the ground's haze
+    vec3 bg = ortho ? vec3(dir.xy, abs(dir.z)) : dir;
+    // (not behind surfaces that cover the pixel: the clouds' noise is the dear part)
+    vec3 sky = sea_behind ? sea_c : o.a < 0.999
+        ? background(ro, bg, sun_visible ? distance(gl_FragCoord.xy, sun_px) : 1e9, sun_radius)
+        : vec3(0.0);
 #ifdef SSAO
-    o.rgb *= texture(ao, v_uv).r;
+    o.rgb *= pow(texture(ao, v_uv).r, 2.2);  // a factor on screen, as the light levels
 #endif
     vec3 c = o.rgb + sky * (1.0 - o.a);
     // back to front over premultiplied layers
@@ -53,8 +69,9 @@ void main() {
 #if LAYERS > 0
     vec4 l0 = texture(layer0, v_uv); c = c * (1.0 - l0.a) + l0.rgb;
 #endif
+    if (sea_front) c = sea_c;
 #ifdef GODRAYS
-    if (sun_visible) c += sky_disc * 0.12 * godray_strength * godrays(gl_FragCoord.xy);
+    if (sun_visible) c += sky_disc * godray_strength * godrays(gl_FragCoord.xy);  // (render/sky.py godray_scale)
 #endif
-    out_color = vec4(c, texture(front, v_uv).r);
+    out_color = vec4(c, front_d);
 }

@@ -1,11 +1,15 @@
 // Deferred light for one layer (opaque or a depth-peeling layer), thesis §5.4:
 // world position from depth, then include/shade.glsl (light volume + eq. 4.1, sun/moon
-// shadow map, fog).
+// shadow map, fog); the opaque layer also closes the shown area's outer wall
+// (include/walls.glsl).
 // Defines: SAMPLES, PER_SAMPLE, SHADOWS, LAYER (peel layer: premultiplied alpha
 // out), FOG, FILL_HOLES (T-junction holes), DEBUG (1 albedo, 2 normal, 3 depth,
 // 4 light, 5 aggregation).
 #include "include/common.glsl"
 #include "include/shade.glsl"
+#ifndef LAYER
+#include "include/walls.glsl"
+#endif
 
 //@ sampler gdepth2D g_depth
 //@ sampler gsampler2D g_albedo
@@ -68,6 +72,17 @@ void main() {
             }
             if (n >= 3) f = best;
         }
+#endif
+#ifndef LAYER
+        vec3 wp, wn;
+        int row;
+        if (walls && wall_hit(v_uv, wp, wn, row) && (f.depth >= 1.0
+                || eye_dist(wp) < eye_dist(world_pos(inv_vp, v_uv, f.depth)) - 1e-3)) {
+            acc += shade_surface(wall_albedo(wp, row, v_uv, px.y), wp, wn, 0.0);  // the outer wall
+            dmin = min(dmin, eye_dist(wp));
+            nsum += wn;
+            hits++;
+        } else
 #endif
         if (f.depth < 1.0) {
             float dist;

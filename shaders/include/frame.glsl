@@ -37,5 +37,31 @@
 //@ frame int vol_n             // the light volume (include/lightvol.glsl): slots per side
 //@ frame ivec2 vol_lo          // its resident box, in blocks
 //@ frame ivec2 vol_hi
+// the physical sky (render/sky.py, include/atmosphere.glsl), haze, clouds, sea, fade
+//@ frame vec4 sky_a[81]        // per node (SKY_NE elevations x SKY_NA azimuths from the
+                                // sun): log of the sky's radiance but the sun's Mie scattering
+//@ frame vec4 sky_b[81]        // log of the sun's Mie scattering there, without its phase
+//@ frame vec3 sun_dir          // towards the sun
+//@ frame float fog_density     // haze per block at sea level
+//@ frame vec3 sky_pole         // the stars turn around it
+//@ frame float fog_height      // haze 1/e per blocks of height
+//@ frame vec3 cloud_sun        // light on the clouds: sun (or moon)
+//@ frame float cloud_cover     // 0..1
+//@ frame vec3 cloud_sky        // and from the sky
+//@ frame float cloud_z         // height of the layer
+//@ frame vec2 cloud_drift      // blocks
+//@ frame float sea_z           // the sea's top
+//@ frame float star_px         // a pixel (radians)
+//@ frame vec4 area_box         // x0, y0, x1, y1 of the shown area (blocks): the sea is beyond it
+//@ frame float fade_start      // horizontal distance: surfaces fade to the sky
+//@ frame float fade_end
+//@ frame int display           // 0 raw (debug views), 1 sRGB, 2 AgX-like tone curve (tonemap.glsl)
+//@ frame bool clouds
+//@ frame bool cloud_shadows
+//@ frame bool sea
+//@ frame bool water_fx
+//@ frame bool walls            // close the shown area's outer wall (include/walls.glsl)
+//@ frame int wall_layer        // its texture (stone's, in the block textures)
+//@ frame bool ssr              // water reflects the scene on screen (include/ssr.glsl)
 //@ frame mat4 far_inv_vp        // far terrain's projection, inverted (render/far.py)
 //@ frame float far_split        // 0: one depth range; 0.5: far terrain's depths from here on

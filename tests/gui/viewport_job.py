@@ -339,6 +339,25 @@ def step_far():
             bpy.data.objects.remove(o)
 
 
+def step_side():
+    """An orthographic front view of the whole shown area from outside (its y0 side),
+    with the outer wall closed (Settings.walls) and open (the control)."""
+    from voxel_addon.blender.liveview import LIVE
+    sc = bpy.context.scene
+    sc.voxel_view.show = True
+    sc.voxel_view.hours = 12.0
+    set_view((8.0, 8.0, 60.0), (90, 0, 0), 420.0, "ORTHO")
+    for on in (True, False):
+        sc.voxel_view.walls = on
+        yield from wait_frames()
+        cx0, cy0, cx1, cy1 = next(iter(LIVE.panes.values())).r.area
+        xs = [16 * cx0 + (16 * (cx1 - cx0)) * (i + 0.5) / 24 for i in range(24)]
+        record("side" if on else "side_open", area=[cx0, cy0, cx1, cy1],
+               band=[project((x, 16.0 * cy0, z)) for x in xs for z in (8.0, 16.0, 24.0, 32.0, 40.0)],
+               sky=[project((x, 16.0 * cy0, 200.0)) for x in xs])
+    sc.voxel_view.walls = True
+
+
 def step_stream():
     """Moving the view by 6 chunks brings in new chunks."""
     from voxel_addon.blender.liveview import LIVE
@@ -653,6 +672,7 @@ def run():
 
 STEPS = {"top": step_top, "still": step_still, "sky": step_sky, "camera": step_camera,
          "far": step_far,
+         "side": step_side,
          "stream": step_stream, "redraws": step_redraws, "quad": step_quad, "window": step_window,
          "problem": step_problem,
          "newfile": step_newfile, "animation": step_animation, "leak": step_leak}

@@ -56,7 +56,9 @@ def test_render_a_world_day_and_night(world, tmp_path):
     assert r.returncode == 0, r.stderr
     lit = png(tmp_path / "lamp.png")
     centre = (slice(10, 30), slice(20, 44))
-    assert lit[centre].mean() > out["night"][centre].mean() + 10
+    # (a tenth of the centre at least: the lamp stands by the water, which lets light
+    # through and shows little of it itself)
+    assert np.percentile((lit - out["night"])[centre].mean(2), 90) > 15
     assert lit[centre][..., 0].mean() > lit[centre][..., 2].mean(), "yellow light"
 
 

@@ -17,7 +17,16 @@ def test_block_layout_matches_the_driver(gl):
     block = frame.FrameBlock()
     kinds = {n: kind for n, (_, _, kind) in members.items()}
     assert {"waving", "sun_visible", "ortho"} <= {n for n, kd in kinds.items() if kd == "b"}
+    assert kinds.get("sky_a") == "a"  # vec4 arrays: one pixel per element
     for name, (_, n, kind) in members.items():
+        if kind == "a":
+            v = rng.uniform(-10, 10, (n // 4, 4))
+            block.set(**{name: v})
+            for i in range(n // 4):
+                lines.append(f"if (k == {k}) r = {name}[{i}];")
+                want.append(v[i])
+                k += 1
+            continue
         if kind == "b":  # bools: true for any non-zero
             v = rng.integers(0, 2, n)
         elif kind == "i":

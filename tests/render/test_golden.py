@@ -44,8 +44,9 @@ def render_scene(gl, name):
     h = hashlib.sha256(repr((sc.camera, sc.time)).encode())
     for arr in (a.blocks, a.light):
         h.update(np.ascontiguousarray(arr).tobytes())
-    r = Renderer(gl, Settings())
+    r = Renderer(gl, Settings(sea_level=source.scene_sea_level(name)))  # as the CLI renders
     r.set_area(a.blocks, a.light, a.cx0, a.cy0, ring=True, light_at=a.light_at)
+    r.s.sea = source.open_sea(r)
     img = r.render(Camera(*sc.camera), daytime.parse_time(sc.time), SIZE)
     r.release()
     return img, h.hexdigest()[:16]

@@ -14,7 +14,8 @@ def test_set_parses_by_field_type():
 
 
 @pytest.mark.parametrize("item", ["shadow_size=2.5", "fov=", "nope=1", "fov", "debug=sepia",
-                                  "shadow_fade=-1", "ssao=2"])
+                                  "shadow_fade=-1", "ssao=2", "cloud_cover=1.5", "haze=-1",
+                                  "exposure=20", "sea_level=300", "fade_width=0"])
 def test_bad_set_is_a_user_error(item):
     with pytest.raises(VoxelError):
         Settings().with_values([item])
@@ -23,3 +24,14 @@ def test_bad_set_is_a_user_error(item):
 def test_effects_then_values():
     s = Settings().with_effects("none,+ssao,oit").with_values(["ssao_radius=2"])
     assert s.ssao and not s.shadows and s.transparency == "oit" and s.ssao_radius == 2.0
+
+
+def test_the_look_has_switches():
+    """Each effect of issue 20 is on by default (the renders use it) and switches off
+    by --effects, like the thesis's effects."""
+    look = ("tonemap", "clouds", "cloud_shadows", "water", "sea", "fade", "stars")
+    s = Settings()
+    assert all(getattr(s, e) for e in look)
+    off = s.with_effects(",".join(f"-{e}" for e in look))
+    assert not any(getattr(off, e) for e in look) and off.shadows
+    assert not any(getattr(s.with_effects("none"), e) for e in look)

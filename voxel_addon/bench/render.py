@@ -24,7 +24,9 @@ from contextlib import contextmanager
 VARIANTS = [("default", None), ("no_effects", "none"), ("no_shadows", "-shadows"),
             ("ssao", "+ssao"), ("peel0", "peel0"), ("oit", "oit"), ("msaa1", "msaa1"), ("msaa4", "msaa4"),
             ("no_godrays", "-godrays"), ("no_dof", "-dof"), ("no_fog", "-fog"),
-            ("no_waving", "-waving")]
+            ("no_waving", "-waving"), ("no_tonemap", "-tonemap"), ("no_clouds", "-clouds"),
+            ("no_cloud_shadows", "-cloud_shadows"), ("no_water", "-water"), ("no_sea", "-sea"),
+            ("no_fade", "-fade")]
 
 QUICK = ("default", "no_effects", "oit")
 
@@ -139,11 +141,14 @@ def run(ctx):
     for name in scenes.SCENES:
         sc = scenes.SCENES[name]
         a = source.scene_area(name)
-        r = Renderer(gl, Settings())
+        sea = source.scene_sea_level(name)  # as the CLI renders it
+        r = Renderer(gl, Settings(sea_level=sea))
         r.set_area(a.blocks, a.light, a.cx0, a.cy0, ring=True, light_at=a.light_at)
+        if not source.open_sea(r):  # as the CLI: a dry edge fades into the haze
+            sea = -1
         hours = daytime.parse_time(sc.time)
         for vname, eff in variants:
-            r.s = Settings().with_effects(eff)
+            r.s = Settings(sea_level=sea).with_effects(eff)
             ms, py, py_wall, _ = _measure(gl, r, Camera(*sc.camera), hours, size, n)
             table[name, vname] = ms
             st = r.stats.snapshot()
@@ -164,6 +169,7 @@ def run(ctx):
             yield ("render_landscape_llvmpipe_aniso4_ms", ms, "ms",
                    "anisotropy 4 forced on llvmpipe (default caps it to 1 there)")
         r.release()
+    yield from _distance16(ctx, gl)
     yield from _distance32(ctx, gl)
     gl.release()
 
@@ -179,6 +185,39 @@ def run(ctx):
     ctx.plot("render_effects", draw)
 
 
+def _tiled(a, d):
+    """{(cx, cy): mesh} over the (2d+1)² chunks around chunk (0, 0): the 4 × 4 chunk
+    meshes of a scene area repeated (the geometry a real world would have per chunk)."""
+    from ..meshing import build_chunk
+    tiles = [[build_chunk(a.blocks[16 * i:16 * i + 18, 16 * j:16 * j + 18], backend=None)
+              for j in range(4)] for i in range(4)]
+    return {(cx, cy): tiles[cx % 4][cy % 4] for cx in range(-d, d + 1) for cy in range(-d, d + 1)}
+
+
+def _distance16(ctx, gl):
+    """The full frame (every default effect, 640x360) at view distance 16 over the
+    landscape's chunks tiled (33 × 33 chunks), at noon, dusk and night (stars): the
+    budget row of the look (issue 20: sky, clouds, water, the edge of the world stay
+    within 1.25x); the sea level is the generator's, as the CLI renders a world."""
+    from ..light import daytime
+    from ..render import Camera, Settings, source
+    from ..render.pipeline import Renderer
+    d = 4 if ctx.quick else 16
+    size = (320, 180) if ctx.quick else (640, 360)
+    a = source.scene_area("landscape")
+    r = Renderer(gl, Settings(distance=d, sea_level=source.scene_sea_level("landscape")))
+    r.set_meshes(_tiled(a, d))
+    r.set_light(a.light, a.cx0, a.cy0)
+    cam = Camera(8, 8, 100, 30, -12)
+    for when in ("12:00", "18:30", "23:30"):
+        ms = _measure(gl, r, cam, daytime.parse_time(when), size, 1 if ctx.quick else 3)[0]
+        st = r.stats.snapshot()
+        yield (f"render_d{d}_full_frame_{when.replace(':', '')}_ms", ms, "ms",
+               f"{size[0]}x{size[1]}, default effects, {st['triangles']} tris, "
+               f"{st['draw_calls']} draws, at {when} (llvmpipe)")
+    r.release()
+
+
 def _distance32(ctx, gl):
     """View distance 32 (65 × 65 chunks): the landscape scene's chunk meshes tiled over
     the whole area (the same geometry a real world would have per chunk), light window
@@ -191,7 +230,7 @@ def _distance32(ctx, gl):
     a = source.scene_area("landscape")
     tiles = [[build_chunk(a.blocks[16 * i:16 * i + 18, 16 * j:16 * j + 18], backend=None)
               for j in range(4)] for i in range(4)]
-    meshes = {(cx, cy): tiles[cx % 4][cy % 4] for cx in range(-d, d + 1) for cy in range(-d, d + 1)}
+    meshes = _tiled(a, d)
     s = Settings(distance=d, msaa=1, waving=False)  # CPU side is measured; keep llvmpipe short
     r = Renderer(gl, s)
     t0 = time.perf_counter()

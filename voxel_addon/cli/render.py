@@ -74,6 +74,7 @@ def run(args):
     far_meshes = []
     if args.scene:
         data = source.scene_area(args.scene)
+        sea = source.scene_sea_level(args.scene)
     else:
         from ..world import World
         world = World.open(args.world, readonly=True, loader=False)
@@ -84,8 +85,11 @@ def run(args):
                 from ..far import ring
                 far_meshes = ring(world.file, world.generator, cam_args[0], cam_args[1],
                                   s.far, s.distance)
+            sea = source.sea_level(world.generator)
         finally:
             world.close()
+    if not any(i.startswith("sea_level=") for i in args.set):
+        s.sea_level = sea
     ctx = mgl.context()
     r = Renderer(ctx, s)
     r.set_area(data.blocks, data.light, data.cx0, data.cy0, ring=True, method=args.aggregation,
@@ -93,6 +97,9 @@ def run(args):
     if data.palette is not None:
         r.set_palette(data.palette)
     r.update_far(far_meshes)
+    asked = any(e.strip().lstrip("+-") == "sea" for e in (args.effects or "").split(","))
+    if not asked and not source.open_sea(r):
+        r.s.sea = False  # the area's edge is dry land: it fades into the haze
     img = r.render(Camera(*cam_args), hours, (w, h))
     rgba = np.dstack([img, np.full(img.shape[:2], 255, np.uint8)])
     args.out.parent.mkdir(parents=True, exist_ok=True)

@@ -46,6 +46,12 @@ def scene(name: str) -> Scene:
     return SCENES[name]
 
 
+def sea_level(name: str) -> int:
+    """The water level of the scene's generator (-1: none)."""
+    from ..generation import make_generator
+    return int(make_generator(GENERATOR, scene(name).seed).params.get("sea_level", -1))
+
+
 @lru_cache(maxsize=4)
 def _area(name: str) -> np.ndarray:
     from ..generation import make_generator

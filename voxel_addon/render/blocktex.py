@@ -1,8 +1,9 @@
 """The block textures on the device: an array of 32x16 layers, each the 16x16 texture
 with its mip chain beside it (level l, 16 >> l wide, at x = 32 - (32 >> l)), sampled
 by hand in shaders/block.frag (no device sampler state: nearest, clamped); the glow
-masks (16x16), each times the strongest glow of a block that uses its layer; and the
-world's colour palette (the `color` block's tint, 256 colours a row)."""
+masks (16x16), each times the strongest glow of a block that uses its layer (water's
+layers all 1: its mark); and the world's colour palette (the `color` block's tint,
+256 colours a row)."""
 from __future__ import annotations
 
 import numpy as np
@@ -26,7 +27,11 @@ class BlockTextures:
                     scale[layer] = max(scale[layer], b.glow)
         if scale.max() > 1.0:
             raise ValueError("a block glows above 1: the glow texture is 8-bit unorm")
-        glow = np.rint(textures.glow_array(origin="bottom") * scale[:, None, None]).astype(np.uint8)
+        glow = np.rint(textures.glow_array(origin="bottom") * scale[:, None, None])
+        # water's layers are marked by glow 1 (block.frag: colour by depth; shade.glsl:
+        # waves, reflections), every other glow stays below it
+        glow = np.minimum(glow, 254).astype(np.uint8)
+        glow[sorted(set(REGISTRY.face_texture[REGISTRY.id("water")].tolist()))] = 255
         self.dev = dev
         self.tex = dev.texture((32, 16), "rgba8", layers=n, data=atlas)
         self.glow = dev.texture((16, 16), "r8", layers=n, data=glow)

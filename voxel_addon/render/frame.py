@@ -2,7 +2,7 @@
 every program reads, written once per frame instead of dozens of uniform writes
 spread over the passes. frame.glsl's `//@ frame` lines are the only place its members
 are written; render/glsl.py lays them out (mat4s, then vec4 rows; ints and bools
-stored as floats) and this packs the values the same way.
+stored as floats, vec4 arrays as their rows) and this packs the values the same way.
 """
 from __future__ import annotations
 
@@ -41,16 +41,19 @@ class FrameBlock:
                        for k in self.order}
 
     def set(self, **values) -> None:
-        """Scalars, sequences, or row-major 4x4 NumPy matrices (GL gets columns)."""
+        """Scalars, sequences, row-major 4x4 NumPy matrices (GL gets columns), or
+        (N, 4) arrays for vec4 arrays."""
         self.values.update(values)
 
     def pack(self) -> bytes:
         """The block's bytes (a device uploads them: Device.frame)."""
         flat = []
         for k in self.order:
-            v, n = self.values[k], self.members[k][1]
+            v, (_, n, kind) = self.values[k], self.members[k]
             if n == 1:
                 flat.append(float(v))
+            elif kind == "a":  # (N, 4) rows
+                flat.extend(np.asarray(v, float).ravel().tolist())
             elif n == 16:
                 flat.extend(np.asarray(v, float).T.ravel().tolist())
             else:

@@ -18,8 +18,8 @@ Any line may end with `if CONDITION`, a preprocessor expression over the program
 defines (`defined(X)`, `!`, `&&`, `||`, comparisons), evaluated here the way the
 body's own `#if` lines see the same defines.
 
-The frame block is one std140 uniform block of a struct (`FrameData frame`) of mat4s
-and vec4s only: every other member lives in a vec4 slot (a vec3 and a float share
+The frame block is one std140 uniform block of a struct (`FrameData frame`) of mat4s,
+vec4s and vec4 arrays only: every other member lives in a vec4 slot (a vec3 and a float share
 one, std140's own rule), ints and bools stored as floats, and the body reads it by
 the member's name through a #define (`cam_pos` -> `frame.s4.xyz`). So the layout is
 the same on every backend (Metal packs a struct's vec3 and bool differently from
@@ -194,7 +194,8 @@ def program(vert: str, frag: str | None, defines: dict | None = None,
 def frame_layout() -> tuple[dict, int, str]:
     """({member: (float index, count, kind)}, size in bytes, the struct and its
     accessors as GLSL) from include/frame.glsl's `//@ frame` lines. kind: "f", "i"
-    (ints and bools are stored as floats; "b" for bools)."""
+    (ints and bools are stored as floats; "b" for bools), "a" for a vec4 array
+    (`//@ frame vec4 NAME[N]`: N rows, set as an (N, 4) array)."""
     members, rows, defines = {}, [], []
     slot, fill = -1, 4
     for kind, a in annotations(resources.shader("include/frame.glsl"), {}):
@@ -204,6 +205,16 @@ def frame_layout() -> tuple[dict, int, str]:
         if typ not in TYPES or typ.startswith("u"):
             raise ValueError(f"frame.glsl: no frame member of type {typ}")
         n = TYPES[typ]
+        m = re.fullmatch(r"(\w+)\[(\d+)\]", name)
+        if m:  # vec4 NAME[N]: N rows of their own, read as NAME[i]
+            if typ != "vec4":
+                raise ValueError(f"frame.glsl: arrays are of vec4 only ({typ} {name})")
+            name, count = m.group(1), int(m.group(2))
+            members[name] = (4 * (slot + 1), 4 * count, "a")
+            slot, fill = slot + count, 4
+            rows.append(f"    vec4 a_{name}[{count}];")
+            defines.append(f"#define {name} {FRAME_NAME}.a_{name}")
+            continue
         k = "b" if typ == "bool" else "i" if typ.startswith("i") or typ == "int" else "f"
         if n == 16:
             slot, fill = slot + 4, 4

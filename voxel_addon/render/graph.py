@@ -50,9 +50,9 @@ class Graph:
                 if x is not None for p in x.programs()]
 
 
-def build(dev, T, sw: Switches, blocks, vol) -> Graph:
+def build(dev, T, sw: Switches, blocks, vol, walls) -> Graph:
     """T: targets.Targets (with what sw needs), blocks: blocktex.BlockTextures, vol:
-    the light volume's texture."""
+    the light volume's texture, walls: the border columns' heights (walls.py)."""
     ms, dbg = sw.samples, DEBUG_DEFINE[sw.debug]
     cut = {"ALPHA_TEST": 1, "MSAA_ALPHA": sw.msaa_alpha}
     g = {"SAMPLES": ms, "SMOOTH_MAG": sw.smooth_mag, "DEBUG_AGG": sw.debug == "aggregation"}
@@ -79,7 +79,7 @@ def build(dev, T, sw: Switches, blocks, vol) -> Graph:
     G.g = GeometryPass(dev, T.g.target, [(n, block({**g, **x})) for n, x in parts], DEPTH_LESS,
                        **tex)
     G.shade = Pass(dev, T.shaded, full("deferred.frag", {**d, "FILL_HOLES": sw.fill_holes}),
-                   clear=True, **gbuf(T.g))
+                   clear=True, wall_tops=walls, tex=tex["tex"], **gbuf(T.g))
     if sw.oit:  # resolved into layer 0: the composite blends it as one peel layer
         G.transparency = oit.OIT(
             GeometryPass(dev, T.oit_fb, [("blend", block({**g, **d, "OIT": 1}))],
@@ -94,7 +94,7 @@ def build(dev, T, sw: Switches, blocks, vol) -> Graph:
                           State("less", True, False), opaque_depth=T.g.depth,
                           prev_depth=T.peel[i - 1].depth if i else T.g.depth, **tex)
              for i, p in enumerate(T.peel[:sw.layers])],
-            [Pass(dev, f, layer, clear=True, **gbuf(p))
+            [Pass(dev, f, layer, clear=True, ssr_color=T.opaque, ssr_front=T.front, **gbuf(p))
              for f, p in zip(T.layer_fb[:sw.layers], T.peel)])
     post = []
     if sw.ssao:

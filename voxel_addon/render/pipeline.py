@@ -12,9 +12,10 @@ from typing import NamedTuple
 import numpy as np
 
 from ..core import chunk
+from ..core.blocks import REGISTRY
 from . import camera as cam
 from . import far as far_mod
-from . import graph, shadow, sky
+from . import graph, shadow, sky, walls
 from .blocktex import BlockTextures
 from .far import FarRing, near_edge
 from .device import Device
@@ -23,6 +24,7 @@ from .geometry import PASSES, Geometry, Stats
 from .lightvol import LightVolume
 from .settings import Settings
 from .targets import Shape, Targets
+from .walls import Walls
 
 
 class Renderer:
@@ -38,10 +40,15 @@ class Renderer:
         self.geo = Geometry(dev)
         self.vol = LightVolume(dev, 1)  # nothing resident yet: open daylight everywhere
         self.blocks = BlockTextures(dev)
+        self.walls = Walls(dev)
+        self.edges: dict = {}        # (cx, cy) -> its border columns' heights (walls.edges)
+        self._walls_dirty = True
         self.frame = FrameBlock()
         self.targets: Targets | None = None
         self.stats: dict = {}
         self.area = None             # (cx0, cy0, cx1, cy1): the box of the shown chunks
+        self.edge_water = None       # set_area: the fraction of the area's edge that is
+                                     # open water (source.open_sea)
         self.lights: dict = {}       # (cx, cy) -> its light (None: open daylight; or packed)
         self._vol_key = None         # the light window last made resident
         self._graphs: dict = {}      # Switches -> Graph, for these targets and volume
@@ -71,6 +78,7 @@ class Renderer:
             self.lights[k] = light
             self.vol.forget(k)
         self.geo.update(meshes)
+        self._edges(meshes)
         self._shown()
 
     def remove_chunks(self, keys) -> None:
@@ -79,12 +87,14 @@ class Renderer:
         self.geo.remove(keys)
         for k in keys:
             self.lights.pop(k, None)
+            self.edges.pop(k, None)
             self.vol.forget(k)
         self._shown()
 
     def set_area(self, blocks: np.ndarray, light: np.ndarray, cx0: int, cy0: int,
                  ring: bool = False, method: str = "greedy", backend: str | None = None,
-                 light_at: tuple[int, int] | None = None, data: np.ndarray | None = None):
+                 light_at: tuple[int, int] | None = None, data: np.ndarray | None = None,
+                 closed: bool = True):
         """Show the chunks [cx0, cx0+w) x [cy0, cy0+h) from a block array and their light
         instead of what was shown.
 
@@ -92,10 +102,21 @@ class Renderer:
         one-voxel ring of neighbours (else outside counts as air); light is the packed
         light of whole chunks from light_at (default (cx0, cy0)), e.g. (16w, 16h, 256);
         chunks it does not cover get open daylight. data: the blocks' small data (the
-        same shape, or None): `color` blocks of different colours stay apart.
+        same shape, or None): `color` blocks of different colours stay apart. closed:
+        the ring counts as air all the same, so the area's outer wall has faces (seen
+        from outside, or from a side view, the area is a closed block, not a slab open
+        into its caves), and caves that reach the wall end in stone (_close); ring=True
+        then only matters for closed=False.
         """
         from .. import meshing
-        if not ring:
+        if ring:
+            self.edge_water = _edge_water(blocks)
+        if ring and closed:
+            closed_blocks = _close(blocks)
+            if data is not None:  # (the ring and the filled caves carry no data)
+                data = np.where(closed_blocks == blocks, data, 0).astype(data.dtype, order="F")
+            blocks = closed_blocks
+        elif not ring:
             pad = np.zeros((blocks.shape[0] + 2, blocks.shape[1] + 2, 256), np.uint16, order="F")
             pad[1:-1, 1:-1] = blocks
             blocks = pad
@@ -122,6 +143,7 @@ class Renderer:
         known for chunks that stay is kept (set_light)."""
         self.remove_chunks([k for k in self.geo.keys if k not in meshes])
         self.geo.update(meshes)
+        self._edges(meshes)
         self._shown()
 
     def set_light(self, light: np.ndarray, cx0: int, cy0: int) -> None:
@@ -142,10 +164,16 @@ class Renderer:
         self.far.remove(keys)
 
     def _shown(self) -> None:
-        """The shown chunks changed: their box (self.area), the light window again."""
+        """The shown chunks changed: their box (self.area), the light window and the
+        outer wall again."""
         self.area = self.geo.bounds()
         self._vol_key = None
         self._near_dirty = True
+        self._walls_dirty = True
+
+    def _edges(self, meshes: dict) -> None:
+        for k, m in meshes.items():
+            self.edges[(int(k[0]), int(k[1]))] = walls.edges(m)
 
     def _sync_light(self, camera) -> None:
         """The light window (Settings.light_radius chunks around the camera's chunk,
@@ -216,9 +244,14 @@ class Renderer:
         # the whole height of the area stays in view; the caller's camera is left alone
         camera = camera.fitted(w / h, s.fov, s.distance * 16 * 1.5 + 256.0)
         self._sync_light(camera)  # before the graph: it may make a bigger volume
+        if self._walls_dirty:  # (likewise a bigger texture)
+            if self.walls.write(self.area, self.edges):
+                self._graphs.clear()
+            self._walls_dirty = False
         geo = self.geo
         geo.commit()
-        sp = sky.params(hours)
+        # (the sky in steps of 15 s of the day: a dragged slider reuses the cached table)
+        sp = sky.params(round(hours * 240.0) / 240.0, s.exposure)
         vp, inv_vp = cull_vp, _ = camera.matrices()
         draw_cam = camera
         if s.debug == "culling":  # from above; regions still culled for the real camera
@@ -240,7 +273,8 @@ class Renderer:
                             s.msaa_alpha, s.per_sample, s.fog, s.fill_holes, use_oit)
         G = self._graphs.get(sw)
         if G is None:
-            G = self._graphs[sw] = graph.build(self.dev, T, sw, self.blocks, self.vol.tex)
+            G = self._graphs[sw] = graph.build(self.dev, T, sw, self.blocks, self.vol.tex,
+                                               self.walls.tex)
 
         F = self.frame
         fog_end = (s.distance + 0.5) * 16.0  # thick by the nearest edge of the shown area
@@ -265,17 +299,22 @@ class Renderer:
             cast = geo.batches(geo.cull(light_vp), G.shadow.names, "shadow")
         for k in ("zenith", "horizon", "halo", "disc"):  # debug views: black where no surface
             F.set(**{f"sky_{k}": sp[k] if shaded else (0.0, 0.0, 0.0)})
+        F.set(**sky_values(s, sp, hours, shaded, camera, self.area, h,
+                           fog_end if far is not None else 0.0))
         F.set(vp=vp, inv_vp=inv_vp, cam_pos=(draw_cam.x, draw_cam.y, draw_cam.z),
               cam_fwd=draw_cam.fwd(), ortho=draw_cam.ortho,
               far_dist=camera.far if far is None else far_clip, shadow_eye=(camera.x, camera.y, camera.z),
               # orthographic: no eye to fade from; the map covers the view box
               shadow_fade=1e9 if camera.ortho else s.shadow_fade,
               day_ambient=sp["ambient"], day_u=sp["u"],
-              day_direct=sp["direct"], sky_stars=sp["stars"] if shaded else 0.0,
+              day_direct=sp["direct"], sky_stars=sp["stars"] if shaded and s.stars else 0.0,
               sky_light_dir=sp["light_dir"], time=s.time, waving=s.waving,
-              godray_strength=s.godray_strength, sun_px=sun_px, sun_radius=sun_r,
+              godray_strength=s.godray_strength * sky.godray_scale(sp), sun_px=sun_px,
+              sun_radius=sun_r,
               sun_visible=sun_vis, fog_start=fog_end * 0.55, fog_end=fog_end,
-              dof_start=fog_end * 0.7, dof_end=fog_end * 1.1, ssao_radius=s.ssao_radius,
+              dof_start=fog_end * 0.8, dof_end=fog_end * 1.15, ssao_radius=s.ssao_radius,
+              # (far terrain continues the ground beyond the area: no wall there)
+              walls=s.walls and self.area is not None and far is None, wall_layer=self.walls.stone_layer(),
               **self.vol.frame_values())
         self.dev.frame(F.pack())
         fr = Frame(T, G, view, cast, layers, use_oit)
@@ -300,6 +339,7 @@ class Renderer:
         self._release_targets()
         self.geo.release()
         self.vol.release()
+        self.walls.release()
         self.blocks.release()
         self.far.release()
         if self._own:
@@ -331,6 +371,67 @@ class Frame:
     @property
     def blend_depth(self):
         return self.targets.peel[0].depth if self.layers else None
+
+
+def _edge_water(blocks: np.ndarray) -> float:
+    """The fraction of an area's outermost columns (inside its ring) whose top is water."""
+    water = REGISTRY.id("water")
+    cols = np.concatenate([blocks[1, 1:-1], blocks[-2, 1:-1], blocks[1:-1, 1], blocks[1:-1, -2]])
+    solid = cols != 0
+    top = 255 - np.argmax(solid[:, ::-1], axis=1)
+    return float((cols[np.arange(len(cols)), top] == water).mean())
+
+
+def _close(blocks: np.ndarray) -> np.ndarray:
+    """A copy of an area with its one-voxel ring: the ring is air (water next to
+    water: the sea beyond the area continues it, include/water.glsl) and the caves
+    (air below the column's top) of the area's outermost voxels are stone, so every
+    face of the outer wall is drawn, from outside and from inside a cave."""
+    b = np.array(blocks, order="F")
+    stone, water = REGISTRY.id("stone"), REGISTRY.id("water")
+    for inner, outer in (((1, slice(None)), (0, slice(None))), ((-2, slice(None)), (-1, slice(None))),
+                         ((slice(None), 1), (slice(None), 0)), ((slice(None), -2), (slice(None), -1))):
+        wall = b[inner]                                # (n, 256) columns of one side
+        solid = wall != 0
+        top = np.where(solid.any(1), 255 - np.argmax(solid[:, ::-1], axis=1), -1)
+        cave = (~solid) & (np.arange(256)[None, :] < top[:, None])
+        wall[cave] = stone
+        b[inner] = wall
+        b[outer] = np.where(wall == water, water, 0)
+    return b
+
+
+def sky_values(s: Settings, sp: dict, hours: float, sky_on: bool, camera, area,
+               h: int, far: float = 0.0) -> dict:
+    """The frame block's sky, haze, clouds, sea, fade and display values (issue 20).
+    The sea beyond the area shows where the world has one (Settings.sea_level; the CLI
+    also asks source.open_sea whether the shown area's edge is at sea). far: the far
+    ring's reach in blocks when it is drawn: the fade moves out to it, the sea starts
+    beyond it (far terrain has its own water)."""
+    zero = np.full((sky.NE * sky.NA, 4), math.log(sky.EPS))
+    fade_end = s.fade_distance or far or (s.distance + 0.5) * 16.0
+    fade = s.fade and not camera.ortho
+    box = [16.0 * v for v in area] if area else [0.0, 0.0, 0.0, 0.0]
+    if far:
+        box = [camera.x - far, camera.y - far, camera.x + far, camera.y + far]
+    fov = camera.fov or s.fov
+    return dict(
+        sky_a=sp["sky_a"] if sky_on else zero, sky_b=sp["sky_b"] if sky_on else zero,
+        sun_dir=sp["sun_dir"], sky_pole=sp["pole"],
+        fog_density=0.0014 * s.haze if sky_on else 0.0, fog_height=s.fog_height,
+        cloud_sun=sp["cloud_sun"], cloud_sky=sp["cloud_sky"], cloud_cover=s.cloud_cover,
+        cloud_z=s.cloud_height, cloud_drift=sky.drift(hours, s.cloud_speed),
+        # (the haze thins upwards from the sea, or from the generators' usual 62)
+        sea_z=(s.sea_level if s.sea_level >= 0 else 62) + 0.95, area_box=box,
+        star_px=2.0 * math.tan(math.radians(fov) / 2.0) / max(h, 1),
+        # (an orthographic view has no eye: nothing is far from it, no horizon to fade to)
+        fade_start=fade_end * (1.0 - s.fade_width) if fade else 1e9,
+        fade_end=fade_end if fade else 2e9,
+        # (the albedo views show the G-buffer's encoded colours as they are)
+        display=(2 if s.tonemap else 1) if sky_on else (1 if s.debug == "light" else 0),
+        clouds=s.clouds and sky_on, cloud_shadows=s.cloud_shadows,
+        sea=s.sea and sky_on and s.sea_level >= 0,
+        water_fx=s.water and sky_on, ssr=s.water and s.ssr and sky_on)
 
 
 def _top_camera(camera: cam.Camera) -> cam.Camera:

@@ -8,7 +8,8 @@ from ..core.errors import VoxelError
 DEBUG_VIEWS = ("none", "albedo", "normal", "depth", "light", "aggregation", "culling")
 # effect name -> (field, value when switched on by --effects)
 EFFECTS = ("shadows", "ssao", "fog", "dof", "godrays", "waving", "smooth_mag",
-           "fill_holes", "msaa_alpha", "per_sample")
+           "fill_holes", "msaa_alpha", "per_sample", "tonemap", "clouds", "cloud_shadows",
+           "water", "ssr", "sea", "fade", "stars", "walls")
 
 TRANSPARENCY = ("peel", "oit")
 
@@ -43,6 +44,28 @@ class Settings:
     debug: str = "none"
     fov: float = 70.0
     time: float = 0.0             # seconds, drives waving
+    # the look (issue 20): light/atmosphere.py, render/sky.py, shaders/include/*.glsl
+    tonemap: bool = True          # AgX-like tone curve (else sRGB, clipped)
+    exposure: float = 0.0         # EV on top of the hour's own exposure (light.daytime)
+    haze: float = 1.0             # density of the haze (the fog effect) at sea level, x
+    fog_height: float = 40.0      # blocks over which the haze thins by 1/e upwards
+    clouds: bool = True
+    cloud_cover: float = 0.45     # 0 clear .. 1 overcast
+    cloud_height: float = 240.0   # z of the cloud layer
+    cloud_speed: float = 12.0     # blocks the clouds drift per minute of the day
+    cloud_shadows: bool = True
+    water: bool = True            # water and glass: sky reflections, Fresnel, sun glint,
+                                  # waves, colour by depth
+    ssr: bool = True              # water reflects the scene on screen (screen-space reflection)
+    sea: bool = True              # a sea to the horizon beyond the shown area
+    sea_level: int = -1           # the world's water level (its generator's, water up to
+                                  # this z; source.sea_level); -1: no sea
+    fade: bool = True             # the shown area's edge fades into the sky (horizon)
+    fade_distance: float = 0.0    # blocks where the fade ends; 0: the view distance's edge
+    fade_width: float = 0.3       # the fade's width, a fraction of its distance
+    stars: bool = True
+    walls: bool = True            # the shown area's outer wall closed where its meshes are
+                                  # open (streamed chunks: render/walls.py)
 
     def with_effects(self, spec: str | None) -> "Settings":
         """Apply '--effects' text: 'all', 'none', or comma-separated [+-]name items."""
@@ -115,7 +138,11 @@ class Settings:
         for name, lo, hi in (("light_radius", 1, 32), ("shadow_size", 256, 8192),
                              ("shadow_fade", 1.0, 1000.0), ("godray_strength", 0.0, 10.0),
                              ("anisotropy", 1.0, 16.0), ("fov", 10.0, 150.0),
-                             ("ssao_radius", 0.1, 8.0)):
+                             ("ssao_radius", 0.1, 8.0), ("exposure", -10.0, 10.0),
+                             ("haze", 0.0, 20.0), ("fog_height", 1.0, 1000.0),
+                             ("cloud_cover", 0.0, 1.0), ("cloud_height", 0.0, 1000.0),
+                             ("cloud_speed", 0.0, 1000.0), ("sea_level", -1, 255),
+                             ("fade_distance", 0.0, 10000.0), ("fade_width", 0.01, 1.0)):
             if not lo <= getattr(self, name) <= hi:
                 raise VoxelError(f"{name} must be between {lo} and {hi}")
 

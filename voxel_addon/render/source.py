@@ -21,6 +21,25 @@ class Area(NamedTuple):
     palette: np.ndarray | None = None  # the world's colours, (n, 3) uint8 (core.colors)
 
 
+def sea_level(generator) -> int:
+    """The water level of a world's generator (its `sea_level` parameter), -1 if it
+    has none (render.Settings.sea_level: the sea beyond the shown area)."""
+    return int(getattr(generator, "params", {}).get("sea_level", -1))
+
+
+def open_sea(renderer) -> bool:
+    """Whether a sea beyond an area set with set_area(ring=True) belongs there: a tenth
+    of the area's edge is open water (a desert or a mountain range fades into the haze
+    instead). The CLI, the bench and the golden images switch Settings.sea by it."""
+    return renderer.edge_water is None or renderer.edge_water > 0.1
+
+
+def scene_sea_level(name: str) -> int:
+    """sea_level of a reference scene's generator (meshing.scenes)."""
+    from ..meshing import scenes
+    return scenes.sea_level(name)
+
+
 def world_area(world, x: float, y: float, distance: int, light_radius: int = 8) -> Area:
     """The (2d+1)² chunks around the chunk holding (x, y), plus ring, and the light of
     the light window (lightvol.window) only: memory stays bounded at distance 32."""

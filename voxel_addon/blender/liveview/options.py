@@ -27,6 +27,8 @@ def settings_of(vv, draft: bool = False, render: bool = False):
         setattr(s, e, bool(getattr(vv, e)))
     s.transparency = vv.transparency
     s.debug = vv.debug_view or "none"
+    s.exposure, s.haze, s.cloud_cover = vv.exposure, vv.haze, vv.cloud_cover
+    s.sea_level = sea_level(vv.id_data)
     if render:
         return s
     # the map covers ~100 blocks up to the shadow fade: at 1024 a texel is still a tenth
@@ -39,6 +41,18 @@ def settings_of(vv, draft: bool = False, render: bool = False):
         s.peel_layers = min(s.peel_layers, 1)
         s.far_draft = True
     return s
+
+
+def sea_level(scene) -> int:
+    """The open world's water level (render.source.sea_level: the sea beyond the
+    shown area), -1 without one."""
+    from .. import session
+    from ...core.errors import VoxelError
+    from ...render import source
+    try:
+        return source.sea_level(session.world(scene.voxel.path).generator)
+    except (VoxelError, AttributeError, OSError):
+        return -1
 
 
 def hours_of(scene) -> float:

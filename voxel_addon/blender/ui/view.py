@@ -57,6 +57,12 @@ VoxelViewSettings = type("VoxelViewSettings", (bpy.types.PropertyGroup,), {"__an
         ("oit", "Weighted OIT", "One pass, approximate order")]),
     "sky": BoolProperty(name="Sky", default=True, update=_redraw,
                         description="The pipeline's sky where Blender drew nothing"),
+    "exposure": FloatProperty(name="Exposure", default=0.0, min=-10.0, max=10.0, update=_redraw,
+                              description="Stops over the time of day's own exposure"),
+    "haze": FloatProperty(name="Haze", default=1.0, min=0.0, max=20.0, update=_redraw,
+                          description="Density of the haze (the Fog effect), thinning with altitude"),
+    "cloud_cover": FloatProperty(name="Cloud Cover", default=0.45, min=0.0, max=1.0,
+                                 update=_redraw, description="0 clear sky, 1 overcast"),
     "debug_view": EnumProperty(name="Debug View", items=_debug_items, update=_redraw),
 }})
 
@@ -177,6 +183,8 @@ class VOXEL_PT_view_effects(bpy.types.Panel):
             col.prop(v, e)
         col.label(text="MSAA: command-line renders only", icon="INFO")
         col.prop(v, "sky")
+        for k in ("exposure", "haze", "cloud_cover"):
+            col.prop(v, k)
         col.prop(v, "transparency")
         col.prop(v, "debug_view")
 

@@ -1,6 +1,7 @@
 // Far terrain into the G-buffer (far.vert): nothing where chunks are drawn (the near
 // mask: no double surfaces; near chunks end where the far ring begins, so no crack)
-// and nothing beyond the far distance (fog_end: the sky starts there).
+// and nothing beyond the far distance (fog_end: the sky starts there). Albedo stays
+// sRGB-encoded like the chunks' (shade.glsl decodes); water is marked as block.frag does.
 #include "include/frame.glsl"
 
 //@ sampler sampler2D near_mask  // per chunk of near_box: 1 where it is drawn as chunks
@@ -15,5 +16,5 @@ void main() {
             && texelFetch(near_mask, c, 0).r > 0.5)
         discard;
     out_albedo = vec4(f_albedo, 1.0);
-    out_normal = vec4(normalize(f_normal) * 0.5 + 0.5, 0.0);
+    out_normal = vec4(normalize(f_normal) * 0.5 + 0.5, f_water);  // (glow: water's mark)
 }

@@ -14,6 +14,7 @@
 //@ vary smooth vec3 f_world
 //@ vary smooth vec3 f_normal
 //@ vary smooth vec3 f_albedo
+//@ vary flat float f_water  // 1: a water surface (block.frag's mark: glow 1)
 
 void main() {
     uint w0 = in_f.x, w1 = in_f.y;
@@ -34,6 +35,7 @@ void main() {
     f_normal = vec3(n, sqrt(max(0.0, 1.0 - dot(n, n))));
     uint c = w1 >> 16;
     f_albedo = vec3(float(c >> 11) / 31.0, float((c >> 5) & 63u) / 63.0, float(c & 31u) / 31.0);
+    f_water = ((w0 >> 25) & 3u) == 1u ? 1.0 : 0.0;
     f_world = vec3(xy, z);
     gl_Position = far_vp * vec4(f_world, 1.0);
 }

@@ -7,6 +7,7 @@ view shows the far ring; far 0 draws none of it."""
 import math
 
 import numpy as np
+import pytest
 
 from voxel_addon.far import grid, ring
 from voxel_addon.generation import make_generator
@@ -49,9 +50,13 @@ def _render(gl, cam, area, meshes, **kw):
         r.release()
 
 
-def test_mountain_silhouette_through_the_pipeline(gl, tmp_path, cl_device):
+@pytest.mark.parametrize("draft", [False, True])
+def test_mountain_silhouette_through_the_pipeline(gl, tmp_path, cl_device, draft):
+    """draft: tiles at half resolution (the next coarser level's surface): twice the
+    sample angle."""
     gen, cam, area, meshes = _view(tmp_path)
-    img, depth, stats = _render(gl, cam, area, meshes, far=FAR)
+    img, depth, stats = _render(gl, cam, area, meshes, far=FAR, far_draft=draft)
+    bound = BOUND * (2 if draft else 1)
     assert stats["far_tiles"] > 50 and stats["far_triangles"] > 0
     surf = depth < 1.0
     far_px = (depth >= 0.5) & (depth < 1.0)
@@ -71,15 +76,15 @@ def test_mountain_silhouette_through_the_pipeline(gl, tmp_path, cl_device):
     cols = far_px[np.clip(top, 0, H - 1).astype(int), np.arange(W)]
     assert cols.mean() > 0.9, cols.mean()
     d = d[cols]
-    # measured (llvmpipe): median 1.0, p95 2.0, max 3.0 px
+    # measured (llvmpipe): median 1, p95 2, max 3 px; draft median 1, p95 3, max 5
     print("silhouette px: median %.2f p95 %.2f max %.2f (signed mean %.2f)"
           % (np.median(np.abs(d)), np.percentile(np.abs(d), 95), np.abs(d).max(), d.mean()))
-    assert np.median(np.abs(d)) <= 1.5
-    assert np.percentile(np.abs(d), 95) <= BOUND * 0.75
-    assert np.abs(d).max() <= BOUND
+    assert np.median(np.abs(d)) <= 1.5 * bound / BOUND
+    assert np.percentile(np.abs(d), 95) <= bound * 0.75
+    assert np.abs(d).max() <= bound
     # sky above the silhouette, no hole below it (cracks at level or near/far seams)
     rows = np.arange(H)[:, None]
-    below = rows >= np.minimum(want, top)[None, :] + BOUND
+    below = rows >= np.minimum(want, top)[None, :] + bound
     assert surf[below].mean() > 0.999, np.argwhere(below & ~surf)[:10]
     sky = img[:int(np.min(want)) - 1]
     assert sky.size and (sky[..., 2].astype(int) > sky[..., 0]).all()  # blue

@@ -1,7 +1,10 @@
 """Run in a fresh process by test_view.py: the add-on's "Render Voxel View" operator
 on a new flat world, from a scene camera, into its image datablock.
 
-    python tests/blender/op_job.py OUT_DIR
+    python tests/blender/op_job.py OUT_DIR [FAR]
+
+FAR: the View panel's far distance, with the camera looking 2 degrees down (the
+far ring fills the band below the horizon that the near chunks leave to the sky).
 
 Writes OUT_DIR/op.npy (the image's pixels, (h, w, 4) float, bottom row first) and
 OUT_DIR/op.json (the operator's result and the image size).
@@ -21,6 +24,7 @@ from flat_scene import flat_scene  # noqa: E402
 
 def main():
     out = Path(sys.argv[1])
+    far = int(sys.argv[2]) if len(sys.argv) > 2 else None
     import bpy
     import voxel_addon
     sc = flat_scene(out)
@@ -30,7 +34,9 @@ def main():
     sc.camera = cam
     # 20 blocks above the flat ground, looking along +x, 20 degrees down
     cam.location = (8.0, 8.0, 90.0)
-    cam.rotation_euler = (math.radians(70.0), 0.0, math.radians(-90.0))
+    cam.rotation_euler = (math.radians(70.0 if far is None else 88.0), 0.0, math.radians(-90.0))
+    if far is not None:
+        sc.voxel_view.distance, sc.voxel_view.far = 2, far
     sc.render.resolution_x, sc.render.resolution_y, sc.render.resolution_percentage = 96, 54, 100
     res = bpy.ops.voxel.render_view()
     im = bpy.data.images["Voxel View"]

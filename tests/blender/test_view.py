@@ -123,3 +123,23 @@ def test_render_view_operator_draws_the_world_from_the_scene_camera(tmp_path):
     # (just above the horizon: the physical sky is paler there than at the zenith)
     assert top[2] > top[0] + 0.03, f"sky is blue at noon: {top}"
     assert abs(bottom - top).sum() > 0.3 and bottom.mean() > 0.1, (top, bottom)
+
+
+def test_render_view_waits_for_far_terrain(tmp_path):
+    """Far 48 beyond distance 2 (the flat world), 2 degrees down: the operator waits for
+    the far ring, which fills the band below the horizon that far 0 leaves to the sky."""
+    px = {}
+    for far in (0, 48):
+        out = tmp_path / f"far{far}"
+        out.mkdir()
+        r = subprocess.run(python_cmd(JOB.with_name("op_job.py"), out, far),
+                           capture_output=True, text=True, timeout=600)
+        assert r.returncode == 0, r.stderr[-3000:]
+        assert json.loads((out / "op.json").read_text())["result"] == ["FINISHED"]
+        px[far] = np.load(out / "op.npy")[::-1, :, :3]
+    # below the horizon (~row 22 of 54, 0.43 degrees a row): the ground 110-400 blocks
+    # away, grass with far on, haze or sea without
+    band = slice(30, 54)
+    green = {f: ((p[band, :, 1] > p[band, :, 2] + 0.1) & (p[band, :, 1] > p[band, :, 0] + 0.1)).mean()
+             for f, p in px.items()}
+    assert green[0] < 0.1 and green[48] > 0.9, green

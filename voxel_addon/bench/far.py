@@ -111,10 +111,55 @@ def _frames(ctx, proc):
            "first frame (target <= 300)")
 
 
+def _gui(ctx):
+    """The live view in the real Blender GUI (tools/far_bench_job.py; the newest
+    Blender, OpenGL): Show ticked with far set, on a file holding the distance-16
+    chunks and no far data: seconds to every chunk and to the horizon (every far
+    tile), far triangles and GPU bytes, frames full and draft with far on and off."""
+    import shutil
+    import subprocess
+    import sys
+    from . import gui
+    why = gui.missing()
+    if why:
+        yield ("far_gui_skipped", 1, "", why)
+        return
+    world = ctx.tmp / "fargui.sqlite"
+    r = subprocess.run([sys.executable, "-m", "voxel_addon", "generate", "--world", str(world),
+                        "--seed", str(SEED), "--center", "8", "8", "--radius", "18"],
+                       capture_output=True, text=True)
+    if r.returncode:
+        raise RuntimeError(r.stderr[-2000:])
+    for far in ((64,) if ctx.quick else (128, 256)):
+        copy = ctx.tmp / f"fargui{far}.sqlite"
+        shutil.copy(world, copy)
+        out = ctx.tmp / f"fargui{far}.json"
+        ctx.say(f"Blender GUI: Show with far {far}")
+        R = gui.run_job("far", [out, copy, far], out, ctx.tmp / f"fargui{far}.log",
+                        timeout=1800, simulate=False, gpu="opengl")
+        if not R.get("ok"):
+            raise RuntimeError(R.get("error"))
+        what = f"Blender {R['blender']} {R['backend']}, distance 16, region " \
+               f"{'x'.join(map(str, R['region']))}"
+        yield (f"far_gui_show_to_horizon{far}_s", R["horizon_s"], "s",
+               f"tick Show (far {far}) -> every far tile drawn ({R['tiles']}); every chunk "
+               f"after {R['near_s']:.1f} s; {what}, {_load()}")
+        yield (f"far_gui_triangles{far}", R["far_triangles"], "", "far triangles uploaded")
+        yield (f"far_gui_gpu_mb{far}", R["far_gpu_mb"], "MiB", "far vertex + index buffers "
+               "(both index sets: full and draft)")
+        for q in ("full", "draft"):
+            a, b = R[f"{q}_0_ms"], R[f"{q}_{far}_ms"]
+            yield (f"far_gui_frame_{q}_ms_far0", a, "ms", f"{q} frame, far 0, the pipeline "
+                   f"every redraw, GPU finished (fastest of 5 interleaved); {what}")
+            yield (f"far_gui_frame_{q}_ms_far{far}", b, "ms", f"the same with far {far}")
+            yield (f"far_gui_frame_{q}_ratio{far}", b / a, "x", "far on / off (target <= 1.3)")
+
+
 def run(ctx):
     import psutil
     proc = psutil.Process()
     yield from _frames(ctx, proc)
+    yield from _gui(ctx)
     fars = (64, 128) if ctx.quick else (128, 256)
     note_q = " (quick: smaller far)" if ctx.quick else ""
     with World.create(ctx.tmp / "farwarm.sqlite", seed=SEED) as w:  # kernel builds

@@ -90,6 +90,32 @@ def test_mountain_silhouette_through_the_pipeline(gl, tmp_path, cl_device, draft
     assert sky.size and (sky[..., 2].astype(int) > sky[..., 0]).all()  # blue
 
 
+def test_the_renderer_morphs_as_the_grid_does(gl):
+    """render/far.py repeats far/grid.py's constants (render does not import far)."""
+    from voxel_addon.far import grid as g
+    from voxel_addon.render import far as f
+    assert (f.TILE, f.MORPH, f.DETAIL, f.COARSEST) == (g.TILE, g.MORPH, g.DETAIL, g.LEVELS[-1])
+    # the shader's k = clamp(d x - y) at a few distances against grid.morph
+    from voxel_addon.far import mesh, tiles
+    from voxel_addon.render.device.mgl import MglDevice
+    key = (2, 0, 0)
+    a = tiles.empty()
+    a["height"][:] = 64
+    m = mesh.build(key, a)
+    ring = f.FarRing(MglDevice(gl))
+    ring.update([m])
+    # half resolution: a quarter of the grid's triangles, every skirt
+    full, low = ring.tiles[key].tris
+    skirts = 4 * g.TILE * 2
+    assert low - skirts == (full - skirts) // 4
+    x, y = ring.tiles[key].morph[:2]
+    d = np.linspace(0, 2000, 41)
+    t = np.clip(d * x - y, 0, 1)
+    assert np.allclose(t * t * (3 - 2 * t), g.morph(d, 2), atol=1e-9)
+    assert mesh.BYTES_PER_VERTEX == 12
+    ring.release()
+
+
 def test_depth_view_shows_far_and_far_zero_draws_none(gl, tmp_path, cl_device):
     gen, cam, area, meshes = _view(tmp_path)
     img, depth, stats = _render(gl, cam, area, meshes, far=FAR, debug="depth")

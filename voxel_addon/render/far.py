@@ -112,9 +112,11 @@ class FarRing:
                 D = DETAIL * 2 * s
                 t.morph = (1.0 / (D * (MORPH[1] - MORPH[0])), MORPH[0] / (MORPH[1] - MORPH[0]),
                            0.0, 0.0)
-            n = 32 * s  # grid.TILE cells
+            n = TILE * s
             ox, oy = m.origin[0] + 0.5, m.origin[1] + 0.5
-            t.box = (ox, oy, float(m.zrange[0]) - 1.0, ox + n, oy + n, float(m.zrange[1]) + 1.0)
+            # (down to the seam wall under the chunks, far.vert: z = -16)
+            t.box = (ox, oy, min(float(m.zrange[0]) - 1.0, -16.0), ox + n, oy + n,
+                     float(m.zrange[1]) + 1.0)
             t.tris = (len(idx) // 3, len(low) // 3)
             t.nbytes = int(m.vertices.nbytes + idx.nbytes + low.nbytes)
             self.tiles[tuple(m.key)] = t

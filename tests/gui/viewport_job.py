@@ -87,7 +87,7 @@ def wait_frames(n=2, full=True, timeout=120.0):
             # the screen may still show an image presented a frame earlier
             yield from one_more_frame(area)
             return
-        why = viewport.problem(bpy.context)  # what the panel says, e.g. the wrong backend:
+        why = LIVE.problem(bpy.context)  # what the panel says, e.g. the wrong backend:
         if why and time.time() - t0 > 10:  # not a passing state, no use waiting longer
             raise RuntimeError(f"the live view cannot draw: {why}")
         yield 0.1

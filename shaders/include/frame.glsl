@@ -63,3 +63,4 @@
 //@ frame bool walls            // close the shown area's outer wall (include/walls.glsl)
 //@ frame int wall_layer        // its texture (stone's, in the block textures)
 //@ frame bool ssr              // water reflects the scene on screen (include/ssr.glsl)
+//@ frame float sea_from        // the sea covers what is below it only this far out (far terrain)

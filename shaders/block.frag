@@ -10,6 +10,7 @@
 // by glow 1 and, as the nearest peeled layer, takes its colour and opacity from its depth.
 #include "include/common.glsl"
 #include "include/frame.glsl"
+#include "include/eye.glsl"
 #ifdef OIT
 #include "include/shade.glsl"
 #endif
@@ -102,7 +103,7 @@ void main() {
     if (glow > 0.999 && water_fx) {  // water (blocktex.py's mark), the nearest layer
         float d = FETCH(opaque_depth, pc, gl_SampleID).r;
         vec2 uv = gl_FragCoord.xy / vec2(textureSize(opaque_depth MS_ARG));
-        c = water_body(c, d < 1.0 ? distance(g_world, world_pos(inv_vp, uv, d)) : 64.0);
+        c = water_body(c, d < 1.0 ? distance(g_world, scene_pos(uv, d)) : 64.0);
     }
 #endif
 #ifdef DEBUG_AGG

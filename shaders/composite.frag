@@ -45,7 +45,8 @@ void main() {
     // of what of the area lies below its surface (one evaluation for both)
     float t = sea_hit(ro, dir);
     vec3 hit = ro + dir * t;
-    bool sea_front = t > 0.0 && front_d < 1e8 && eye_dist(hit) < front_d && !in_area(hit.xy);
+    bool sea_front = t > 0.0 && front_d < 1e8 && eye_dist(hit) < front_d && !in_area(hit.xy)
+        && distance(hit.xy, cam_pos.xy) >= sea_from;  // (far terrain: from its ring's edge)
     bool sea_behind = t > 0.0 && o.a < 0.999;
     vec3 sea_c = sea_front || sea_behind ? sea_color(ro, hit) : vec3(0.0);
     // parallel rays all look one way: below the horizon (where no sea is) an

@@ -77,7 +77,7 @@ void main() {
         vec3 wp, wn;
         int row;
         if (walls && wall_hit(v_uv, wp, wn, row) && (f.depth >= 1.0
-                || eye_dist(wp) < eye_dist(world_pos(inv_vp, v_uv, f.depth)) - 1e-3)) {
+                || eye_dist(wp) < eye_dist(scene_pos(v_uv, f.depth)) - 1e-3)) {
             acc += shade_surface(wall_albedo(wp, row, v_uv, px.y), wp, wn, 0.0);  // the outer wall
             dmin = min(dmin, eye_dist(wp));
             nsum += wn;

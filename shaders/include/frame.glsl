@@ -65,3 +65,4 @@
 //@ frame bool ssr              // water reflects the scene on screen (include/ssr.glsl)
 //@ frame mat4 far_inv_vp        // far terrain's projection, inverted (render/far.py)
 //@ frame float far_split        // 0: one depth range; 0.5: far terrain's depths from here on
+//@ frame float sea_from        // the sea covers what is below it only this far out (far terrain)

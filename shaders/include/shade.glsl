@@ -106,7 +106,9 @@ vec4 shade_surface(vec4 albedo, vec3 p, vec3 n, float glow) {
         float direct = day * (sky_light_dir.z > 0.0 ? shadow_at(p, n) * cloud_shadow(p) : 0.0);
         vec3 r = reflection(p, v, m, direct, true) * day;
 #ifdef LAYER
-        if (water && ssr) {  // the scene where the reflected ray meets it on screen
+        // the scene where the reflected ray meets it on screen (not where the water
+        // reflects too little to show it: steep views)
+        if (water && ssr && f > 0.06) {
             vec3 rd = reflect(v, m);
             vec4 s = ssr_trace(p, normalize(vec3(rd.xy, max(rd.z, 1e-3))));
             r = mix(r, s.rgb, s.a);

@@ -11,7 +11,7 @@
 //@ sampler sampler2D ssr_color  if defined(LAYER)  // the opaque scene, premultiplied
 //@ sampler sampler2D ssr_front  if defined(LAYER)  // its distance (r; 1e9: none)
 
-#define SSR_STEPS 18
+#define SSR_STEPS 14
 
 // where world point q lands on screen (uv) and whether it does
 bool ssr_uv(vec3 q, out vec2 uv) {
@@ -33,7 +33,7 @@ vec4 ssr_trace(vec3 p, vec3 r) {
     vec2 uv;
     for (int i = 0; i < SSR_STEPS; i++) {
         vec3 q = p + r * t;
-        if (!ssr_uv(q, uv)) return vec4(0.0);
+        if (q.z > 256.0 || !ssr_uv(q, uv)) return vec4(0.0);  // (nothing above the world)
         float b = ssr_behind(q, uv, size);
         if (b > 0.0) {
             if (b > (t - t0) * 1.5 + 0.5) return vec4(0.0);  // passed behind, not into it
@@ -50,7 +50,7 @@ vec4 ssr_trace(vec3 p, vec3 r) {
             return vec4(c.rgb / max(c.a, 1e-3), w);
         }
         t0 = t;
-        t *= 1.4;  // 0.5 .. ~200 blocks
+        t *= 1.5;  // 0.5 .. ~100 blocks
     }
     return vec4(0.0);
 }

@@ -25,8 +25,9 @@ VARIANTS = [("default", None), ("no_effects", "none"), ("no_shadows", "-shadows"
             ("ssao", "+ssao"), ("peel0", "peel0"), ("oit", "oit"), ("msaa1", "msaa1"), ("msaa4", "msaa4"),
             ("no_godrays", "-godrays"), ("no_dof", "-dof"), ("no_fog", "-fog"),
             ("no_waving", "-waving"), ("no_tonemap", "-tonemap"), ("no_clouds", "-clouds"),
-            ("no_cloud_shadows", "-cloud_shadows"), ("no_water", "-water"), ("no_sea", "-sea"),
-            ("no_fade", "-fade")]
+            ("no_cloud_shadows", "-cloud_shadows"), ("no_water", "-water"), ("no_ssr", "-ssr"),
+            ("no_sea", "-sea"), ("no_fade", "-fade"), ("no_stars", "-stars"),
+            ("no_walls", "-walls")]
 
 QUICK = ("default", "no_effects", "oit")
 

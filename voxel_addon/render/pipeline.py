@@ -430,7 +430,7 @@ def sky_values(s: Settings, sp: dict, hours: float, sky_on: bool, camera, area,
         # (the albedo views show the G-buffer's encoded colours as they are)
         display=(2 if s.tonemap else 1) if sky_on else (1 if s.debug == "light" else 0),
         clouds=s.clouds and sky_on, cloud_shadows=s.cloud_shadows,
-        sea=s.sea and sky_on and s.sea_level >= 0,
+        sea=s.sea and sky_on and s.sea_level >= 0, sea_from=max(s.sea_from, far),
         water_fx=s.water and sky_on, ssr=s.water and s.ssr and sky_on)
 
 

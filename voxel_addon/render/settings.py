@@ -60,6 +60,9 @@ class Settings:
     sea: bool = True              # a sea to the horizon beyond the shown area
     sea_level: int = -1           # the world's water level (its generator's, water up to
                                   # this z; source.sea_level); -1: no sea
+    sea_from: float = 0.0         # blocks from the camera (horizontally) from which the sea
+                                  # covers what lies below it outside the shown area (far
+                                  # terrain: its ring's edge)
     fade: bool = True             # the shown area's edge fades into the sky (horizon)
     fade_distance: float = 0.0    # blocks where the fade ends; 0: the view distance's edge
     fade_width: float = 0.3       # the fade's width, a fraction of its distance
@@ -142,7 +145,8 @@ class Settings:
                              ("haze", 0.0, 20.0), ("fog_height", 1.0, 1000.0),
                              ("cloud_cover", 0.0, 1.0), ("cloud_height", 0.0, 1000.0),
                              ("cloud_speed", 0.0, 1000.0), ("sea_level", -1, 255),
-                             ("fade_distance", 0.0, 10000.0), ("fade_width", 0.01, 1.0)):
+                             ("fade_distance", 0.0, 100000.0), ("fade_width", 0.01, 1.0),
+                             ("sea_from", 0.0, 100000.0)):
             if not lo <= getattr(self, name) <= hi:
                 raise VoxelError(f"{name} must be between {lo} and {hi}")
 

@@ -659,8 +659,13 @@ def step_readme():
 def run():
     try:
         yield from setup()
+        import gpu
+        # On Vulkan (lavapipe) the far step runs in a Blender of its own (test_viewport.py):
+        # with it the whole job's JIT-compiled pipelines ran out of LLVM section memory in
+        # the last step ("Unable to allocate section memory", Blender gone, every test lost)
+        alone = ("far",) if gpu.platform.backend_type_get() == "VULKAN" else ()
         for name, fn in {**STEPS, "readme": step_readme}.items():
-            if (ONLY is None and name in STEPS) or (ONLY and name in ONLY):
+            if (ONLY is None and name in STEPS and name not in alone) or (ONLY and name in ONLY):
                 yield from fn()
         RESULT["ok"] = True
     except Exception:

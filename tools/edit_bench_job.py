@@ -50,7 +50,8 @@ def frames_after(t0, n=1):
 def steps():
     from mathutils import Quaternion, Vector
     import voxel_addon
-    from voxel_addon.blender import session, strokes, viewport
+    from voxel_addon.blender import session, strokes
+    from voxel_addon.blender.liveview import LIVE
     voxel_addon.register()
     sc = bpy.context.scene
     for ob in list(bpy.data.objects):

@@ -14,7 +14,6 @@ from __future__ import annotations
 import statistics
 import sys
 import time
-import traceback
 from pathlib import Path
 
 import bpy
@@ -79,15 +78,7 @@ def run(world):
 
 
 def main(out, world):
-    try:
-        yield from run(world)
-        R["ok"] = True
-    except Exception:
-        R["ok"] = False
-        R["error"] = traceback.format_exc()
-    import json
-    out.write_text(json.dumps(R, indent=1))
-    bpy.ops.wm.quit_blender()
+    yield from V.report(run(world), R, out)
 
 
 if __name__ == "__main__":

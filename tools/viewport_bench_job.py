@@ -192,13 +192,19 @@ def run():
 
 
 def main():
+    yield from report(run(), R, OUT)
+
+
+def report(job, r: dict, out: Path):
+    """Generator: run job, then write r (with "ok", or "error": the traceback) to
+    out as JSON and quit Blender: what every bench job ends with."""
     try:
-        yield from run()
-        R["ok"] = True
+        yield from job
+        r["ok"] = True
     except Exception:
-        R["ok"] = False
-        R["error"] = traceback.format_exc()
-    OUT.write_text(json.dumps(R, indent=1))
+        r["ok"] = False
+        r["error"] = traceback.format_exc()
+    out.write_text(json.dumps(r, indent=1))
     bpy.ops.wm.quit_blender()
 
 

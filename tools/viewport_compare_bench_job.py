@@ -23,11 +23,9 @@ baseline (clear_refs 5).
 from __future__ import annotations
 
 import gc
-import json
 import math
 import sys
 import time
-import traceback
 from pathlib import Path
 
 import bpy
@@ -285,14 +283,7 @@ def material(limit, step):
 
 # ---------------------------------------------------------------------- main
 def main(out, mode, world, d, limit):
-    try:
-        yield from (live(world, d) if mode == "live" else baked(world, d, limit))
-        R["ok"] = True
-    except Exception:
-        R["ok"] = False
-        R["error"] = traceback.format_exc()
-    out.write_text(json.dumps(R, indent=1))
-    bpy.ops.wm.quit_blender()
+    yield from V.report(live(world, d) if mode == "live" else baked(world, d, limit), R, out)
 
 
 def start():

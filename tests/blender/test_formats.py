@@ -11,15 +11,6 @@ from tests.formats import mcfiles as mc
 from tests.formats import voxfiles as vf
 
 
-@pytest.fixture
-def addon(bpy):
-    import voxel_addon
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    voxel_addon.register()
-    yield bpy
-    voxel_addon.unregister()
-
-
 def _save(tmp_path):
     secs = {0: np.full((16, 16, 16), "minecraft:air", object)}
     secs[0][3, 4, 5] = "minecraft:bricks"           # y 3, z 4, x 5

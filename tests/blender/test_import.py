@@ -11,15 +11,6 @@ from voxel_addon import bake
 
 
 @pytest.fixture
-def addon(bpy):
-    import voxel_addon
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    voxel_addon.register()
-    yield bpy
-    voxel_addon.unregister()
-
-
-@pytest.fixture
 def world_file(tmp_path):
     from voxel_addon.world import World
     path = tmp_path / "w.sqlite"

@@ -226,3 +226,21 @@ class ModalJob:
         wm.progress_end()
         if getattr(context, "workspace", None) is not None:
             context.workspace.status_text_set(None)
+
+
+class FileJob(ModalJob):
+    """A ModalJob behind a file browser (mix in before bpy.types.Operator and
+    ImportHelper): OK in the browser runs it modally; scripts and background run
+    it at once."""
+
+    modal_run: bpy.props.BoolProperty(default=False, options={"HIDDEN", "SKIP_SAVE"})
+
+    def invoke(self, context, event):
+        from bpy_extras.io_utils import ImportHelper
+        self.modal_run = True
+        return ImportHelper.invoke(self, context, event)
+
+    def execute(self, context):
+        if self.modal_run and context.window is not None:
+            return self.start(context)
+        return ModalJob.execute(self, context)

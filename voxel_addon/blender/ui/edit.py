@@ -64,6 +64,21 @@ def _changes(cells, bid):
     return [(x, y, z, bid) for x, y, z in cells]
 
 
+def changed(op, edit) -> set:
+    """An edit operator's result: edit() -> number of blocks changed; a VoxelError is
+    the operator's one-line error, nothing changed cancels (no undo step)."""
+    from ...core.errors import VoxelError
+    try:
+        n = edit()
+    except VoxelError as e:
+        op.report({"ERROR"}, str(e))
+        return {"CANCELLED"}
+    if not n:
+        op.report({"INFO"}, "nothing changed")
+        return {"CANCELLED"}
+    return {"FINISHED"}
+
+
 class VOXEL_OT_edit(bpy.types.Operator):
     bl_idname = "voxel.edit"
     bl_label = "Voxel Edit"
@@ -80,23 +95,17 @@ class VOXEL_OT_edit(bpy.types.Operator):
     corner: IntVectorProperty(name="Corner", size=3)
 
     def execute(self, context):
+        return changed(self, lambda: self._stroke(context))
+
+    def _stroke(self, context) -> int:
         from .. import strokes
         from ...core import brush, chunk
         from ...core.blocks import REGISTRY
-        from ...core.errors import VoxelError
-        try:
-            bid = 0 if self.remove else REGISTRY.id(self.block)
-            chunk.check_z(self.location[2])
-            cells = brush.box(self.location, self.corner) if self.box else \
-                brush.cells(self.location, self.size, self.shape)
-            n = strokes.stroke(context, _changes(cells, bid))
-        except VoxelError as e:
-            self.report({"ERROR"}, str(e))
-            return {"CANCELLED"}
-        if not n:
-            self.report({"INFO"}, "nothing changed")
-            return {"CANCELLED"}
-        return {"FINISHED"}
+        bid = 0 if self.remove else REGISTRY.id(self.block)
+        chunk.check_z(self.location[2])
+        cells = brush.box(self.location, self.corner) if self.box else \
+            brush.cells(self.location, self.size, self.shape)
+        return strokes.stroke(context, _changes(cells, bid))
 
 
 class _Hover:

@@ -12,7 +12,7 @@ import bpy
 from bpy.props import BoolProperty, IntProperty, IntVectorProperty, StringProperty
 from bpy_extras.io_utils import ExportHelper, ImportHelper
 
-from ..job import ModalJob
+from ..job import FileJob
 
 
 def target_world(context, source: str, explicit: str = ""):
@@ -62,7 +62,7 @@ def _minecraft_steps(world, src, report, **kw):
         yield "import", done / max(total, 1)
 
 
-class IMPORT_SCENE_OT_voxel_minecraft(ModalJob, bpy.types.Operator, ImportHelper):
+class IMPORT_SCENE_OT_voxel_minecraft(FileJob, bpy.types.Operator, ImportHelper):
     bl_idname = "import_scene.voxel_minecraft"
     bl_label = "Import Minecraft World"
     bl_description = ("Import a Minecraft Java world (its level.dat or save folder) or region "
@@ -82,7 +82,6 @@ class IMPORT_SCENE_OT_voxel_minecraft(ModalJob, bpy.types.Operator, ImportHelper
                             description="Minecraft X0, Z0, X1, Z1 (chunks touching it)")
     replace: BoolProperty(name="Replace", default=False,
                           description="Overwrite chunks the world already has")
-    modal_run: BoolProperty(default=False, options={"HIDDEN", "SKIP_SAVE"})
 
     def draw(self, context):
         col = self.layout.column()
@@ -94,15 +93,6 @@ class IMPORT_SCENE_OT_voxel_minecraft(ModalJob, bpy.types.Operator, ImportHelper
         if self.use_area:
             col.prop(self, "area")
         col.prop(self, "replace")
-
-    def invoke(self, context, event):
-        self.modal_run = True
-        return ImportHelper.invoke(self, context, event)
-
-    def execute(self, context):
-        if self.modal_run and context.window is not None:
-            return self.start(context)
-        return ModalJob.execute(self, context)
 
     def source(self) -> str:
         p = bpy.path.abspath(self.filepath)
@@ -136,7 +126,7 @@ def _vox_steps(world, path, at, out):
     yield "done", 1.0
 
 
-class IMPORT_SCENE_OT_voxel_vox(ModalJob, bpy.types.Operator, ImportHelper):
+class IMPORT_SCENE_OT_voxel_vox(FileJob, bpy.types.Operator, ImportHelper):
     bl_idname = "import_scene.voxel_vox"
     bl_label = "Import MagicaVoxel"
     bl_description = ("Place a MagicaVoxel model (.vox) into the scene's voxel world, its "
@@ -149,17 +139,10 @@ class IMPORT_SCENE_OT_voxel_vox(ModalJob, bpy.types.Operator, ImportHelper):
                           description="World file to write (empty: the scene's world)")
     location: IntVectorProperty(name="Location", size=3, default=(0, 0, 64),
                                 description="Where the model's bounding box corner goes")
-    modal_run: BoolProperty(default=False, options={"HIDDEN", "SKIP_SAVE"})
 
     def invoke(self, context, event):
-        self.modal_run = True
         self.location = [round(v) for v in context.scene.cursor.location]
-        return ImportHelper.invoke(self, context, event)
-
-    def execute(self, context):
-        if self.modal_run and context.window is not None:
-            return self.start(context)
-        return ModalJob.execute(self, context)
+        return FileJob.invoke(self, context, event)
 
     def make_job(self, context):
         from ...formats import magica
@@ -232,16 +215,8 @@ class VOXEL_OT_stamp(bpy.types.Operator):
     location: IntVectorProperty(name="Location", size=3)
 
     def execute(self, context):
-        from ...core.errors import VoxelError
-        try:
-            n = stamp_at(context, self.filepath, tuple(self.location))
-        except VoxelError as e:
-            self.report({"ERROR"}, str(e))
-            return {"CANCELLED"}
-        if not n:
-            self.report({"INFO"}, "nothing changed")
-            return {"CANCELLED"}
-        return {"FINISHED"}
+        from .edit import changed
+        return changed(self, lambda: stamp_at(context, self.filepath, tuple(self.location)))
 
 
 def _redraw(context):

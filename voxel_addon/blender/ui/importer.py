@@ -9,7 +9,7 @@ from bpy.props import (BoolProperty, EnumProperty, FloatProperty, IntProperty,
 from bpy_extras.io_utils import ImportHelper
 
 from ...meshing import METHODS
-from ..job import Job, ModalJob, region_of_mode
+from ..job import FileJob, Job, region_of_mode
 
 MODES = [("region", "Region", "The block columns [X0, X1) × [Y0, Y1) below"),
          ("origin", "Around the Origin", "A square of Size × Size blocks centred on (0, 0)"),
@@ -22,7 +22,7 @@ LIGHT = [("atlas", "Atlas", "Light in a texture on a second UV set; merged quads
          ("vertex", "Per Vertex", "Light in colour attributes (quads split where it varies)")]
 
 
-class IMPORT_SCENE_OT_voxel_world(ModalJob, bpy.types.Operator, ImportHelper):
+class IMPORT_SCENE_OT_voxel_world(FileJob, bpy.types.Operator, ImportHelper):
     bl_idname = "import_scene.voxel_world"
     bl_label = "Import Voxel World"
     bl_description = "Bake a region of a voxel world file into mesh objects"
@@ -40,7 +40,6 @@ class IMPORT_SCENE_OT_voxel_world(ModalJob, bpy.types.Operator, ImportHelper):
     method: EnumProperty(name="Merge", default="greedy", items=METHOD_ITEMS)
     instances: BoolProperty(name="Plants as Instances", default=False)
     hours: FloatProperty(name="Time of Day", default=12.0, min=0.0, max=24.0)
-    modal_run: BoolProperty(default=False, options={"HIDDEN", "SKIP_SAVE"})
 
     def draw(self, context):
         col = self.layout.column()
@@ -50,15 +49,6 @@ class IMPORT_SCENE_OT_voxel_world(ModalJob, bpy.types.Operator, ImportHelper):
         elif self.mode == "origin":
             col.prop(self, "size")
         draw_options(col, self)
-
-    def invoke(self, context, event):
-        self.modal_run = True
-        return ImportHelper.invoke(self, context, event)
-
-    def execute(self, context):
-        if self.modal_run and context.window is not None:
-            return self.start(context)
-        return ModalJob.execute(self, context)
 
     def make_job(self, context) -> Job:
         return job_for(self.filepath, self, mode=self.mode, region=self.region, size=self.size)

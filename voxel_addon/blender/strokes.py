@@ -259,3 +259,18 @@ def unregister_handlers() -> None:
     for lst in (h.undo_post, h.redo_post, h.load_post):
         for fn in [f for f in lst if getattr(f, "__module__", None) == __name__]:
             lst.remove(fn)
+
+
+def changed(op, edit) -> set:
+    """An edit operator's result: edit() -> number of blocks changed; a VoxelError is
+    the operator's one-line error, nothing changed cancels (no undo step)."""
+    from ..core.errors import VoxelError
+    try:
+        n = edit()
+    except VoxelError as e:
+        op.report({"ERROR"}, str(e))
+        return {"CANCELLED"}
+    if not n:
+        op.report({"INFO"}, "nothing changed")
+        return {"CANCELLED"}
+    return {"FINISHED"}

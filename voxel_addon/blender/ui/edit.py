@@ -64,21 +64,6 @@ def _changes(cells, bid):
     return [(x, y, z, bid) for x, y, z in cells]
 
 
-def changed(op, edit) -> set:
-    """An edit operator's result: edit() -> number of blocks changed; a VoxelError is
-    the operator's one-line error, nothing changed cancels (no undo step)."""
-    from ...core.errors import VoxelError
-    try:
-        n = edit()
-    except VoxelError as e:
-        op.report({"ERROR"}, str(e))
-        return {"CANCELLED"}
-    if not n:
-        op.report({"INFO"}, "nothing changed")
-        return {"CANCELLED"}
-    return {"FINISHED"}
-
-
 class VOXEL_OT_edit(bpy.types.Operator):
     bl_idname = "voxel.edit"
     bl_label = "Voxel Edit"
@@ -95,6 +80,7 @@ class VOXEL_OT_edit(bpy.types.Operator):
     corner: IntVectorProperty(name="Corner", size=3)
 
     def execute(self, context):
+        from ..strokes import changed
         return changed(self, lambda: self._stroke(context))
 
     def _stroke(self, context) -> int:

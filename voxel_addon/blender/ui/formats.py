@@ -215,7 +215,7 @@ class VOXEL_OT_stamp(bpy.types.Operator):
     location: IntVectorProperty(name="Location", size=3)
 
     def execute(self, context):
-        from .edit import changed
+        from ..strokes import changed
         return changed(self, lambda: stamp_at(context, self.filepath, tuple(self.location)))
 
 

@@ -29,12 +29,6 @@ Frag fetch(ivec2 c, int s) {
     return f;
 }
 
-vec4 shade(Frag f, vec2 uv, out float dist) {
-    vec3 p = scene_pos(uv, f.depth);
-    dist = eye_dist(p);
-    return shade_surface(f.albedo, p, normalize(f.n), f.glow);
-}
-
 void main() {
     ivec2 c = ivec2(gl_FragCoord.xy);
     vec2 px = 1.0 / vec2(textureSize(g_depth MS_ARG));
@@ -42,6 +36,20 @@ void main() {
     float dmin = 1e9;
     vec3 nsum = vec3(0.0);
     int hits = 0;
+#ifndef LAYER
+    // the shown area's outer wall where the meshes have none (include/walls.glsl): the
+    // ray's one wall point, once per pixel, in place of what is behind it. From inside
+    // the area a ray only meets it where nothing is drawn (it left through the ground or
+    // a cave), so only those pixels look for it there.
+    vec3 wp = vec3(0.0), wn = vec3(0.0);
+    int row = 0;
+    bool outside = ortho || any(lessThan(cam_pos.xy, area_box.xy))
+                         || any(greaterThanEqual(cam_pos.xy, area_box.zw));
+    bool wall = walls && (outside || FETCH(g_depth, c, 0).r >= 1.0)
+                && wall_hit(v_uv, wp, wn, row);
+    float wall_d = wall ? eye_dist(wp) : 1e9;
+    vec4 wall_c = wall ? wall_albedo(wp, row, v_uv, px.y) : vec4(0.0);
+#endif
 #if SAMPLES > 1 && defined(PER_SAMPLE)
     for (int s = 0; s < SAMPLES; s++) {
         Frag f = fetch(c, s);
@@ -73,22 +81,20 @@ void main() {
             if (n >= 3) f = best;
         }
 #endif
+        vec3 p = scene_pos(v_uv, f.depth);
+        vec4 albedo = f.albedo;
+        vec3 n = f.n;
+        float glow = f.glow;
 #ifndef LAYER
-        vec3 wp, wn;
-        int row;
-        if (walls && wall_hit(v_uv, wp, wn, row) && (f.depth >= 1.0
-                || eye_dist(wp) < eye_dist(scene_pos(v_uv, f.depth)) - 1e-3)) {
-            acc += shade_surface(wall_albedo(wp, row, v_uv, px.y), wp, wn, 0.0);  // the outer wall
-            dmin = min(dmin, eye_dist(wp));
-            nsum += wn;
-            hits++;
-        } else
+        if (wall && (f.depth >= 1.0 || wall_d < eye_dist(p) - 1e-3)) {
+            p = wp; albedo = wall_c; n = wn; glow = 0.0;
+            f.depth = 0.0;  // (drawn)
+        }
 #endif
         if (f.depth < 1.0) {
-            float dist;
-            acc += shade(f, v_uv, dist);
-            dmin = min(dmin, dist);
-            nsum += f.n;
+            acc += shade_surface(albedo, p, normalize(n), glow);
+            dmin = min(dmin, eye_dist(p));
+            nsum += n;
             hits++;
         }
     }

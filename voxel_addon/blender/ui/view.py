@@ -18,12 +18,13 @@ def _redraw(self, context):
 # The viewport is where people build: a distance blur hides what they point at, so it
 # starts off here (the CLI's renders keep Settings' default).
 VIEWPORT_OFF = ("dof",)
+LABELS = {"ssr": "Screen Space Reflections"}  # (as Eevee names it; others: the name, titled)
 def _effects():
     """One bool per effect (defaults from Settings(), but VIEWPORT_OFF)."""
     from ...render.settings import Settings
     from ..liveview.options import effects
     s = Settings()
-    return {e: BoolProperty(name=e.replace("_", " ").title(),
+    return {e: BoolProperty(name=LABELS.get(e, e.replace("_", " ").title()),
                             default=getattr(s, e) and e not in VIEWPORT_OFF,
                             update=_redraw) for e in effects()}
 

@@ -34,6 +34,19 @@ def decode_block(src, size: int) -> bytes:
     return _decode(src, size)
 
 
+def _more(src: bytes, i: int, k: int) -> tuple[int, int]:
+    """A length of 15 continues in bytes of 255 and a last one below: (length, next i)."""
+    n = len(src)
+    while True:
+        if i >= n:
+            raise ValueError("LZ4 block ends inside a length")
+        b = src[i]
+        i += 1
+        k += b
+        if b != 255:
+            return k, i
+
+
 def _decode(src, size: int) -> bytes:
     src = bytes(src)
     out = bytearray()
@@ -43,14 +56,7 @@ def _decode(src, size: int) -> bytes:
         i += 1
         k = token >> 4
         if k == 15:
-            while True:
-                if i >= n:
-                    raise ValueError("LZ4 block ends inside a length")
-                b = src[i]
-                i += 1
-                k += b
-                if b != 255:
-                    break
+            k, i = _more(src, i, k)
         if i + k > n or len(out) + k > size:
             raise ValueError("LZ4 literals run past the block or the expected size")
         out += src[i:i + k]
@@ -63,14 +69,7 @@ def _decode(src, size: int) -> bytes:
         i += 2
         m = token & 15
         if m == 15:
-            while True:
-                if i >= n:
-                    raise ValueError("LZ4 block ends inside a length")
-                b = src[i]
-                i += 1
-                m += b
-                if b != 255:
-                    break
+            m, i = _more(src, i, m)
         m += 4
         if off == 0 or off > len(out):
             raise ValueError(f"LZ4 match offset {off} outside the output")

@@ -12,10 +12,8 @@ times with the GPU finished, LIVE.finish), the fastest of N each.
 from __future__ import annotations
 
 import importlib.util
-import json
 import sys
 import time
-import traceback
 from pathlib import Path
 
 import bpy
@@ -91,14 +89,7 @@ def run(out: Path, world: str, far: int):
 
 
 def main(out, world, far):
-    try:
-        yield from run(out, world, far)
-        R["ok"] = True
-    except Exception:
-        R["ok"] = False
-        R["error"] = traceback.format_exc()
-    out.write_text(json.dumps(R, indent=1))
-    bpy.ops.wm.quit_blender()
+    yield from V.report(run(out, world, far), R, out)
 
 
 if __name__ == "__main__":

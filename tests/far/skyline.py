@@ -103,3 +103,15 @@ def mesh_skyline(meshes, cam, width, height, morph=True):
                 best = np.minimum(best, yc)
             np.minimum.at(out, c[on], best)
     return out
+
+
+def tile_of(gen, key, trees: bool = True) -> dict:
+    """A far tile's samples straight from the generator's 2D passes (trees=False: the
+    bare ground, whose skyline the true heights give)."""
+    X, Y = grid.columns(key)
+    s = gen.surface(np.stack([X.ravel(), Y.ravel()], -1))
+    t = np.rint(s["trees"] * 255).reshape(X.shape) if trees else np.zeros(X.shape)
+    return {"height": s["height"].reshape(X.shape).astype(np.int16),
+            "top": s["top"].reshape(X.shape).astype(np.uint16),
+            "water": s["water"].reshape(X.shape).astype(np.int16),
+            "trees": t.astype(np.uint8)}

@@ -8,6 +8,8 @@ from voxel_addon.far import grid, mesh
 from voxel_addon.far.tiles import empty
 from voxel_addon.generation import make_generator
 
+from .skyline import tile_of
+
 T = grid.TILE
 
 
@@ -23,13 +25,6 @@ def decode(m):
     return np.stack([x, y, z], -1), kx, ky, kind, nx, ny
 
 
-def tile_of(gen, key):
-    X, Y = grid.columns(key)
-    s = gen.surface(np.stack([X.ravel(), Y.ravel()], -1))
-    return {"height": s["height"].reshape(X.shape).astype(np.int16),
-            "top": s["top"].reshape(X.shape).astype(np.uint16),
-            "water": s["water"].reshape(X.shape).astype(np.int16),
-            "trees": np.rint(s["trees"] * 255).reshape(X.shape).astype(np.uint8)}
 
 
 def test_vertices_are_the_samples():

@@ -10,18 +10,11 @@ from voxel_addon.far import grid, mesh
 from voxel_addon.generation import make_generator
 from voxel_addon.render.camera import Camera
 
-from .skyline import in_rects, mesh_skyline, true_skyline
+from .skyline import in_rects, mesh_skyline, tile_of, true_skyline
 
 W, H = 480, 270
 
 
-def tile_of(gen, key):
-    X, Y = grid.columns(key)
-    s = gen.surface(np.stack([X.ravel(), Y.ravel()], -1))
-    return {"height": s["height"].reshape(X.shape).astype(np.int16),
-            "top": s["top"].reshape(X.shape).astype(np.uint16),
-            "water": s["water"].reshape(X.shape).astype(np.int16),
-            "trees": np.zeros(X.shape, np.uint8)}   # the skyline of the ground
 
 
 def test_far_skyline_is_the_true_one(cl_device):
@@ -31,7 +24,7 @@ def test_far_skyline_is_the_true_one(cl_device):
     cam = Camera(0.5, 0.5, h0 + 20.0, math.degrees(math.atan2(-928, 960)), 2.0, 60.0,
                  W / H, 0.5, 8000.0)
     sel = [k for k, _ in grid.select(cam.x, cam.y, far=128, near=0)]
-    meshes = [mesh.build(k, tile_of(gen, k)) for k in sel]
+    meshes = [mesh.build(k, tile_of(gen, k, trees=False)) for k in sel]
     reach = max(math.hypot(max(abs(r[0] - cam.x), abs(r[2] - cam.x)),
                            max(abs(r[1] - cam.y), abs(r[3] - cam.y)))
                 for r in map(grid.rect, sel))

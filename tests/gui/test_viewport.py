@@ -46,13 +46,16 @@ def run(app, world, tmp_path_factory):
     return res
 
 
+ALONE = "far,leak"  # the steps viewport_job.py runs apart on Vulkan (its run() says why)
+
+
 @pytest.fixture(scope="module")
-def far_run(app, world, request, tmp_path_factory):
-    """The far step's results: from the job's one Blender, but on Vulkan from a Blender
-    of its own (viewport_job.py run())."""
+def alone_run(app, world, request, tmp_path_factory):
+    """The far and leak steps' results: from the job's one Blender, but on Vulkan from a
+    Blender of their own (viewport_job.py run())."""
     if app.backend_name() != "vulkan":
         return request.getfixturevalue("run")
-    return _run(app, tmp_path_factory.mktemp("gui_far"), world, "far")
+    return _run(app, tmp_path_factory.mktemp("gui_alone"), world, ALONE)
 
 
 def _img(step):
@@ -237,13 +240,13 @@ def test_no_python_error_over_100_redraws(run):
     assert not bad, bad[:20]
 
 
-def test_register_unregister_10_times_leaks_nothing(run):
-    leak = run["steps"]["leak"]
+def test_register_unregister_10_times_leaks_nothing(alone_run):
+    leak = alone_run["steps"]["leak"]
     assert leak == {"renderers": 0, "gpus": 0, "feed": False, "handle": False,
                     "timer": False, "load_pre": 0, "threads": leak["threads"]}, leak
     assert leak["threads"] <= 0, leak
     # and nothing of the world is drawn any more
-    reg = _region(run["steps"]["unregistered"])
+    reg = _region(alone_run["steps"]["unregistered"])
     bg = np.median(reg.reshape(-1, 3), 0)
     assert bg.max() - bg.min() < 6 and (np.abs(reg - bg).max(-1) <= 2).mean() > 0.8
 
@@ -308,11 +311,11 @@ def test_render_animation_from_the_ui_writes_frames_and_esc_stops(run):
     assert m["stopped_with"] >= 2 and m["files2"] == [] and m["tmp2"] == [], m
 
 
-def test_far_terrain_shows_and_mixes_with_far_objects_by_depth(far_run):
+def test_far_terrain_shows_and_mixes_with_far_objects_by_depth(alone_run):
     """Far 32 beyond distance 4 (viewport_job.py step_far): terrain where far 0 showed
     sky toward the horizon; a cube ~400 blocks away above the far ground stays in
     front of it, one sunk into the far ground is hidden by it."""
-    st = far_run["steps"]
+    st = alone_run["steps"]
     f0, f64, off = st["far0"], st["far32"], st["far_off"]
     assert f64["status"]["far_drawn"] >= f64["status"]["far_wanted"] > 0, f64["status"]
     a, b, c = _region(f0), _region(f64), _region(off)

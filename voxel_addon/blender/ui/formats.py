@@ -62,7 +62,13 @@ def _minecraft_steps(world, src, report, **kw):
         yield "import", done / max(total, 1)
 
 
-class IMPORT_SCENE_OT_voxel_minecraft(FileJob, bpy.types.Operator, ImportHelper):
+class _IntoWorld:
+    """The imports' target: a world file, or the scene's (target_world)."""
+    world: StringProperty(name="World File", subtype="FILE_PATH", default="",
+                          description="World file to write (empty: the scene's world)")
+
+
+class IMPORT_SCENE_OT_voxel_minecraft(_IntoWorld, FileJob, bpy.types.Operator, ImportHelper):
     bl_idname = "import_scene.voxel_minecraft"
     bl_label = "Import Minecraft World"
     bl_description = ("Import a Minecraft Java world (its level.dat or save folder) or region "
@@ -72,8 +78,6 @@ class IMPORT_SCENE_OT_voxel_minecraft(FileJob, bpy.types.Operator, ImportHelper)
 
     filename_ext = ".mca"
     filter_glob: StringProperty(default="*.mca;level.dat", options={"HIDDEN"})
-    world: StringProperty(name="World File", subtype="FILE_PATH", default="",
-                          description="World file to write (empty: the scene's world)")
     use_y_min: BoolProperty(name="Custom Bottom", default=False)
     y_min: IntProperty(name="Bottom Y", default=-64,
                        description="Minecraft y that becomes z 0 (default -64 for 1.18+, else 0)")
@@ -126,7 +130,7 @@ def _vox_steps(world, path, at, out):
     yield "done", 1.0
 
 
-class IMPORT_SCENE_OT_voxel_vox(FileJob, bpy.types.Operator, ImportHelper):
+class IMPORT_SCENE_OT_voxel_vox(_IntoWorld, FileJob, bpy.types.Operator, ImportHelper):
     bl_idname = "import_scene.voxel_vox"
     bl_label = "Import MagicaVoxel"
     bl_description = ("Place a MagicaVoxel model (.vox) into the scene's voxel world, its "
@@ -135,8 +139,6 @@ class IMPORT_SCENE_OT_voxel_vox(FileJob, bpy.types.Operator, ImportHelper):
 
     filename_ext = ".vox"
     filter_glob: StringProperty(default="*.vox", options={"HIDDEN"})
-    world: StringProperty(name="World File", subtype="FILE_PATH", default="",
-                          description="World file to write (empty: the scene's world)")
     location: IntVectorProperty(name="Location", size=3, default=(0, 0, 64),
                                 description="Where the model's bounding box corner goes")
 

@@ -7,7 +7,13 @@ A save that fails on closing (disk full, a file-size limit, a drive gone) is nev
 silent: it is reported in the status bar and the console, the world's unsaved edits
 go into a file beside it (world/rescue.py; the temporary folder when that fails
 too), and the next open applies them. When no rescue file can be written either, the
-world stays open in memory (`unsaved`) so a later close retries.
+world stays open in memory (`unsaved`) so a later close retries. A save that fails
+while the world is in use (a stroke's: its file deleted or moved away) goes the same
+way at once (`save_failed`), and a world whose file is gone is let go.
+
+Other processes may write the same file (another Blender, a command-line import):
+a timer polls every open world about once a second (`World.refresh`: a pragma when
+nothing changed) and redraws the viewports when it took in their chunks.
 """
 from __future__ import annotations
 
@@ -15,6 +21,7 @@ import os
 
 _worlds: dict[str, object] = {}
 unsaved: dict[str, object] = {}  # worlds whose save and rescue both failed (retried on close)
+POLL_S = 1.0  # seconds between looks for other processes' writes
 
 
 def _key(path: str) -> str:
@@ -43,7 +50,46 @@ def world(path: str, *, create_seed: int | None = None, generator: str | None = 
             w = World.open(key)
     _worlds[key] = w
     _restore(w, key)
+    _start_polling()
     return w
+
+
+def _start_polling() -> None:
+    import bpy
+    if not bpy.app.timers.is_registered(_poll):
+        bpy.app.timers.register(_poll, first_interval=POLL_S, persistent=True)
+
+
+def _poll():
+    """Take in what other processes wrote to the open worlds; redraw if anything."""
+    got = False
+    for key, w in list(_worlds.items()):
+        try:
+            got |= bool(w.refresh())
+        except Exception as e:  # noqa: BLE001 - a poll must not kill the timer
+            print(f"Voxel Worlds: could not look for changes in {key}: {e}")
+    if got:
+        from . import liveview
+        liveview.redraw()
+    return POLL_S if _worlds else None
+
+
+def save_failed(w, error: Exception) -> str:
+    """A write of the open world W failed (a stroke's): as when closing fails, its
+    unsaved edits go into the rescue file and the user is told; the edits rescued
+    are not listed again. A world whose file is gone (deleted, moved away) is let
+    go: nothing more can be written to it. Returns the message."""
+    key = next((k for k, x in _worlds.items() if x is w), None) or \
+        os.path.realpath(str(w.file.path))
+    msg = _save_failed(key, w, error)
+    if unsaved.get(key) is w:  # not rescued: memory is all there is, keep it open
+        _worlds.pop(key, None)
+        return msg
+    w.forget_unsaved()
+    if w.file.gone():
+        _worlds.pop(key, None)
+        w.discard()
+    return msg
 
 
 def _restore(w, key: str) -> None:
@@ -70,6 +116,9 @@ def close(path: str) -> str | None:
 def close_all() -> list[str]:
     """Close every world (unregister): one failing save does not stop the others,
     and none fails silently. What the user was told, one line per failed save."""
+    import bpy
+    if bpy.app.timers.is_registered(_poll):
+        bpy.app.timers.unregister(_poll)
     todo = [*unsaved.items(), *_worlds.items()]
     unsaved.clear()
     _worlds.clear()

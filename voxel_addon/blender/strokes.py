@@ -16,7 +16,10 @@ Blender's would fall out of step with it (RetopoFlow #1494); one number inside
 Blender's snapshots cannot.
 
 Each stroke reaches the world file in one transaction before the operator returns,
-so killing Blender right after a stroke loses nothing. A drag keeps its parts in
+so killing Blender right after a stroke loses nothing. When that write fails (the
+file was deleted or moved away while open, the disk is full) the stroke's edits go
+into the rescue file at once (session.save_failed) and the operator reports an
+error: never FINISHED silently. A drag keeps its parts in
 memory (shown at once) and writes them together when it ends: on release, on Esc or
 right-click, when Blender cancels the operator (the window or file closes) and, at
 the latest, when the world closes. The journal
@@ -39,7 +42,7 @@ def apply(world, changes, write: bool = True):
     import time
     from ..world import edit
     t = time.perf_counter()
-    out = edit.edit(world, list(changes), write)
+    out = saved(world, lambda: edit.edit(world, list(changes), write))
     done = time.perf_counter()
     ms = (done - t) * 1e3
     STATS.update(edits=STATS["edits"] + 1, voxels=STATS["voxels"] + len(out[1].voxels),
@@ -55,7 +58,7 @@ def finish(world) -> None:
     from ..world import edit
     t = time.perf_counter()
     if world.held:
-        edit.write(world)
+        saved(world, lambda: edit.write(world))
     ms = (time.perf_counter() - t) * 1e3
     STATS.update(ms=STATS["ms"] + ms, stroke_ms=STATS["stroke_ms"] + ms)
     _stroke_done()
@@ -67,12 +70,26 @@ def _stroke_done():
 
 def undo(world, rec) -> list:
     from ..world import edit
-    return edit.undo(world, rec)
+    return saved(world, lambda: edit.undo(world, rec))
 
 
 def redo(world, rec) -> list:
     from ..world import edit
-    return edit.redo(world, rec)
+    return saved(world, lambda: edit.redo(world, rec))
+
+
+def saved(world, fn):
+    """fn(), a change of `world` that writes it; a failed write is rescued and told
+    (session.save_failed) and raised as a VoxelError with what the user was told."""
+    import sqlite3
+    from . import session
+    from ..core.errors import VoxelError
+    try:
+        return fn()
+    except (VoxelError, OSError, sqlite3.Error) as e:
+        if isinstance(e, VoxelError) and not world.file.gone():
+            raise  # a user mistake (a bad block, z off the world): nothing was written
+        raise VoxelError(session.save_failed(world, e)) from None
 
 
 def merge(a, b):

@@ -64,6 +64,12 @@ class Builder:
         self._thread = threading.Thread(target=self._run, name="voxel-far", daemon=True)
         self._thread.start()
 
+    @classmethod
+    def of(cls, world) -> "Builder":
+        """The builder of a world.World (taken by duck typing: .file, .generator and
+        .gen_lock, its loader's generator lock, shared so one generates at a time)."""
+        return cls(world.file, world.generator, world.gen_lock)
+
     # ---- consumer side -----------------------------------------------------
     def set_view(self, x: float, y: float, far: int, near: int = 0,
                  detail: int = grid.DETAIL) -> None:

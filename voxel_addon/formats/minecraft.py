@@ -5,11 +5,15 @@ Minecraft block (x, y, z) becomes voxel (x, -1-z, y - y_min): not mirrored, nort
 and counted. Chunks Minecraft has not finished (Status other than full) are skipped
 and counted; a damaged chunk is skipped with its one-line reason. Chunks go to the
 file in batches, each one transaction: an interrupted import keeps every finished
-batch, and no chunk is ever half-written.
+batch, and no chunk is ever half-written. Whether a chunk is already in the file is
+decided again inside each batch's transaction (World.store_chunks), so a chunk
+another writer stored while the import ran is kept (counted in `kept`), and with
+replace the edits saved since the import started are applied over the imported one.
 """
 from __future__ import annotations
 
 import gzip
+import time
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -30,6 +34,7 @@ LAYOUTS = ("dimensions/minecraft/overworld/region", "region")  # 26.1 first, the
 @dataclass
 class Report:
     chunks: int = 0                      # imported
+    kept: int = 0                        # stored by another writer meanwhile: left as they were
     unfinished: Counter = field(default_factory=Counter)   # skipped, by Status
     damaged: list = field(default_factory=list)            # one-line reasons
     external: int = 0                    # in .mcc files, not read
@@ -44,6 +49,9 @@ class Report:
         if self.unfinished:
             out.append("skipped, not finished by Minecraft: " + ", ".join(
                 f"{n} {s or '?'}" for s, n in self.unfinished.most_common()))
+        if self.kept:
+            out.append(f"kept, stored in the world by another writer during the import: "
+                       f"{self.kept}")
         if self.external:
             out.append(f"skipped, stored in external .mcc files: {self.external}")
         if self.damaged:
@@ -202,6 +210,7 @@ def import_world(world, path, *, y_min=None, area=None, replace=False, progress=
 def steps(world, path, report: Report, *, y_min=None, area=None, replace=False):
     """The import as a generator of (chunks done, total), one step per batch written,
     filling `report`. Closing it early keeps every batch written so far."""
+    start = time.time()  # edits saved from now on survive a replace (store_chunks)
     todo = plan(path, area)
     keys = {to_key(cx, cz) for _, cx, cz in todo}
     have = keys & set(world.file.chunk_keys())
@@ -238,8 +247,9 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False):
                 batch.append((to_key(cx, cz), blocks, data))
         if len(batch) >= BATCH or (done == len(todo) and batch):
             pal.save()
-            world.store_chunks(batch)
-            report.chunks += len(batch)
+            kept = world.store_chunks(batch, replace=replace, since=start)
+            report.chunks += len(batch) - len(kept)
+            report.kept += len(kept)
             batch = []
             yield done, len(todo)
     if report.version is None:

@@ -56,8 +56,8 @@ class FarStore:
         self.wf = wf
         self._mem = {}  # read-only file: what was built, kept here instead
         self.writable = not wf.readonly
-        with wf._lock:
-            have = {r[0] for r in wf.db.execute(
+        with wf.locked():
+            have = {r[0] for r in wf.query(
                 "SELECT name FROM sqlite_master WHERE name LIKE 'far_%'")}
             self.tables = "far_tiles" in have and "far_info" in have
             if self.writable:
@@ -73,9 +73,8 @@ class FarStore:
                         db.execute("INSERT OR REPLACE INTO far_info VALUES ('signature', ?)",
                                    (signature,))
             elif self.tables:
-                old = wf.db.execute("SELECT value FROM far_info WHERE key='signature'"
-                                    ).fetchone()
-                self.tables = old is not None and old[0] == signature
+                old = wf.query("SELECT value FROM far_info WHERE key='signature'")
+                self.tables = bool(old) and old[0][0] == signature
 
     # ---- blobs ------------------------------------------------------------
     def _encode(self, a: dict) -> tuple[str, bytes]:
@@ -83,7 +82,7 @@ class FarStore:
         for name, t, _, _ in FIELDS:
             v = a[name]
             if name == "top":
-                v = self.wf._to_file[v]
+                v = self.wf.file_ids[v]
             parts.append(np.ascontiguousarray(v, t).tobytes())
         codec = codecs.default()
         return codec, codecs.encode(codec, b"".join(parts))
@@ -100,20 +99,19 @@ class FarStore:
             if v.size and (v.min() < lo or v.max() > hi):
                 return None
             if name == "top":
-                if v.max(initial=0) >= len(self.wf._to_reg):
+                if v.max(initial=0) >= len(self.wf.registry_ids):
                     return None
-                v = self.wf._to_reg[v]
+                v = self.wf.registry_ids[v]
             out[name] = v.astype(v.dtype.newbyteorder("="))
         return out
 
     def _rows(self, sql, args):
         if not self.tables:
             return []
-        with self.wf._lock:
-            try:
-                return self.wf.db.execute(sql, args).fetchall()
-            except sqlite3.DatabaseError:
-                return []
+        try:
+            return self.wf.query(sql, args)
+        except sqlite3.DatabaseError:
+            return []
 
     # ---- tiles ------------------------------------------------------------
     def tile(self, key, n: int) -> dict | None:
@@ -165,10 +163,7 @@ class FarStore:
     # ---- what changed -------------------------------------------------------
     def chunks_in(self, cx0, cy0, cx1, cy1) -> set:
         """Keys of the stored chunks in [cx0, cx1] x [cy0, cy1]."""
-        with self.wf._lock:
-            return {tuple(r) for r in self.wf.db.execute(
-                "SELECT cx, cy FROM chunks WHERE cx BETWEEN ? AND ? AND cy BETWEEN ? AND ?",
-                (cx0, cx1, cy0, cy1))}
+        return self.wf.chunks_in(cx0, cy0, cx1, cy1)
 
     def take_dirty(self, tiles_of, limit: int = 4096) -> set:
         """Chunks written since the last call (at most limit): forgotten here, and
@@ -176,7 +171,7 @@ class FarStore:
         in between cannot keep a stale tile). Returns those tile keys."""
         if not self.writable:
             return set()
-        with self.wf._lock:
+        with self.wf.locked():
             rows = [tuple(r) for r in self._rows("SELECT cx, cy FROM far_dirty LIMIT ?",
                                                  (limit,))]
             if not rows:
@@ -190,11 +185,4 @@ class FarStore:
 
     def edits(self, x0, y0, x1, y1) -> np.ndarray:
         """(x, y, z, block) of the edits in [x0, x1) x [y0, y1) (registry ids)."""
-        with self.wf._lock:
-            rows = self.wf.db.execute(
-                "SELECT x, y, z, block FROM edits WHERE x>=? AND x<? AND y>=? AND y<?",
-                (x0, x1, y0, y1)).fetchall()
-        a = np.array(rows, np.int64).reshape(-1, 4)
-        a = a[(a[:, 3] >= 0) & (a[:, 3] < len(self.wf._to_reg))]
-        a[:, 3] = self.wf._to_reg[a[:, 3]]
-        return a
+        return self.wf.edits_box(x0, y0, x1, y1)

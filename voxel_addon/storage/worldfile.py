@@ -4,10 +4,20 @@ Block ids in the file are the file's own (table `block_types`); they are transla
 to and from the running registry's ids here, so nothing above storage ever sees
 file ids. Every write is one transaction (WAL journal), so a killed writer leaves
 the last committed state: a chunk row is either the old blob or the new one.
+
+Several writers (two Blenders, Blender and a command-line import): triggers number
+every write of a chunk row in `chunk_versions` (a file-wide sequence, whoever
+writes, older versions of this program included), so a writer can tell inside its
+write transaction whether the row changed since it read it (`save(resolve=...)`: one
+indexed lookup per chunk), and a reader can list what others wrote since a version
+it saw (`versions_since`, polled when `data_changed()`). The file's identity (device,
+inode) is kept when it opens: a file deleted or moved away while open fails the next
+write with a VoxelError instead of writing into a file nobody will see.
 """
 from __future__ import annotations
 
 import json
+import os
 import sqlite3
 import threading
 import time
@@ -40,6 +50,19 @@ CREATE TABLE IF NOT EXISTS edits(x INTEGER, y INTEGER, z INTEGER, block INTEGER 
     data INTEGER NOT NULL DEFAULT 0, t REAL NOT NULL, PRIMARY KEY (x, y, z));
 """
 
+# Our own table beside SPEC 3's `chunks` (whose columns stay as they are): the
+# version of each chunk row, the file-wide sequence number of its last write (or
+# delete). Kept by triggers, so every writer of `chunks` keeps it right.
+VERSION_TABLE = (
+    """CREATE TABLE IF NOT EXISTS chunk_versions(cx INTEGER, cy INTEGER, v INTEGER NOT NULL,
+        PRIMARY KEY (cx, cy))""",
+    "CREATE INDEX IF NOT EXISTS chunk_versions_v ON chunk_versions(v)",
+) + tuple(
+    f"""CREATE TRIGGER IF NOT EXISTS chunk_version_{what} AFTER {what.upper()} ON chunks BEGIN
+        INSERT OR REPLACE INTO chunk_versions VALUES ({row}.cx, {row}.cy,
+            (SELECT COALESCE(MAX(v), 0) + 1 FROM chunk_versions));
+    END""" for what, row in (("insert", "NEW"), ("update", "NEW"), ("delete", "OLD")))
+
 
 class CorruptChunk(VoxelError):
     """A chunk row that cannot be decoded; it is left as it is in the file."""
@@ -52,6 +75,7 @@ class WorldFile:
         self.path = Path(path)
         self.readonly = readonly
         self._lock = threading.RLock()
+        self._identity_at_open = None
         if _create is None and not self.path.is_file():
             raise VoxelError(f"no world file at {self.path}")
         if _create is not None and self.path.exists():
@@ -65,6 +89,7 @@ class WorldFile:
             else:
                 self.db = sqlite3.connect(self.path, check_same_thread=False, timeout=30)
             self.db.isolation_level = None  # explicit BEGIN/COMMIT below
+            self._identity_at_open = self._stat()
             if _create is not None:
                 self._init(_create)
             # Read before any pragma that writes, so a foreign file is never touched.
@@ -78,6 +103,15 @@ class WorldFile:
             self.db.execute("PRAGMA journal_mode=WAL")
         self._map_ids(file_names)
         self._light_table(readonly)
+        self._version_table(readonly)
+        self._fetch_sql = (
+            "SELECT {v}, c.codec, c.blocks, c.data, {l} FROM (SELECT ? AS cx, ? AS cy) k "
+            "LEFT JOIN chunks c ON c.cx = k.cx AND c.cy = k.cy {vj} {lj}").format(
+            v="COALESCE(v.v, 0)" if self._has_versions else "0",
+            vj="LEFT JOIN chunk_versions v ON v.cx = k.cx AND v.cy = k.cy"
+            if self._has_versions else "",
+            l="l.codec, l.light" if self._has_light else "NULL, NULL",
+            lj="LEFT JOIN light l ON l.cx = k.cx AND l.cy = k.cy" if self._has_light else "")
 
     # ---- creation and checks -------------------------------------------------
     @classmethod
@@ -147,6 +181,43 @@ class WorldFile:
                 self.db.execute(LIGHT_TABLE)
             self._has_light = True
 
+    def _version_table(self, readonly: bool) -> None:
+        """Files written before chunk_versions get it (every chunk at version 0)."""
+        have = {r[0] for r in self.db.execute(
+            "SELECT name FROM sqlite_master WHERE name LIKE 'chunk_version%'")}
+        if len(have) < len(VERSION_TABLE) and not readonly:
+            with self.transaction() as db:
+                for statement in VERSION_TABLE:
+                    db.execute(statement)
+            have = {"chunk_versions"}
+        self._has_versions = "chunk_versions" in have
+
+    def _stat(self):
+        try:
+            st = os.stat(self.path)
+        except OSError:
+            return None
+        return (st.st_dev, st.st_ino)
+
+    def gone(self) -> bool:
+        """Whether the file at `path` is no longer the one opened (deleted, moved
+        away, replaced by another file)."""
+        now = self._stat()
+        return now is None or (self._identity_at_open is not None
+                               and now != self._identity_at_open)
+
+    def check_path(self) -> None:
+        """A VoxelError when the file at `path` is no longer the one opened (deleted,
+        moved away, replaced): writing on would put the edits where nobody sees them.
+        Every write transaction checks it (a stat: microseconds)."""
+        now = self._stat()
+        if now is None:
+            raise VoxelError(f"the world file {self.path} was deleted or moved while it was "
+                             "open; nothing more is written to it")
+        if self._identity_at_open is not None and now != self._identity_at_open:
+            raise VoxelError(f"the world file {self.path} was replaced by another file while "
+                             "it was open; nothing more is written to it")
+
     # ---- properties -------------------------------------------------------
     @property
     def seed(self) -> int:
@@ -165,9 +236,31 @@ class WorldFile:
             self.db.execute("INSERT OR REPLACE INTO meta VALUES (?, ?)", (key, str(value)))
         self.meta[key] = str(value)
 
-    # ---- transactions -----------------------------------------------------
+    # ---- transactions, queries for the file's other tables (far.py) ----------
     def transaction(self):
+        """`with wf.transaction() as db:` one write transaction (BEGIN IMMEDIATE: no
+        other process writes until it ends), under the file's lock."""
         return _Transaction(self)
+
+    def locked(self):
+        """The file's lock (re-entrant): hold it around reads and writes that must
+        see no other thread's write in between."""
+        return self._lock
+
+    def query(self, sql: str, args=()) -> list:
+        """Rows of one read statement, under the file's lock."""
+        with self._lock:
+            return self.db.execute(sql, tuple(args)).fetchall()
+
+    @property
+    def file_ids(self) -> np.ndarray:
+        """Lookup table registry id -> the file's block id (read it, never change it)."""
+        return self._to_file
+
+    @property
+    def registry_ids(self) -> np.ndarray:
+        """Lookup table file block id -> registry id (its length bounds file ids)."""
+        return self._to_reg
 
     def _writable(self) -> None:
         if self.readonly:
@@ -197,7 +290,25 @@ class WorldFile:
                                    tuple(key)).fetchone() if light and self._has_light else None
         if row is None:
             return None
-        codec, blob, dblob = row
+        blocks, data = self._decode(key, *row)
+        if not light:
+            return blocks, data
+        return blocks, data, None if lrow is None else self._decode_light(*lrow)
+
+    def fetch(self, key):
+        """(blocks, data, light, version) of chunk `key` read at one instant (one
+        statement): blocks None when the file has no such chunk; version: the
+        chunk's number in chunk_versions (0: never written since versions exist).
+        Light is None when missing or damaged; a damaged chunk raises CorruptChunk."""
+        with self._lock:
+            row = self.db.execute(self._fetch_sql, tuple(key)).fetchone()
+        v, codec, blob, dblob, lcodec, lblob = row
+        if codec is None:
+            return None, None, None, v
+        blocks, data = self._decode(key, codec, blob, dblob)
+        return blocks, data, self._decode_light(lcodec, lblob), v
+
+    def _decode(self, key, codec, blob, dblob):
         try:
             blocks = C.from_linear(codecs.decode(codec, blob, C.VOLUME * 2)).copy(order="F")
             data = None if dblob is None else \
@@ -210,15 +321,51 @@ class WorldFile:
                                "missing from block_types; it was left untouched")
         if not self._identity:
             blocks = self._to_reg[blocks]
-        if not light:
-            return blocks, data
-        lit = None
-        if lrow is not None:
-            try:
-                lit = C.from_linear(codecs.decode(lrow[0], lrow[1], C.VOLUME * 2)).copy(order="F")
-            except (ValueError, VoxelError):  # derived data: recomputed, never a failure
-                lit = None
-        return blocks, data, lit
+        return blocks, data
+
+    @staticmethod
+    def _decode_light(codec, blob):
+        if blob is None:
+            return None
+        try:
+            return C.from_linear(codecs.decode(codec, blob, C.VOLUME * 2)).copy(order="F")
+        except (ValueError, VoxelError):  # derived data: recomputed, never a failure
+            return None
+
+    def version(self, key) -> int:
+        """The stored version of chunk `key` (0: never written since versions exist)."""
+        if not self._has_versions:
+            return 0
+        with self._lock:
+            row = self.db.execute("SELECT v FROM chunk_versions WHERE cx=? AND cy=?",
+                                  tuple(key)).fetchone()
+        return 0 if row is None else row[0]
+
+    def top_version(self) -> int:
+        """The newest chunk version in the file (versions only grow)."""
+        if not self._has_versions:
+            return 0
+        with self._lock:
+            return self.db.execute("SELECT COALESCE(MAX(v), 0) FROM chunk_versions"
+                                   ).fetchone()[0]
+
+    def versions_since(self, v: int) -> list[tuple[tuple[int, int], int]]:
+        """((cx, cy), version) of every chunk written or deleted after version v."""
+        if not self._has_versions:
+            return []
+        with self._lock:
+            return [((cx, cy), w) for cx, cy, w in self.db.execute(
+                "SELECT cx, cy, v FROM chunk_versions WHERE v > ?", (v,))]
+
+    def data_changed(self) -> bool:
+        """Whether another connection (another process) committed a change since the
+        last call (SQLite's data_version: cheap, no file read)."""
+        with self._lock:
+            if self.db is None:
+                return False
+            v = self.db.execute("PRAGMA data_version").fetchone()[0]
+        old, self._data_version = getattr(self, "_data_version", v), v
+        return v != old
 
     def encode_chunk(self, key, blocks, data=None, codec: str | None = None,
                      light=None) -> tuple:
@@ -231,23 +378,44 @@ class WorldFile:
         return (int(key[0]), int(key[1]), codec, codecs.encode(codec, C.to_linear(ids)), dblob,
                 lblob)
 
-    def save(self, rows=(), edits=(), stale_light=()) -> None:
+    def save(self, rows=(), edits=(), stale_light=(), resolve=None) -> dict:
         """Encoded chunk rows (from encode_chunk) and (x, y, z, block, data) edits in
         registry ids, written in one transaction: after it returns they survive a kill.
         A row's light (its 6th value) replaces the stored one, None drops it;
-        `stale_light`: keys whose stored light no longer holds (dropped too)."""
+        `stale_light`: keys whose stored light no longer holds (dropped too).
+
+        `resolve(key, version)`, when given, is called inside the transaction (the
+        file is locked for writing: nobody writes meanwhile) with the stored version
+        of each row's chunk and returns the row to write: the same, another one (a
+        merge: read the stored chunk with read_chunk, encode the result; the light of
+        its 3x3 is dropped) or None (keep the stored one). Returns {key: version} of
+        the rows written."""
         with self.transaction():
+            if resolve is not None:
+                out = []
+                for r in rows:
+                    key = (r[0], r[1])
+                    got = resolve(key, self.version(key))
+                    if got is not None and got is not r:
+                        stale_light = list(stale_light) + [(key[0] + i, key[1] + j)
+                                                           for i in (-1, 0, 1) for j in (-1, 0, 1)]
+                    if got is not None:
+                        out.append(got)
+                rows = out
+            top = self.top_version()
             self.db.executemany("INSERT OR REPLACE INTO chunks VALUES (?, ?, ?, ?, ?)",
                                 [r[:5] for r in rows])
             self.db.executemany("INSERT OR REPLACE INTO light VALUES (?, ?, ?, ?)",
                                 [r[:3] + r[5:] for r in rows if r[5] is not None])
+            written = {(r[0], r[1]) for r in rows}
             self.db.executemany("DELETE FROM light WHERE cx=? AND cy=?",
                                 [r[:2] for r in rows if r[5] is None]
-                                + [tuple(k) for k in stale_light])
+                                + [tuple(k) for k in stale_light if tuple(k) not in written])
             now = time.time()
             self.db.executemany("INSERT OR REPLACE INTO edits VALUES (?, ?, ?, ?, ?, ?)",
                                 [(x, y, z, int(self._to_file[b]), d, now)
                                  for x, y, z, b, d in edits])
+            return {k: v for k, v in self.versions_since(top) if k in written}
 
     def write_chunks(self, items, codec: str | None = None) -> None:
         """items: (key, blocks, data-or-None) triples."""
@@ -261,16 +429,34 @@ class WorldFile:
             return self.db.execute("DELETE FROM chunks").rowcount
 
     # ---- edits ------------------------------------------------------------
-    def edits_in(self, key) -> list[tuple[int, int, int, int, int]]:
-        """(x, y, z, block, data) edits inside chunk `key`, in registry ids."""
+    def edits_in(self, key, since: float | None = None) -> list[tuple[int, int, int, int, int]]:
+        """(x, y, z, block, data) edits inside chunk `key`, in registry ids (those
+        saved at or after time `since` only, when given), oldest first."""
         x0, y0 = key[0] * C.SIZE, key[1] * C.SIZE
         with self._lock:  # rows outside the world's ranges (a hostile file) are left out
             rows = self.db.execute(
                 "SELECT x, y, z, block, data FROM edits WHERE x>=? AND x<? AND y>=? AND y<? "
-                "AND z>=0 AND z<? AND data>=0 AND data<=65535",
-                (x0, x0 + C.SIZE, y0, y0 + C.SIZE, C.HEIGHT)).fetchall()
+                "AND z>=0 AND z<? AND data>=0 AND data<=65535 AND t>=? ORDER BY t",
+                (x0, x0 + C.SIZE, y0, y0 + C.SIZE, C.HEIGHT,
+                 float("-inf") if since is None else since)).fetchall()
         return [(x, y, z, int(self._to_reg[b]) if 0 <= b < len(self._to_reg) else 0, d)
                 for x, y, z, b, d in rows]
+
+    def edits_box(self, x0, y0, x1, y1) -> np.ndarray:
+        """(x, y, z, block) of the edits in columns [x0, x1) x [y0, y1) as an (n, 4)
+        array in registry ids (rows with block ids outside the file's table left out)."""
+        rows = self.query("SELECT x, y, z, block FROM edits WHERE x>=? AND x<? AND y>=? AND y<?",
+                          (x0, x1, y0, y1))
+        a = np.array(rows, np.int64).reshape(-1, 4)
+        a = a[(a[:, 3] >= 0) & (a[:, 3] < len(self._to_reg))]
+        a[:, 3] = self._to_reg[a[:, 3]]
+        return a
+
+    def chunks_in(self, cx0, cy0, cx1, cy1) -> set:
+        """Keys of the stored chunks in [cx0, cx1] x [cy0, cy1]."""
+        return {tuple(r) for r in self.query(
+            "SELECT cx, cy FROM chunks WHERE cx BETWEEN ? AND ? AND cy BETWEEN ? AND ?",
+            (cx0, cx1, cy0, cy1))}
 
     def edit_count(self) -> int:
         with self._lock:
@@ -297,7 +483,12 @@ class _Transaction:
     def __enter__(self):
         self.wf._writable()
         self.wf._lock.acquire()
-        self.wf.db.execute("BEGIN IMMEDIATE")
+        try:
+            self.wf.check_path()
+            self.wf.db.execute("BEGIN IMMEDIATE")
+        except BaseException:
+            self.wf._lock.release()
+            raise
         return self.wf.db
 
     def __exit__(self, exc_type, exc, tb):

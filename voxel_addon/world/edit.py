@@ -53,6 +53,7 @@ def edit(world, changes, write: bool = True):
     memory (shown, saved by the next `write`, flush or close): the parts of one
     drag, written together when it ends."""
     items = check(world, changes)
+    world.refresh()  # another process's changes first (a pragma when there are none)
     return _apply(world, items, write)
 
 
@@ -62,18 +63,36 @@ def write(world) -> None:
 
 
 def undo(world, record: Record) -> list[Payload]:
-    return _apply(world, [(*v, *b) for v, b in zip(record.voxels, record.before)])[0]
+    """Put back the values before the stroke, only where a voxel still holds the
+    stroke's value: what another session (or process) put there since stays."""
+    return _apply(world, _still(world, record.voxels, record.after, record.before))[0]
 
 
 def redo(world, record: Record) -> list[Payload]:
-    return _apply(world, [(*v, *a) for v, a in zip(record.voxels, record.after)])[0]
+    return _apply(world, _still(world, record.voxels, record.before, record.after))[0]
+
+
+def _still(world, voxels, now, to) -> list:
+    """(x, y, z, id, data) setting `to` for the voxels that hold `now` at present
+    (after taking in what other processes wrote)."""
+    world.writable()
+    world.refresh()
+    world.load({C.key_of(x, y) for x, y, _ in voxels})
+    out = []
+    with world.locked():
+        for (x, y, z), n, t in zip(voxels, now, to):
+            c = world.chunk_at(x >> 4, y >> 4)
+            lx, ly = x & 15, y & 15
+            if (int(c.blocks[lx, ly, z]), 0 if c.data is None else int(c.data[lx, ly, z])) \
+                    == tuple(n):
+                out.append((x, y, z, *t))
+    return out
 
 
 def check(world, changes) -> list[tuple[int, int, int, int, int]]:
     """(x, y, z, id, data) of every change, or a VoxelError before anything changes
     (World.set_block checks the same way)."""
-    if world.readonly:
-        raise VoxelError(f"{world.file.path} is open read-only")
+    world.writable()
     if isinstance(changes, tuple) or (isinstance(changes, list) and changes
                                       and not isinstance(changes[0], (tuple, list))):
         changes = [changes]
@@ -213,11 +232,13 @@ def _apply(world, items, write=True):
             first, last, steps = _set_voxels(world, items)
             if not last:
                 return sorted(fresh.values()), Record((), (), ())
-            changed = {C.key_of(x, y) for x, y, _ in last}
+            per: dict = {}
+            for v in last:
+                per.setdefault(C.key_of(v[0], v[1]), {})[v] = last[v]
+            changed = set(per)
             t = world.tick()
-            for k in changed:
-                world.bver[k] = t
-                world.chunks[k].dirty = True
+            for k, vox in per.items():  # the rows go to the file through commit/hold
+                world.blocks_changed(k, vox, edits=False, tick=t, relit=True)
             remeshed = _remesh(world, blocks, last, win)
             relit = _relight(world, blocks, lit, steps, near, win)
             payloads = []

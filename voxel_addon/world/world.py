@@ -11,6 +11,17 @@ first, so a chunk re-requested before its write lands comes back with every edit
 
 A chunk row that cannot be decoded is reported once (`corrupt`, a log warning) and
 treated as missing: never generated in its place, never written over.
+
+Other writers of the same file (another Blender, a command-line edit or import):
+every active chunk remembers the stored version it was read at (`fver`) and this
+session's own changes to it since (`_mine`: voxel -> (id, data)), which every block
+writer records through `blocks_changed`. A write finds inside its transaction that
+the stored chunk moved on (storage.WorldFile.save's resolve) and then writes the
+stored chunk with its own changes applied again instead of its stale copy (a
+generated chunk never edited: the stored one is kept); the active chunk takes the
+merged blocks, its light and mesh are made again. `refresh()` (cheap when nothing
+changed: a pragma) reloads the active chunks another process wrote, own unsaved
+changes on top.
 Besides blocks, an active chunk may hold its final light and mesh (world.stream and
 world.edit fill them); `tick` numbers every change so payload versions only grow.
 """
@@ -53,11 +64,15 @@ class World:
         self._edits: dict[tuple[int, int, int], tuple[int, int]] = {}  # unsaved user edits
         self._stale: set = set()  # chunks whose light in the file no longer holds
         self._held: set = set()   # chunks a stroke changed, written at its commit
+        self.fver: dict = {}      # key -> stored version its active copy (or snapshot) was read at
+        self._mine: dict = {}     # key -> {(x, y, z): (id, data)} own changes not known stored
         self.corrupt: dict[tuple[int, int], str] = {}  # key -> message, reported once
         self.bver: dict[tuple[int, int], int] = {}   # key -> tick of its last block change
         self.pver: dict[tuple[int, int], int] = {}   # key -> version of its newest payload
         self._tick = itertools.count(1)
         self.streams = weakref.WeakSet()  # closed before the world closes
+        self._seen = file.top_version()   # newest stored version refresh() looked at
+        file.data_changed()               # its baseline
         self._stop = False
         self.loader_error: BaseException | None = None
         self._thread = None
@@ -113,6 +128,17 @@ class World:
             cached = self._colors = (raw, colors.parse(self.file.meta))
         return cached[1]
 
+    @property
+    def gen_lock(self):
+        """Held around every use of the world's generator (OpenCL queues are not
+        re-entrant): give it to whatever else generates with it (far.Builder)."""
+        return self._gen_lock
+
+    def writable(self) -> None:
+        """A VoxelError when the world is open read-only (checked before any change)."""
+        if self.readonly:
+            raise VoxelError(f"{self.file.path} is open read-only")
+
     def tick(self) -> int:
         """A new number, larger than every one before (versions, block changes)."""
         return next(self._tick)
@@ -159,11 +185,27 @@ class World:
         with self._lock:
             c = self.chunk_at(x >> 4, y >> 4)
             old = c.get(x & 15, y & 15, z)
-            c.set(x & 15, y & 15, z, bid, data)
-            self.bver[c.key] = self.tick()
-            self._edits[(x, y, z)] = (bid, data)
-            self.drop_light(c.key)
+            c.data = C.put(c.blocks, c.data, x & 15, y & 15, z, bid, data)
+            self.blocks_changed(c.key, {(x, y, z): (bid, data)})
         return old
+
+    def blocks_changed(self, key, voxels: dict, *, edits: bool = True, tick=None,
+                       relit: bool = False) -> None:
+        """The one bookkeeping of every block writer (set_block, set_blocks, edits,
+        imports), called under the lock once `voxels` ({(x, y, z): (id, data)} in
+        chunk `key`) are in the active chunk: it is marked changed, its block version
+        ticks, the voxels count as this session's own (re-applied over another
+        writer's copy, see the module docstring) and, with `edits`, as user edits
+        kept for the file's edits table; unless `relit` (world.edit relights
+        itself) the light and meshes of its 3x3 are dropped."""
+        c = self.chunks[key]
+        c.dirty = True
+        self.bver[key] = self.tick() if tick is None else tick
+        self._mine.setdefault(key, {}).update(voxels)
+        if edits:
+            self._edits.update(voxels)
+        if not relit:
+            self.drop_light(key)
 
     def drop_light(self, key) -> None:
         """Light and meshes of the 3x3 around chunk `key` no longer hold (in memory
@@ -215,7 +257,7 @@ class World:
         while pending:
             with self._lock:
                 epochs = {k: self._evictions.get(k, 0) for k in pending}
-            found = self._fetch([k for k in pending if k not in self.chunks])
+            found, vers = self._fetch([k for k in pending if k not in self.chunks])
             retry = []
             with self._lock:
                 now = time.monotonic()
@@ -228,14 +270,20 @@ class World:
                             retry.append(k)
                             continue
                         c = self.chunks[k] = found[k]
+                        if vers[k] is not None:  # read from the file: what it holds now
+                            self.fver[k] = vers[k]
+                            self._mine.pop(k, None)
                     c.last_use = now
                     out[k] = c
             pending = retry
         return out
 
-    def _fetch(self, keys) -> dict:
-        """New Chunk objects for keys: from an unsaved snapshot, the file, or the generator."""
+    def _fetch(self, keys) -> tuple[dict, dict]:
+        """New Chunk objects for keys: from an unsaved snapshot, the file, or the
+        generator; and the stored version each stands on ({key: version}; None for
+        a snapshot: its own stays)."""
         found: dict = {}
+        vers: dict = {}
         to_make = []
         for key in keys:
             with self._lock:
@@ -244,17 +292,19 @@ class World:
                 c = found[key] = Chunk(key, snap[0].copy(order="F"),
                                        None if snap[1] is None else snap[1].copy(order="F"))
                 c.light = snap[2]  # light arrays are replaced, never changed in place
+                vers[key] = None
                 continue
             try:
-                got = self.file.read_chunk(key, light=True)
+                blocks, data, light, v = self.file.fetch(key)
             except CorruptChunk as e:
                 self._report_corrupt(key, str(e))
                 continue
-            if got is None:
+            vers[key] = v
+            if blocks is None:
                 to_make.append(key)
             else:
-                c = found[key] = Chunk(key, got[0], got[1])
-                c.light = got[2]
+                c = found[key] = Chunk(key, blocks, data)
+                c.light = light
                 c.compact()
         if to_make:
             with self._gen_lock:
@@ -265,7 +315,7 @@ class World:
                 c = Chunk(key, *self.apply_stored_edits(key, blocks))
                 c.dirty = not self.readonly
                 found[key] = c
-        return found
+        return found, vers
 
     def apply_stored_edits(self, key, blocks, data=None):
         """The file's edits inside chunk `key` applied to freshly generated arrays
@@ -318,7 +368,9 @@ class World:
                     continue
                 self._evictions[k] = self._evictions.get(k, 0) + 1
                 if c.dirty and not self.readonly:
-                    self._saving[k] = (c.blocks, c.data, c.light)
+                    self._saving[k] = self._snapshot(k, c.blocks, c.data, c.light)
+                elif k not in self._saving:
+                    self.fver.pop(k, None)
         self.flush(only=keys)
         return len(keys)
 
@@ -365,23 +417,30 @@ class World:
     def _write(self, keys, extra=()) -> None:
         # Snapshots go into _saving before the write so a chunk evicted and reloaded
         # while this write is in flight is rebuilt from them, not from the stale file.
-        # A chunk's light is written with it: in memory it is final or None.
+        # A chunk's light is written with it: in memory it is final or None. Each
+        # snapshot carries the stored version it stands on and the own changes in
+        # it: a chunk another writer changed meanwhile is merged (_resolve).
         with self._lock:
             for k in self.chunks if keys is None else [k for k in keys if k in self.chunks]:
                 c = self.chunks[k]
                 if c.dirty:
-                    self._saving[k] = (c.blocks.copy(order="F"),
-                                       None if c.data is None else c.data.copy(order="F"),
-                                       c.light)
+                    self._saving[k] = self._snapshot(k, c.blocks.copy(order="F"),
+                                                     None if c.data is None
+                                                     else c.data.copy(order="F"), c.light)
                     c.dirty = False
             saving = dict(self._saving)
             edits = [(x, y, z, b, d) for (x, y, z), (b, d) in self._edits.items()]
             edits += list(extra)
             self._edits.clear()
             stale, self._stale = self._stale, set()
+        merged: dict = {}
         try:
-            rows = [self.file.encode_chunk(k, b, d, light=li) for k, (b, d, li) in saving.items()]
-            self.file.save(rows, edits, [k for k in stale if k not in saving])
+            rows = [self.file.encode_chunk(k, *snap[:2], light=snap[2])
+                    for k, snap in saving.items()]
+            by = {(r[0], r[1]): r for r in rows}
+            new = self.file.save(rows, edits, [k for k in stale if k not in saving],
+                                 resolve=lambda k, v: self._resolve(k, v, saving[k], by[k],
+                                                                    merged))
         except BaseException:
             with self._lock:  # keep the edits for the next try; snapshots stay in _saving
                 for x, y, z, b, d in edits:
@@ -392,6 +451,91 @@ class World:
             for k, snap in saving.items():
                 if self._saving.get(k) is snap:
                     del self._saving[k]
+                self._stored(k, new.get(k), snap[4], merged.get(k))
+
+    def _snapshot(self, key, blocks, data, light) -> tuple:
+        """What _saving holds for a chunk: (blocks, data, light, stored version it
+        stands on, its own changes {voxel: (id, data)} at this moment)."""
+        return (blocks, data, light, self.fver.get(key, 0), dict(self._mine.get(key, ())))
+
+    def _resolve(self, key, version, snap, row, merged):
+        """Inside the write transaction: the row to write for snapshot `snap` of
+        chunk `key` when the file holds `version` of it (storage's resolve); a merge
+        goes into `merged` as (blocks, data, version kept or None)."""
+        if version == snap[3]:
+            return row  # nobody wrote it since it was read: the common case
+        stored = self.file.read_chunk(key)
+        if stored is None:  # deleted meanwhile (recreate): this copy is all there is
+            return row
+        if not snap[4]:     # generated or relit only: the stored one stays
+            merged[key] = (*stored, version)
+            return None
+        blocks, data = stored
+        for (x, y, z), (b, d) in snap[4].items():
+            data = C.put(blocks, data, x & 15, y & 15, z, b, d)
+        merged[key] = (blocks, data, None)
+        return self.file.encode_chunk(key, blocks, data)
+
+    def _stored(self, key, version, written: dict, merged) -> None:
+        """After a write (lock held): the own changes now stored are no longer own,
+        the version moves on, and a merged chunk shows the merge (with the own
+        changes made while it was written on top)."""
+        mine = self._mine.get(key)
+        if mine:
+            for v, val in written.items():
+                if mine.get(v) == val:
+                    del mine[v]
+            if not mine:
+                del self._mine[key]
+        if version is None and merged is not None:
+            version = merged[2]  # the stored one was kept
+        c = self.chunks.get(key)
+        if merged is not None and c is not None:
+            blocks, data = merged[0].copy(order="F"), \
+                None if merged[1] is None else merged[1].copy(order="F")
+            for (x, y, z), (b, d) in self._mine.get(key, {}).items():
+                data = C.put(blocks, data, x & 15, y & 15, z, b, d)
+            c.blocks, c.data, c.light, c.mesh = blocks, data, None, None
+            c.dirty = key in self._mine
+            self.bver[key] = self.tick()
+            self.drop_light(key)
+        if version is not None:
+            if c is None and key not in self._saving:
+                self.fver.pop(key, None)  # gone from memory: read again when loaded
+            else:
+                self.fver[key] = version
+
+    def refresh(self) -> set:
+        """Take in what other processes wrote: active chunks whose stored version
+        moved on are read again, own unsaved changes applied on top, their light and
+        meshes dropped (streams and the live view make them again). Cheap when
+        nothing changed (one pragma). Returns the keys reloaded."""
+        if self.file.db is None or not self.file.data_changed():
+            return set()
+        out = set()
+        with self._lock:
+            changed = self.file.versions_since(self._seen)
+            self._seen = max([self._seen] + [v for _, v in changed])
+            for key, v in changed:
+                c = self.chunks.get(key)
+                if c is None or self.fver.get(key) == v or key in self._saving:
+                    continue
+                try:
+                    blocks, data, _, v = self.file.fetch(key)
+                except CorruptChunk as e:
+                    self._report_corrupt(key, str(e))
+                    continue
+                if blocks is None:
+                    continue  # deleted (recreate): this copy stays
+                for (x, y, z), (b, d) in self._mine.get(key, {}).items():
+                    data = C.put(blocks, data, x & 15, y & 15, z, b, d)
+                c.blocks, c.data, c.light, c.mesh = blocks, data, None, None
+                c.dirty = key in self._mine
+                self.fver[key] = v
+                self.bver[key] = self.tick()
+                self.drop_light(key)
+                out.add(key)
+        return out
 
     def unload_all(self) -> None:
         with self._lock:
@@ -415,6 +559,25 @@ class World:
             self.flush()
             self.file.close()
 
+    def discard(self) -> None:
+        """Stop streams and the loader and close the file without saving (its file
+        is gone: nothing can be written; the unsaved edits were rescued first)."""
+        for s in list(self.streams):
+            s.close()
+        with self._lock:
+            self._stop = True
+            self._wake.notify_all()
+        if self._thread is not None:
+            self._thread.join()
+            self._thread = None
+        self.file.close()
+
+    def forget_unsaved(self) -> None:
+        """Drop the unsaved edits from the list of edits to save (they were kept
+        elsewhere: world/rescue.py); the chunks keep showing them."""
+        with self._lock:
+            self._edits.clear()
+
     def unsaved_edits(self) -> list[tuple[int, int, int, int, int]]:
         """The user's edits (x, y, z, block id, data) not yet in the file. Generated
         chunks and light are not listed: they come back from the seed."""
@@ -426,10 +589,10 @@ class World:
         """Generate and store every key not yet in the file; returns how many were new.
 
         Streams in batches straight to the file (nothing stays resident), each batch
-        one transaction, so an interrupted run keeps what it finished.
+        one transaction, so an interrupted run keeps what it finished; a chunk
+        another writer stored meanwhile is kept as it is.
         """
-        if self.readonly:
-            raise VoxelError(f"{self.file.path} is open read-only")
+        self.writable()
         have = set(self.file.chunk_keys())
         todo = [k for k in keys if k not in have and k not in self.chunks]
         done = 0
@@ -439,42 +602,68 @@ class World:
                 arrays = self.generator.generate(batch)
             rows = [self.file.encode_chunk(key, *self.apply_stored_edits(key, blocks))
                     for key, blocks in zip(batch, arrays)]
-            self.file.save(rows)
+            by = {(r[0], r[1]): r for r in rows}
+            self.file.save(rows, resolve=lambda k, v: None if self.file.has_chunk(k) else by[k])
             done += len(batch)
             if progress:
                 progress(done, len(todo))
         return len(todo)
 
-    def store_chunks(self, items) -> None:
+    def store_chunks(self, items, *, replace: bool = True, since: float | None = None) -> list:
         """Write whole chunks ((key, blocks, data-or-None) triples: an import) in one
-        transaction, in place of what the file and memory held; the stored light of
-        their 3x3 is dropped. Active copies are replaced, so a live view shows them."""
-        if self.readonly:
-            raise VoxelError(f"{self.file.path} is open read-only")
-        items = [(tuple(k), b, d) for k, b, d in items]
-        rows = [self.file.encode_chunk(k, b, d) for k, b, d in items]
-        stale = {(k[0] + i, k[1] + j) for k, _, _ in items for i in (-1, 0, 1)
-                 for j in (-1, 0, 1)}
+        transaction; the stored light of their 3x3 is dropped, active copies show
+        them (a live view too). Decided per chunk inside the transaction (another
+        writer may have stored it meanwhile): without `replace` a chunk the file
+        holds is kept; with it the chunk is written, and edits saved since time
+        `since` (made while the import ran, by any process) are applied again over
+        it. This session's own unsaved changes stay on top. Returns the keys kept."""
+        self.writable()
+        items = {tuple(k): (b, d) for k, b, d in items}
+        rows = {k: self.file.encode_chunk(k, b, d) for k, (b, d) in items.items()}
+        stale = {(k[0] + i, k[1] + j) for k in items for i in (-1, 0, 1) for j in (-1, 0, 1)}
+        kept, final = [], {}
+
+        def resolve(key, version):
+            if not replace and self.file.has_chunk(key):
+                kept.append(key)
+                return None
+            b, d = items[key]
+            later = self.file.edits_in(key, since) if replace and since is not None else ()
+            if not later:
+                final[key] = (b, d)
+                return rows[key]
+            b, d = b.copy(order="F"), None if d is None else d.copy(order="F")
+            for x, y, z, bid, v in later:
+                d = C.put(b, d, x & 15, y & 15, z, bid, v)
+            final[key] = (b, d)
+            return self.file.encode_chunk(key, b, d)
+
         with self._flush_lock:
-            self.file.save(rows, stale_light=stale)
+            new = self.file.save(list(rows.values()), stale_light=stale, resolve=resolve)
             with self._lock:
-                for k, b, d in items:
-                    self._saving.pop(k, None)
+                for k, (b, d) in final.items():
+                    mine = self._mine.get(k)
+                    if not mine:  # an own snapshot would be merged over the import anyway
+                        self._saving.pop(k, None)
                     self.corrupt.pop(k, None)
                     c = self.chunks.get(k)
                     if c is not None:
-                        c.blocks, c.data, c.dirty = b.copy(order="F"), \
-                            None if d is None else d.copy(order="F"), False
+                        b, d = b.copy(order="F"), None if d is None else d.copy(order="F")
+                        for (x, y, z), (bid, v) in (mine or {}).items():
+                            d = C.put(b, d, x & 15, y & 15, z, bid, v)
+                        c.blocks, c.data, c.dirty = b, d, bool(mine)
+                    if c is not None or k in self._saving:
+                        self.fver[k] = new[k]
                     self.bver[k] = self.tick()
-                for k, _, _ in items:
+                for k in final:
                     self.drop_light(k)
                 self._stale -= stale  # the file's light rows are gone already
+        return kept
 
     def set_blocks(self, xyz, ids, data=None) -> None:
         """set_block for many voxels at once ((n, 3) positions, n ids, n data values
         or None), kept like edits until the next flush or commit (a .vox stamp)."""
-        if self.readonly:
-            raise VoxelError(f"{self.file.path} is open read-only")
+        self.writable()
         xyz = np.asarray(xyz, np.int64).reshape(-1, 3)
         ids = np.asarray(ids, np.uint16)
         vals = np.zeros(len(ids), np.uint16) if data is None else np.asarray(data, np.uint16)
@@ -497,12 +686,8 @@ class World:
                 c = self.chunk_at(*k)
                 lx, ly, z = xyz[part, 0] & 15, xyz[part, 1] & 15, xyz[part, 2]
                 c.data = C.put(c.blocks, c.data, lx, ly, z, ids[part], vals[part])
-                c.dirty = True
-                self.bver[k] = self.tick()
-                for (x, y, zz), b, d in zip(xyz[part].tolist(), ids[part].tolist(),
-                                            vals[part].tolist()):
-                    self._edits[(x, y, zz)] = (b, d)
-                self.drop_light(k)
+                self.blocks_changed(k, {tuple(v): (b, d) for v, b, d in zip(
+                    xyz[part].tolist(), ids[part].tolist(), vals[part].tolist())})
 
     def recreate(self, keep_edits: bool = True) -> None:
         """Forget every generated chunk (they regenerate on demand from the seed)."""

@@ -30,8 +30,7 @@ class Feed:
         if far and self._far is None:
             from ...far import Builder
             # the world's loader generates with the same generator: one at a time
-            self._far = Builder(self.world.file, self.world.generator,
-                                lock=getattr(self.world, "_gen_lock", None))
+            self._far = Builder.of(self.world)
         elif not far and self._far is not None:
             self._far.close()
             self._far = None

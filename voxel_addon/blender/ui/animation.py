@@ -95,8 +95,7 @@ class _Job:
         from ...core.errors import VoxelError
         from ...far import Builder
         if self._far is None:
-            self._far = Builder(self.world.file, self.world.generator,
-                                lock=getattr(self.world, "_gen_lock", None))
+            self._far = Builder.of(self.world)
         b = self._far
         b.set_view(cam.x, cam.y, s.far, s.distance)
         if not b.wait_ready(600.0):

@@ -214,7 +214,12 @@ class VOXEL_OT_edit_stroke(bpy.types.Operator):
 
     def _finish(self, context):
         from .. import strokes
-        strokes.finish(self.world)
+        from ...core.errors import VoxelError
+        try:
+            strokes.finish(self.world)
+        except VoxelError as e:  # not saved (rescued): said, not FINISHED
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
         if not self.rec.voxels:
             return {"CANCELLED"}
         strokes.commit(context.scene, self.rec)
@@ -223,7 +228,11 @@ class VOXEL_OT_edit_stroke(bpy.types.Operator):
     def cancel(self, context):
         """Blender ends the drag (its window or file closes): keep what was shown."""
         from .. import strokes
-        strokes.finish(self.world)
+        from ...core.errors import VoxelError
+        try:
+            strokes.finish(self.world)
+        except VoxelError:
+            return  # told and rescued by strokes.saved
         if self.rec.voxels:
             strokes.commit(context.scene, self.rec)
 

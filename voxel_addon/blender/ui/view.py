@@ -110,7 +110,7 @@ class VOXEL_OT_render_view(bpy.types.Operator):
                 if s.far:  # waits for the far builder (tiles kept in the file: quick again)
                     from ...far import ring
                     view.set_far(ring(world.file, world.generator, cam.x, cam.y, s.far,
-                                      s.distance, lock=getattr(world, "_gen_lock", None)))
+                                      s.distance, lock=world.gen_lock))
                 img = view.render(cam, hours_of(sc), (w, h))
             finally:
                 view.release()

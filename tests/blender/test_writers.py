@@ -1,0 +1,55 @@
+"""Blender and another process on one world file (issue 26), in the bpy module: the
+other process is a real `python -m voxel_addon edit`. Its edit shows up through the
+session's poll, Blender's undo leaves it alone, and a world file deleted while open
+sends the next stroke's edits to the rescue file with an error, never FINISHED."""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+
+import pytest
+
+from tests import host
+from tests.blender.test_edit import _undo_to, addon, on_file  # noqa: F401 - fixture
+from voxel_addon.blender import session
+from voxel_addon.core.blocks import REGISTRY
+
+
+def other_process_sets(path, x, y, z, name):
+    env = dict(os.environ, PYTHONPATH=str(host.ROOT), VOXEL_OPENCL="0")
+    r = subprocess.run(host.python_cmd("-m", "voxel_addon", "edit", "--world", path, "--set",
+                                       x, y, z, name), env=env, capture_output=True, text=True,
+                       timeout=120, cwd=host.ROOT)
+    assert r.returncode == 0, r.stderr[-2000:]
+
+
+def test_another_process_shows_up_and_undo_leaves_it(bpy, addon):  # noqa: F811
+    sc, path = addon, addon.voxel.path
+    w = session.world(path)
+    assert bpy.ops.voxel.edit(location=(3, 4, 100), block="lamp_red") == {"FINISHED"}
+    assert bpy.ops.voxel.edit(location=(5, 4, 100), block="glass") == {"FINISHED"}
+    other_process_sets(path, 5, 4, 100, "stone")    # over one of Blender's voxels
+    other_process_sets(path, 7, 4, 100, "sand")
+    assert session._poll() == session.POLL_S       # what the timer does each second
+    assert [REGISTRY[w.get_block(x, 4, 100)].name for x in (3, 5, 7)] == \
+        ["lamp_red", "stone", "sand"]
+    _undo_to(sc, 0)                                # Ctrl+Z twice
+    assert on_file(path, 3, 4, 100) == "air"        # Blender's own stroke undone
+    assert on_file(path, 5, 4, 100) == "stone"      # the other process's edits stay
+    assert on_file(path, 7, 4, 100) == "sand"
+
+
+def test_a_deleted_world_sends_the_stroke_to_the_rescue_file(bpy, addon):  # noqa: F811
+    from voxel_addon.world import rescue
+    path = addon.voxel.path
+    assert bpy.ops.voxel.edit(location=(3, 4, 100), block="lamp_red") == {"FINISHED"}
+    os.remove(path)
+    with pytest.raises(RuntimeError, match="deleted or moved.*unsaved edits are in"):
+        bpy.ops.voxel.edit(location=(6, 4, 100), block="glass")
+    beside = rescue.places(path)[0]
+    edits = json.loads(beside.read_text())["edits"]
+    assert [6, 4, 100, "glass", 0] in edits
+    assert not session.is_open(path)                # let go: nothing more goes to it
+    with pytest.raises(RuntimeError, match="does not exist"):
+        bpy.ops.voxel.edit(location=(7, 4, 100), block="glass")

@@ -1,0 +1,100 @@
+"""Real processes writing one world file at once (issue 26): every edit a process
+acknowledged is in the file afterwards. Two streams of `python -m voxel_addon edit`
+into the same chunk (each process rewrote the whole chunk it had loaded: 22 of 24
+left), and an import racing edits into the chunks it has not reached yet (it checked
+for existing chunks when it started, then overwrote them: 3 of 8 left)."""
+from __future__ import annotations
+
+import os
+import subprocess
+import time
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+
+from tests import host
+from tests.formats import mcfiles as mc
+from voxel_addon.core.blocks import REGISTRY
+from voxel_addon.world import World
+
+ENV = dict(os.environ, PYTHONPATH=str(host.ROOT), VOXEL_OPENCL="0")  # start-up: no CL probe
+
+
+def cli(*args) -> subprocess.CompletedProcess:
+    return subprocess.run(host.python_cmd("-m", "voxel_addon", *map(str, args)), env=ENV,
+                          capture_output=True, text=True, timeout=120, cwd=host.ROOT)
+
+
+def edits(world, cells):
+    """Run `edit --set` for cells ((x, y, z, name)) one after the other; the cells
+    whose process said it saved."""
+    done = []
+    for x, y, z, name in cells:
+        r = cli("edit", "--world", world, "--set", x, y, z, name)
+        assert r.returncode == 0, r.stderr[-2000:]
+        assert "saved" in r.stdout
+        done.append((x, y, z, name))
+    return done
+
+
+def stored(world, cells):
+    with World.open(world, loader=False, readonly=True) as w:
+        return [(x, y, z, n) for x, y, z, n in cells if w.get_block(x, y, z) == REGISTRY.id(n)]
+
+
+def test_two_edit_processes_on_one_chunk_lose_nothing(tmp_path):
+    w = tmp_path / "w.sqlite"
+    with World.create(w, seed=4, generator="flat", loader=False) as world:
+        world.chunk_at(15, 15)
+    n = 12  # 24 edits: 22 were left before (issue 26)
+    a = [(240 + i, 250, 100, "stone") for i in range(n)]
+    b = [(240 + i, 252, 100, "glass") for i in range(n)]
+    with ThreadPoolExecutor(2) as ex:
+        fa, fb = ex.submit(edits, w, a), ex.submit(edits, w, b)
+        done = fa.result() + fb.result()
+    assert len(done) == 2 * n
+    assert stored(w, done) == done
+    with World.open(w, loader=False, readonly=True) as world:
+        assert world.file.edit_count() == 2 * n
+
+
+def _save(folder, w, h):
+    """A save folder of w x h stone chunks (Minecraft chunks (0..w-1, 0..h-1))."""
+    secs = {4: np.full((16, 16, 16), "minecraft:stone", object)}  # y 64..79 -> z 128..143
+    body = mc.chunk_nbt(0, 0, secs)
+    mc.write_region(folder / "region", {(x, z): body for x in range(w) for z in range(h)}, 2)
+
+
+def test_an_import_racing_edits_keeps_every_edit(tmp_path):
+    """Edits land in chunks the import reaches last, while it runs: each is kept
+    (the chunk stays as the edit stored it, counted as kept) or re-applied."""
+    # big enough that the edit processes start while it runs: regions r.0.0, r.1.0,
+    # r.2.0 are read in that order, each row by row (z, then x)
+    wide, side = 96, 32
+    _save(tmp_path / "save", wide, side)
+    w = tmp_path / "w.sqlite"
+    with World.create(w, seed=0, generator="empty", loader=False):
+        pass
+    imp = subprocess.Popen(host.python_cmd("-m", "voxel_addon", "import", "--world", w,
+                                           "--from", tmp_path / "save"),
+                           env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                           cwd=host.ROOT)
+    # wait for its first batch (the import has started and passed its checks)
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < 60 and imp.poll() is None:
+        with World.open(w, loader=False, readonly=True) as world:
+            if world.file.chunk_count():
+                break
+        time.sleep(0.05)
+    # Minecraft chunk (x, z) is chunk (x, -z-1): the last ones in the file's order
+    cells = [(16 * (wide - 1 - i) + 3, -16 * (side - 1) - 5, 150, "glass") for i in range(8)]
+    with ThreadPoolExecutor(2) as ex:
+        done = [x for f in [ex.submit(edits, w, cells[0::2]), ex.submit(edits, w, cells[1::2])]
+                for x in f.result()]
+    out, err = imp.communicate(timeout=120)
+    assert imp.returncode == 0, err[-2000:]
+    assert stored(w, done) == done
+    with World.open(w, loader=False, readonly=True) as world:
+        assert world.file.chunk_count() >= wide * side  # edits stored their neighbours too
+        assert world.get_block(16 * 5 + 1, -16 * 5 - 1, 140) == REGISTRY.id("stone")  # imported
+    print(out)

@@ -89,18 +89,22 @@ class Writing:
             self._close(save=False)
         except Exception:  # noqa: BLE001 - closing a broken file: the first error is the news
             pass
+        removed = False
         if self.new:
             for p in self._files():
                 try:
                     p.unlink()
-                except OSError:  # gone already, or not ours to remove
+                    removed = True
+                except OSError:  # gone already (or never made)
                     pass
-            kept = f"nothing was kept ({self.path.name}, new, was removed)"
+            kept = f"nothing was kept ({self.path.name}, which it created, was removed)"
         else:
             kept = self.kept()
             kept = f"{kept}; the rest was not written" if kept else \
                 f"nothing of this {self.what} was written; the world is unchanged"
         err = explain(e, self.path, doing, kept)
+        if err is e and removed:
+            raise type(e)(f"{e} ({self.path.name}, which it created, was removed)") from None
         if err is None or err is e:
             return  # a user mistake says it already; a bug keeps its traceback
         raise err from None

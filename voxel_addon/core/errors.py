@@ -35,11 +35,27 @@ def cause(e: BaseException, path=None) -> str | None:
         what = None if code is None else _SQLITE.get(code & 0xFF)
         if what is None and "locked" in str(e):
             what = _SQLITE[5]
-        if what == "disk I/O error" and path is not None:
-            what = _why_io(path) or what
+        if path is not None and code is not None and code & 0xFF in (8, 10, 14):
+            what = (_why_io(path) if code & 0xFF == 10 else _why_not_writable(path)) or what
         return what
     if isinstance(e, OSError) and e.errno in _ERRNO:
         return _ERRNO[e.errno]
+    return None
+
+
+def _why_not_writable(path) -> str | None:
+    """Which of file system, folder and file says no (SQLite only says read-only)."""
+    import stat
+    p = os.path.abspath(path)
+    try:
+        if os.statvfs(os.path.dirname(p)).f_flag & os.ST_RDONLY:
+            return "the file system is read-only"
+        if not stat.S_IMODE(os.stat(os.path.dirname(p)).st_mode) & 0o222:
+            return "the folder is read-only (no journal can be made beside the file)"
+        if os.path.exists(p) and not stat.S_IMODE(os.stat(p).st_mode) & 0o222:
+            return "the file is read-only"
+    except OSError:
+        pass
     return None
 
 

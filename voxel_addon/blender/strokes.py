@@ -16,14 +16,13 @@ Blender's would fall out of step with it (RetopoFlow #1494); one number inside
 Blender's snapshots cannot.
 
 Each stroke reaches the world file in one transaction before the operator returns,
-so killing Blender right after a stroke loses nothing. When that write fails (the
-file was deleted or moved away while open, the disk is full) the stroke's edits go
-into the rescue file at once (session.save_failed) and the operator reports an
-error: never FINISHED silently. A drag keeps its parts in
-memory (shown at once) and writes them together when it ends: on release, on Esc or
-right-click, when Blender cancels the operator (the window or file closes) and, at
-the latest, when the world closes. The journal
-forgets what Blender's own history can no longer reach (`Journal.trim`).
+so killing Blender right after a stroke loses nothing. When the world file was
+deleted or moved away while open, the stroke's edits go into the rescue file at
+once (`saved`, session.save_failed) and the operator reports it as an error. A drag
+keeps its parts in memory (shown at once) and writes them together when it ends: on
+release, on Esc or right-click, when Blender cancels the operator (the window or
+file closes) and, at the latest, when the world closes. The journal forgets what
+Blender's own history can no longer reach (`Journal.trim`).
 """
 from __future__ import annotations
 
@@ -79,16 +78,17 @@ def redo(world, rec) -> list:
 
 
 def saved(world, fn):
-    """fn(), a change of `world` that writes it; a failed write is rescued and told
-    (session.save_failed) and raised as a VoxelError with what the user was told."""
-    import sqlite3
+    """fn(), a change of `world` that writes it. When the write fails because the
+    world file was deleted or moved away, the edits go to the rescue file at once
+    and the world is let go (session.save_failed), raised as a VoxelError saying so;
+    other failures (a full disk: saved later) go to the caller (session.refused)."""
     from . import session
     from ..core.errors import VoxelError
     try:
         return fn()
-    except (VoxelError, OSError, sqlite3.Error) as e:
-        if isinstance(e, VoxelError) and not world.file.gone():
-            raise  # a user mistake (a bad block, z off the world): nothing was written
+    except Exception as e:
+        if world.file.db is None or not world.file.gone():
+            raise
         raise VoxelError(session.save_failed(world, e)) from None
 
 
@@ -235,7 +235,7 @@ def _reconcile(scene) -> None:
     j, target = _journal, scene.voxel_edit.step
     if j is None or j.applied == target:
         return
-    from ..core.errors import VoxelError
+    from ..core.errors import explain
     try:
         payloads = j.go(session.world, target)
     except KeyError:  # a step from before this session's history: nothing to replay
@@ -243,8 +243,11 @@ def _reconcile(scene) -> None:
         j.nodes.setdefault(target, (None, None, None))
         j.applied = target
         return
-    except VoxelError as e:  # e.g. the world file was deleted: say so, keep Blender's undo going
-        print(f"voxel: cannot follow undo in the world file: {e}")
+    except Exception as e:  # noqa: BLE001 - the file was deleted, is full, locked: say so,
+        err = explain(e, scene.voxel.path)  # keep Blender's undo going
+        if err is None:
+            raise
+        print(f"voxel: cannot follow undo in the world file: {err}")
         return
     show(payloads)
 
@@ -278,14 +281,26 @@ def unregister_handlers() -> None:
             lst.remove(fn)
 
 
+NOT_SAVED = ("the stroke is shown but not in the file; the world saves it when it "
+             "can, at the latest on closing (or keeps it beside the file)")
+
+
+def refused(op, e: Exception) -> bool:
+    """A stroke's failure on OP as one line (session.refused, saying the stroke stays
+    shown and pending); False for a bug."""
+    from . import session
+    return session.refused(op, e, kept=NOT_SAVED)
+
+
 def changed(op, edit) -> set:
-    """An edit operator's result: edit() -> number of blocks changed; a VoxelError is
-    the operator's one-line error, nothing changed cancels (no undo step)."""
-    from ..core.errors import VoxelError
+    """An edit operator's result: edit() -> number of blocks changed; a VoxelError or
+    a file's failure (session.refused) is the operator's one-line error, nothing
+    changed cancels (no undo step)."""
     try:
         n = edit()
-    except VoxelError as e:
-        op.report({"ERROR"}, str(e))
+    except Exception as e:  # noqa: BLE001 - a full disk or locked file: one line too
+        if not refused(op, e):
+            raise
         return {"CANCELLED"}
     if not n:
         op.report({"INFO"}, "nothing changed")

@@ -3,12 +3,16 @@
 Minecraft block (x, y, z) becomes voxel (x, -1-z, y - y_min): not mirrored, north
 (-z) is +y, chunk (cx, cz) is chunk (cx, -cz-1); layers outside z 0..255 are dropped
 and counted. Chunks Minecraft has not finished (Status other than full) are skipped
-and counted; a damaged chunk is skipped with its one-line reason. Chunks go to the
-file in batches, each one transaction: an interrupted import keeps every finished
-batch, and no chunk is ever half-written. Whether a chunk is already in the file is
-decided again inside each batch's transaction (World.store_chunks), so a chunk
-another writer stored while the import ran is kept (counted in `kept`), and with
-replace the edits saved since the import started are applied over the imported one.
+and counted; a damaged chunk (one from before 1.13 too) is skipped with its one-line
+reason. What can be checked is checked before the first write: chunks already in the
+world, a level.dat from before 1.13; a world whose chunks are all from before 1.13 is
+refused having written nothing. Chunks go to the file in batches, each one
+transaction (with the palette colours they use): an interrupted import keeps every
+finished batch, and no chunk is ever half-written. Whether a chunk is already in the
+file is decided again inside each batch's transaction (World.store_chunks), so a
+chunk another writer stored while the import ran is kept (counted in `kept`), and
+with replace the edits saved since the import started are applied over the imported
+one.
 """
 from __future__ import annotations
 
@@ -128,8 +132,8 @@ class _Palettes:
         return got
 
     def save(self) -> None:
-        if self.changed:
-            self.world.file.set_meta(colors.KEY, colors.dump(self.colors))
+        if self.changed:  # written with the next chunks, in their transaction
+            self.world.file.stage_meta(colors.KEY, colors.dump(self.colors))
             self.changed = False
 
 
@@ -194,11 +198,12 @@ def plan(path, area=None) -> list[tuple[Region, int, int]]:
 
 
 def import_world(world, path, *, y_min=None, area=None, replace=False, progress=None,
-                 cancelled=None) -> Report:
+                 cancelled=None, report: Report | None = None) -> Report:
     """Import the chunks of a save folder / region files into `world` (see the
     module docstring). `progress(done, total)`; `cancelled()` -> True stops after
-    the batch in hand (what was written stays)."""
-    report = Report()
+    the batch in hand (what was written stays); `report` is filled as it goes (what
+    is in the file when it fails)."""
+    report = Report() if report is None else report
     for done, total in steps(world, path, report, y_min=y_min, area=area, replace=replace):
         if progress:
             progress(done, total)
@@ -219,6 +224,11 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False):
                          f"{world.file.path} (imported before, or generated); "
                          "import with --replace (Blender: Replace) to overwrite them")
     version = level_version(path) if Path(path).is_dir() else None
+    if version is not None and version < anvil.V_FLATTENING:  # refused before any write
+        raise VoxelError(f"{Path(path).name}: level.dat has DataVersion {version}, before 1.13 "
+                         "(numeric block ids); open and save the world in Minecraft 1.13 "
+                         "or newer first")
+    old = 0  # chunks from before 1.13: skipped like damaged ones, unless all are
     pal = _Palettes(world, report)
     batch = []
     for done, (reg, cx, cz) in enumerate(todo, 1):
@@ -229,8 +239,7 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False):
             ch = None
         except (RegionError, anvil.ChunkError, nbt.NbtError) as e:
             msg = str(e)
-            if "before 1.13" in msg:
-                raise VoxelError(f"{reg.path.name} chunk ({cx}, {cz}): {msg}") from None
+            old += "before 1.13" in msg
             report.damaged.append(msg if msg.startswith(reg.path.name)
                                   else f"{reg.path.name} chunk ({cx}, {cz}): {msg}")
             ch = None
@@ -252,6 +261,10 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False):
             report.kept += len(kept)
             batch = []
             yield done, len(todo)
+    if old and old == len(report.damaged) and not (report.chunks or report.unfinished):
+        # nothing written: a world Minecraft never saved in 1.13+ is refused whole
+        raise VoxelError(f"none of the {old} chunks is from Minecraft 1.13 or newer, nothing "
+                         f"was imported ({report.damaged[0]})")
     if report.version is None:
         report.y_min = y_min if y_min is not None else 0
     yield len(todo), len(todo)

@@ -27,7 +27,7 @@ import numpy as np
 
 from ..core import chunk as C
 from ..core.blocks import REGISTRY
-from ..core.errors import VoxelError
+from ..core.errors import VoxelError, cause
 from . import codecs
 
 FORMAT_VERSION = 1
@@ -64,6 +64,23 @@ VERSION_TABLE = (
     END""" for what, row in (("insert", "NEW"), ("update", "NEW"), ("delete", "OLD")))
 
 
+def lock_timeout() -> float:
+    """Seconds a write waits for another program's transaction on the same file
+    (VOXEL_LOCK_TIMEOUT, default 30) before it fails as locked."""
+    try:
+        return max(0.0, float(os.environ.get("VOXEL_LOCK_TIMEOUT", "30")))
+    except ValueError:
+        return 30.0
+
+
+def _open_error(path: Path, e: sqlite3.DatabaseError) -> VoxelError:
+    """A full disk, a locked or read-only file is not a damaged one: say which."""
+    what = cause(e, path)
+    if what is not None:
+        return VoxelError(f"{what} while opening {path}: nothing was written")
+    return VoxelError(f"{path} is not a readable world file ({e})")
+
+
 class CorruptChunk(VoxelError):
     """A chunk row that cannot be decoded; it is left as it is in the file."""
 
@@ -76,6 +93,7 @@ class WorldFile:
         self.readonly = readonly
         self._lock = threading.RLock()
         self._identity_at_open = None
+        self._staged: dict[str, str] = {}  # meta values written by the next save
         if _create is None and not self.path.is_file():
             raise VoxelError(f"no world file at {self.path}")
         if _create is not None and self.path.exists():
@@ -87,7 +105,8 @@ class WorldFile:
                 uri = self.path.resolve().as_uri() + "?mode=ro"
                 self.db = sqlite3.connect(uri, uri=True, check_same_thread=False)
             else:
-                self.db = sqlite3.connect(self.path, check_same_thread=False, timeout=30)
+                self.db = sqlite3.connect(self.path, check_same_thread=False,
+                                          timeout=lock_timeout())
             self.db.isolation_level = None  # explicit BEGIN/COMMIT below
             self._identity_at_open = self._stat()
             if _create is not None:
@@ -97,7 +116,7 @@ class WorldFile:
             file_names = dict(self.db.execute("SELECT id, name FROM block_types"))
             self.db.execute("PRAGMA synchronous=NORMAL")
         except sqlite3.DatabaseError as e:
-            raise VoxelError(f"{self.path} is not a readable world file ({e})") from None
+            raise _open_error(self.path, e) from None
         self._check_version()
         if not readonly and _create is None:
             self.db.execute("PRAGMA journal_mode=WAL")
@@ -235,6 +254,13 @@ class WorldFile:
         with self.transaction():
             self.db.execute("INSERT OR REPLACE INTO meta VALUES (?, ?)", (key, str(value)))
         self.meta[key] = str(value)
+
+    def stage_meta(self, key: str, value: str) -> None:
+        """Set a meta value now (in memory) and write it with the next `save`, in
+        its transaction: a palette goes to the file with the voxels that use it."""
+        self._writable()
+        with self._lock:
+            self.meta[key] = self._staged[key] = str(value)
 
     # ---- transactions, queries for the file's other tables (far.py) ----------
     def transaction(self):
@@ -403,6 +429,8 @@ class WorldFile:
                         out.append(got)
                 rows = out
             top = self.top_version()
+            staged = dict(self._staged)
+            self.db.executemany("INSERT OR REPLACE INTO meta VALUES (?, ?)", staged.items())
             self.db.executemany("INSERT OR REPLACE INTO chunks VALUES (?, ?, ?, ?, ?)",
                                 [r[:5] for r in rows])
             self.db.executemany("INSERT OR REPLACE INTO light VALUES (?, ?, ?, ?)",
@@ -415,7 +443,12 @@ class WorldFile:
             self.db.executemany("INSERT OR REPLACE INTO edits VALUES (?, ?, ?, ?, ?, ?)",
                                 [(x, y, z, int(self._to_file[b]), d, now)
                                  for x, y, z, b, d in edits])
-            return {k: v for k, v in self.versions_since(top) if k in written}
+            new = {k: v for k, v in self.versions_since(top) if k in written}
+        with self._lock:
+            for k, v in staged.items():  # written: unless staged again meanwhile
+                if self._staged.get(k) == v:
+                    del self._staged[k]
+        return new
 
     def write_chunks(self, items, codec: str | None = None) -> None:
         """items: (key, blocks, data-or-None) triples."""

@@ -177,3 +177,21 @@ def test_store_chunks_keeps_or_merges_per_chunk(path):
     finally:
         imp.close()
         ed.close()
+
+
+def test_a_merge_drops_the_stored_light_around_it(path):
+    """The light b solved around its stale copy no longer holds once a's lamp is
+    merged in: no light row of the 3x3 survives b's write (it is solved again)."""
+    a, b = World.open(path, loader=False), World.open(path, loader=False)
+    try:
+        edit(b, (2, 1, 100, STONE), write=False)   # b relights its neighbours too
+        edit(a, (1, 1, 100, LAMP))
+        b.flush()                                  # ... and writes them with that light
+        rows = sqlite3.connect(path).execute(
+            "SELECT cx, cy FROM light WHERE cx BETWEEN -1 AND 1 AND cy BETWEEN -1 AND 1"
+        ).fetchall()
+        assert rows == [], rows
+        assert (stored(path, 1, 1, 100), stored(path, 2, 1, 100)) == (LAMP, STONE)
+    finally:
+        a.close()
+        b.close()

@@ -417,14 +417,15 @@ class WorldFile:
         its 3x3 is dropped) or None (keep the stored one). Returns {key: version} of
         the rows written."""
         with self.transaction():
+            stale_light = [tuple(k) for k in stale_light]
             if resolve is not None:
                 out = []
                 for r in rows:
                     key = (r[0], r[1])
                     got = resolve(key, self.version(key))
-                    if got is not None and got is not r:
-                        stale_light = list(stale_light) + [(key[0] + i, key[1] + j)
-                                                           for i in (-1, 0, 1) for j in (-1, 0, 1)]
+                    if got is not None and got is not r:  # merged: its 3x3's light is off
+                        stale_light += [(key[0] + i, key[1] + j)
+                                        for i in (-1, 0, 1) for j in (-1, 0, 1)]
                     if got is not None:
                         out.append(got)
                 rows = out
@@ -435,10 +436,9 @@ class WorldFile:
                                 [r[:5] for r in rows])
             self.db.executemany("INSERT OR REPLACE INTO light VALUES (?, ?, ?, ?)",
                                 [r[:3] + r[5:] for r in rows if r[5] is not None])
-            written = {(r[0], r[1]) for r in rows}
             self.db.executemany("DELETE FROM light WHERE cx=? AND cy=?",
-                                [r[:2] for r in rows if r[5] is None]
-                                + [tuple(k) for k in stale_light if tuple(k) not in written])
+                                [r[:2] for r in rows if r[5] is None] + stale_light)
+            written = {(r[0], r[1]) for r in rows}
             now = time.time()
             self.db.executemany("INSERT OR REPLACE INTO edits VALUES (?, ?, ?, ?, ?, ?)",
                                 [(x, y, z, int(self._to_file[b]), d, now)

@@ -3,7 +3,9 @@
 Minecraft block (x, y, z) becomes voxel (x, -1-z, y - y_min): not mirrored, north
 (-z) is +y, chunk (cx, cz) is chunk (cx, -cz-1); layers outside z 0..255 are dropped
 and counted. Chunks Minecraft has not finished (Status other than full) are skipped
-and counted; a damaged chunk is skipped with its one-line reason. Chunks go to the
+and counted; a damaged chunk is skipped with its one-line reason; a hostile file
+(region header with shared sectors, an import budget spent: formats/budget.py) refuses
+the import with one line, its region headers checked before any chunk. Chunks go to the
 file in batches, each one transaction: an interrupted import keeps every finished
 batch, and no chunk is ever half-written.
 """
@@ -21,10 +23,13 @@ from ..core import colors
 from ..core.blocks import REGISTRY
 from ..core.errors import VoxelError
 from . import anvil, mapping, nbt
+from .budget import Budget, Exceeded
 from .region import External, Region, RegionError
 
 BATCH = 32
 LAYOUTS = ("dimensions/minecraft/overworld/region", "region")  # 26.1 first, then older
+LEVEL_KEEP = {"Data": {"DataVersion": None}}
+LEVEL_TAGS = 1 << 20   # a level.dat has hundreds to thousands
 
 
 @dataclass
@@ -79,14 +84,17 @@ def regions_of(path) -> list[Path]:
 
 
 def level_version(path) -> int | None:
-    """DataVersion from a save folder's level.dat, or None."""
+    """DataVersion from a save folder's level.dat, or None (a damaged one is ignored,
+    one of more than LEVEL_TAGS tags refused)."""
     f = Path(path) / "level.dat"
     if not f.is_file():
         return None
     try:
         with gzip.open(f) as g:
             raw = g.read(64 << 20)
-        data = nbt.parse(raw).get("Data", {})
+        data = nbt.parse(raw, LEVEL_KEEP, LEVEL_TAGS).get("Data", {})
+    except Exceeded as e:
+        raise VoxelError(f"{f}: {e} (a hostile file?)") from None
     except (OSError, EOFError, ValueError):
         return None
     v = data.get("DataVersion") if isinstance(data, dict) else None
@@ -210,11 +218,15 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False):
                          f"{world.file.path} (imported before, or generated); "
                          "import with --replace (Blender: Replace) to overwrite them")
     version = level_version(path) if Path(path).is_dir() else None
+    budget = Budget.of_input(sum(len(r.data) for r in {id(t[0]): t[0] for t in todo}.values()))
     pal = _Palettes(world, report)
     batch = []
     for done, (reg, cx, cz) in enumerate(todo, 1):
         try:
-            ch = anvil.read(reg.payload(cx, cz))
+            ch = anvil.read(reg.payload(cx, cz, budget), budget)
+        except Exceeded as e:
+            raise VoxelError(f"{reg.path.name} chunk ({cx}, {cz}): {e}; import refused") \
+                from None
         except External:
             report.external += 1
             ch = None

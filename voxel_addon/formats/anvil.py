@@ -17,7 +17,6 @@ from typing import NamedTuple
 import numpy as np
 
 from . import nbt
-from .budget import Exceeded
 
 V_FLATTENING = 1451  # 17w47a: block names and palettes (1.13)
 V_PACKED = 2529      # 20w17a: indices never span two longs
@@ -51,11 +50,11 @@ def read(payload: bytes, budget=None) -> Chunk:
     limit = CHUNK_TAGS if budget is None else min(CHUNK_TAGS, max(budget.tags, 0))
     try:
         root, tags = nbt.read(payload, KEEP, limit)
-    except Exceeded:
+    except nbt.TooMany:
         if limit < CHUNK_TAGS:
-            raise Exceeded(budget.tags_message()) from None
-        raise Exceeded(f"more than {CHUNK_TAGS:,} NBT tags in one chunk (real ones have "
-                       "thousands)") from None
+            raise nbt.TooMany(budget.tags_message()) from None
+        raise nbt.TooMany(f"more than {CHUNK_TAGS:,} NBT tags in one chunk (real ones "
+                          "have thousands)") from None
     if budget is not None:
         budget.spend_tags(tags)
     version = root.get("DataVersion")

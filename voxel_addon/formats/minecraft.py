@@ -22,7 +22,7 @@ from ..core import chunk as C
 from ..core import colors
 from ..core.blocks import REGISTRY
 from ..core.errors import VoxelError
-from . import anvil, mapping, nbt
+from . import anvil, mapping, nbt, region
 from .budget import Budget, Exceeded
 from .region import External, Region, RegionError
 
@@ -64,11 +64,12 @@ class Report:
 
 def regions_of(path) -> list[Path]:
     """The region files of a save folder (both layouts), a folder of .mca files or
-    one .mca file."""
+    one .mca file; their headers checked (check_headers)."""
     path = Path(path)
     if path.is_file():
         if path.suffix != ".mca":
             raise VoxelError(f"{path} is not a region file (.mca)")
+        check_headers([path])
         return [path]
     if not path.is_dir():
         raise VoxelError(f"{path} does not exist")
@@ -80,7 +81,18 @@ def regions_of(path) -> list[Path]:
     if not files:
         raise VoxelError(f"no region files (r.X.Z.mca) in {path} (nor in region/ or "
                          "dimensions/minecraft/overworld/region/)")
+    check_headers(files)
     return files
+
+
+def check_headers(files) -> None:
+    """Refuse damaged or hostile region headers (shared sectors, sectors in the header
+    or past the file) reading 8 KiB of each: before anything is written."""
+    for f in files:
+        try:
+            region.check(f)
+        except (OSError, RegionError) as e:
+            raise VoxelError(f"{f}: {e}") from None
 
 
 def level_version(path) -> int | None:

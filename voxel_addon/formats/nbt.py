@@ -3,7 +3,8 @@ big-endian named tags. Hostile input: every length is checked against the bytes
 left before anything is allocated, nesting stops at 512 levels (an explicit stack,
 no recursion), a parse reads at most `limit` tags (arrays and lists of numbers count
 as one, they are views) and never past its buffer. A fault is an NbtError (a
-ValueError) with the offset; too many tags is a budget.Exceeded.
+ValueError) with the offset; too many tags or levels is a Hostile (an NbtError and a
+budget.Exceeded: callers refuse the whole file).
 
 `parse(buf, keep)` returns the root compound as a dict; `keep` ({name: sub-keep or
 None for all of it}) limits a compound, or each compound of a list, to those
@@ -37,6 +38,14 @@ _I32 = struct.Struct(">i").unpack_from
 
 class NbtError(ValueError):
     pass
+
+
+class Hostile(NbtError, Exceeded):
+    """Past a limit no real file comes near (tags, nesting): refuse the whole file."""
+
+
+class TooMany(Hostile):
+    """More tags than the parse's limit."""
 
 
 _KEEPS: dict = {}   # id(keep) -> (keep, its bytes-keyed copy); holding keep pins the id
@@ -116,7 +125,7 @@ def read(buf, keep=None, limit: int = MAX_TAGS):
             t, sub, name = item, k, (True if out is not None else None)
         left -= 1
         if left < 0:
-            raise Exceeded(f"more than {limit:,} NBT tags")
+            raise TooMany(f"more than {limit:,} NBT tags")
         build = name is not None
         # the value of tag t at pos
         if t in _SIZE:
@@ -157,11 +166,11 @@ def read(buf, keep=None, limit: int = MAX_TAGS):
                 v = [] if build else None
                 if c:
                     if len(stack) >= MAX_DEPTH:
-                        raise NbtError("NBT nested deeper than 512 levels")
+                        raise Hostile("NBT nested deeper than 512 levels")
                     stack.append([v, sub, it, c])
         elif t == COMPOUND:
             if len(stack) >= MAX_DEPTH:
-                raise NbtError("NBT nested deeper than 512 levels")
+                raise Hostile("NBT nested deeper than 512 levels")
             v = {} if build else None
             stack.append([v, sub, None, 0])
         else:

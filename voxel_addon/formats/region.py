@@ -39,53 +39,63 @@ def position(path) -> tuple[int, int] | None:
     return (int(m.group(1)), int(m.group(2))) if m else None
 
 
+def header(path, head, n: int) -> dict:
+    """{(cx, cz): (first sector, sector count)} of a region file `path` of `n` bytes
+    whose first 8 KiB are `head`; RegionError unless every chunk's sectors lie after
+    the header, inside the file (its last sector may be short) and belong to it alone."""
+    path = Path(path)
+    name = path.name
+    pos = position(path)
+    if pos is None:
+        raise RegionError(f"{name}: not a region file name (r.X.Z.mca)")
+    if n == 0:
+        return {}
+    if n < 2 * SECTOR:
+        raise RegionError(f"{name}: shorter than a region header ({n} bytes)")
+    rx, rz = pos
+    entries = {}
+    for i in range(1024):
+        off = int.from_bytes(head[4 * i:4 * i + 3], "big")
+        count = head[4 * i + 3]
+        if off or count:
+            entries[(32 * rx + (i & 31), 32 * rz + (i >> 5))] = (off, count)
+    end = -(-n // SECTOR)
+    last, owner = 2, None
+    for (off, count), key in sorted((v, k) for k, v in entries.items()):
+        if off < 2:
+            raise RegionError(f"{name}: chunk {key} points into the region header "
+                              f"(sector {off}); a damaged or hostile region file")
+        if off + count > end:
+            raise RegionError(f"{name}: chunk {key} lies past the end of the file "
+                              f"(sectors {off}+{count} of {end}); a damaged or hostile "
+                              "region file")
+        if count and off < last:
+            raise RegionError(f"{name}: chunks {owner} and {key} share sector {off}; "
+                              "a damaged or hostile region file")
+        if count:
+            last, owner = off + count, key
+    return entries
+
+
+def check(path) -> None:
+    """Refuse a region file whose header is damaged (see header()) reading only it."""
+    path = Path(path)
+    with open(path, "rb") as f:
+        head = f.read(SECTOR)
+        n = f.seek(0, 2)
+    header(path, head, n)
+
+
 class Region:
     """One .mca file read into memory. `chunks()` lists the present (cx, cz) in
     Minecraft chunk coordinates, `payload(cx, cz)` gives its decompressed NBT."""
 
     def __init__(self, path, data: bytes | None = None):
         self.path = Path(path)
-        pos = position(self.path)
-        if pos is None:
+        if position(self.path) is None:
             raise RegionError(f"{self.path.name}: not a region file name (r.X.Z.mca)")
-        self.rx, self.rz = pos
         self.data = self.path.read_bytes() if data is None else data
-        n = len(self.data)
-        if n == 0:
-            self.entries = {}
-            return
-        if n < 2 * SECTOR:
-            raise RegionError(f"{self.path.name}: shorter than a region header ({n} bytes)")
-        self.entries = {}
-        head = memoryview(self.data)[:SECTOR]
-        for i in range(1024):
-            off = int.from_bytes(head[4 * i:4 * i + 3], "big")
-            count = head[4 * i + 3]
-            if off == 0 and count == 0:
-                continue
-            cx, cz = 32 * self.rx + (i & 31), 32 * self.rz + (i >> 5)
-            self.entries[(cx, cz)] = (off, count)
-        self._check_sectors(n)
-
-    def _check_sectors(self, n: int) -> None:
-        """Every chunk's sectors lie after the header, inside the file (its last
-        sector may be short) and belong to it alone."""
-        name = self.path.name
-        end = -(-n // SECTOR)
-        last, owner = 2, None
-        for (off, count), key in sorted((v, k) for k, v in self.entries.items()):
-            if off < 2:
-                raise RegionError(f"{name}: chunk {key} points into the region header "
-                                  f"(sector {off}); a damaged or hostile region file")
-            if off + count > end:
-                raise RegionError(f"{name}: chunk {key} lies past the end of the file "
-                                  f"(sectors {off}+{count} of {end}); a damaged or hostile "
-                                  "region file")
-            if count and off < last:
-                raise RegionError(f"{name}: chunks {owner} and {key} share sector {off}; "
-                                  "a damaged or hostile region file")
-            if count:
-                last, owner = off + count, key
+        self.entries = header(self.path, memoryview(self.data)[:SECTOR], len(self.data))
 
     def chunks(self) -> list[tuple[int, int]]:
         return sorted(self.entries, key=lambda k: (k[1], k[0]))

@@ -21,7 +21,7 @@ from . import nbt
 V_FLATTENING = 1451  # 17w47a: block names and palettes (1.13)
 V_PACKED = 2529      # 20w17a: indices never span two longs
 V_NO_LEVEL = 2844    # 21w43a: no Level wrapper, y from -64 (1.18)
-CHUNK_TAGS = 1 << 20
+CHUNK_TAGS = 1 << 19
 DONE = {"full", "minecraft:full", "postprocessed", "fullchunk"}
 _SECTION = {"Y": None, "block_states": {"palette": {"Name": None}, "data": None},
             "Palette": {"Name": None}, "BlockStates": None}

@@ -29,7 +29,7 @@ from .region import External, Region, RegionError
 BATCH = 32
 LAYOUTS = ("dimensions/minecraft/overworld/region", "region")  # 26.1 first, then older
 LEVEL_KEEP = {"Data": {"DataVersion": None}}
-LEVEL_TAGS = 1 << 20   # a level.dat has hundreds to thousands
+LEVEL_TAGS = 1 << 18   # a level.dat has hundreds to thousands
 
 
 @dataclass

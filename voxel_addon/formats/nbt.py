@@ -24,7 +24,7 @@ from .budget import Exceeded
 
 END, BYTE, SHORT, INT, LONG, FLOAT, DOUBLE, BYTES, STRING, LIST, COMPOUND, INTS, LONGS = range(13)
 MAX_DEPTH = 512
-MAX_TAGS = 1 << 20   # one parse; a full 1.21 chunk has a few thousand
+MAX_TAGS = 1 << 19   # one parse; a full 1.21 chunk has a few thousand
 _FIXED = {BYTE: ">i1", SHORT: ">i2", INT: ">i4", LONG: ">i8", FLOAT: ">f4", DOUBLE: ">f8"}
 _DT = {t: np.dtype(d) for t, d in {**_FIXED, BYTES: ">i1", INTS: ">i4", LONGS: ">i8"}.items()}
 # bytes per element: scalars and numeric list items; arrays' items

@@ -7,8 +7,10 @@ from __future__ import annotations
 
 import hashlib
 import os
+import resource
 import subprocess
 import sys
+import threading
 import time
 import tracemalloc
 import zlib
@@ -65,6 +67,8 @@ CASES = {
     "NBT 100k levels deep": (lambda t: _save(t, H.one_chunk(H.deep_chunk(100_000))), False),
     "level.dat of 60M tags": (lambda t: _save(t, H.one_chunk(H.good_chunk()), H.level_bomb()),
                               False),
+    "level.dat of 15M tags": (lambda t: _save(t, H.one_chunk(H.good_chunk()),
+                                              H.level_bomb(15_000_000)), False),
     "vox group of 130k children": (lambda t: _vox(t, H.wide_group()), True),
     "vox group of 60k same children": (lambda t: _vox(t, H.wide_group(60_000)), True),
     "vox binary tree of one node": (lambda t: _vox(t, H.binary_tree()), True),
@@ -74,15 +78,27 @@ CASES = {
 }
 
 
+def _cap():
+    # a broken limit must fail the test, not take the machine: 2 GiB of address space
+    resource.setrlimit(resource.RLIMIT_AS, (2 << 30, 2 << 30))
+
+
 def cli(world: Path, src: Path):
-    """(exit code, stdout, stderr, peak RSS in bytes, seconds) of the real CLI."""
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    """(exit code, stdout, stderr, peak RSS in bytes, seconds) of the real CLI, killed
+    after 60 s."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT), OPENBLAS_NUM_THREADS="1")
     out, err = world.parent / "out.txt", world.parent / "err.txt"
     t0 = time.perf_counter()
     with open(out, "wb") as o, open(err, "wb") as e:
         p = subprocess.Popen([sys.executable, "-m", "voxel_addon", "import", "--world",
-                              str(world), "--from", str(src)], stdout=o, stderr=e, env=env)
-        _, status, usage = os.wait4(p.pid, 0)
+                              str(world), "--from", str(src)], stdout=o, stderr=e, env=env,
+                             preexec_fn=_cap)
+        timer = threading.Timer(60, p.kill)
+        timer.start()
+        try:
+            _, status, usage = os.wait4(p.pid, 0)
+        finally:
+            timer.cancel()
     dt = time.perf_counter() - t0
     p.returncode = os.waitstatus_to_exitcode(status)
     rss = usage.ru_maxrss * (1 if sys.platform == "darwin" else 1024)
@@ -248,6 +264,9 @@ def test_real_shaped_chunks_are_far_below_the_tag_limit():
 def test_level_dat_is_read_for_its_version_only(tmp_path):
     (tmp_path / "level.dat").write_bytes(H.level_bomb(3_000_000))
     with pytest.raises(VoxelError, match="NBT tags"):
+        minecraft.level_version(tmp_path)
+    (tmp_path / "level.dat").write_bytes(H.level_bomb(minecraft.LEVEL_BYTES))
+    with pytest.raises(VoxelError, match="inflates past 16 MiB"):
         minecraft.level_version(tmp_path)
     mc.level_dat(tmp_path, 4000)
     assert minecraft.level_version(tmp_path) == 4000

@@ -30,6 +30,7 @@ BATCH = 32
 LAYOUTS = ("dimensions/minecraft/overworld/region", "region")  # 26.1 first, then older
 LEVEL_KEEP = {"Data": {"DataVersion": None}}
 LEVEL_TAGS = 1 << 18   # a level.dat has hundreds to thousands
+LEVEL_BYTES = 16 << 20  # and tens of KB
 
 
 @dataclass
@@ -97,13 +98,15 @@ def check_headers(files) -> None:
 
 def level_version(path) -> int | None:
     """DataVersion from a save folder's level.dat, or None (a damaged one is ignored,
-    one of more than LEVEL_TAGS tags refused)."""
+    one of more than LEVEL_TAGS tags or LEVEL_BYTES refused)."""
     f = Path(path) / "level.dat"
     if not f.is_file():
         return None
     try:
         with gzip.open(f) as g:
-            raw = g.read(64 << 20)
+            raw = g.read(LEVEL_BYTES + 1)
+        if len(raw) > LEVEL_BYTES:
+            raise Exceeded(f"inflates past {LEVEL_BYTES >> 20} MiB")
         data = nbt.parse(raw, LEVEL_KEEP, LEVEL_TAGS).get("Data", {})
     except Exceeded as e:
         raise VoxelError(f"{f}: {e} (a hostile file?)") from None

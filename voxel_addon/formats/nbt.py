@@ -84,21 +84,23 @@ def read(buf, keep=None, limit: int = MAX_TAGS):
     if pos > n:
         raise NbtError("a string runs past the NBT at byte 1")
     kb = _bytes_keys(keep)
+    SIZE, ASIZE, UNPACK, DT, frombuffer = _SIZE, _ASIZE, _UNPACK, _DT, np.frombuffer
     root = {}
     left = limit
-    # open containers: [out (dict, list or None while skipping), keep, list item tag
-    # (None: a compound), items left]
-    stack = [[root, kb, None, 0]]
-    while stack:
-        f = stack[-1]
-        out, k, item = f[0], f[1], f[2]
+    # the open container: out (dict, list, or None while skipping), its keep, its list
+    # item tag (None: a compound) and items left; its parents wait on `stack`
+    out, k, item, cnt = root, kb, None, 0
+    stack = []
+    while True:
         if item is None:               # a compound: its next named tag
             if pos >= n:
                 raise NbtError(f"NBT ends early at byte {pos} (wants 1 more)")
             t = b[pos]
             if t == END:
                 pos += 1
-                stack.pop()
+                if not stack:
+                    break
+                out, k, item, cnt = stack.pop()
                 continue
             if pos + 3 > n:
                 raise NbtError(f"NBT ends early at byte {pos + 1}")
@@ -106,8 +108,7 @@ def read(buf, keep=None, limit: int = MAX_TAGS):
             pos = s + (b[pos + 1] << 8 | b[pos + 2])
             if pos > n:
                 raise NbtError(f"a string runs past the NBT at byte {s - 2}")
-            name = None
-            sub = None
+            name = sub = None
             if out is not None:
                 if k is None:
                     name = b[s:pos].decode("utf-8", "replace")
@@ -118,21 +119,21 @@ def read(buf, keep=None, limit: int = MAX_TAGS):
                         name = key.decode("utf-8", "replace")
                     # else: skipped, name stays None
         else:                          # a list: its next item
-            if f[3] == 0:
-                stack.pop()
+            if cnt == 0:
+                out, k, item, cnt = stack.pop()   # a list is never the root
                 continue
-            f[3] -= 1
+            cnt -= 1
             t, sub, name = item, k, (True if out is not None else None)
         left -= 1
         if left < 0:
             raise TooMany(f"more than {limit:,} NBT tags")
         build = name is not None
         # the value of tag t at pos
-        if t in _SIZE:
-            e = pos + _SIZE[t]
+        if t in SIZE:
+            e = pos + SIZE[t]
             if e > n:
-                raise NbtError(f"NBT ends early at byte {pos} (wants {_SIZE[t]} more)")
-            v = _UNPACK[t](b, pos)[0] if build else None
+                raise NbtError(f"NBT ends early at byte {pos} (wants {SIZE[t]} more)")
+            v = UNPACK[t](b, pos)[0] if build else None
             pos = e
         elif t == STRING:
             if pos + 2 > n:
@@ -142,18 +143,18 @@ def read(buf, keep=None, limit: int = MAX_TAGS):
                 raise NbtError(f"a string runs past the NBT at byte {pos}")
             v = b[pos + 2:e].decode("utf-8", "replace") if build else None
             pos = e
-        elif t in _ASIZE:
-            c = _length(b, pos, n, _ASIZE[t])
-            v = np.frombuffer(b, _DT[t], c, pos + 4) if build else None
-            pos += 4 + c * _ASIZE[t]
+        elif t in ASIZE:
+            c = _length(b, pos, n, ASIZE[t])
+            v = frombuffer(b, DT[t], c, pos + 4) if build else None
+            pos += 4 + c * ASIZE[t]
         elif t == LIST:
             if pos + 1 > n:
                 raise NbtError(f"NBT ends early at byte {pos} (wants 1 more)")
             it = b[pos]
-            if it in _SIZE:
-                c = _length(b, pos + 1, n, _SIZE[it])
-                v = np.frombuffer(b, _DT[it], c, pos + 5) if build else None
-                pos += 5 + c * _SIZE[it]
+            if it in SIZE:
+                c = _length(b, pos + 1, n, SIZE[it])
+                v = frombuffer(b, DT[it], c, pos + 5) if build else None
+                pos += 5 + c * SIZE[it]
             elif it == END:
                 _length(b, pos + 1, n, 0)
                 v = [] if build else None
@@ -165,14 +166,28 @@ def read(buf, keep=None, limit: int = MAX_TAGS):
                 pos += 5
                 v = [] if build else None
                 if c:
-                    if len(stack) >= MAX_DEPTH:
+                    if build:
+                        if name is True:
+                            out.append(v)
+                        else:
+                            out[name] = v
+                    if len(stack) >= MAX_DEPTH - 1:
                         raise Hostile("NBT nested deeper than 512 levels")
-                    stack.append([v, sub, it, c])
+                    stack.append((out, k, item, cnt))
+                    out, k, item, cnt = v, sub, it, c
+                    continue
         elif t == COMPOUND:
-            if len(stack) >= MAX_DEPTH:
+            if len(stack) >= MAX_DEPTH - 1:
                 raise Hostile("NBT nested deeper than 512 levels")
             v = {} if build else None
-            stack.append([v, sub, None, 0])
+            if build:
+                if name is True:
+                    out.append(v)
+                else:
+                    out[name] = v
+            stack.append((out, k, item, cnt))
+            out, k, item, cnt = v, sub, None, 0
+            continue
         else:
             raise NbtError(f"unknown tag {t} at byte {pos}")
         if build:

@@ -93,7 +93,10 @@ def check_headers(files) -> None:
         try:
             region.check(f)
         except (OSError, RegionError) as e:
-            raise VoxelError(f"{f}: {e}") from None
+            msg = str(e)
+            if msg.startswith(f"{Path(f).name}: "):
+                msg = msg[len(Path(f).name) + 2:]
+            raise VoxelError(f"{f}: {msg}") from None
 
 
 def level_version(path) -> int | None:
@@ -198,7 +201,10 @@ def plan(path, area=None) -> list[tuple[Region, int, int]]:
         try:
             reg = Region(f)
         except (OSError, RegionError) as e:
-            raise VoxelError(f"{f}: {e}") from None
+            msg = str(e)
+            if msg.startswith(f"{Path(f).name}: "):
+                msg = msg[len(Path(f).name) + 2:]
+            raise VoxelError(f"{f}: {msg}") from None
         for cx, cz in reg.chunks():
             if area is not None:
                 x0, z0, x1, z1 = area

@@ -295,3 +295,16 @@ def test_vox_budget_leaves_real_scenes():
     assert len(s.instances) == 256
     xyz, _, size = vox.voxels(s)
     assert len(xyz) == 256 * 4096 and size.tolist() == [1600, 48, 16]
+
+
+def test_region_files_are_read_a_chunk_at_a_time(tmp_path):
+    f = tmp_path / "r.0.0.mca"
+    f.write_bytes(mc.region({(0, 0): H.good_chunk(), (1, 0): H.good_chunk()}, 2))
+    with open(f, "r+b") as h:      # 256 MiB of (sparse) sectors no chunk points at
+        h.truncate(256 * MIB)
+
+    def go():
+        reg = Region(f)
+        assert reg.stored == 2 * 4096
+        assert [len(anvil.read(reg.payload(cx, cz)).sections) for cx, cz in reg.chunks()] == [1, 1]
+    assert peak_of(go) < 8 * MIB

@@ -239,7 +239,7 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False):
                          f"{world.file.path} (imported before, or generated); "
                          "import with --replace (Blender: Replace) to overwrite them")
     version = level_version(path) if Path(path).is_dir() else None
-    budget = Budget.of_input(sum(len(r.data) for r in {id(t[0]): t[0] for t in todo}.values()))
+    budget = Budget.of_input(sum(r.stored for r in {id(t[0]): t[0] for t in todo}.values()))
     pal = _Palettes(world, report)
     batch = []
     for done, (reg, cx, cz) in enumerate(todo, 1):

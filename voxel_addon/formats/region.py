@@ -87,18 +87,34 @@ def check(path) -> None:
 
 
 class Region:
-    """One .mca file read into memory. `chunks()` lists the present (cx, cz) in
-    Minecraft chunk coordinates, `payload(cx, cz)` gives its decompressed NBT."""
+    """One .mca file: its header read when made, each chunk's sectors when asked for
+    (a folder of regions is never all in memory). `chunks()` lists the present
+    (cx, cz) in Minecraft chunk coordinates, `payload(cx, cz)` gives its decompressed
+    NBT; `stored` is the bytes its chunks' sectors hold (what a budget scales with)."""
 
     def __init__(self, path, data: bytes | None = None):
         self.path = Path(path)
         if position(self.path) is None:
             raise RegionError(f"{self.path.name}: not a region file name (r.X.Z.mca)")
-        self.data = self.path.read_bytes() if data is None else data
-        self.entries = header(self.path, memoryview(self.data)[:SECTOR], len(self.data))
+        self.data = data
+        if data is None:
+            with open(self.path, "rb") as f:
+                head = f.read(SECTOR)
+                n = f.seek(0, 2)
+        else:
+            head, n = memoryview(data)[:SECTOR], len(data)
+        self.entries = header(self.path, head, n)
+        self.stored = min(n, SECTOR * sum(c for _, c in self.entries.values()))
 
     def chunks(self) -> list[tuple[int, int]]:
         return sorted(self.entries, key=lambda k: (k[1], k[0]))
+
+    def _sectors(self, off: int, count: int):
+        if self.data is not None:
+            return memoryview(self.data)[off * SECTOR:(off + count) * SECTOR]
+        with open(self.path, "rb") as f:
+            f.seek(off * SECTOR)
+            return memoryview(f.read(count * SECTOR))
 
     def payload(self, cx: int, cz: int, budget=None) -> bytes:
         """The chunk's NBT bytes; RegionError when it cannot be had, budget.Exceeded
@@ -107,15 +123,18 @@ class Region:
         where = f"{self.path.name} chunk ({cx}, {cz})"
         if count == 0:
             raise RegionError(f"{where}: sectors {off}+{count} lie outside the file")
-        start = off * SECTOR
-        if start + 5 > len(self.data):
+        try:
+            raw = self._sectors(off, count)
+        except OSError as e:
+            raise RegionError(f"{where}: cannot be read ({e.strerror})") from None
+        if len(raw) < 5:
             raise RegionError(f"{where}: sectors lie outside the file")
-        length, kind = _LEN.unpack_from(self.data, start)
-        if length < 1 or length - 1 > count * SECTOR or start + 4 + length > len(self.data):
+        length, kind = _LEN.unpack_from(raw, 0)
+        if length < 1 or length - 1 > count * SECTOR or 4 + length > len(raw):
             raise RegionError(f"{where}: length {length} does not fit its {count} sectors")
         if kind & 0x80:
             raise External(f"{where}: stored in an external .mcc file (not read)")
-        body = memoryview(self.data)[start + 5:start + 4 + length]
+        body = raw[5:4 + length]
         left = MAX_NBT if budget is None else min(MAX_NBT, max(budget.bytes, 0))
         try:
             out = decompress(kind, body, left)

@@ -117,8 +117,11 @@ def level_bomb(n=60_000_000) -> bytes:
 
 # ---- .vox scene graphs ------------------------------------------------------------
 def cube_model(side=16) -> bytes:
+    """A SIZE and an XYZI chunk: a full cube of side^3 voxels (colours 1..200)."""
     g = np.stack(np.meshgrid(*[np.arange(side)] * 3, indexing="ij"), -1).reshape(-1, 3)
-    return vf.model((side,) * 3, [(x, y, z, 1 + (x + y) % 200) for x, y, z in g.tolist()])
+    xyzi = np.concatenate([g, 1 + (g[:, :1] + g[:, 1:2]) % 200], 1).astype(np.uint8)
+    return (vf.chunk(b"SIZE", struct.pack("<3i", side, side, side))
+            + vf.chunk(b"XYZI", struct.pack("<i", len(xyzi)) + xyzi.tobytes()))
 
 
 def wide_group(children=130_000, side=4) -> bytes:

@@ -26,6 +26,7 @@ from voxel_addon.world import World
 
 from . import hostile as H
 from . import mcfiles as mc
+from . import voxfiles as vf
 
 MIB = 1 << 20
 ROOT = Path(__file__).resolve().parents[2]
@@ -281,6 +282,8 @@ def test_level_dat_is_read_for_its_version_only(tmp_path):
     (lambda: H.cycle(), "reaches node 1 twice"),
     (lambda: H.instances(1100), "more than 1,048,576 voxels"),
     (lambda: H.shapes(vox.MAX_INSTANCES + 1), "more than 32,768 models"),
+    (lambda: vf.file(vf.model((2, 2, 2), [(1, 1, 1, 5)] * 9)), "9 voxels in a model of 2x2x2"),
+    (lambda: vf.file(b"".join([H.cube_model(128)] * 3)), "models hold more than 4,194,304"),
 ])
 def test_vox_scene_graph_budgets(make, msg):
     data = make()

@@ -33,6 +33,7 @@ MAX_ENTRIES_ALL = 1 << 20
 # voxels over all instances. Placing one costs ~400 B in the world's edits
 # (world.set_blocks: 1M voxels took 480 MB, 12 s); raise it when that is leaner
 MAX_PLACED = 1 << 20
+MAX_STORED = 4 * MAX_PLACED   # voxels over all models, placed or not
 MAX_T = 1 << 24  # translations; a world is far smaller along z anyway
 _I = struct.Struct("<i")
 _HEAD = struct.Struct("<4sii")
@@ -158,6 +159,7 @@ def read(data: bytes) -> Scene:
     models, sizes, nodes, layers = [], [], {}, {}
     palette = None
     spent = [0]
+    stored = 0
     for cid, c0, c1, _, _ in _chunks(buf, k0, k1):
         cur = _Cursor(buf, c0, c1, spent)
         if cid == b"SIZE":
@@ -173,8 +175,13 @@ def read(data: bytes) -> Scene:
             n = cur.int()
             if n < 0 or 4 * n > c1 - cur.pos:
                 raise VoxError(f"{n} voxels do not fit their chunk")
-            a = np.frombuffer(buf, np.uint8, 4 * n, cur.pos).reshape(n, 4)
             s = sizes[-1]
+            if n > s[0] * s[1] * s[2]:
+                raise VoxError(f"{n} voxels in a model of {s[0]}x{s[1]}x{s[2]}")
+            stored += n
+            if stored > MAX_STORED:
+                raise VoxError(f"the models hold more than {MAX_STORED:,} voxels")
+            a = np.frombuffer(buf, np.uint8, 4 * n, cur.pos).reshape(n, 4)
             if n and ((a[:, :3] >= np.array(s)).any()):
                 raise VoxError(f"a voxel outside its model's size {s}")
             models.append(Model(s, a[a[:, 3] != 0]))

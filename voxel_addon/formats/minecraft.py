@@ -65,7 +65,8 @@ class Report:
 
 def regions_of(path) -> list[Path]:
     """The region files of a save folder (both layouts), a folder of .mca files or
-    one .mca file; their headers checked (check_headers)."""
+    one .mca file; their headers checked (check_headers) and a hostile level.dat
+    refused, so that callers learn it before they make anything."""
     path = Path(path)
     if path.is_file():
         if path.suffix != ".mca":
@@ -74,6 +75,7 @@ def regions_of(path) -> list[Path]:
         return [path]
     if not path.is_dir():
         raise VoxelError(f"{path} does not exist")
+    level_version(path)
     for sub in LAYOUTS:
         if (path / sub).is_dir():
             path = path / sub

@@ -88,6 +88,12 @@ def regions_of(path) -> list[Path]:
     return files
 
 
+def _refused(f, e) -> VoxelError:
+    msg = str(e)
+    name = f"{Path(f).name}: "
+    return VoxelError(f"{f}: {msg[len(name):] if msg.startswith(name) else msg}")
+
+
 def check_headers(files) -> None:
     """Refuse damaged or hostile region headers (shared sectors, sectors in the header
     or past the file) reading 8 KiB of each: before anything is written."""
@@ -95,10 +101,7 @@ def check_headers(files) -> None:
         try:
             region.check(f)
         except (OSError, RegionError) as e:
-            msg = str(e)
-            if msg.startswith(f"{Path(f).name}: "):
-                msg = msg[len(Path(f).name) + 2:]
-            raise VoxelError(f"{f}: {msg}") from None
+            raise _refused(f, e) from None
 
 
 def level_version(path) -> int | None:
@@ -203,10 +206,7 @@ def plan(path, area=None) -> list[tuple[Region, int, int]]:
         try:
             reg = Region(f)
         except (OSError, RegionError) as e:
-            msg = str(e)
-            if msg.startswith(f"{Path(f).name}: "):
-                msg = msg[len(Path(f).name) + 2:]
-            raise VoxelError(f"{f}: {msg}") from None
+            raise _refused(f, e) from None
         for cx, cz in reg.chunks():
             if area is not None:
                 x0, z0, x1, z1 = area

@@ -71,3 +71,19 @@ def test_chunk_meshes_carry_colours(backend, request):
         sub = d[16 * k[0]:16 * k[0] + 18, 16 * k[1]:16 * k[1] + 18]
         cell_colors(m.quads, sub)
     assert build_chunks(b, (0, 0))[(0, 0)].colors is None   # no data: as before
+
+
+def test_spliced_region_keeps_colours():
+    """An edit's remesh of some render regions spliced into the old mesh carries the
+    per-vertex colours as a full build does (the colours live beside the packed
+    vertices, so splice must cut them the same way)."""
+    from voxel_addon.meshing import splice
+    b, d = scene(3, w=18, h=18)
+    old = build_chunks(b, (0, 0), data=d)[(0, 0)]
+    b[8, 8, 50], d[8, 8, 50] = COLOR, 7         # a new colour in region 0
+    part = build_chunks(b, (0, 0), data=d, regions=(0, 1))[(0, 0)]
+    full = build_chunks(b, (0, 0), data=d)[(0, 0)]
+    s = splice(old, part, 0, 1)
+    assert np.array_equal(s.vertices, full.vertices) and np.array_equal(s.quads, full.quads)
+    assert s.colors is not None and np.array_equal(s.colors, full.colors)
+    assert 7 in s.colors

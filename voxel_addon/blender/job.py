@@ -165,26 +165,41 @@ class ModalJob:
     def finish(self, context, job) -> None:
         self.report({"INFO"}, f"{len(job.objects)} objects, {job.bake.triangles} triangles")
 
+    def failed(self, context) -> None:
+        """After a failure (the job cancelled): undo what make_job made (a new world file)."""
+
+    def kept(self) -> str:
+        """What stays in the world file after a failure, said after it."""
+        return ""
+
+    def _failed(self, context, e) -> bool:
+        from . import session
+        try:
+            self.failed(context)
+        finally:
+            told = session.refused(self, e, kept=self.kept())
+        return told
+
     def execute(self, context):
-        from ..core.errors import VoxelError
         job = None
         try:
             job = self.make_job(context)
             job.run()
-        except VoxelError as e:
+        except Exception as e:  # noqa: BLE001 - a full disk is one line (session.refused)
             if job is not None:
                 job.cancel()
-            self.report({"ERROR"}, str(e))
+            if not self._failed(context, e):
+                raise
             return {"CANCELLED"}
         self.finish(context, job)
         return {"FINISHED"}
 
     def start(self, context):
-        from ..core.errors import VoxelError
         try:
             job = self.make_job(context)
-        except VoxelError as e:
-            self.report({"ERROR"}, str(e))
+        except Exception as e:  # noqa: BLE001
+            if not self._failed(context, e):
+                raise
             return {"CANCELLED"}
         wm = context.window_manager
         self._runner = Runner(job, context)
@@ -194,7 +209,6 @@ class ModalJob:
         return {"RUNNING_MODAL"}
 
     def modal(self, context, event):
-        from ..core.errors import VoxelError
         if event.type == "ESC":
             self._runner.cancel()
             self._end(context)
@@ -207,10 +221,10 @@ class ModalJob:
         except Exception as e:  # noqa: BLE001 - whatever stops the job, clean up first
             self._runner.cancel()
             self._end(context)
-            if not isinstance(e, VoxelError):
+            if not self._failed(context, e):  # a bug: its traceback, and still one line
                 import traceback
                 traceback.print_exc()
-            self.report({"ERROR"}, str(e))
+                self.report({"ERROR"}, f"{type(e).__name__}: {e}")
             return {"CANCELLED"}
         if not done:
             return {"RUNNING_MODAL"}

@@ -111,5 +111,45 @@ def tell(msg: str, kind: str = "ERROR") -> None:
         pass  # no operator (unregistered): the console line is what is left
 
 
+def refused(op, e: Exception, path: str = "", kept: str = "") -> bool:
+    """Report E on operator OP as one line when it is a user's or the file's failure
+    (a VoxelError; a full disk, a read-only or locked file: core.errors.explain),
+    and say True; False for anything else (a bug: the caller lets it raise)."""
+    from ..core.errors import explain
+    if not path:
+        try:
+            import bpy
+            path = bpy.path.abspath(bpy.context.scene.voxel.path)
+        except AttributeError:
+            path = ""
+    err = explain(e, path or None, "saving", kept)
+    if err is None:
+        return False
+    op.report({"ERROR"}, str(err))
+    return True
+
+
+def discard(path: str) -> list[str]:
+    """Close the world at PATH without saving and remove its file (and -wal, -shm):
+    for a file an operator created and then failed to fill. The names removed."""
+    key = _key(path)
+    w = _worlds.pop(key, None) or unsaved.pop(key, None)
+    if w is not None:
+        try:
+            if w.file.db is not None:
+                w.file.close()  # first: close() then stops its threads without a save
+            w.close()
+        except Exception:  # noqa: BLE001 - the file goes anyway
+            pass
+    gone = []
+    for p in (key, key + "-wal", key + "-shm", key + "-journal"):
+        try:
+            os.remove(p)
+            gone.append(p)
+        except OSError:
+            pass
+    return gone
+
+
 def is_open(path: str) -> bool:
     return bool(path) and _key(path) in _worlds

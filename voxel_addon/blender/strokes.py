@@ -218,7 +218,7 @@ def _reconcile(scene) -> None:
     j, target = _journal, scene.voxel_edit.step
     if j is None or j.applied == target:
         return
-    from ..core.errors import VoxelError
+    from ..core.errors import explain
     try:
         payloads = j.go(session.world, target)
     except KeyError:  # a step from before this session's history: nothing to replay
@@ -226,8 +226,11 @@ def _reconcile(scene) -> None:
         j.nodes.setdefault(target, (None, None, None))
         j.applied = target
         return
-    except VoxelError as e:  # e.g. the world file was deleted: say so, keep Blender's undo going
-        print(f"voxel: cannot follow undo in the world file: {e}")
+    except Exception as e:  # noqa: BLE001 - the file was deleted, is full, locked: say so,
+        err = explain(e, scene.voxel.path)  # keep Blender's undo going
+        if err is None:
+            raise
+        print(f"voxel: cannot follow undo in the world file: {err}")
         return
     show(payloads)
 
@@ -261,14 +264,26 @@ def unregister_handlers() -> None:
             lst.remove(fn)
 
 
+NOT_SAVED = ("the stroke is shown but not in the file; the world saves it when it "
+             "can, at the latest on closing (or keeps it beside the file)")
+
+
+def refused(op, e: Exception) -> bool:
+    """A stroke's failure on OP as one line (session.refused, saying the stroke stays
+    shown and pending); False for a bug."""
+    from . import session
+    return session.refused(op, e, kept=NOT_SAVED)
+
+
 def changed(op, edit) -> set:
-    """An edit operator's result: edit() -> number of blocks changed; a VoxelError is
-    the operator's one-line error, nothing changed cancels (no undo step)."""
-    from ..core.errors import VoxelError
+    """An edit operator's result: edit() -> number of blocks changed; a VoxelError or
+    a file's failure (session.refused) is the operator's one-line error, nothing
+    changed cancels (no undo step)."""
     try:
         n = edit()
-    except VoxelError as e:
-        op.report({"ERROR"}, str(e))
+    except Exception as e:  # noqa: BLE001 - a full disk or locked file: one line too
+        if not refused(op, e):
+            raise
         return {"CANCELLED"}
     if not n:
         op.report({"INFO"}, "nothing changed")

@@ -43,3 +43,10 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+    except Exception as e:  # a full disk, a locked file...: one line too (core.errors)
+        from ..core.errors import explain
+        err = explain(e, getattr(args, "world", None), f"running {args.command} on")
+        if err is None:
+            raise  # a bug: its traceback is what helps
+        print(f"error: {err}", file=sys.stderr)
+        return 2

@@ -34,3 +34,77 @@ class Progress:
 
 def note(msg: str) -> None:
     print(msg, file=sys.stderr, flush=True)
+
+
+class Writing:
+    """Around a command that writes the world file PATH (`with Writing(path, what) as w`,
+    the world opened through `w.own(...)`): on success the world is closed (saved);
+    on a failure nothing more is written, a file this command created is removed
+    (with its -wal and -shm) while one that existed never is, and a full disk, a
+    read-only or locked file becomes one line saying what failed and what was kept
+    (core.errors.explain). `w.kept`: a function saying what is in the file so far
+    (batch-wise commands), None while nothing is."""
+
+    def __init__(self, path, what: str, doing: str = "saving"):
+        self.path, self.what, self.doing = Path(path), what, doing
+        self.new = not any(p.exists() for p in self._files())
+        self.world = None
+        self.kept = lambda: None
+
+    def _files(self) -> list[Path]:
+        return [self.path] + [self.path.with_name(self.path.name + s)
+                              for s in ("-wal", "-shm", "-journal")]
+
+    def own(self, world):
+        self.world = world
+        return world
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, kind, e, tb):
+        if e is None or isinstance(e, KeyboardInterrupt):  # an interrupt keeps what is done
+            try:
+                self._close(save=True)
+            except Exception as e2:  # noqa: BLE001 - the last save failed: same as below
+                self._failed(e2, "saving")
+            return False
+        if isinstance(e, Exception):
+            self._failed(e, self.doing)
+        return False
+
+    def _close(self, save: bool) -> None:
+        w = self.world
+        if w is None:
+            return
+        if save:
+            w.close()
+        elif w.file.db is not None:
+            w.file.close()  # abandon: what is not in the file stays out of it
+        self.world = None
+
+    def _failed(self, e: Exception, doing: str) -> None:
+        from ..core.errors import explain
+        try:
+            self._close(save=False)
+        except Exception:  # noqa: BLE001 - closing a broken file: the first error is the news
+            pass
+        removed = False
+        if self.new:
+            for p in self._files():
+                try:
+                    p.unlink()
+                    removed = True
+                except OSError:  # gone already (or never made)
+                    pass
+            kept = f"nothing was kept ({self.path.name}, which it created, was removed)"
+        else:
+            kept = self.kept()
+            kept = f"{kept}; the rest was not written" if kept else \
+                f"nothing of this {self.what} was written; the world is unchanged"
+        err = explain(e, self.path, doing, kept)
+        if err is e and removed:
+            raise type(e)(f"{e} ({self.path.name}, which it created, was removed)") from None
+        if err is None or err is e:
+            return  # a user mistake says it already; a bug keeps its traceback
+        raise err from None

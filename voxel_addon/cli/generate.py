@@ -4,7 +4,7 @@ from __future__ import annotations
 import time
 
 from ..core.errors import VoxelError
-from .common import Progress, add_world, note
+from .common import Progress, Writing, add_world, note
 
 
 def add_parser(sub):
@@ -27,24 +27,24 @@ def run(args):
     from ..generation import DEFAULT
     if not 0 <= args.radius <= 256:
         raise VoxelError(f"--radius must be between 0 and 256 (got {args.radius})")
-    if args.world.exists():
-        world = World.open(args.world, backend=args.backend, loader=False)
-        if args.seed is not None and args.seed != world.seed:
-            world.close()
-            raise VoxelError(f"{args.world} has seed {world.seed}; a world keeps its seed "
-                             "(use another file for another seed)")
-        if args.generator and args.generator != world.file.generator:
-            world.close()
-            raise VoxelError(f"{args.world} uses generator {world.file.generator!r}, "
-                             f"not {args.generator!r}")
-    else:
+    if not args.world.exists():
         if args.seed is None:
             raise VoxelError("--seed is needed to create a new world")
         if not args.world.parent.is_dir():
             raise VoxelError(f"folder {args.world.parent} does not exist")
-        world = World.create(args.world, seed=args.seed, generator=args.generator or DEFAULT,
-                             backend=args.backend, loader=False)
-    with world:
+    with Writing(args.world, "generation", "generating into") as w:
+        if args.world.exists():
+            world = w.own(World.open(args.world, backend=args.backend, loader=False))
+            if args.seed is not None and args.seed != world.seed:
+                raise VoxelError(f"{args.world} has seed {world.seed}; a world keeps its seed "
+                                 "(use another file for another seed)")
+            if args.generator and args.generator != world.file.generator:
+                raise VoxelError(f"{args.world} uses generator {world.file.generator!r}, "
+                                 f"not {args.generator!r}")
+        else:
+            world = w.own(World.create(args.world, seed=args.seed,
+                                       generator=args.generator or DEFAULT,
+                                       backend=args.backend, loader=False))
         gen = world.generator
         note(f"generator {gen.name}, backend {getattr(gen, 'backend_used', gen.backend)}")
         cx, cy = args.center[0] >> 4, args.center[1] >> 4
@@ -53,7 +53,14 @@ def run(args):
         keys = sorted(((x, y) for x in range(cx - r, cx + r + 1) for y in range(cy - r, cy + r + 1)),
                       key=lambda k: (max(abs(k[0] - cx), abs(k[1] - cy)), k))
         t0 = time.perf_counter()
-        made = world.generate_area(keys, Progress("generating"))
+        show, done = Progress("generating"), [0, 0]
+
+        def progress(n, total):  # what is in the file, should the next batch fail
+            done[:] = n, total
+            show(n, total)
+        w.kept = lambda: f"{done[0]} of {done[1]} new chunks were written and kept" \
+            if done[0] else None
+        made = world.generate_area(keys, progress)
         dt = time.perf_counter() - t0
         note(f"{made} new chunks in {dt:.2f} s, {len(keys) - made} already present; "
              f"{world.file.chunk_count()} chunks in {args.world}")

@@ -7,7 +7,7 @@ import time
 from pathlib import Path
 
 from ..core.errors import VoxelError
-from .common import Progress, add_world, note
+from .common import Progress, Writing, add_world, note
 
 
 def add_parser(sub):
@@ -59,14 +59,19 @@ def run(args):
         from ..formats import minecraft
         minecraft.regions_of(src)
     t0 = time.perf_counter()
-    with _open(args) as world:
+    with Writing(args.world, "import", "importing into") as w:
+        world = w.own(_open(args))
         if is_vox:
             r = magica.import_vox(world, src, args.at)
-            note(f"{r['voxels']} voxels from {r['models']} models ({r['instances']} placed) "
-                 f"into box {' '.join(map(str, r['box']))} in {time.perf_counter() - t0:.2f} s")
-            return 0
-        rep = minecraft.import_world(world, src, y_min=args.y_min, area=args.area,
-                                     replace=args.replace, progress=Progress("importing"))
+        else:
+            rep = minecraft.Report()
+            w.kept = lambda: f"{rep.chunks} chunks were written and kept" if rep.chunks else None
+            minecraft.import_world(world, src, y_min=args.y_min, area=args.area,
+                                   replace=args.replace, progress=Progress("importing"), report=rep)
+    if is_vox:
+        note(f"{r['voxels']} voxels from {r['models']} models ({r['instances']} placed) "
+             f"into box {' '.join(map(str, r['box']))} in {time.perf_counter() - t0:.2f} s")
+        return 0
     dt = time.perf_counter() - t0
     lines = rep.lines()
     lines[0] += f" in {dt:.2f} s ({rep.chunks / max(dt, 1e-9):.0f} chunks/s)"

@@ -63,8 +63,8 @@ def place(world, scene: vox.Scene, at=(0, 0, 0)) -> dict:
     edits and written in one transaction; returns a small report."""
     pal = colors.parse(world.file.meta)
     xyz, data, pal = stamp(scene, at, pal)
-    world.file.set_meta(colors.KEY, colors.dump(pal))
     world.set_blocks(xyz, np.full(len(xyz), COLOR, np.uint16), data)
+    world.file.stage_meta(colors.KEY, colors.dump(pal))  # written with the voxels
     world.flush()
     lo = xyz.min(0).tolist() if len(xyz) else list(at)
     hi = (xyz.max(0) + 1).tolist() if len(xyz) else list(at)

@@ -3,11 +3,14 @@
 Minecraft block (x, y, z) becomes voxel (x, -1-z, y - y_min): not mirrored, north
 (-z) is +y, chunk (cx, cz) is chunk (cx, -cz-1); layers outside z 0..255 are dropped
 and counted. Chunks Minecraft has not finished (Status other than full) are skipped
-and counted; a damaged chunk is skipped with its one-line reason; a hostile file
-(region header with shared sectors, an import budget spent: formats/budget.py) refuses
-the import with one line, its region headers checked before any chunk. Chunks go to the
-file in batches, each one transaction: an interrupted import keeps every finished
-batch, and no chunk is ever half-written.
+and counted; a damaged chunk (one from before 1.13 too) is skipped with its one-line
+reason; a hostile file (a region header with shared sectors, an import budget spent:
+formats/budget.py) refuses the import with one line. What can be checked is checked
+before the first write: region headers and level.dat (when the files are listed),
+chunks already in the world, a level.dat from before 1.13; a world whose chunks are
+all from before 1.13 is refused having written nothing. Chunks go to the file in
+batches, each one transaction (with the palette colours they use): an interrupted
+import keeps every finished batch, and no chunk is ever half-written.
 """
 from __future__ import annotations
 
@@ -151,8 +154,8 @@ class _Palettes:
         return got
 
     def save(self) -> None:
-        if self.changed:
-            self.world.file.set_meta(colors.KEY, colors.dump(self.colors))
+        if self.changed:  # written with the next chunks, in their transaction
+            self.world.file.stage_meta(colors.KEY, colors.dump(self.colors))
             self.changed = False
 
 
@@ -217,11 +220,12 @@ def plan(path, area=None) -> list[tuple[Region, int, int]]:
 
 
 def import_world(world, path, *, y_min=None, area=None, replace=False, progress=None,
-                 cancelled=None) -> Report:
+                 cancelled=None, report: Report | None = None) -> Report:
     """Import the chunks of a save folder / region files into `world` (see the
     module docstring). `progress(done, total)`; `cancelled()` -> True stops after
-    the batch in hand (what was written stays)."""
-    report = Report()
+    the batch in hand (what was written stays); `report` is filled as it goes (what
+    is in the file when it fails)."""
+    report = Report() if report is None else report
     for done, total in steps(world, path, report, y_min=y_min, area=area, replace=replace):
         if progress:
             progress(done, total)
@@ -241,6 +245,11 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False):
                          f"{world.file.path} (imported before, or generated); "
                          "import with --replace (Blender: Replace) to overwrite them")
     version = level_version(path) if Path(path).is_dir() else None
+    if version is not None and version < anvil.V_FLATTENING:  # refused before any write
+        raise VoxelError(f"{Path(path).name}: level.dat has DataVersion {version}, before 1.13 "
+                         "(numeric block ids); open and save the world in Minecraft 1.13 "
+                         "or newer first")
+    old = 0  # chunks from before 1.13: skipped like damaged ones, unless all are
     budget = Budget.of_input(sum(r.stored for r in {id(t[0]): t[0] for t in todo}.values()))
     pal = _Palettes(world, report)
     batch = []
@@ -255,8 +264,7 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False):
             ch = None
         except (RegionError, anvil.ChunkError, nbt.NbtError) as e:
             msg = str(e)
-            if "before 1.13" in msg:
-                raise VoxelError(f"{reg.path.name} chunk ({cx}, {cz}): {msg}") from None
+            old += "before 1.13" in msg
             report.damaged.append(msg if msg.startswith(reg.path.name)
                                   else f"{reg.path.name} chunk ({cx}, {cz}): {msg}")
             ch = None
@@ -277,6 +285,10 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False):
             report.chunks += len(batch)
             batch = []
             yield done, len(todo)
+    if old and old == len(report.damaged) and not (report.chunks or report.unfinished):
+        # nothing written: a world Minecraft never saved in 1.13+ is refused whole
+        raise VoxelError(f"none of the {old} chunks is from Minecraft 1.13 or newer, nothing "
+                         f"was imported ({report.damaged[0]})")
     if report.version is None:
         report.y_min = y_min if y_min is not None else 0
     yield len(todo), len(todo)

@@ -8,6 +8,7 @@ the last committed state: a chunk row is either the old blob or the new one.
 from __future__ import annotations
 
 import json
+import os
 import sqlite3
 import threading
 import time
@@ -17,7 +18,7 @@ import numpy as np
 
 from ..core import chunk as C
 from ..core.blocks import REGISTRY
-from ..core.errors import VoxelError
+from ..core.errors import VoxelError, cause
 from . import codecs
 
 FORMAT_VERSION = 1
@@ -41,6 +42,23 @@ CREATE TABLE IF NOT EXISTS edits(x INTEGER, y INTEGER, z INTEGER, block INTEGER 
 """
 
 
+def lock_timeout() -> float:
+    """Seconds a write waits for another program's transaction on the same file
+    (VOXEL_LOCK_TIMEOUT, default 30) before it fails as locked."""
+    try:
+        return max(0.0, float(os.environ.get("VOXEL_LOCK_TIMEOUT", "30")))
+    except ValueError:
+        return 30.0
+
+
+def _open_error(path: Path, e: sqlite3.DatabaseError) -> VoxelError:
+    """A full disk, a locked or read-only file is not a damaged one: say which."""
+    what = cause(e, path)
+    if what is not None:
+        return VoxelError(f"{what} while opening {path}: nothing was written")
+    return VoxelError(f"{path} is not a readable world file ({e})")
+
+
 class CorruptChunk(VoxelError):
     """A chunk row that cannot be decoded; it is left as it is in the file."""
 
@@ -52,6 +70,7 @@ class WorldFile:
         self.path = Path(path)
         self.readonly = readonly
         self._lock = threading.RLock()
+        self._staged: dict[str, str] = {}  # meta values written by the next save
         if _create is None and not self.path.is_file():
             raise VoxelError(f"no world file at {self.path}")
         if _create is not None and self.path.exists():
@@ -63,7 +82,8 @@ class WorldFile:
                 uri = self.path.resolve().as_uri() + "?mode=ro"
                 self.db = sqlite3.connect(uri, uri=True, check_same_thread=False)
             else:
-                self.db = sqlite3.connect(self.path, check_same_thread=False, timeout=30)
+                self.db = sqlite3.connect(self.path, check_same_thread=False,
+                                          timeout=lock_timeout())
             self.db.isolation_level = None  # explicit BEGIN/COMMIT below
             if _create is not None:
                 self._init(_create)
@@ -72,7 +92,7 @@ class WorldFile:
             file_names = dict(self.db.execute("SELECT id, name FROM block_types"))
             self.db.execute("PRAGMA synchronous=NORMAL")
         except sqlite3.DatabaseError as e:
-            raise VoxelError(f"{self.path} is not a readable world file ({e})") from None
+            raise _open_error(self.path, e) from None
         self._check_version()
         if not readonly and _create is None:
             self.db.execute("PRAGMA journal_mode=WAL")
@@ -165,6 +185,13 @@ class WorldFile:
             self.db.execute("INSERT OR REPLACE INTO meta VALUES (?, ?)", (key, str(value)))
         self.meta[key] = str(value)
 
+    def stage_meta(self, key: str, value: str) -> None:
+        """Set a meta value now (in memory) and write it with the next `save`, in
+        its transaction: a palette goes to the file with the voxels that use it."""
+        self._writable()
+        with self._lock:
+            self.meta[key] = self._staged[key] = str(value)
+
     # ---- transactions -----------------------------------------------------
     def transaction(self):
         return _Transaction(self)
@@ -237,6 +264,8 @@ class WorldFile:
         A row's light (its 6th value) replaces the stored one, None drops it;
         `stale_light`: keys whose stored light no longer holds (dropped too)."""
         with self.transaction():
+            staged = dict(self._staged)
+            self.db.executemany("INSERT OR REPLACE INTO meta VALUES (?, ?)", staged.items())
             self.db.executemany("INSERT OR REPLACE INTO chunks VALUES (?, ?, ?, ?, ?)",
                                 [r[:5] for r in rows])
             self.db.executemany("INSERT OR REPLACE INTO light VALUES (?, ?, ?, ?)",
@@ -248,6 +277,10 @@ class WorldFile:
             self.db.executemany("INSERT OR REPLACE INTO edits VALUES (?, ?, ?, ?, ?, ?)",
                                 [(x, y, z, int(self._to_file[b]), d, now)
                                  for x, y, z, b, d in edits])
+        with self._lock:
+            for k, v in staged.items():  # written: unless staged again meanwhile
+                if self._staged.get(k) == v:
+                    del self._staged[k]
 
     def write_chunks(self, items, codec: str | None = None) -> None:
         """items: (key, blocks, data-or-None) triples."""

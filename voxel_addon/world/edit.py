@@ -336,8 +336,10 @@ def _relight(world, blocks, lit, steps, near, win) -> set:
 
 
 def _same(a, b) -> bool:
+    # colours live beside the packed vertices: a recoloured voxel changes only them
     return a is not None and np.array_equal(a.vertices, b.vertices) and \
-        np.array_equal(a.ranges, b.ranges)
+        np.array_equal(a.ranges, b.ranges) and (a.colors is None) == (b.colors is None) \
+        and (a.colors is None or np.array_equal(a.colors, b.colors))
 
 
 def _mesh(meshing, blocks, origin, keys, regions=None, data=None):

@@ -126,7 +126,6 @@ class VOXEL_OT_edit_stroke(bpy.types.Operator):
         from .. import strokes
         from ...core import brush
         from ...core.blocks import REGISTRY
-        from ...core.errors import VoxelError
         s = context.scene.voxel_edit
         if s.remove:  # the tool setting swaps what a click and a Shift-click do
             self.mode = "PLACE" if self.mode == "REMOVE" else "REMOVE"
@@ -154,8 +153,9 @@ class VOXEL_OT_edit_stroke(bpy.types.Operator):
             self.placed: set = set()
             self.last = None
             self._paint(context, [cell])
-        except VoxelError as e:
-            self.report({"ERROR"}, str(e))
+        except Exception as e:  # noqa: BLE001 - a full disk or locked file: one line too
+            if not strokes.refused(self, e):
+                raise
             return {"CANCELLED"}
         context.window_manager.modal_handler_add(self)
         return {"RUNNING_MODAL"}
@@ -214,7 +214,11 @@ class VOXEL_OT_edit_stroke(bpy.types.Operator):
 
     def _finish(self, context):
         from .. import strokes
-        strokes.finish(self.world)
+        try:
+            strokes.finish(self.world)
+        except Exception as e:  # noqa: BLE001 - not written: said; still shown and undoable
+            if not strokes.refused(self, e):
+                raise
         if not self.rec.voxels:
             return {"CANCELLED"}
         strokes.commit(context.scene, self.rec)
@@ -222,10 +226,7 @@ class VOXEL_OT_edit_stroke(bpy.types.Operator):
 
     def cancel(self, context):
         """Blender ends the drag (its window or file closes): keep what was shown."""
-        from .. import strokes
-        strokes.finish(self.world)
-        if self.rec.voxels:
-            strokes.commit(context.scene, self.rec)
+        self._finish(context)
 
 
 class VOXEL_OT_pick_block(bpy.types.Operator):

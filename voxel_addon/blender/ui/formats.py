@@ -15,10 +15,12 @@ from bpy_extras.io_utils import ExportHelper, ImportHelper
 from ..job import FileJob
 
 
-def target_world(context, source: str, explicit: str = ""):
+def target_world(context, source: str, explicit: str = "", op=None):
     """(world, path) the import writes into: `explicit`, else the scene's world
     file, else a new file named after the source beside it; an empty world (air
-    around what is imported) when it is created here. The scene then shows it."""
+    around what is imported) when it is created here. The scene then shows it.
+    OP (an _IntoWorld operator) remembers a file made here, which its failure
+    removes (`_IntoWorld.failed`)."""
     from .. import session
     s = context.scene.voxel
     path = explicit
@@ -28,6 +30,9 @@ def target_world(context, source: str, explicit: str = ""):
     if not path:
         base = source.rstrip("/\\")
         path = (os.path.splitext(base)[0] if os.path.isfile(base) else base) + ".sqlite"
+    made = not session.is_open(path) and not os.path.exists(bpy.path.abspath(path))
+    if op is not None:
+        op._made = (path, s.path) if made else None
     world = session.world(path, create_seed=0, generator="empty")
     s.path = path
     return world, path
@@ -63,9 +68,25 @@ def _minecraft_steps(world, src, report, **kw):
 
 
 class _IntoWorld:
-    """The imports' target: a world file, or the scene's (target_world)."""
+    """The imports' target: a world file, or the scene's (target_world). A file
+    the import created is removed when it fails; the scene's path goes back."""
     world: StringProperty(name="World File", subtype="FILE_PATH", default="",
                           description="World file to write (empty: the scene's world)")
+    _made = None
+
+    def failed(self, context):
+        from .. import session
+        if self._made:
+            path, before = self._made
+            session.discard(path)
+            context.scene.voxel.path = before
+
+    def kept(self) -> str:
+        r = getattr(self, "_report", None)  # Minecraft: batch by batch
+        if self._made:
+            return f"nothing was kept ({os.path.basename(self._made[0])}, new, was removed)"
+        return f"{r.chunks} chunks were written and kept" if r and r.chunks else \
+            "nothing of this import was written; the world is unchanged"
 
 
 class IMPORT_SCENE_OT_voxel_minecraft(_IntoWorld, FileJob, bpy.types.Operator, ImportHelper):
@@ -108,8 +129,8 @@ class IMPORT_SCENE_OT_voxel_minecraft(_IntoWorld, FileJob, bpy.types.Operator, I
         from ...formats import minecraft
         src = self.source()
         minecraft.regions_of(src)  # one clear line before anything is made
-        world, _ = target_world(context, src, self.world)
         self._report = minecraft.Report()
+        world, _ = target_world(context, src, self.world, self)
         kw = dict(y_min=self.y_min if self.use_y_min else None,
                   area=tuple(self.area) if self.use_area else None, replace=self.replace)
         return _Job(_minecraft_steps(world, src, self._report, **kw), "import")
@@ -150,7 +171,7 @@ class IMPORT_SCENE_OT_voxel_vox(_IntoWorld, FileJob, bpy.types.Operator, ImportH
         from ...formats import magica
         path = bpy.path.abspath(self.filepath)
         magica.read_file(path)  # a bad file is refused before the world opens
-        world, _ = target_world(context, path, self.world)
+        world, _ = target_world(context, path, self.world, self)
         self._out: dict = {}
         return _Job(_vox_steps(world, path, tuple(self.location), self._out), "place")
 
@@ -173,15 +194,15 @@ class EXPORT_SCENE_OT_voxel_vox(bpy.types.Operator, ExportHelper):
                            "(X0, Y0, Z0) becomes the model's origin")
 
     def execute(self, context):
-        from ...core.errors import VoxelError
         from ...formats import magica
         from .. import session
         try:
             world = session.world(context.scene.voxel.path)
             world.flush()  # what the scene shows, edits included
             r = magica.export_vox(world, tuple(self.box), bpy.path.abspath(self.filepath))
-        except VoxelError as e:
-            self.report({"ERROR"}, str(e))
+        except Exception as e:  # noqa: BLE001 - a full disk or locked file: one line too
+            if not session.refused(self, e):
+                raise
             return {"CANCELLED"}
         self.report({"INFO"}, f"{r['voxels']} voxels, {r['colors']} colours, {r['models']} "
                     f"models -> {self.filepath}")
@@ -201,7 +222,7 @@ def stamp_at(context, path: str, cell) -> int:
     size = magica.vox.voxels(scene)[2]
     at = (cell[0] - int(size[0]) // 2, cell[1] - int(size[1]) // 2, cell[2])
     xyz, data, pal = magica.stamp(scene, at, colors.parse(world.file.meta))
-    world.file.set_meta(colors.KEY, colors.dump(pal))  # colours only: not undone
+    world.file.stage_meta(colors.KEY, colors.dump(pal))  # saved with the stroke; not undone
     color = np.full(len(xyz), magica.COLOR)
     return strokes.stroke(context, list(zip(*xyz.T.tolist(), color.tolist(), data.tolist())))
 

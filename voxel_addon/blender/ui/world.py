@@ -40,7 +40,6 @@ class VOXEL_OT_world_new(bpy.types.Operator):
     def execute(self, context):
         import os
         from .. import session
-        from ...core.errors import VoxelError
         s = _settings(context)
         path = bpy.path.abspath(s.path)
         if os.path.exists(path):
@@ -48,8 +47,10 @@ class VOXEL_OT_world_new(bpy.types.Operator):
             return {"CANCELLED"}
         try:
             session.world(s.path, create_seed=s.seed, generator=s.generator)
-        except VoxelError as e:
-            self.report({"ERROR"}, str(e))
+        except Exception as e:  # noqa: BLE001 - a full disk, a read-only folder: one line
+            session.discard(s.path)  # created here: nothing half-made stays
+            if not session.refused(self, e, path):
+                raise
             return {"CANCELLED"}
         self.report({"INFO"}, f"created {path}")
         return {"FINISHED"}
@@ -68,13 +69,13 @@ class VOXEL_OT_world_open(bpy.types.Operator):
 
     def execute(self, context):
         from .. import session
-        from ...core.errors import VoxelError
         s = _settings(context)
         path = self.filepath or s.path
         try:
             w = session.world(path)
-        except VoxelError as e:
-            self.report({"ERROR"}, str(e))
+        except Exception as e:  # noqa: BLE001 - a locked or unreadable file: one line
+            if not session.refused(self, e, bpy.path.abspath(path)):
+                raise
             return {"CANCELLED"}
         s.path = path
         s.seed = int(w.seed)
@@ -94,12 +95,12 @@ class VOXEL_OT_world_recreate(bpy.types.Operator):
 
     def execute(self, context):
         from .. import session
-        from ...core.errors import VoxelError
         s = _settings(context)
         try:
             session.world(s.path).recreate(keep_edits=s.keep_edits)
-        except VoxelError as e:
-            self.report({"ERROR"}, str(e))
+        except Exception as e:  # noqa: BLE001 - a full disk or locked file: one line
+            if not session.refused(self, e):
+                raise
             return {"CANCELLED"}
         return {"FINISHED"}
 

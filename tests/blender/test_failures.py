@@ -1,0 +1,87 @@
+"""Blender operators that write, on a world file another process holds locked (a
+real `BEGIN IMMEDIATE` in a child process, VOXEL_LOCK_TIMEOUT short): each ends with
+one ERROR report naming the failure and what was kept, never a Python traceback;
+an import that created its world file and failed removes it (issue 26)."""
+from __future__ import annotations
+
+import sqlite3
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from tests.formats import mcfiles as mc
+from tests.formats import voxfiles as vf
+
+
+@pytest.fixture
+def world(tmp_path):
+    from voxel_addon.world import World
+    path = tmp_path / "w.sqlite"
+    with World.create(path, seed=3, generator="flat", loader=False) as w:
+        w.chunk_at(0, 0)
+    return path
+
+
+@pytest.fixture
+def locked(world, monkeypatch):
+    """WORLD held by another process's write transaction while the test runs."""
+    monkeypatch.setenv("VOXEL_LOCK_TIMEOUT", "0.2")
+    p = subprocess.Popen(
+        [sys.executable, "-c", "import sqlite3, sys, time\n"
+         "db = sqlite3.connect(sys.argv[1], isolation_level=None)\n"
+         "db.execute('BEGIN IMMEDIATE'); print('held', flush=True); time.sleep(120)",
+         str(world)], stdout=subprocess.PIPE, text=True)
+    assert p.stdout.readline().strip() == "held"
+    yield world
+    p.kill()
+    p.wait()
+
+
+def _one_line(exc) -> str:
+    msg = str(exc.value)
+    assert "Traceback" not in msg and "locked by another program" in msg, msg
+    return msg
+
+
+def test_writing_operators_report_one_line(addon, locked):
+    bpy = addon
+    from voxel_addon.blender import session
+    from voxel_addon.core import colors
+    bpy.context.scene.voxel.path = str(locked)
+    session.world(str(locked))  # opened before: reading needs no lock
+    with pytest.raises(RuntimeError) as e:
+        bpy.ops.voxel.edit(location=(3, 4, 70), block="glass")
+    assert "shown but not in the file" in _one_line(e)
+    s = bpy.context.scene.voxel_bake
+    s.region_min, s.region_max = (160, 160), (200, 200)  # not generated yet
+    with pytest.raises(RuntimeError) as e:
+        bpy.ops.voxel.generate()
+    _one_line(e)
+    src = locked.parent / "m.vox"
+    src.write_bytes(vf.file(vf.model((2, 2, 2), [(0, 0, 0, 5), (1, 1, 1, 9)])
+                            + vf.rgba(np.full((255, 3), 77))))
+    with pytest.raises(RuntimeError) as e:
+        bpy.ops.import_scene.voxel_vox(filepath=str(src), location=(0, 0, 80))
+    assert "nothing of this import was written" in _one_line(e)
+    with pytest.raises(RuntimeError) as e:
+        bpy.ops.voxel.world_recreate()
+    _one_line(e)
+    db = sqlite3.connect(f"file:{locked}?mode=ro", uri=True)
+    assert db.execute("SELECT COUNT(*) FROM meta WHERE key=?", (colors.KEY,)).fetchone()[0] == 0
+    assert db.execute("SELECT COUNT(*) FROM edits").fetchone()[0] == 0
+    db.close()
+
+
+def test_a_failed_import_removes_the_world_it_created(addon, tmp_path):
+    bpy = addon
+    save = tmp_path / "Old World"
+    old = mc.nbt({"DataVersion": 1343, "Level": {"xPos": 0, "zPos": 0}})
+    mc.write_region(save / "region", {(x, 0): old for x in range(3)})
+    bpy.context.scene.voxel.path = ""
+    with pytest.raises(RuntimeError) as e:
+        bpy.ops.import_scene.voxel_minecraft(filepath=str(save / "region" / "r.0.0.mca"))
+    assert "1.13" in str(e.value) and "Traceback" not in str(e.value)
+    assert sorted(p.name for p in (save / "region").iterdir()) == ["r.0.0.mca"]  # no r.0.0.sqlite*
+    assert bpy.context.scene.voxel.path == ""

@@ -118,18 +118,18 @@ def world_bytes(tmp_path_factory):
 def test_cli_refuses_with_one_line(tmp_path, world_bytes, case):
     write, early = CASES[case]
     src = write(tmp_path)
-    w = tmp_path / "w.sqlite"
-    if not early:  # refused after the world file opened: it must be as it was
-        w.write_bytes(world_bytes)
-    rc, out, err, rss, dt = cli(w, src)
-    assert rc == 2, (case, rc, out, err[-2000:])
-    assert err.startswith("error: ") and err.count("\n") == 1, err[-2000:]
-    assert rss < 600 * MIB, (case, rss >> 20)
-    assert dt < 10, (case, dt)
-    if early:      # refused before a world file is made or opened
-        assert not w.exists()
-    else:
-        assert hashlib.sha256(w.read_bytes()).digest() == hashlib.sha256(world_bytes).digest()
+    new, old = tmp_path / "new.sqlite", tmp_path / "old.sqlite"
+    old.write_bytes(world_bytes)
+    # early: refused before a world file is made or opened; else refused after the file
+    # opened, a new one removed again (cli/importer.py) and an old one as it was
+    for w in ([new] if early else [new, old]):
+        rc, out, err, rss, dt = cli(w, src)
+        assert rc == 2, (case, rc, out, err[-2000:])
+        assert err.startswith("error: ") and err.count("\n") == 1, err[-2000:]
+        assert rss < 600 * MIB, (case, rss >> 20)
+        assert dt < 10, (case, dt)
+    assert sorted(p.name for p in tmp_path.glob("*.sqlite*")) == ["old.sqlite"]
+    assert hashlib.sha256(old.read_bytes()).digest() == hashlib.sha256(world_bytes).digest()
 
 
 # ---- the decoders' limits -----------------------------------------------------------

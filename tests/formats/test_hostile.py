@@ -58,24 +58,34 @@ def _vox(tmp, data: bytes) -> Path:
     return tmp / "m.vox"
 
 
-# name -> (writer of the source in a folder, refused before the world file is opened)
+# name -> (writer of the source in a folder, the refusal's words, refused before the
+# world file is opened)
 CASES = {
-    "aliased zlib bomb": (lambda t: _save(t, H.aliased(H.zlib_bomb(64 * MIB), 2)), True),
-    "aliased slow LZ4 block": (lambda t: _save(t, H.aliased(H.slow_lz4(), 4)), True),
-    "aliased 32 MiB NBT": (lambda t: _save(t, H.aliased(zlib.compress(H.big_nbt(), 9), 2)), True),
-    "30M tiny tags kept": (lambda t: _save(t, H.one_chunk(H.tag_bomb())), False),
-    "30M tiny tags skipped": (lambda t: _save(t, H.one_chunk(H.tag_bomb(key="x"))), False),
-    "NBT 100k levels deep": (lambda t: _save(t, H.one_chunk(H.deep_chunk(100_000))), False),
+    "aliased zlib bomb": (lambda t: _save(t, H.aliased(H.zlib_bomb(64 * MIB), 2)),
+                          "share sector 2", True),
+    "aliased slow LZ4 block": (lambda t: _save(t, H.aliased(H.slow_lz4(), 4)),
+                               "share sector 2", True),
+    "aliased 32 MiB NBT": (lambda t: _save(t, H.aliased(zlib.compress(H.big_nbt(), 9), 2)),
+                           "share sector 2", True),
+    "30M tiny tags kept": (lambda t: _save(t, H.one_chunk(H.tag_bomb())),
+                           "more than 524,288 NBT tags in one chunk", False),
+    "30M tiny tags skipped": (lambda t: _save(t, H.one_chunk(H.tag_bomb(key="x"))),
+                              "more than 524,288 NBT tags in one chunk", False),
+    "NBT 100k levels deep": (lambda t: _save(t, H.one_chunk(H.deep_chunk(100_000))),
+                             "deeper than 512", False),
     "level.dat of 60M tags": (lambda t: _save(t, H.one_chunk(H.good_chunk()), H.level_bomb()),
-                              True),
+                              "inflates past 16 MiB", True),
     "level.dat of 15M tags": (lambda t: _save(t, H.one_chunk(H.good_chunk()),
-                                              H.level_bomb(15_000_000)), True),
-    "vox group of 130k children": (lambda t: _vox(t, H.wide_group()), True),
-    "vox group of 60k same children": (lambda t: _vox(t, H.wide_group(60_000)), True),
-    "vox binary tree of one node": (lambda t: _vox(t, H.binary_tree()), True),
-    "vox cycle": (lambda t: _vox(t, H.cycle()), True),
-    "vox 30k instances": (lambda t: _vox(t, H.instances()), True),
-    "vox 4k instances of 4096": (lambda t: _vox(t, H.instances(4096, 16)), True),
+                                              H.level_bomb(15_000_000)),
+                              "more than 262,144 NBT tags", True),
+    "vox group of 130k children": (lambda t: _vox(t, H.wide_group()), "130000 children", True),
+    "vox group of 60k same children": (lambda t: _vox(t, H.wide_group(60_000)),
+                                       "reaches node 2 twice", True),
+    "vox binary tree of one node": (lambda t: _vox(t, H.binary_tree()), "twice", True),
+    "vox cycle": (lambda t: _vox(t, H.cycle()), "reaches node 1 twice", True),
+    "vox 30k instances": (lambda t: _vox(t, H.instances()), "1,048,576 voxels", True),
+    "vox 4k instances of 4096": (lambda t: _vox(t, H.instances(4096, 16)), "1,048,576 voxels",
+                                 True),
 }
 
 
@@ -88,7 +98,7 @@ def cli(world: Path, src: Path):
     """(exit code, stdout, stderr, peak RSS in bytes, seconds) of the real CLI, killed
     after 60 s."""
     env = dict(os.environ, PYTHONPATH=str(ROOT), OPENBLAS_NUM_THREADS="1")
-    out, err = world.parent / "out.txt", world.parent / "err.txt"
+    out, err = src.parent / "out.txt", src.parent / "err.txt"
     t0 = time.perf_counter()
     with open(out, "wb") as o, open(err, "wb") as e:
         p = subprocess.Popen([sys.executable, "-m", "voxel_addon", "import", "--world",
@@ -116,16 +126,18 @@ def world_bytes(tmp_path_factory):
 
 @pytest.mark.parametrize("case", list(CASES))
 def test_cli_refuses_with_one_line(tmp_path, world_bytes, case):
-    write, early = CASES[case]
+    write, words, early = CASES[case]
     src = write(tmp_path)
     new, old = tmp_path / "new.sqlite", tmp_path / "old.sqlite"
     old.write_bytes(world_bytes)
-    # early: refused before a world file is made or opened; else refused after the file
-    # opened, a new one removed again (cli/importer.py) and an old one as it was
-    for w in ([new] if early else [new, old]):
+    # early: refused before a world file is opened (into a missing folder, which the
+    # world's opening would name instead); else after, a new file removed again
+    # (cli/importer.py) and an old one as it was
+    for w in ([tmp_path / "missing" / "w.sqlite"] if early else [new, old]):
         rc, out, err, rss, dt = cli(w, src)
         assert rc == 2, (case, rc, out, err[-2000:])
         assert err.startswith("error: ") and err.count("\n") == 1, err[-2000:]
+        assert words in err, err
         assert rss < 600 * MIB, (case, rss >> 20)
         assert dt < 10, (case, dt)
     assert sorted(p.name for p in tmp_path.glob("*.sqlite*")) == ["old.sqlite"]

@@ -22,6 +22,21 @@ def add_arguments(parser) -> None:
                    help="run on an existing Dask cluster (dask scheduler / dask worker)")
 
 
+def check_writable(args, path=None) -> None:
+    """Before a cluster starts: a world file (or, for a new one, its folder) this
+    process cannot write is refused now, with nothing started or changed."""
+    import os
+    if getattr(args, "workers", None) is None and not getattr(args, "scheduler", None):
+        return  # one process: the command's own checks, as before
+    path = Path(path or args.world)
+    folder = path.parent if str(path.parent) else Path(".")
+    if path.exists() and not os.access(path, os.W_OK):
+        raise VoxelError(f"{path} is not writable")
+    if folder.is_dir() and not os.access(folder, os.W_OK | os.X_OK):
+        raise VoxelError(f"folder {folder} is not writable (the world file needs its "
+                         "journal beside it)")
+
+
 def version() -> str:
     """The package's code as the workers must share it: a digest of every module's
     source (bit-identical results need identical code, not just a version number)."""

@@ -92,7 +92,7 @@ def session(args, say=_say):
         else:
             from distributed import LocalCluster
             cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                   dashboard_address=None, silence_logs=logging.ERROR)
+                                   dashboard_address=":0", silence_logs=logging.CRITICAL)
             client = Client(cluster)
         _check_versions(client, address or "the local cluster")
         yield Pool(client)

@@ -297,10 +297,14 @@ class Encoder:
     def row(self, key, blocks, data=None, light=None) -> tuple:
         codec = self.codec
         ids = blocks if self.to_file is None else self.to_file[blocks]
-        dblob = None if data is None or not data.any() else codecs.encode(codec, C.to_linear(data))
         lblob = None if light is None else codecs.encode(codec, C.to_linear(light))
-        return (int(key[0]), int(key[1]), codec, codecs.encode(codec, C.to_linear(ids)), dblob,
-                lblob)
+        return (int(key[0]), int(key[1]), codec, codecs.encode(codec, C.to_linear(ids)),
+                self.data(data), lblob)
+
+    def data(self, data):
+        """A row's data blob (None when there are no data values)."""
+        return None if data is None or not data.any() else \
+            codecs.encode(self.codec, C.to_linear(data))
 
 
 class _Transaction:

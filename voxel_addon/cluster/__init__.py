@@ -166,18 +166,16 @@ class Pool:
     def map(self, fn, items, *, shared=None, progress=None, window=None):
         """Run fn(item, shared) on the workers for each item (fn: a module-level function
         importable from voxel_addon on the workers); `shared`: a dict broadcast once to
-        every worker; yields (item, result) as tasks complete. At most WINDOW tasks are
+        every worker; yields (item, result) as tasks complete. ITEMS may be a lazy
+        iterable (read as tasks go out; progress then needs len). At most WINDOW tasks are
         in flight (default 4 per worker thread), so results never pile up faster than the
         caller consumes them. A worker killed mid-job costs only its tasks (Dask re-runs
         them elsewhere); leaving the loop early (an error, Ctrl-C) cancels the rest."""
         from distributed import as_completed
         from distributed.client import FutureCancelledError  # noqa: F401 - raised by gather
-        items = list(items)
-        total = len(items)
-        if progress:
+        total = len(items) if hasattr(items, "__len__") else None
+        if progress and total is not None:
             progress(0, total)
-        if not total:
-            return
         c = self.client
         share = c.scatter([shared], broadcast=True, hash=False)[0] if shared is not None else None
         window = window or 4 * self.size
@@ -205,7 +203,7 @@ class Pool:
                     f.release()
                     done += 1
                     yield item, r
-                if progress:
+                if progress and total is not None:
                     progress(done, total)
                 submit(len(batch))
         finally:
@@ -213,6 +211,20 @@ class Pool:
                 c.cancel(list(of))
             if share is not None:
                 share.release()
+
+
+class Serial:
+    """Pool.map in this process, one item after another (the commands' one-process
+    path where it shares the cluster's code: the same tasks, the same results)."""
+
+    size = 1
+
+    def map(self, fn, items, *, shared=None, progress=None, window=None):
+        total = len(items) if hasattr(items, "__len__") else None
+        for done, item in enumerate(items, 1):
+            yield item, fn(item, shared)
+            if progress and total is not None:
+                progress(done, total)
 
 
 def _gather(client, futures):

@@ -11,6 +11,8 @@ import time
 
 import numpy as np
 
+from . import knob
+
 COMMIT = 16    # tiles per transaction (or what arrived within COMMIT_S)
 COMMIT_S = 1.0
 
@@ -102,6 +104,7 @@ def run(world, pool, x, y, far, near=0, backend=None, progress=None) -> tuple[in
 
     shared = {"generator": (gen.name, gen.seed, gen.params, backend)}
     buf, done, t = [], 0, time.monotonic()
+    every = knob("COMMIT", COMMIT)
 
     def commit():
         nonlocal buf, done, t
@@ -118,7 +121,7 @@ def run(world, pool, x, y, far, near=0, backend=None, progress=None) -> tuple[in
     try:
         for item, a in pool.map(build, items(), shared=shared):
             buf.append((item[0], a))
-            if len(buf) >= COMMIT or time.monotonic() - t > COMMIT_S:
+            if len(buf) >= every or time.monotonic() - t > COMMIT_S:
                 commit()
     finally:
         commit()

@@ -111,14 +111,14 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
         if skip(i, minecraft.to_key(cx, cz)):
             continue
         try:
-            kind, body = reg.raw(cx, cz)
+            reg.raw(cx, cz)
         except External:
             local[i] = ("external",)
             continue
         except RegionError as e:
             local[i] = ("damaged", str(e))
             continue
-        plan.append((i, (reg.path.name, cx, cz, kind, bytes(body))))
+        plan.append((i, reg, cx, cz))
     version = minecraft.level_version(path) if Path(path).is_dir() else None
     if version is None:
         version = _first_version(todo)
@@ -127,15 +127,21 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
         (-64 if version >= anvil.V_NO_LEVEL else 0) if version is not None else 0)
     shared = {"y_min": report.y_min, "encoder": f.encoder()}
     step = task_size(len(plan), pool.size, most=64)  # a chunk is quick here: bigger tasks
-    tasks = [tuple(plan[j:j + step]) for j in range(0, len(plan), step)]
+
+    def tasks():  # the bytes are copied as tasks go out, not all at once
+        for j in range(0, len(plan), step):
+            yield tuple((i, (reg.path.name, cx, cz, kind, bytes(body)))
+                        for i, reg, cx, cz in plan[j:j + step]
+                        for kind, body in [reg.raw(cx, cz)])
+
     f.set_meta(JOB, json.dumps({"sig": sig, "done": start}))
     w = _Writer(world, report, sig, progress, len(plan) + len(local))
-    order = sorted([i for i, _ in plan] + list(local))
+    order = sorted([p[0] for p in plan] + list(local))
     ready: dict = dict(local)
     computed, pos = 0, 0
     every = knob("COMMIT", COMMIT)
     try:
-        for task, results in pool.map(read, tasks, shared=shared):
+        for task, results in pool.map(read, tasks(), shared=shared):
             computed += len(task)
             for (i, _), r in zip(task, results):
                 ready[i] = r

@@ -1,10 +1,11 @@
 """generate, import and far on a real Dask cluster (issue 27): a `dask scheduler` and
 two `dask worker` processes on 127.0.0.1, the commands as real subprocesses. Every
 output is compared with the one-process run of the same command (chunk blobs, far
-tiles, the colour palette, the import report), also when a worker is SIGKILLed mid-job
-and when the command itself is SIGKILLed (or stopped with Ctrl-C) and run again (then
-the second run must compute only what the first did not commit). Bad addresses, an unreachable scheduler,
-a worker without the package and an unwritable world: one line, exit 2, no change."""
+tiles, the colour palette, the import report), also when a worker is SIGKILLed
+mid-job and when the command itself is SIGKILLed (or stopped with Ctrl-C) and run
+again (then the second run must compute only what the first did not commit). Bad
+addresses, an unreachable scheduler, a worker without the package and an unwritable
+world: one line, exit 2, no change."""
 from __future__ import annotations
 
 import json

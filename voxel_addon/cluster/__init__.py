@@ -48,12 +48,17 @@ def check_writable(args, path=None) -> None:
 
 
 def version() -> str:
-    """The package's code as the workers must share it: a digest of every module's
-    source (bit-identical results need identical code, not just a version number)."""
+    """The code as the workers must share it: a digest of every module's source and
+    of the NumPy and zstandard versions (bit-identical results need identical code,
+    not just a version number, and the same compressor)."""
+    import numpy
+    from ..storage import codecs
     h = hashlib.sha256()
     root = Path(__file__).resolve().parent.parent
     for p in sorted(root.rglob("*.py")):
         h.update(p.relative_to(root).as_posix().encode() + b"\0" + p.read_bytes() + b"\0")
+    zstd = getattr(codecs, "_zstd", None)
+    h.update(f"numpy {numpy.__version__} zstandard {getattr(zstd, '__version__', None)}".encode())
     return h.hexdigest()[:12]
 
 
@@ -97,10 +102,13 @@ def session(args, say=_say):
             client = _connect(Client, address)
         else:
             from distributed import LocalCluster
-            with _children_ignore_sigint():
-                cluster = LocalCluster(n_workers=workers, threads_per_worker=1,
-                                       processes=True, dashboard_address=":0",
-                                       silence_logs=logging.CRITICAL)
+            try:
+                with _children_ignore_sigint():
+                    cluster = LocalCluster(n_workers=workers, threads_per_worker=1,
+                                           processes=True, dashboard_address=":0",
+                                           silence_logs=logging.CRITICAL)
+            except Exception as e:  # noqa: BLE001 - no workers to run on: say why, once
+                raise VoxelError(f"cannot start {workers} local Dask workers: {e}") from None
             client = Client(cluster)
         _check_versions(client, address or "the local cluster")
         if address:
@@ -176,7 +184,8 @@ def _check_versions(client, where: str) -> None:
         client.close()
         w, v = sorted(bad.items())[0]
         v = v if isinstance(v, str) else f"{type(v).__name__}: {v}"
-        what = v if v.startswith("no voxel_addon") else f"voxel_addon {v}, this is {mine}"
+        what = v if v.startswith("no voxel_addon") else \
+            f"other code (voxel_addon sources, NumPy or zstandard: {v}, here {mine})"
         raise VoxelError(f"{len(bad)} of {len(theirs)} workers of {where} cannot run this "
                          f"command: worker {w} has {what} (install the same voxel_addon or "
                          "put its checkout on the worker's PYTHONPATH)")

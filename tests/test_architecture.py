@@ -101,3 +101,18 @@ def test_the_check_can_fail():
             "from voxel_addon import light\nfrom . import chunk\n")
     assert imports(PKG / "core" / "probe.py", text) == {"world", "render", "light", "core"}
     assert "world" not in table()["core"] and table()["cli"]["blender"] == "bake.py"
+
+
+def test_only_cluster_imports_dask():
+    """The Blender extension does not carry Dask: only voxel_addon/cluster/ imports it."""
+    bad = []
+    for path in sorted(PKG.rglob("*.py")):
+        if unit_of(path) == "cluster":
+            continue
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import) else
+                     [node.module or ""] if isinstance(node, ast.ImportFrom) and not node.level
+                     else [])
+            if any(n.split(".")[0] in ("dask", "distributed") for n in names):
+                bad.append(str(path.relative_to(ROOT)))
+    assert not bad, f"only voxel_addon/cluster/ may import Dask: {bad}"

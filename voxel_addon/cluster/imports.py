@@ -64,11 +64,11 @@ def read(item, shared):
     ("damaged", message, before 1.13?) or ("hostile", message)."""
     from ..formats import anvil, minecraft, nbt
     from ..formats.budget import Budget, Exceeded
-    from ..formats.region import RegionError, unpack
+    from ..formats.region import MAX_NBT, RegionError, unpack
     out = []
     for _, (name, cx, cz, kind, body) in item:
         where = f"{name} chunk ({cx}, {cz})"
-        b = Budget.of_input(0)  # only the per-chunk limits bind; the writer charges the rest
+        b = Budget(MAX_NBT, anvil.CHUNK_TAGS)  # the per-chunk limits; the writer charges the rest
         try:
             ch = anvil.read(unpack(name, cx, cz, kind, body, b), b)
         except Exceeded as e:  # nbt.Hostile too: refuses the import, as in one process

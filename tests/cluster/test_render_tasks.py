@@ -1,0 +1,110 @@
+"""bake --per tile --out DIR (and animate) in one process and on a real Dask cluster:
+the same files, a killed worker costs only its tasks, a killed command resumes."""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+REGION = ("-40", "-40", "40", "40")  # 2x2 tiles: 64x64, 16x64, 64x16, 16x16 columns
+TILES = {f"tile_{x}_{y}.glb" for x in (-40, 24) for y in (-40, 24)}
+
+
+def cli(*args, wait=True):
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    cmd = [sys.executable, "-m", "voxel_addon", *map(str, args)]
+    if not wait:
+        return subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                text=True, start_new_session=True)
+    return subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=300)
+
+
+def files(d: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted(d.iterdir())}
+
+
+@pytest.fixture(scope="module")
+def world(tmp_path_factory):
+    from voxel_addon.world import World
+    p = tmp_path_factory.mktemp("w") / "w.sqlite"
+    with World.create(p, seed=5, backend="numpy", loader=False) as w:
+        w.generate_area([(x, y) for x in range(-3, 3) for y in range(-3, 3)])
+        w.set_block(20, 20, 120, "lamp_red")  # light that crosses the tile edge at x=24
+    return p
+
+
+def bake(world, out, *more, wait=True):
+    return cli("bake", "--world", world, "--region", *REGION, "--per", "tile", "--out", out,
+               *more, wait=wait)
+
+
+@pytest.fixture(scope="module")
+def baked(world, tmp_path_factory):
+    """The one-process tiles."""
+    out = tmp_path_factory.mktemp("ref") / "tiles"
+    r = bake(world, out)
+    assert r.returncode == 0, r.stderr
+    got = files(out)
+    assert set(got) == TILES
+    return got
+
+
+def test_bake_on_a_scheduler_equals_one_process(baked, world, cluster, tmp_path):
+    r = bake(world, tmp_path / "t", "--scheduler", cluster.address)
+    assert r.returncode == 0, r.stderr
+    assert files(tmp_path / "t") == baked
+
+
+def test_bake_on_local_workers_equals_one_process(baked, world, tmp_path):
+    r = bake(world, tmp_path / "t", "--workers", "2")
+    assert r.returncode == 0, r.stderr
+    assert files(tmp_path / "t") == baked
+
+
+def _busy_worker(client, prefix, timeout=60.0):
+    """The address of a worker running a task whose key starts with `prefix`."""
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < timeout:
+        for addr, keys in client.processing().items():
+            if any(str(k).startswith(prefix) for k in keys):
+                return addr
+        time.sleep(0.02)
+    raise AssertionError(f"no worker ran a {prefix} task within {timeout} s")
+
+
+def test_bake_survives_a_killed_worker(baked, world, cluster, tmp_path):
+    with cluster.client() as c:
+        p = bake(world, tmp_path / "t", "--scheduler", cluster.address, wait=False)
+        victim = _busy_worker(c, "tile_glb")
+        pid = c.run(os.getpid, workers=[victim])[victim]
+        os.kill(pid, signal.SIGKILL)
+        _, err = p.communicate(timeout=120)
+        assert p.returncode == 0, err
+        assert files(tmp_path / "t") == baked
+    cluster.wait_workers(2)  # the nanny starts it again for the next test
+
+
+def test_bake_killed_then_run_again_does_only_the_rest(baked, world, cluster, tmp_path):
+    out = tmp_path / "t"
+    p = bake(world, out, "--scheduler", cluster.address, wait=False)
+    t0 = time.monotonic()
+    while not any(out.glob("*.glb")) and p.poll() is None:
+        assert time.monotonic() - t0 < 120
+        time.sleep(0.01)
+    os.killpg(p.pid, signal.SIGKILL)
+    p.wait()
+    kept = {q.name: q.stat() for q in out.glob("*.glb")}
+    assert 1 <= len(kept) < len(TILES)  # killed mid-job
+    assert all(files(out)[n] == baked[n] for n in kept)  # what is there is complete
+    r = bake(world, out, "--scheduler", cluster.address)
+    assert r.returncode == 0, r.stderr
+    assert f"{len(TILES) - len(kept)} tiles written, {len(kept)} already there" in r.stderr
+    assert {n: v for n, v in files(out).items() if not n.startswith(".")} == baked
+    for n, st in kept.items():  # not written again
+        assert (out / n).stat().st_mtime_ns == st.st_mtime_ns

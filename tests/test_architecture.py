@@ -91,8 +91,7 @@ def test_every_allowed_dependency_is_used():
             files = used.get(unit, {}).get(dep, set())
             if not files or (only is not None and not set(only) <= files):
                 limit = f" ({'; '.join(only)} only)" if only else ""
-            stale.append(f"{unit} may import {dep}{limit}: "
-                             "nothing does")
+                stale.append(f"{unit} may import {dep}{limit}: nothing does")
     assert not stale, "\n".join(stale)
 
 
@@ -101,4 +100,19 @@ def test_the_check_can_fail():
     text = ("def f():\n    from ..world import World\n    import voxel_addon.render.camera\n"
             "from voxel_addon import light\nfrom . import chunk\n")
     assert imports(PKG / "core" / "probe.py", text) == {"world", "render", "light", "core"}
-    assert "world" not in table()["core"] and table()["cli"]["blender"] == "bake.py"
+    assert "world" not in table()["core"] and table()["cli"]["blender"] == ["bake.py", "animate.py"]
+
+
+def test_only_cluster_imports_dask():
+    """The Blender extension does not carry Dask: only voxel_addon/cluster/ imports it."""
+    bad = []
+    for path in sorted(PKG.rglob("*.py")):
+        if unit_of(path) == "cluster":
+            continue
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import) else
+                     [node.module or ""] if isinstance(node, ast.ImportFrom) and not node.level
+                     else [])
+            if any(n.split(".")[0] in ("dask", "distributed") for n in names):
+                bad.append(str(path.relative_to(ROOT)))
+    assert not bad, f"only voxel_addon/cluster/ may import Dask: {bad}"

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import time
 
+from .. import cluster
 from ..core.errors import VoxelError
 from .common import Progress, add_world, note
 
@@ -19,32 +20,21 @@ def add_parser(sub):
     p.add_argument("--generator", help="overworld (default) or flat; new worlds only")
     p.add_argument("--backend", choices=BACKENDS,
                    help="generation backend (default: OpenCL when a device is present)")
+    cluster.add_arguments(p)
     return p
 
 
 def run(args):
-    from ..world import World
-    from ..generation import DEFAULT
     if not 0 <= args.radius <= 256:
         raise VoxelError(f"--radius must be between 0 and 256 (got {args.radius})")
-    if args.world.exists():
-        world = World.open(args.world, backend=args.backend, loader=False)
-        if args.seed is not None and args.seed != world.seed:
-            world.close()
-            raise VoxelError(f"{args.world} has seed {world.seed}; a world keeps its seed "
-                             "(use another file for another seed)")
-        if args.generator and args.generator != world.file.generator:
-            world.close()
-            raise VoxelError(f"{args.world} uses generator {world.file.generator!r}, "
-                             f"not {args.generator!r}")
-    else:
+    if not args.world.exists():
         if args.seed is None:
             raise VoxelError("--seed is needed to create a new world")
         if not args.world.parent.is_dir():
             raise VoxelError(f"folder {args.world.parent} does not exist")
-        world = World.create(args.world, seed=args.seed, generator=args.generator or DEFAULT,
-                             backend=args.backend, loader=False)
-    with world:
+    cluster.check_writable(args)
+    # the cluster first: an unreachable one leaves no file created or changed
+    with cluster.session(args) as pool, _open(args) as world:
         gen = world.generator
         note(f"generator {gen.name}, backend {getattr(gen, 'backend_used', gen.backend)}")
         cx, cy = args.center[0] >> 4, args.center[1] >> 4
@@ -53,7 +43,30 @@ def run(args):
         keys = sorted(((x, y) for x in range(cx - r, cx + r + 1) for y in range(cy - r, cy + r + 1)),
                       key=lambda k: (max(abs(k[0] - cx), abs(k[1] - cy)), k))
         t0 = time.perf_counter()
-        made = world.generate_area(keys, Progress("generating"))
+        if pool is None:
+            made = world.generate_area(keys, Progress("generating"))
+        else:
+            from ..cluster import generate
+            made, computed = generate.run(world, pool, keys, args.backend, Progress("generating"))
+            note(f"workers computed {computed} chunks")
         dt = time.perf_counter() - t0
         note(f"{made} new chunks in {dt:.2f} s, {len(keys) - made} already present; "
              f"{world.file.chunk_count()} chunks in {args.world}")
+
+
+def _open(args):
+    from ..generation import DEFAULT
+    from ..world import World
+    if not args.world.exists():
+        return World.create(args.world, seed=args.seed, generator=args.generator or DEFAULT,
+                            backend=args.backend, loader=False)
+    world = World.open(args.world, backend=args.backend, loader=False)
+    if args.seed is not None and args.seed != world.seed:
+        world.close()
+        raise VoxelError(f"{args.world} has seed {world.seed}; a world keeps its seed "
+                         "(use another file for another seed)")
+    if args.generator and args.generator != world.file.generator:
+        world.close()
+        raise VoxelError(f"{args.world} uses generator {world.file.generator!r}, "
+                         f"not {args.generator!r}")
+    return world

@@ -67,6 +67,11 @@ class Region:
 
     def payload(self, cx: int, cz: int) -> bytes:
         """The chunk's NBT bytes; RegionError when it cannot be had."""
+        return unpack(self.path.name, cx, cz, *self.raw(cx, cz))
+
+    def raw(self, cx: int, cz: int) -> tuple[int, memoryview]:
+        """(compression type, compressed body) of the chunk, its place checked:
+        what `unpack` turns into NBT elsewhere (a cluster worker)."""
         off, count = self.entries[(cx, cz)]
         where = f"{self.path.name} chunk ({cx}, {cz})"
         if off < 2 or count == 0 or (off + count) * SECTOR > len(self.data) + SECTOR:
@@ -79,11 +84,15 @@ class Region:
             raise RegionError(f"{where}: length {length} does not fit its {count} sectors")
         if kind & 0x80:
             raise External(f"{where}: stored in an external .mcc file (not read)")
-        body = memoryview(self.data)[start + 5:start + 4 + length]
-        try:
-            return decompress(kind, body)
-        except ValueError as e:
-            raise RegionError(f"{where}: {e}") from None
+        return kind, memoryview(self.data)[start + 5:start + 4 + length]
+
+
+def unpack(name: str, cx: int, cz: int, kind: int, body) -> bytes:
+    """Region.raw's answer decompressed; RegionError naming the chunk."""
+    try:
+        return decompress(kind, body)
+    except ValueError as e:
+        raise RegionError(f"{name} chunk ({cx}, {cz}): {e}") from None
 
 
 def decompress(kind: int, body) -> bytes:

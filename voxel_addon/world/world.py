@@ -449,24 +449,34 @@ class World:
         """Write whole chunks ((key, blocks, data-or-None) triples: an import) in one
         transaction, in place of what the file and memory held; the stored light of
         their 3x3 is dropped. Active copies are replaced, so a live view shows them."""
+        items = [(tuple(k), b, d) for k, b, d in items]
+        self.store_rows([self.file.encode_chunk(k, b, d) for k, b, d in items], items)
+
+    def store_rows(self, rows, items=None) -> None:
+        """store_chunks for rows encoded elsewhere (WorldFile.encoder: a cluster
+        worker). Active copies of their chunks take `items`' arrays when given, else
+        leave memory (they load from the file when asked for again)."""
         if self.readonly:
             raise VoxelError(f"{self.file.path} is open read-only")
-        items = [(tuple(k), b, d) for k, b, d in items]
-        rows = [self.file.encode_chunk(k, b, d) for k, b, d in items]
-        stale = {(k[0] + i, k[1] + j) for k, _, _ in items for i in (-1, 0, 1)
-                 for j in (-1, 0, 1)}
+        keys = [(r[0], r[1]) for r in rows]
+        arrays = {k: (b, d) for k, b, d in items or ()}
+        stale = {(k[0] + i, k[1] + j) for k in keys for i in (-1, 0, 1) for j in (-1, 0, 1)}
         with self._flush_lock:
             self.file.save(rows, stale_light=stale)
             with self._lock:
-                for k, b, d in items:
+                for k in keys:
                     self._saving.pop(k, None)
                     self.corrupt.pop(k, None)
                     c = self.chunks.get(k)
-                    if c is not None:
+                    if c is not None and k in arrays:
+                        b, d = arrays[k]
                         c.blocks, c.data, c.dirty = b.copy(order="F"), \
                             None if d is None else d.copy(order="F"), False
+                    elif c is not None:
+                        del self.chunks[k]
+                        self._evictions[k] = self._evictions.get(k, 0) + 1
                     self.bver[k] = self.tick()
-                for k, _, _ in items:
+                for k in keys:
                     self.drop_light(k)
                 self._stale -= stale  # the file's light rows are gone already
 

@@ -183,7 +183,7 @@ class Pool:
         window = window or 4 * self.size
         todo = iter(enumerate(items))
         of = {}  # future -> item
-        ac = as_completed()
+        ac = as_completed(loop=c.loop)  # the client is not the default one (--scheduler)
         done = 0
 
         def submit(n):

@@ -108,3 +108,86 @@ def test_bake_killed_then_run_again_does_only_the_rest(baked, world, cluster, tm
     assert {n: v for n, v in files(out).items() if not n.startswith(".")} == baked
     for n, st in kept.items():  # not written again
         assert (out / n).stat().st_mtime_ns == st.st_mtime_ns
+
+
+# ------------------------------------------------------------------ animate
+
+FRAMES = ["frame_0001.png", "frame_0002.png", "frame_0003.png"]
+
+
+@pytest.fixture(scope="module")
+def blend(tmp_path_factory):
+    p = tmp_path_factory.mktemp("blend") / "fly.blend"
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    r = subprocess.run([sys.executable, str(Path(__file__).with_name("blend_job.py")), str(p)],
+                       capture_output=True, text=True, env=env, timeout=120)
+    assert r.returncode == 0 and p.is_file(), r.stderr[-2000:]
+    return p
+
+
+def animate(world, blend, out, *more, wait=True):
+    return cli("animate", "--world", world, "--blend", blend, "--out", out, *more, wait=wait)
+
+
+def pixels(d: Path) -> dict:
+    import numpy as np
+    from matplotlib.image import imread
+    return {n: np.round(imread(d / n) * 255).astype(np.int16) for n in sorted(os.listdir(d))}
+
+
+def same_frames(d: Path, ref: dict) -> None:
+    got = pixels(d)
+    assert set(got) == set(ref)
+    for n, img in got.items():
+        assert img.shape == ref[n].shape == (36, 64, 4)
+        assert abs(img - ref[n]).max() <= 1, n
+
+
+@pytest.fixture(scope="module")
+def frames(world, blend, tmp_path_factory):
+    """The one-process frames: the camera flies, the day goes from noon to midnight."""
+    out = tmp_path_factory.mktemp("ref") / "frames"
+    r = animate(world, blend, out)
+    assert r.returncode == 0, r.stderr
+    got = pixels(out)
+    assert sorted(got) == FRAMES
+    sky = [got[n][:4, :, :3].mean() for n in FRAMES]
+    assert sky[0] > sky[2] + 40, sky  # noon is brighter than midnight: the day cycle
+    return got
+
+
+def test_animate_on_a_scheduler_equals_one_process(frames, world, blend, cluster, tmp_path):
+    r = animate(world, blend, tmp_path / "f", "--scheduler", cluster.address)
+    assert r.returncode == 0, r.stderr
+    same_frames(tmp_path / "f", frames)
+
+
+def test_animate_on_local_workers_equals_one_process(frames, world, blend, tmp_path):
+    r = animate(world, blend, tmp_path / "f", "--workers", "2")
+    assert r.returncode == 0, r.stderr
+    same_frames(tmp_path / "f", frames)
+
+
+def test_animate_survives_a_killed_worker(frames, world, blend, cluster, tmp_path):
+    with cluster.client() as c:
+        p = animate(world, blend, tmp_path / "f", "--scheduler", cluster.address, wait=False)
+        victim = _busy_worker(c, "frame_png")
+        os.kill(c.run(os.getpid, workers=[victim])[victim], signal.SIGKILL)
+        _, err = p.communicate(timeout=120)
+        assert p.returncode == 0, err
+        same_frames(tmp_path / "f", frames)
+    cluster.wait_workers(2)
+
+
+def test_animate_again_renders_only_missing_frames(frames, world, blend, tmp_path):
+    """--frames A B renders those only; frames already in DIR are kept."""
+    out = tmp_path / "f"
+    r = animate(world, blend, out, "--frames", 2, 2)
+    assert r.returncode == 0, r.stderr
+    assert sorted(os.listdir(out)) == FRAMES[1:2]
+    kept = {n: (out / n).stat().st_mtime_ns for n in FRAMES[1:2]}
+    r = animate(world, blend, out)
+    assert r.returncode == 0, r.stderr
+    assert "2 frames of 64x36 written, 1 already there" in r.stderr
+    same_frames(out, frames)
+    assert {n: (out / n).stat().st_mtime_ns for n in FRAMES[1:2]} == kept

@@ -191,3 +191,15 @@ def test_animate_again_renders_only_missing_frames(frames, world, blend, tmp_pat
     assert "2 frames of 64x36 written, 1 already there" in r.stderr
     same_frames(out, frames)
     assert {n: (out / n).stat().st_mtime_ns for n in FRAMES[1:2]} == kept
+
+
+@pytest.mark.parametrize("args, message", [
+    (("bake", "--region", 0, 0, 8, 8, "--out", "{tmp}/tiles"), "a folder takes --per tile"),
+    (("animate", "--blend", "{tmp}/no.blend", "--out", "{tmp}/f"), "no .blend at"),
+    (("animate", "--blend", "{tmp}/bad.blend", "--out", "{tmp}/f"), "cannot read"),
+])
+def test_mistakes_are_one_line(world, tmp_path, args, message):
+    (tmp_path / "bad.blend").write_bytes(b"not a blend file")
+    r = cli(args[0], "--world", world, *(str(a).format(tmp=tmp_path) for a in args[1:]))
+    assert r.returncode == 2 and r.stderr.count("\n") == 1 and message in r.stderr, r.stderr
+    assert r.stdout == ""

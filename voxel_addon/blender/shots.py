@@ -5,6 +5,7 @@ the scene camera (render.Camera), its vertical field of view and the time of day
 rendered elsewhere (cli/animate.py, on the moderngl device, maybe on a cluster)."""
 from __future__ import annotations
 
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 from ..core.errors import VoxelError
@@ -18,6 +19,27 @@ class Shot:
     hours: float
 
 
+@contextmanager
+def _quiet():
+    """Blender's own log lines (written to the C stdout and stderr) go nowhere: the
+    command's stdout is its result and its errors are one line."""
+    import os
+    import sys
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = [os.dup(1), os.dup(2)]
+    null = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(null, 1)
+        os.dup2(null, 2)
+        yield
+    finally:
+        os.dup2(saved[0], 1)
+        os.dup2(saved[1], 2)
+        for fd in (*saved, null):
+            os.close(fd)
+
+
 def read(blend, frames=None):
     """(Settings, (w, h), [Shot]) of the .blend's scene over `frames` (first, last),
     default the scene's frame range (with its step)."""
@@ -29,7 +51,8 @@ def read(blend, frames=None):
         bpy.ops.wm.read_factory_settings(use_empty=True)
         register()  # the add-on's scene settings, so their defaults read as in Blender
     try:
-        bpy.ops.wm.open_mainfile(filepath=str(blend), load_ui=False)
+        with _quiet():
+            bpy.ops.wm.open_mainfile(filepath=str(blend), load_ui=False)
     except RuntimeError as e:
         raise VoxelError(f"cannot read {blend}: {str(e).strip().splitlines()[-1]}") from None
     sc = bpy.context.scene

@@ -41,15 +41,19 @@ def run(args):
         raise VoxelError(f"no world file at {args.world}")
     if not args.blend.is_file():
         raise VoxelError(f"no .blend at {args.blend}")
+    if args.frames and args.frames[1] < args.frames[0]:
+        raise VoxelError(f"--frames {args.frames[0]} {args.frames[1]}: the last frame comes "
+                         "before the first")
     try:
         args.out.mkdir(parents=True, exist_ok=True)
     except OSError as e:
         raise VoxelError(f"cannot create folder {args.out}: {e.strerror}") from None
     t0 = time.perf_counter()
     with cluster.session(args) as pool:  # the cluster is checked before the slow part
-        s, size, shots = _read(args.blend, args.frames)
         with World.open(args.world, readonly=True, loader=False) as w:
-            s.sea_level = source.sea_level(w.generator)
+            sea = source.sea_level(w.generator)
+        s, size, shots = _read(args.blend, args.frames)
+        s.sea_level = sea
         todo = [sh for sh in shots if not (args.out / name(sh.frame)).is_file()]
         shared = {"settings": s, "size": size}
         progress = Progress("animate", "frames")

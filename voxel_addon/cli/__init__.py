@@ -9,7 +9,7 @@ from ..core.errors import VoxelError
 
 # Order is the order of `--help`. A command's module may be missing until its issue lands.
 COMMANDS = ["generate", "info", "dump", "edit", "map", "render", "animate", "bake", "importer",
-            "exporter", "bench"]
+            "exporter", "far", "bench"]
 
 
 class _Parser(argparse.ArgumentParser):

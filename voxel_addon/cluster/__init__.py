@@ -14,6 +14,16 @@ from ..core.errors import VoxelError
 CONNECT_TIMEOUT = 10  # seconds to reach a scheduler and to see its first worker
 
 
+def knob(name: str, default: int) -> int:
+    """A tuning value the environment may set (VOXEL_<NAME>): commit sizes, the
+    connect timeout on a slow network; tests use small ones."""
+    import os
+    try:
+        return max(1, int(os.environ.get(f"VOXEL_{name}", default)))
+    except ValueError:
+        return default
+
+
 def add_arguments(parser) -> None:
     g = parser.add_mutually_exclusive_group()
     g.add_argument("--workers", type=int, metavar="N",
@@ -85,16 +95,17 @@ def session(args, say=_say):
         from distributed import Client
         if address:
             client = _connect(Client, address)
-            info = client.scheduler_info()
-            board = (client.dashboard_link if "dashboard" in info.get("services", {})
-                     else "none (the scheduler runs without one)")
-            say(f"cluster {address}: {len(info['workers'])} workers, dashboard {board}")
         else:
             from distributed import LocalCluster
             cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                    dashboard_address=":0", silence_logs=logging.CRITICAL)
             client = Client(cluster)
         _check_versions(client, address or "the local cluster")
+        if address:
+            info = client.scheduler_info()
+            board = (client.dashboard_link if "dashboard" in info.get("services", {})
+                     else "none (the scheduler runs without one)")
+            say(f"cluster {address}: {len(info['workers'])} workers, dashboard {board}")
         yield Pool(client)
     finally:
         if client is not None:
@@ -113,13 +124,14 @@ def _connect(Client, address: str):
     # Handshake once by hand first: a Client that fails to start lingers and logs for
     # 20 s more while it is collected, and a port that is no scheduler breaks it oddly.
     try:
-        asyncio.run(asyncio.wait_for(_reach(address), CONNECT_TIMEOUT + 2))
-        client = Client(address, timeout=f"{CONNECT_TIMEOUT}s", set_as_default=False)
+        wait = knob("CONNECT_TIMEOUT", CONNECT_TIMEOUT)
+        asyncio.run(asyncio.wait_for(_reach(address, wait), wait + 2))
+        client = Client(address, timeout=f"{wait}s", set_as_default=False)
     except Exception as e:  # noqa: BLE001 - whatever answered, it is not a scheduler we can use
         msg = str(e).splitlines()[0] if str(e) else type(e).__name__
         raise VoxelError(f"cannot reach a Dask scheduler at {address}: {msg}") from None
     try:
-        client.wait_for_workers(1, timeout=CONNECT_TIMEOUT)
+        client.wait_for_workers(1, timeout=wait)
     except (TimeoutError, OSError):
         client.close()
         raise VoxelError(f"the Dask scheduler at {address} has no workers "
@@ -127,9 +139,9 @@ def _connect(Client, address: str):
     return client
 
 
-async def _reach(address: str) -> None:
+async def _reach(address: str, wait: int) -> None:
     from distributed.comm import connect
-    comm = await connect(address, timeout=CONNECT_TIMEOUT)
+    comm = await connect(address, timeout=wait)
     await comm.close()
 
 
@@ -166,24 +178,21 @@ class Pool:
     def map(self, fn, items, *, shared=None, progress=None, window=None):
         """Run fn(item, shared) on the workers for each item (fn: a module-level function
         importable from voxel_addon on the workers); `shared`: a dict broadcast once to
-        every worker; yields (item, result) as tasks complete. At most WINDOW tasks are
+        every worker; yields (item, result) as tasks complete. ITEMS may be a lazy
+        iterable (read as tasks go out; progress then needs len). At most WINDOW tasks are
         in flight (default 4 per worker thread), so results never pile up faster than the
         caller consumes them. A worker killed mid-job costs only its tasks (Dask re-runs
         them elsewhere); leaving the loop early (an error, Ctrl-C) cancels the rest."""
         from distributed import as_completed
-        from distributed.client import FutureCancelledError  # noqa: F401 - raised by gather
-        items = list(items)
-        total = len(items)
-        if progress:
+        total = len(items) if hasattr(items, "__len__") else None
+        if progress and total is not None:
             progress(0, total)
-        if not total:
-            return
         c = self.client
         share = c.scatter([shared], broadcast=True, hash=False)[0] if shared is not None else None
         window = window or 4 * self.size
         todo = iter(enumerate(items))
         of = {}  # future -> item
-        ac = as_completed(loop=c.loop)  # the client is not the default one (--scheduler)
+        ac = as_completed(loop=c.loop)
         done = 0
 
         def submit(n):
@@ -205,7 +214,7 @@ class Pool:
                     f.release()
                     done += 1
                     yield item, r
-                if progress:
+                if progress and total is not None:
                     progress(done, total)
                 submit(len(batch))
         finally:
@@ -213,6 +222,20 @@ class Pool:
                 c.cancel(list(of))
             if share is not None:
                 share.release()
+
+
+class Serial:
+    """Pool.map in this process, one item after another (the commands' one-process
+    path where it shares the cluster's code: the same tasks, the same results)."""
+
+    size = 1
+
+    def map(self, fn, items, *, shared=None, progress=None, window=None):
+        total = len(items) if hasattr(items, "__len__") else None
+        for done, item in enumerate(items, 1):
+            yield item, fn(item, shared)
+            if progress and total is not None:
+                progress(done, total)
 
 
 def _gather(client, futures):

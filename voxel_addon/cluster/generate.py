@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import time
 
+from . import knob
+
 TASK = 4      # chunks per task: small enough to spread 2 workers, large enough to amortise
 COMMIT = 64   # rows per transaction (or what arrived within COMMIT_S)
 COMMIT_S = 1.0
@@ -44,6 +46,7 @@ def run(world, pool, keys, backend=None, progress=None) -> tuple[int, int]:
     tasks = [tuple(todo[i:i + TASK]) for i in range(0, len(todo), TASK)]
     shared = {"generator": (gen.name, gen.seed, gen.params, backend), "encoder": f.encoder()}
     buf, made, computed, t = [], 0, 0, time.monotonic()
+    every = knob("COMMIT", COMMIT)
 
     def commit():
         nonlocal buf, made, t
@@ -64,7 +67,7 @@ def run(world, pool, keys, backend=None, progress=None) -> tuple[int, int]:
                     blocks = gen.generate([k])[0]
                 row = f.encode_chunk(k, *world.apply_stored_edits(k, blocks))
             buf.append(row)
-        if len(buf) >= COMMIT or time.monotonic() - t > COMMIT_S:
+        if len(buf) >= every or time.monotonic() - t > COMMIT_S:
             commit()
     commit()
     return made, computed

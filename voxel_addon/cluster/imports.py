@@ -17,6 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
+from . import knob
+
 TASK = 8     # chunks per task
 COMMIT = 64  # chunks per transaction
 JOB = "import_job"
@@ -131,6 +133,7 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
     order = sorted([i for i, _ in plan] + list(local))
     ready: dict = dict(local)
     computed, pos = 0, 0
+    every = knob("COMMIT", COMMIT)
     try:
         for task, results in pool.map(read, tasks, shared=shared):
             computed += len(task)
@@ -139,7 +142,7 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
             while pos < len(order) and order[pos] in ready:  # the one-process order
                 w.settle(ready.pop(order[pos]))
                 pos += 1
-                if len(w.batch) >= COMMIT:
+                if len(w.batch) >= every:
                     w.commit(order[pos - 1] + 1)
         while pos < len(order):  # no tasks at all: only local ones
             w.settle(ready.pop(order[pos]))

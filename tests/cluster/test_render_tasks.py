@@ -55,6 +55,25 @@ def baked(world, tmp_path_factory):
     return got
 
 
+def test_tiles_are_self_contained_validator_clean_glbs(baked, tmp_path):
+    import json
+    import shutil
+    import struct
+    node = shutil.which("node")
+    if not node or not (ROOT / ".tools" / "node_modules" / "gltf-validator").is_dir():
+        pytest.skip("glTF validator missing (python build.py setup installs it into .tools)")
+    for name, data in baked.items():
+        (tmp_path / name).write_bytes(data)
+        r = subprocess.run([node, str(ROOT / "tools" / "validate_gltf.mjs"), str(tmp_path / name)],
+                           capture_output=True, text=True, timeout=120)
+        issues = json.loads(r.stdout)["issues"]
+        assert issues["numErrors"] == issues["numWarnings"] == 0, (name, issues["messages"])
+        n = struct.unpack_from("<I", data, 12)[0]
+        doc = json.loads(data[20:20 + n])
+        assert all("uri" not in b for b in doc["buffers"] + doc.get("images", []))
+        assert [m["name"] for m in doc["meshes"]] == [name[:-4]]  # the tile, nothing else
+
+
 def test_bake_on_a_scheduler_equals_one_process(baked, world, cluster, tmp_path):
     r = bake(world, tmp_path / "t", "--scheduler", cluster.address)
     assert r.returncode == 0, r.stderr

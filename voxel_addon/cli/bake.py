@@ -149,8 +149,13 @@ def tile_glb(cut, shared):
 
 
 def _tile_glb(cut, shared):
+    import socket
     from ..bake import tiles
-    from ..blender import bake as BB
+    try:
+        from ..blender import bake as BB
+    except ImportError as e:
+        raise VoxelError(f"bake needs the bpy module (pip install bpy) on {socket.gethostname()}: "
+                         f"{e}") from None
     bk = tiles.bake(cut, method=shared["method"], instances=shared["instances"],
                     light=shared["light"])
     return BB.glb_bytes(bk, hours=shared["hours"], instances=shared["instances"])

@@ -7,9 +7,8 @@ from __future__ import annotations
 
 import time
 
-from . import knob
+from . import knob, task_size
 
-TASK = 4      # chunks per task: small enough to spread 2 workers, large enough to amortise
 COMMIT = 64   # rows per transaction (or what arrived within COMMIT_S)
 COMMIT_S = 1.0
 
@@ -43,7 +42,8 @@ def run(world, pool, keys, backend=None, progress=None) -> tuple[int, int]:
     f, gen = world.file, world.generator
     have = set(f.chunk_keys())
     todo = [k for k in keys if k not in have]
-    tasks = [tuple(todo[i:i + TASK]) for i in range(0, len(todo), TASK)]
+    step = task_size(len(todo), pool.size)
+    tasks = [tuple(todo[i:i + step]) for i in range(0, len(todo), step)]
     shared = {"generator": (gen.name, gen.seed, gen.params, backend), "encoder": f.encoder()}
     buf, made, computed, t = [], 0, 0, time.monotonic()
     every = knob("COMMIT", COMMIT)

@@ -17,9 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from . import knob
+from . import knob, task_size
 
-TASK = 8     # chunks per task
 COMMIT = 64  # chunks per transaction
 JOB = "import_job"
 
@@ -127,7 +126,8 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
     report.y_min = y_min if y_min is not None else (
         (-64 if version >= anvil.V_NO_LEVEL else 0) if version is not None else 0)
     shared = {"y_min": report.y_min, "encoder": f.encoder()}
-    tasks = [tuple(plan[j:j + TASK]) for j in range(0, len(plan), TASK)]
+    step = task_size(len(plan), pool.size)
+    tasks = [tuple(plan[j:j + step]) for j in range(0, len(plan), step)]
     f.set_meta(JOB, json.dumps({"sig": sig, "done": start}))
     w = _Writer(world, report, sig, progress, len(plan) + len(local))
     order = sorted([i for i, _ in plan] + list(local))

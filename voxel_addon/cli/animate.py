@@ -56,21 +56,18 @@ def run(args):
         s.sea_level = sea
         todo = [sh for sh in shots if not (args.out / name(sh.frame)).is_file()]
         shared = {"settings": s, "size": size}
-        progress = Progress("animate", "frames")
         if pool is None:
+            pool = cluster.Serial()
             shared["world"] = {"path": str(args.world.resolve())}
-            results = ((sh, frame_png(sh, shared)) for sh in todo)
         else:
             # Workers share no file system: the world goes to each once, as a consistent
             # snapshot (a frame needs the chunks around its camera, which the world's own
             # loader reads and generates; the same loader on a copy gives the same area).
             data = _snapshot(args.world)
             shared["world"] = {"bytes": data, "digest": hashlib.sha256(data).hexdigest()}
-            results = pool.map(frame_png, todo, shared=shared, progress=progress)
-        for i, (sh, png) in enumerate(results):
+        for sh, png in pool.map(frame_png, todo, shared=shared,
+                                progress=Progress("animate", "frames")):
             _write(args.out / name(sh.frame), png)
-            if pool is None:
-                progress(i + 1, len(todo))
     note(f"animate: {len(todo)} frames of {size[0]}x{size[1]} written, "
          f"{len(shots) - len(todo)} already there, in {time.perf_counter() - t0:.1f} s")
     print(args.out)

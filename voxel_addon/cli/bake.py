@@ -110,25 +110,33 @@ def _tiles(args, hours):
     t0 = time.perf_counter()
     written = empty = 0
     with cluster.session(args) as pool:  # the cluster is checked before the slow reads
+        pool = pool or cluster.Serial()
         with World.open(args.world, readonly=True, loader=False) as world:
-            cuts = [c for c in (tiles.cut(world, region, t) for t in todo) if not c["empty"]]
-        empty = len(todo) - len(cuts)
-        progress = Progress("bake", "tiles")
-        if pool is None:
-            results = ((c, tile_glb(c, shared)) for c in cuts)
-        else:
-            results = pool.map(tile_glb, cuts, shared=shared, progress=progress)
-        for i, (c, glb) in enumerate(results):
-            if glb is None:
-                empty += 1
-            else:
-                _write(out / f"{c['name']}.glb", glb)
-                written += 1
-            if pool is None:
-                progress(i + 1, len(cuts))
+            # read as the tasks go out: the client never holds every tile's blocks
+            cuts = _Sized((tiles.cut(world, region, t) for t in todo), len(todo))
+            for c, glb in pool.map(tile_glb, cuts, shared=shared,
+                                   progress=Progress("bake", "tiles")):
+                if glb is None:
+                    empty += 1
+                else:
+                    _write(out / f"{c['name']}.glb", glb)
+                    written += 1
     note(f"bake: {written} tiles written, {len(plan) - len(todo)} already there, {empty} empty "
          f"in {time.perf_counter() - t0:.1f} s")
     print(out)
+
+
+class _Sized:
+    """A lazy iterable that knows its length (Pool.map's progress)."""
+
+    def __init__(self, it, n):
+        self.it, self.n = it, n
+
+    def __iter__(self):
+        return iter(self.it)
+
+    def __len__(self):
+        return self.n
 
 
 def _write(path: Path, data: bytes) -> None:
@@ -142,6 +150,8 @@ def tile_glb(cut, shared):
     task of --per tile --out DIR, here and on cluster workers. bpy works only on a
     process's main thread (elsewhere it crashes), and a Dask worker runs tasks on other
     threads: there the tile goes to a helper process (cli.helper)."""
+    if cut["empty"]:  # air only: nothing to bake, no bpy needed
+        return None
     if threading.current_thread() is threading.main_thread():
         return _tile_glb(cut, shared)
     from . import helper

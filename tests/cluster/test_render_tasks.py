@@ -110,15 +110,18 @@ def test_bake_survives_a_killed_worker(baked, world, cluster, tmp_path):
 
 
 def test_bake_killed_then_run_again_does_only_the_rest(baked, world, cluster, tmp_path):
-    out = tmp_path / "t"
-    p = bake(world, out, "--scheduler", cluster.address, wait=False)
-    t0 = time.monotonic()
-    while not any(out.glob("*.glb")) and p.poll() is None:
-        assert time.monotonic() - t0 < 120
-        time.sleep(0.01)
-    os.killpg(p.pid, signal.SIGKILL)
-    p.wait()
-    kept = {q.name: q.stat() for q in out.glob("*.glb")}
+    for attempt in range(3):  # a kill that came after the last tile proves nothing: again
+        out = tmp_path / f"t{attempt}"
+        p = bake(world, out, "--scheduler", cluster.address, wait=False)
+        t0 = time.monotonic()
+        while not any(out.glob("*.glb")) and p.poll() is None:
+            assert time.monotonic() - t0 < 120
+            time.sleep(0.005)
+        os.killpg(p.pid, signal.SIGKILL)
+        p.wait()
+        kept = {q.name: q.stat() for q in out.glob("*.glb")}
+        if len(kept) < len(TILES):
+            break
     assert 1 <= len(kept) < len(TILES)  # killed mid-job
     assert all(files(out)[n] == baked[n] for n in kept)  # what is there is complete
     r = bake(world, out, "--scheduler", cluster.address)

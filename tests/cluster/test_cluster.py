@@ -117,8 +117,14 @@ def prepared_world(path: Path) -> Path:
 def save_folder(path: Path) -> Path:
     """A 1.18+ save: 8 x 6 chunks (colour blocks among them), one unfinished chunk."""
     rng = np.random.default_rng(3)
-    chunks = {(cx, cz): mc.chunk_nbt(cx, cz, column(rng, cx, cz)[0])
-              for cx in range(-4, 4) for cz in range(-3, 3)}
+    wool = [f"minecraft:{c}_wool" for c in ("red", "blue", "lime", "cyan", "pink", "gray")]
+    chunks = {}
+    for cx in range(-4, 4):
+        for cz in range(-3, 3):
+            secs = column(rng, cx, cz)[0]
+            for name in rng.permutation(wool)[:3]:  # colours met in another order per chunk
+                secs[0][tuple(rng.integers(0, 16, 3))] = name
+            chunks[(cx, cz)] = mc.chunk_nbt(cx, cz, secs)
     chunks[(1, 7)] = mc.chunk_nbt(1, 7, column(rng, 1, 7)[0], status="minecraft:features")
     mc.write_region(path / "region", chunks)
     mc.level_dat(path, 3953)

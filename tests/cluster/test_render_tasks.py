@@ -86,21 +86,22 @@ def test_bake_on_local_workers_equals_one_process(baked, world, tmp_path):
     assert files(tmp_path / "t") == baked
 
 
-def _busy_worker(client, prefix, timeout=60.0):
-    """The address of a worker running a task whose key starts with `prefix`."""
+def _busy_worker(client, prefix, proc, timeout=60.0):
+    """The address of a worker holding a task whose key starts with `prefix` (of the
+    command PROC: every task is handed out at once, so it holds it while it runs)."""
     t0 = time.monotonic()
-    while time.monotonic() - t0 < timeout:
+    while time.monotonic() - t0 < timeout and proc.poll() is None:
         for addr, keys in client.processing().items():
             if any(str(k).startswith(prefix) for k in keys):
                 return addr
-        time.sleep(0.02)
-    raise AssertionError(f"no worker ran a {prefix} task within {timeout} s")
+        time.sleep(0.01)
+    raise AssertionError(f"no worker was seen with a {prefix} task ({proc.poll()})")
 
 
 def test_bake_survives_a_killed_worker(baked, world, cluster, tmp_path):
     with cluster.client() as c:
         p = bake(world, tmp_path / "t", "--scheduler", cluster.address, wait=False)
-        victim = _busy_worker(c, "tile_glb")
+        victim = _busy_worker(c, "tile_glb", p)
         pid = c.run(os.getpid, workers=[victim])[victim]
         os.kill(pid, signal.SIGKILL)
         _, err = p.communicate(timeout=120)
@@ -193,7 +194,7 @@ def test_animate_on_local_workers_equals_one_process(frames, world, blend, tmp_p
 def test_animate_survives_a_killed_worker(frames, world, blend, cluster, tmp_path):
     with cluster.client() as c:
         p = animate(world, blend, tmp_path / "f", "--scheduler", cluster.address, wait=False)
-        victim = _busy_worker(c, "frame_png")
+        victim = _busy_worker(c, "frame_png", p)
         os.kill(c.run(os.getpid, workers=[victim])[victim], signal.SIGKILL)
         _, err = p.communicate(timeout=120)
         assert p.returncode == 0, err

@@ -11,7 +11,7 @@ import time
 from pathlib import Path
 
 from ..core.errors import VoxelError
-from .common import Progress, add_world, note
+from .common import Progress, add_world, note, write_whole
 
 
 def add_parser(sub):
@@ -67,7 +67,7 @@ def run(args):
             shared["world"] = {"bytes": data, "digest": hashlib.sha256(data).hexdigest()}
         for sh, png in pool.map(frame_png, todo, shared=shared,
                                 progress=Progress("animate", "frames")):
-            _write(args.out / name(sh.frame), png)
+            write_whole(args.out / name(sh.frame), png)
     note(f"animate: {len(todo)} frames of {size[0]}x{size[1]} written, "
          f"{len(shots) - len(todo)} already there, in {time.perf_counter() - t0:.1f} s")
     print(args.out)
@@ -93,11 +93,6 @@ def _snapshot(path: Path) -> bytes:
     finally:
         con.close()
 
-
-def _write(path: Path, data: bytes) -> None:
-    tmp = path.with_name(f".{path.name}.part")
-    tmp.write_bytes(data)
-    tmp.replace(path)  # atomic: a killed run leaves no half file under the real name
 
 
 # ------------------------------------------------------------------ the task

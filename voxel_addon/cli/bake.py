@@ -9,7 +9,7 @@ import time
 from pathlib import Path
 
 from ..core.errors import VoxelError
-from .common import Progress, add_world, note
+from .common import Progress, add_world, note, write_whole
 
 
 def add_parser(sub):
@@ -119,7 +119,7 @@ def _tiles(args, hours):
                 if glb is None:
                     empty += 1
                 else:
-                    _write(out / f"{c['name']}.glb", glb)
+                    write_whole(out / f"{c['name']}.glb", glb)
                     written += 1
     note(f"bake: {written} tiles written, {len(plan) - len(todo)} already there, {empty} empty "
          f"in {time.perf_counter() - t0:.1f} s")
@@ -138,11 +138,6 @@ class _Sized:
     def __len__(self):
         return self.n
 
-
-def _write(path: Path, data: bytes) -> None:
-    tmp = path.with_name(f".{path.name}.part")
-    tmp.write_bytes(data)
-    tmp.replace(path)  # atomic: a killed run leaves no half file under the real name
 
 
 def tile_glb(cut, shared):

@@ -34,3 +34,11 @@ class Progress:
 
 def note(msg: str) -> None:
     print(msg, file=sys.stderr, flush=True)
+
+
+def write_whole(path: Path, data: bytes) -> None:
+    """Write under a temporary name, then rename: a killed run leaves no half file
+    under the real name, so a file that is there is complete (resumable outputs)."""
+    tmp = path.with_name(f".{path.name}.part")
+    tmp.write_bytes(data)
+    tmp.replace(path)

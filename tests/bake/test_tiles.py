@@ -9,7 +9,8 @@ import pytest
 from voxel_addon import bake
 from voxel_addon.bake import tiles
 
-REGION = (-60, -61, 40, 30)  # tiles start at x -60, 4 and y -61, 3: lamps (3,3), (-3,-3) by the edges
+# tiles start at x -60, 4 and y -61, 3: the lamps at (3, 3) and (-3, -3) sit by the edges
+REGION = (-60, -61, 40, 30)
 FIELDS = ("positions", "normals", "uvs", "light", "daylight", "block", "face")
 
 

@@ -2,8 +2,8 @@
 two `dask worker` processes on 127.0.0.1, the commands as real subprocesses. Every
 output is compared with the one-process run of the same command (chunk blobs, far
 tiles, the colour palette, the import report), also when a worker is SIGKILLed mid-job
-and when the command itself is SIGKILLed and run again (then the second run must
-compute only what the first did not commit). Bad addresses, an unreachable scheduler,
+and when the command itself is SIGKILLed (or stopped with Ctrl-C) and run again (then
+the second run must compute only what the first did not commit). Bad addresses, an unreachable scheduler,
 a worker without the package and an unwritable world: one line, exit 2, no change."""
 from __future__ import annotations
 
@@ -198,8 +198,21 @@ def kill_after_first_commit(proc, path, total, sig=signal.SIGKILL, timeout=120):
         assert time.monotonic() < end, "no commit within the timeout"
         time.sleep(0.005)
     assert proc.poll() is None and n < total, "the job ended before it could be killed"
-    os.killpg(proc.pid, sig)
-    proc.communicate(timeout=60)
+    os.killpg(proc.pid, sig)  # Ctrl-C on a terminal reaches the whole group too
+    out, err = proc.communicate(timeout=60)
+    if sig == signal.SIGINT:  # a clean stop: one line, no worker's traceback, none left
+        assert proc.returncode == 130 and err.strip().splitlines()[-1] == "interrupted", err
+        assert "Traceback" not in err, err
+        end = time.monotonic() + 15
+        while time.monotonic() < end:  # the workers and helpers go away with it
+            try:
+                os.killpg(proc.pid, 0)
+            except ProcessLookupError:
+                break
+            time.sleep(0.1)
+        else:
+            os.killpg(proc.pid, signal.SIGKILL)
+            pytest.fail("processes of the interrupted command stayed")
     return count(path)
 
 
@@ -252,7 +265,7 @@ def test_import_and_far_equal_one_process(cluster, ref, tmp_path):
 def test_import_killed_then_resumed(cluster, ref, tmp_path):
     w = tmp_path / "imp.sqlite"
     p = cli("import", "--world", w, "--from", ref["save"], "--scheduler", cluster.address,
-            env={"VOXEL_COMMIT": "2"}, wait=False)
+            env={"VOXEL_COMMIT": "1"}, wait=False)
     kept = kill_after_first_commit(p, w, 48)
     assert 0 < kept < 48
     r = cli("import", "--world", w, "--from", ref["save"], "--scheduler", cluster.address)
@@ -267,12 +280,12 @@ def test_import_killed_then_resumed(cluster, ref, tmp_path):
 
 
 # ---- through --workers --------------------------------------------------------
-def test_local_workers_killed_then_resumed(ref, tmp_path):
+def test_local_workers_interrupted_then_resumed(ref, tmp_path):
     w = tmp_path / "gen.sqlite"
     shutil.copy(ref["base"], w)
     args = ("generate", "--world", w, "--radius", 3, "--backend", "numpy", "--workers", 2)
     p = cli(*args, env={"VOXEL_COMMIT": "2"}, wait=False)
-    kept = kill_after_first_commit(p, w, 49)
+    kept = kill_after_first_commit(p, w, 49, signal.SIGINT)
     r = cli(*args)
     assert r.returncode == 0, r.stderr
     assert computed(r.stderr, "computed") == 49 - kept

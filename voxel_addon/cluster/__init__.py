@@ -97,8 +97,10 @@ def session(args, say=_say):
             client = _connect(Client, address)
         else:
             from distributed import LocalCluster
-            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                   dashboard_address=":0", silence_logs=logging.CRITICAL)
+            with _children_ignore_sigint():
+                cluster = LocalCluster(n_workers=workers, threads_per_worker=1,
+                                       processes=True, dashboard_address=":0",
+                                       silence_logs=logging.CRITICAL)
             client = Client(cluster)
         _check_versions(client, address or "the local cluster")
         if address:
@@ -112,6 +114,23 @@ def session(args, say=_say):
             client.close()
         if cluster is not None:
             cluster.close()
+
+
+@contextmanager
+def _children_ignore_sigint():
+    """Worker processes started meanwhile ignore SIGINT: Ctrl-C on a terminal reaches
+    the whole process group, and the command, not each worker, stops the cluster
+    (otherwise every worker prints a traceback)."""
+    import signal
+    import threading
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
 
 
 def _connect(Client, address: str):

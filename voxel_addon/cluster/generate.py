@@ -57,17 +57,19 @@ def run(world, pool, keys, backend=None, progress=None) -> tuple[int, int]:
         if progress:
             progress(made, len(todo))
 
-    for ks, rows in pool.map(make, tasks, shared=shared):
-        computed += len(ks)
-        for k, row in zip(ks, rows):
-            if f.has_chunk(k):
-                continue  # written meanwhile by someone else: theirs stays
-            if f.edits_in(k):
-                with world._gen_lock:
-                    blocks = gen.generate([k])[0]
-                row = f.encode_chunk(k, *world.apply_stored_edits(k, blocks))
-            buf.append(row)
-        if len(buf) >= every or time.monotonic() - t > COMMIT_S:
-            commit()
-    commit()
+    try:
+        for ks, rows in pool.map(make, tasks, shared=shared):
+            computed += len(ks)
+            for k, row in zip(ks, rows):
+                if f.has_chunk(k):
+                    continue  # written meanwhile by someone else: theirs stays
+                if f.edits_in(k):
+                    with world._gen_lock:
+                        blocks = gen.generate([k])[0]
+                    row = f.encode_chunk(k, *world.apply_stored_edits(k, blocks))
+                buf.append(row)
+            if len(buf) >= every or time.monotonic() - t > COMMIT_S:
+                commit()
+    finally:
+        commit()  # Ctrl-C or a failed task: what arrived is kept too
     return made, computed

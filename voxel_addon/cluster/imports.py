@@ -126,7 +126,7 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
     report.y_min = y_min if y_min is not None else (
         (-64 if version >= anvil.V_NO_LEVEL else 0) if version is not None else 0)
     shared = {"y_min": report.y_min, "encoder": f.encoder()}
-    step = task_size(len(plan), pool.size)
+    step = task_size(len(plan), pool.size, most=64)  # a chunk is quick here: bigger tasks
     tasks = [tuple(plan[j:j + step]) for j in range(0, len(plan), step)]
     f.set_meta(JOB, json.dumps({"sig": sig, "done": start}))
     w = _Writer(world, report, sig, progress, len(plan) + len(local))

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import hashlib
 import os
-import tempfile
 import threading
 import time
 from pathlib import Path
@@ -112,13 +111,21 @@ def _world(src: dict):
             from ..world import World
             path = src.get("path")
             if path is None:
-                import atexit
-                fd, path = tempfile.mkstemp(prefix=f"voxel_world_{key[:12]}_", suffix=".sqlite")
-                with os.fdopen(fd, "wb") as f:
-                    f.write(src["bytes"])
-                atexit.register(_remove, path)
+                path = _copy(src["bytes"], key)
             w = _worlds[key] = World.open(path, readonly=True, loader=False)
         return w
+
+
+def _copy(data: bytes, key: str) -> str:
+    """The world's bytes as a temporary file of this process, in the worker's scratch
+    folder (gone with the worker, even a killed one); removed at exit too."""
+    import atexit
+    from .. import cluster
+    path = os.path.join(cluster.scratch(), f"voxel_world_{key[:12]}_{os.getpid()}.sqlite")
+    with open(path, "wb") as f:
+        f.write(data)
+    atexit.register(_remove, path)
+    return path
 
 
 def _remove(path: str) -> None:

@@ -98,11 +98,11 @@ def _tiles(args, hours):
     if args.blend:
         raise VoxelError("--blend needs --out F.glb (a folder gets one .glb per tile)")
     out = args.out
+    region = check_region(*args.region)
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as e:
         raise VoxelError(f"cannot create folder {out}: {e.strerror}") from None
-    region = check_region(*args.region)
     plan = tiles.plan(*region)
     todo = [t for t in plan if not (out / f"{t[0]}.glb").is_file()]
     shared = {"method": args.method, "instances": args.instances, "light": args.light,
@@ -137,7 +137,6 @@ class _Sized:
 
     def __len__(self):
         return self.n
-
 
 
 def tile_glb(cut, shared):

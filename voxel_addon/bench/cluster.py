@@ -47,7 +47,7 @@ def run(ctx):
     from ..cluster import generate, imports
     from ..world import World
     from .formats import region
-    r = 4 if ctx.quick else 10
+    r = 4 if ctx.quick else 16
     n = (2 * r + 1) ** 2
     rows = {}
     for w in (1, 2):
@@ -59,7 +59,7 @@ def run(ctx):
     yield ("cluster_generate_numpy_speedup_w2", rows[("generate", 2)] / rows[("generate", 1)],
            "x", "--workers 2 over --workers 1")
 
-    side = 12 if ctx.quick else 24
+    side = 12 if ctx.quick else 32
     save = ctx.tmp / "mcc"
     (save / "region").mkdir(parents=True)
     (save / "region" / "r.0.0.mca").write_bytes(region(np.random.default_rng(2), side))

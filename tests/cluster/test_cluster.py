@@ -115,7 +115,8 @@ def prepared_world(path: Path) -> Path:
 
 
 def save_folder(path: Path) -> Path:
-    """A 1.18+ save: 8 x 6 chunks (colour blocks among them), one unfinished chunk."""
+    """A 1.18+ save: 8 x 6 chunks (colour blocks among them), an unfinished and a
+    damaged one."""
     rng = np.random.default_rng(3)
     wool = [f"minecraft:{c}_wool" for c in ("red", "blue", "lime", "cyan", "pink", "gray")]
     chunks = {}
@@ -126,6 +127,7 @@ def save_folder(path: Path) -> Path:
                 secs[0][tuple(rng.integers(0, 16, 3))] = name
             chunks[(cx, cz)] = mc.chunk_nbt(cx, cz, secs)
     chunks[(1, 7)] = mc.chunk_nbt(1, 7, column(rng, 1, 7)[0], status="minecraft:features")
+    chunks[(2, 7)] = b"\x0a\x00\x00\x08not NBT"  # damaged: skipped with its reason
     mc.write_region(path / "region", chunks)
     mc.level_dat(path, 3953)
     return path
@@ -244,7 +246,8 @@ def test_import_and_far_equal_one_process(cluster, ref, tmp_path):
     assert chunks(w) == chunks(ref["imp"])
     assert meta(w, "colors") == meta(ref["imp"], "colors") and meta(w, "colors")
     assert report(r.stdout) == ref["imp_report"]  # counts, skipped chunks, names
-    assert computed(r.stderr, "read") == 49
+    assert computed(r.stderr, "read") == 50
+    assert "damaged: 1" in r.stdout and "not finished by Minecraft: 1" in r.stdout
     f = tmp_path / "far.sqlite"
     shutil.copy(ref["gen"], f)
     r = cli("far", "--world", f, *FAR, "--backend", "numpy", "--scheduler", cluster.address)
@@ -270,8 +273,8 @@ def test_import_killed_then_resumed(cluster, ref, tmp_path):
     assert 0 < kept < 48
     r = cli("import", "--world", w, "--from", ref["save"], "--scheduler", cluster.address)
     assert r.returncode == 0, r.stderr
-    # only what is missing: the chunks not committed, and the unfinished one again
-    assert computed(r.stderr, "read") == 49 - kept
+    # only what is missing: the chunks not committed, the unfinished and damaged again
+    assert computed(r.stderr, "read") == 50 - kept
     assert chunks(w) == chunks(ref["imp"])
     assert meta(w, "colors") == meta(ref["imp"], "colors")
     assert not meta(w, "import_job")
@@ -318,6 +321,8 @@ def test_bad_addresses_and_unwritable_worlds(cluster, ref, tmp_path):
     _refused(cli("generate", "--world", new, "--seed", 1, "--scheduler", bad[1]), bad[1])
     _refused(cli("far", "--world", w, *FAR, "--scheduler", bad[2], env=quick), bad[2])
     _refused(cli("import", "--world", new, "--from", ref["save"], "--workers", 0), "--workers")
+    _refused(cli("far", "--world", w, "--center", 0, 0, "--far", 0), "--far")
+    _refused(cli("far", "--world", new, *FAR), "no world file")
     assert not new.exists() and w.read_bytes() == before
     # a world file this user may not write (root: without the capability to ignore modes)
     os.chmod(w, 0o444)

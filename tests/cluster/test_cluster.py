@@ -8,7 +8,6 @@ addresses, an unreachable scheduler, a worker without the package and an unwrita
 world: one line, exit 2, no change."""
 from __future__ import annotations
 
-import json
 import os
 import re
 import shutil
@@ -40,16 +39,6 @@ def cli(*args, env=None, wait=True, prefix=()):
     return subprocess.run(cmd, capture_output=True, text=True, env=e, timeout=300)
 
 
-def _dask(*args, pythonpath=True, cwd=None):
-    env = dict(os.environ)
-    env.pop("PYTHONPATH", None)
-    if pythonpath:
-        env["PYTHONPATH"] = str(ROOT)
-    return subprocess.Popen([sys.executable, "-m", "dask", *map(str, args)], env=env, cwd=cwd,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                            start_new_session=True)
-
-
 def _stop(p):
     try:
         os.killpg(p.pid, signal.SIGKILL)
@@ -58,48 +47,7 @@ def _stop(p):
     p.wait(10)
 
 
-class Cluster:
-    def __init__(self, tmp: Path):
-        self.procs = []
-        sf = tmp / "scheduler.json"
-        self.procs.append(_dask("scheduler", "--host", "127.0.0.1", "--port", 0,
-                                "--no-dashboard", "--scheduler-file", sf))
-        end = time.monotonic() + 60
-        while not sf.exists() or not sf.read_text().strip():
-            assert time.monotonic() < end, "dask scheduler did not start"
-            time.sleep(0.1)
-        time.sleep(0.2)
-        self.address = json.loads(sf.read_text())["address"]
-        for i in range(2):
-            self.procs.append(self.worker(f"w{i}", tmp))
-        self.wait_workers(2)
-
-    def worker(self, name, tmp, pythonpath=True):
-        return _dask("worker", self.address, "--nthreads", 1, "--nworkers", 1, "--name", name,
-                     "--no-dashboard", "--host", "127.0.0.1", "--local-directory", tmp / name,
-                     pythonpath=pythonpath, cwd=tmp)
-
-    def client(self):
-        from distributed import Client
-        return Client(self.address, timeout="20s", set_as_default=False)
-
-    def wait_workers(self, n, timeout=60):
-        with self.client() as c:
-            end = time.monotonic() + timeout
-            while len(c.scheduler_info()["workers"]) != n:
-                assert time.monotonic() < end, f"the cluster did not reach {n} workers"
-                time.sleep(0.1)
-
-    def close(self):
-        for p in reversed(self.procs):
-            _stop(p)
-
-
-@pytest.fixture(scope="module")
-def cluster(tmp_path_factory):
-    c = Cluster(tmp_path_factory.mktemp("dask"))
-    yield c
-    c.close()
+# the cluster fixture: conftest.py (one cluster per test run, shared with the render tasks)
 
 
 # ---- inputs and the one-process outputs --------------------------------------

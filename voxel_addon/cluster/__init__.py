@@ -290,6 +290,18 @@ def _malloc() -> None:
         pass  # not glibc: nothing to undo
 
 
+def scratch() -> str:
+    """A folder for a task's temporary files: on a worker its own local directory (Dask
+    removes it with the worker, or, for a killed one, when the next worker starts),
+    elsewhere the system's."""
+    try:
+        from distributed import get_worker
+        return get_worker().local_directory
+    except (ImportError, ValueError):
+        import tempfile
+        return tempfile.gettempdir()
+
+
 class Serial:
     """Pool.map in this process, one item after another (the commands' one-process
     path where it shares the cluster's code: the same tasks, the same results)."""

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import csv
 import os
+import shutil
 import statistics
 import subprocess
 import sys
@@ -67,8 +68,9 @@ def _side(tree: Path, area: str, quick: bool, out: Path) -> dict:
     cmd = [sys.executable, "-m", "voxel_addon", "bench", "--out", str(out), "--area", area]
     if quick:
         cmd.append("--quick")
+    shutil.rmtree(out, ignore_errors=True)  # never read an earlier invocation's CSV
     r = subprocess.run(cmd, cwd=tree, env=env, capture_output=True, text=True)
-    (out / "stderr.txt").parent.mkdir(parents=True, exist_ok=True)
+    out.mkdir(parents=True, exist_ok=True)
     (out / "stderr.txt").write_text(r.stdout + r.stderr)
     if r.returncode or not (out / "bench.csv").exists():
         print(f"  {area} at {tree.name}: failed (exit {r.returncode}), see {out / 'stderr.txt'}",
@@ -109,6 +111,7 @@ def run(out: Path, rev: str, areas: list[str] | None, quick: bool, rounds: int) 
     finally:
         subprocess.run(["git", "worktree", "remove", "--force", str(base)], cwd=ROOT,
                        capture_output=True)
+        shutil.rmtree(tmp, ignore_errors=True)
     rows = compare(per, meta)
     path = out / "bench.csv"
     with path.open("w", newline="") as f:

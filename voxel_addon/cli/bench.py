@@ -9,20 +9,19 @@ def add_parser(sub):
     from ..bench.runner import AREAS
     p.add_argument("--area", action="append", choices=AREAS, help="only this area (repeatable)")
     p.add_argument("--quick", action="store_true", help="smaller sizes, for a smoke run "
-                   "(with --baseline and no --area: the storage and world areas, about a minute "
-                   "per round)")
+                   "(with --baseline and no --area: the storage and world areas, 3 rounds in "
+                   "about a minute)")
     p.add_argument("--baseline", metavar="REV", help="also run the areas at git revision REV "
                    "(a temporary worktree) alternating with this tree; the CSV gets ratios")
-    p.add_argument("--rounds", type=int, metavar="N",
-                   help="with --baseline: runs per side (default 3, with --quick 1)")
+    p.add_argument("--rounds", type=int, default=3, metavar="N",
+                   help="with --baseline: runs per side, alternating (default 3)")
     return p
 
 
 def run(args):
     if args.baseline:
         from ..bench.compare import run as compare
-        path = compare(args.out, args.baseline, args.area, args.quick,
-                       args.rounds or (1 if args.quick else 3))
+        path = compare(args.out, args.baseline, args.area, args.quick, args.rounds)
     else:
         from ..bench.runner import run as run_bench
         path = run_bench(args.out, args.area, args.quick)

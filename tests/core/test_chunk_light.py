@@ -57,3 +57,28 @@ def test_cold_blocks_are_kept_packed(monkeypatch):
     assert c.get(3, 4, 200) == 7 and c.blocks[3, 4, 200] == 7
     a[3, 4, 200] = 7
     assert np.array_equal(c.blocks, a)
+
+
+def test_cold_blocks_keep_a_byte_per_voxel_when_ids_fit(monkeypatch):
+    """Block ids below 256 are packed as bytes (half the memory of a cold chunk) and
+    read back as the same uint16 ids; a chunk holding a larger id keeps two bytes."""
+    from voxel_addon.core import chunk as C
+    monkeypatch.setattr(C, "HOT_S", -1.0)
+    rng = np.random.default_rng(2)
+    for big in (0, 300, 65535):
+        a = C.empty()
+        a[:, :, :50] = 255
+        a[:, :, 50:80] = rng.integers(0, 256, (16, 16, 30))
+        if big:
+            a[5, 6, 70] = big
+        c = Chunk((0, 0), a.copy(order="F"))
+        c.compact()
+        slab = c._bpack[-1]
+        assert slab.dtype == (np.uint16 if big else np.uint8)
+        assert c.nbytes() == slab.nbytes == 16 * 16 * 30 * slab.itemsize
+        got = c.blocks
+        assert got.dtype == np.uint16 and got.flags.f_contiguous and np.array_equal(got, a)
+    # light is never narrowed (its packs are uploaded as they are)
+    a = np.zeros((16, 16, 256), np.uint16, order="F")
+    a[:, :, 10:20] = 7
+    assert pack_layers(a)[-1].dtype == np.uint16

@@ -148,7 +148,7 @@ class Chunk:
         b = self._blocks
         if b is not None and b.shape == (SIZE, SIZE, HEIGHT) \
                 and time.monotonic() - self._bhot > HOT_S:
-            self._bpack, self._blocks = pack_layers(b), None
+            self._bpack, self._blocks = pack_layers(b, narrow=True), None
 
     @property
     def origin(self) -> tuple[int, int]:
@@ -184,9 +184,12 @@ def put(blocks, data, lx: int, ly: int, z: int, block: int, value: int):
     return data
 
 
-def pack_layers(a: np.ndarray) -> tuple:
+def pack_layers(a: np.ndarray, narrow: bool = False) -> tuple:
     """(16, 16, 256) array -> (shape, lo, hi, bottom value, top value, a[:, :, lo:hi]):
-    the layers below lo all hold the bottom value, those from hi up the top value."""
+    the layers below lo all hold the bottom value, those from hi up the top value.
+    `narrow`: the kept layers as uint8 when every value fits (block ids: the registry
+    has fewer than 256, so a cold chunk's blocks take half the memory); unpack_layers
+    gives the array back in the dtype of the bottom and top values, a's."""
     f = a.reshape(-1, a.shape[2], order="F") if a.flags.f_contiguous \
         else np.asfortranarray(a).reshape(-1, a.shape[2], order="F")
     mn, mx = f.min(0), f.max(0)
@@ -196,11 +199,13 @@ def pack_layers(a: np.ndarray) -> tuple:
     hi = int(odd[-1]) + 1 if odd.size else 0
     odd = np.flatnonzero(~same[:hi] | (mn[:hi] != bot))
     lo = int(odd[0]) if odd.size else hi
+    if narrow and a.dtype.itemsize > 1 and (hi <= lo or int(mx[lo:hi].max()) < 256):
+        return a.shape, lo, hi, bot, top, a[:, :, lo:hi].astype(np.uint8, order="F")
     return a.shape, lo, hi, bot, top, a[:, :, lo:hi].copy(order="F")
 
 
 def unpack_layers(shape, lo, hi, bot, top, slab) -> np.ndarray:
-    out = np.empty(shape, slab.dtype, order="F")
+    out = np.empty(shape, getattr(bot, "dtype", slab.dtype), order="F")
     out[:, :, :lo] = bot
     out[:, :, lo:hi] = slab
     out[:, :, hi:] = top

@@ -101,3 +101,9 @@ def test_the_check_can_fail():
             "from voxel_addon import light\nfrom . import chunk\n")
     assert imports(PKG / "core" / "probe.py", text) == {"world", "render", "light", "core"}
     assert "world" not in table()["core"] and table()["cli"]["blender"] == "bake.py"
+
+
+def test_minecraft_resources_stand_alone():
+    """mcres reads the player's files for the import, the bake and the drawing alike:
+    it may lean on core only, never on a world, a format or the GPU."""
+    assert table()["mcres"] == {"core": None}

@@ -4,6 +4,7 @@ decoded, not after inflating all of it (a 65 KB zstd frame of 2 GiB of zeros too
 4.9 s and 2.2 GB before)."""
 from __future__ import annotations
 
+import gzip
 import sqlite3
 import tracemalloc
 import zlib
@@ -33,8 +34,8 @@ def zstd_bomb(n: int, declared: bool = True) -> bytes:
     return b"".join(out)
 
 
-def zlib_bomb(n: int) -> bytes:
-    c = zlib.compressobj(9)
+def zlib_bomb(n: int, wbits: int = 15) -> bytes:
+    c = zlib.compressobj(9, zlib.DEFLATED, wbits)
     zero = bytes(MIB)
     return b"".join([c.compress(zero) for _ in range(n // MIB)] + [c.flush()])
 
@@ -42,7 +43,8 @@ def zlib_bomb(n: int) -> bytes:
 @pytest.fixture(scope="module")
 def bombs():
     return {"zstd": zstd_bomb(2048 * MIB), "zlib": zlib_bomb(256 * MIB),
-            "zstd-undeclared": zstd_bomb(256 * MIB, declared=False)}
+            "zstd-undeclared": zstd_bomb(256 * MIB, declared=False),
+            "gzip": zlib_bomb(64 * MIB, 31)}
 
 
 def peak_of(fn):
@@ -64,6 +66,32 @@ def test_decode_stops_at_the_expected_size(bombs, kind):
         with pytest.raises(ValueError):
             codecs.decode(codec, blob, SIZE)
     assert peak_of(go) < 8 * SIZE
+
+
+def test_gzip_inflate_stops_at_the_expected_size(bombs):
+    def go():
+        with pytest.raises(ValueError):
+            codecs.inflate(bombs["gzip"], SIZE, 31)
+    assert peak_of(go) < 8 * SIZE
+    raw = bytes(range(256)) * 8
+    assert codecs.inflate(gzip.compress(raw), len(raw), 31) == raw
+
+
+@pytest.mark.parametrize("blob", ["text", 12, 1.5])
+def test_a_blob_of_another_type_is_a_damaged_chunk(world_path, blob):
+    with World.create(world_path, seed=1, generator="flat", loader=False) as w:
+        w.chunk_at(0, 0)
+        w.flush()
+    db = sqlite3.connect(world_path)
+    db.execute("UPDATE chunks SET blocks=? WHERE cx=0 AND cy=0", (blob,))
+    db.commit()
+    db.close()
+    wf = WorldFile(world_path, readonly=True)
+    try:
+        with pytest.raises(CorruptChunk, match="where a blob belongs"):
+            wf.read_chunk((0, 0))
+    finally:
+        wf.close()
 
 
 @pytest.mark.parametrize("codec", ["zstd", "zlib"])

@@ -5,6 +5,10 @@ data}`, root `Status`. 1.13-1.17 (1451..2843): `Level.Sections[]` with `Palette`
 `BlockStates`, `Level.Status`; before 1.16 (DataVersion 2529) indices run on across
 longs, since then a long holds 64 // bits whole indices. Older worlds (numeric ids)
 are refused. Index order in a section: y * 256 + z * 16 + x.
+
+A chunk's NBT may hold at most CHUNK_TAGS tags (arrays count as one): a full 1.21
+chunk has a few thousand, one with a thousand filled chests some hundred thousand;
+more is a hostile file (budget.Exceeded), refused with the whole import.
 """
 from __future__ import annotations
 
@@ -17,6 +21,7 @@ from . import nbt
 V_FLATTENING = 1451  # 17w47a: block names and palettes (1.13)
 V_PACKED = 2529      # 20w17a: indices never span two longs
 V_NO_LEVEL = 2844    # 21w43a: no Level wrapper, y from -64 (1.18)
+CHUNK_TAGS = 1 << 19
 DONE = {"full", "minecraft:full", "postprocessed", "fullchunk"}
 _SECTION = {"Y": None, "block_states": {"palette": {"Name": None}, "data": None},
             "Palette": {"Name": None}, "BlockStates": None}
@@ -40,8 +45,18 @@ class Chunk(NamedTuple):
     sections: list
 
 
-def read(payload: bytes) -> Chunk:
-    root = nbt.parse(payload, keep=KEEP)
+def read(payload: bytes, budget=None) -> Chunk:
+    """The sections of a chunk's NBT; `budget` (a budget.Budget) is charged its tags."""
+    limit = CHUNK_TAGS if budget is None else min(CHUNK_TAGS, max(budget.tags, 0))
+    try:
+        root, tags = nbt.read(payload, KEEP, limit)
+    except nbt.TooMany:
+        if limit < CHUNK_TAGS:
+            raise nbt.TooMany(budget.tags_message()) from None
+        raise nbt.TooMany(f"more than {CHUNK_TAGS:,} NBT tags in one chunk (real ones "
+                          "have thousands)") from None
+    if budget is not None:
+        budget.spend_tags(tags)
     version = root.get("DataVersion")
     if not isinstance(version, int):
         raise ChunkError("no DataVersion (a world from before 1.13 is not supported; "

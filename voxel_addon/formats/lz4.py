@@ -15,6 +15,11 @@ import struct
 MAGIC = b"LZ4Block"
 _HEAD = struct.Struct("<BiiI")
 
+
+class TooLarge(ValueError):
+    """The stream decodes to more than its limit."""
+
+
 try:
     from lz4 import block as _block
 except ImportError:
@@ -104,7 +109,7 @@ def decode_stream(data, limit: int) -> bytes:
         if clen == 0 and dlen == 0:
             return bytes(out)
         if len(out) + dlen > limit:
-            raise ValueError(f"LZ4 data larger than {limit} bytes")
+            raise TooLarge(f"LZ4 data larger than {limit} bytes")
         body = data[pos:pos + clen]
         if method == 0x10:
             if clen != dlen:

@@ -4,15 +4,17 @@ Minecraft block (x, y, z) becomes voxel (x, -1-z, y - y_min): not mirrored, nort
 (-z) is +y, chunk (cx, cz) is chunk (cx, -cz-1); layers outside z 0..255 are dropped
 and counted. Chunks Minecraft has not finished (Status other than full) are skipped
 and counted; a damaged chunk (one from before 1.13 too) is skipped with its one-line
-reason. What can be checked is checked before the first write: chunks already in the
-world, a level.dat from before 1.13; a world whose chunks are all from before 1.13 is
-refused having written nothing. Chunks go to the file in batches, each one
-transaction (with the palette colours they use): an interrupted import keeps every
-finished batch, and no chunk is ever half-written. Whether a chunk is already in the
-file is decided again inside each batch's transaction (World.store_chunks), so a
-chunk another writer stored while the import ran is kept (counted in `kept`), and
-with replace the edits saved since the import started are applied over the imported
-one.
+reason; a hostile file (a region header with shared sectors, an import budget spent:
+formats/budget.py) refuses the import with one line. What can be checked is checked
+before the first write: region headers and level.dat (when the files are listed),
+chunks already in the world, a level.dat from before 1.13; a world whose chunks are
+all from before 1.13 is refused having written nothing. Chunks go to the file in
+batches, each one transaction (with the palette colours they use): an interrupted
+import keeps every finished batch, and no chunk is ever half-written. Whether a chunk
+is already in the file is decided again inside each batch's transaction
+(World.store_chunks), so a chunk another writer stored while the import ran is kept
+(counted in `kept`), and with replace the edits saved since the import started are
+applied over the imported one.
 """
 from __future__ import annotations
 
@@ -28,11 +30,15 @@ from ..core import chunk as C
 from ..core import colors
 from ..core.blocks import REGISTRY
 from ..core.errors import VoxelError
-from . import anvil, mapping, nbt
+from . import anvil, mapping, nbt, region
+from .budget import Budget, Exceeded
 from .region import External, Region, RegionError
 
 BATCH = 32
 LAYOUTS = ("dimensions/minecraft/overworld/region", "region")  # 26.1 first, then older
+LEVEL_KEEP = {"Data": {"DataVersion": None}}
+LEVEL_TAGS = 1 << 18   # a level.dat has hundreds to thousands
+LEVEL_BYTES = 16 << 20  # and tens of KB
 
 
 @dataclass
@@ -71,14 +77,17 @@ class Report:
 
 def regions_of(path) -> list[Path]:
     """The region files of a save folder (both layouts), a folder of .mca files or
-    one .mca file."""
+    one .mca file; their headers checked (check_headers) and a hostile level.dat
+    refused, so that callers learn it before they make anything."""
     path = Path(path)
     if path.is_file():
         if path.suffix != ".mca":
             raise VoxelError(f"{path} is not a region file (.mca)")
+        check_headers([path])
         return [path]
     if not path.is_dir():
         raise VoxelError(f"{path} does not exist")
+    level_version(path)
     for sub in LAYOUTS:
         if (path / sub).is_dir():
             path = path / sub
@@ -87,18 +96,40 @@ def regions_of(path) -> list[Path]:
     if not files:
         raise VoxelError(f"no region files (r.X.Z.mca) in {path} (nor in region/ or "
                          "dimensions/minecraft/overworld/region/)")
+    check_headers(files)
     return files
 
 
+def _refused(f, e) -> VoxelError:
+    msg = str(e)
+    name = f"{Path(f).name}: "
+    return VoxelError(f"{f}: {msg[len(name):] if msg.startswith(name) else msg}")
+
+
+def check_headers(files) -> None:
+    """Refuse damaged or hostile region headers (shared sectors, sectors in the header
+    or past the file) reading 8 KiB of each: before anything is written."""
+    for f in files:
+        try:
+            region.check(f)
+        except (OSError, RegionError) as e:
+            raise _refused(f, e) from None
+
+
 def level_version(path) -> int | None:
-    """DataVersion from a save folder's level.dat, or None."""
+    """DataVersion from a save folder's level.dat, or None (a damaged one is ignored,
+    one of more than LEVEL_TAGS tags or LEVEL_BYTES refused)."""
     f = Path(path) / "level.dat"
     if not f.is_file():
         return None
     try:
         with gzip.open(f) as g:
-            raw = g.read(64 << 20)
-        data = nbt.parse(raw).get("Data", {})
+            raw = g.read(LEVEL_BYTES + 1)
+        if len(raw) > LEVEL_BYTES:
+            raise Exceeded(f"inflates past {LEVEL_BYTES >> 20} MiB")
+        data = nbt.parse(raw, LEVEL_KEEP, LEVEL_TAGS).get("Data", {})
+    except Exceeded as e:
+        raise VoxelError(f"{f}: {e} (a hostile file?)") from None
     except (OSError, EOFError, ValueError):
         return None
     v = data.get("DataVersion") if isinstance(data, dict) else None
@@ -187,7 +218,7 @@ def plan(path, area=None) -> list[tuple[Region, int, int]]:
         try:
             reg = Region(f)
         except (OSError, RegionError) as e:
-            raise VoxelError(f"{f}: {e}") from None
+            raise _refused(f, e) from None
         for cx, cz in reg.chunks():
             if area is not None:
                 x0, z0, x1, z1 = area
@@ -229,11 +260,15 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False):
                          "(numeric block ids); open and save the world in Minecraft 1.13 "
                          "or newer first")
     old = 0  # chunks from before 1.13: skipped like damaged ones, unless all are
+    budget = Budget.of_input(sum(r.stored for r in {id(t[0]): t[0] for t in todo}.values()))
     pal = _Palettes(world, report)
     batch = []
     for done, (reg, cx, cz) in enumerate(todo, 1):
         try:
-            ch = anvil.read(reg.payload(cx, cz))
+            ch = anvil.read(reg.payload(cx, cz, budget), budget)
+        except Exceeded as e:
+            raise VoxelError(f"{reg.path.name} chunk ({cx}, {cz}): {e}; import refused") \
+                from None
         except External:
             report.external += 1
             ch = None

@@ -1,7 +1,10 @@
 """A small, bounded reader of Minecraft's NBT:
 big-endian named tags. Hostile input: every length is checked against the bytes
-left before anything is allocated, nesting stops at 512 levels, and a parse never
-reads past its buffer; any fault is an NbtError (a ValueError) with the offset.
+left before anything is allocated, nesting stops at 512 levels (an explicit stack,
+no recursion), a parse reads at most `limit` tags (arrays and lists of numbers count
+as one, they are views) and never past its buffer. A fault is an NbtError (a
+ValueError) with the offset; too many tags or levels is a Hostile (an NbtError and a
+budget.Exceeded: callers refuse the whole file).
 
 `parse(buf, keep)` returns the root compound as a dict; `keep` ({name: sub-keep or
 None for all of it}) limits a compound, or each compound of a list, to those
@@ -17,137 +20,184 @@ import struct
 
 import numpy as np
 
+from .budget import Exceeded
+
 END, BYTE, SHORT, INT, LONG, FLOAT, DOUBLE, BYTES, STRING, LIST, COMPOUND, INTS, LONGS = range(13)
 MAX_DEPTH = 512
+MAX_TAGS = 1 << 19   # one parse; a full 1.21 chunk has a few thousand
 _FIXED = {BYTE: ">i1", SHORT: ">i2", INT: ">i4", LONG: ">i8", FLOAT: ">f4", DOUBLE: ">f8"}
+_DT = {t: np.dtype(d) for t, d in {**_FIXED, BYTES: ">i1", INTS: ">i4", LONGS: ">i8"}.items()}
+# bytes per element: scalars and numeric list items; arrays' items
 _SIZE = {t: np.dtype(d).itemsize for t, d in _FIXED.items()}
-_ARRAY = {BYTES: ">i1", INTS: ">i4", LONGS: ">i8"}
-_SCALAR = {t: struct.Struct(d.replace("i1", "b").replace("i2", "h").replace("i4", "i")
-                            .replace("i8", "q").replace("f4", "f").replace("f8", "d"))
+_ASIZE = {BYTES: 1, INTS: 4, LONGS: 8}
+_UNPACK = {t: struct.Struct(d.replace("i1", "b").replace("i2", "h").replace("i4", "i")
+                            .replace("i8", "q").replace("f4", "f").replace("f8", "d")).unpack_from
            for t, d in _FIXED.items()}
-_U16 = struct.Struct(">H")
-_I32 = struct.Struct(">i")
+_I32 = struct.Struct(">i").unpack_from
 
 
 class NbtError(ValueError):
     pass
 
 
-class _Reader:
-    __slots__ = ("buf", "n")
-
-    def __init__(self, buf):
-        self.buf = bytes(buf)
-        self.n = len(self.buf)
-
-    def need(self, pos: int, k: int) -> int:
-        if k < 0 or pos + k > self.n:
-            raise NbtError(f"NBT ends early at byte {pos} (wants {k} more)")
-        return pos + k
-
-    def string(self, pos):
-        if pos + 2 > self.n:
-            raise NbtError(f"NBT ends early at byte {pos}")
-        stop = pos + 2 + (self.buf[pos] << 8 | self.buf[pos + 1])
-        if stop > self.n:
-            raise NbtError(f"a string runs past the NBT at byte {pos}")
-        return self.buf[pos + 2:stop].decode("utf-8", "replace"), stop
-
-    def length(self, pos, size):
-        end = self.need(pos, 4)
-        (k,) = _I32.unpack_from(self.buf, pos)
-        if k < 0:
-            raise NbtError(f"negative length {k} at byte {pos}")
-        self.need(end, k * size)  # before anything is allocated
-        return k, end
-
-    def value(self, tag, pos, depth, keep=None):
-        if depth > MAX_DEPTH:
-            raise NbtError("NBT nested deeper than 512 levels")
-        s = _SCALAR.get(tag)
-        if s is not None:
-            end = self.need(pos, s.size)
-            return s.unpack_from(self.buf, pos)[0], end
-        if tag == STRING:
-            return self.string(pos)
-        if tag in _ARRAY:
-            dt = np.dtype(_ARRAY[tag])
-            k, pos = self.length(pos, dt.itemsize)
-            return np.frombuffer(self.buf, dt, k, pos), pos + k * dt.itemsize
-        if tag == LIST:
-            end = self.need(pos, 1)
-            item = self.buf[pos]
-            k, pos = self.length(end, _SIZE.get(item, 1 if item != END else 0))
-            if item in _FIXED:
-                dt = np.dtype(_FIXED[item])
-                return np.frombuffer(self.buf, dt, k, pos), pos + k * dt.itemsize
-            if item == END:
-                return [], pos
-            if item > LONGS:
-                raise NbtError(f"unknown list item tag {item} at byte {end}")
-            out = []
-            for _ in range(k):
-                v, pos = self.value(item, pos, depth + 1, keep)
-                out.append(v)
-            return out, pos
-        if tag == COMPOUND:
-            return self.compound(pos, depth + 1, keep)
-        raise NbtError(f"unknown tag {tag} at byte {pos}")
-
-    def skip(self, tag, pos, depth):
-        if depth > MAX_DEPTH:
-            raise NbtError("NBT nested deeper than 512 levels")
-        if tag in _SIZE:
-            return self.need(pos, _SIZE[tag])
-        if tag == STRING:
-            end = self.need(pos, 2)
-            return self.need(end, _U16.unpack_from(self.buf, pos)[0])
-        if tag in _ARRAY:
-            size = np.dtype(_ARRAY[tag]).itemsize
-            k, pos = self.length(pos, size)
-            return pos + k * size
-        if tag == LIST:
-            end = self.need(pos, 1)
-            item = self.buf[pos]
-            k, pos = self.length(end, _SIZE.get(item, 1 if item != END else 0))
-            if item in _SIZE:
-                return pos + k * _SIZE[item]
-            if item > LONGS:
-                raise NbtError(f"unknown list item tag {item} at byte {end}")
-            for _ in range(k):
-                pos = self.skip(item, pos, depth + 1)
-            return pos
-        if tag == COMPOUND:
-            while True:
-                end = self.need(pos, 1)
-                t = self.buf[pos]
-                if t == END:
-                    return end
-                e2 = self.need(end, 2)
-                pos = self.skip(t, self.need(e2, _U16.unpack_from(self.buf, end)[0]), depth + 1)
-        raise NbtError(f"unknown tag {tag} at byte {pos}")
-
-    def compound(self, pos, depth, keep):
-        out = {}
-        while True:
-            end = self.need(pos, 1)
-            t = self.buf[pos]
-            if t == END:
-                return out, end
-            name, pos = self.string(end)
-            if keep is None:
-                out[name], pos = self.value(t, pos, depth)
-            elif name in keep:
-                out[name], pos = self.value(t, pos, depth, keep[name])
-            else:
-                pos = self.skip(t, pos, depth)
+class Hostile(NbtError, Exceeded):
+    """Past a limit no real file comes near (tags, nesting): refuse the whole file."""
 
 
-def parse(buf, keep=None) -> dict:
-    """The root compound of an NBT document (its name dropped)."""
-    r = _Reader(buf)
-    if r.n < 3 or r.buf[0] != COMPOUND:
+class TooMany(Hostile):
+    """More tags than the parse's limit."""
+
+
+_KEEPS: dict = {}   # id(keep) -> (keep, its bytes-keyed copy); holding keep pins the id
+
+
+def _bytes_keys(keep):
+    """`keep` with names as bytes (compared before decoding), sub-keeps likewise."""
+    if keep is None:
+        return None
+    got = _KEEPS.get(id(keep))
+    if got is None:
+        if len(_KEEPS) > 256:
+            _KEEPS.clear()
+        got = _KEEPS[id(keep)] = (keep, {k.encode(): _bytes_keys(v) for k, v in keep.items()})
+    return got[1]
+
+
+def _length(b, pos, n, size):
+    if pos + 4 > n:
+        raise NbtError(f"NBT ends early at byte {pos} (wants 4 more)")
+    (k,) = _I32(b, pos)
+    if k < 0:
+        raise NbtError(f"negative length {k} at byte {pos}")
+    if pos + 4 + k * size > n:   # before anything is allocated
+        raise NbtError(f"NBT ends early at byte {pos + 4} (wants {k * size} more)")
+    return k
+
+
+def read(buf, keep=None, limit: int = MAX_TAGS):
+    """(root compound, tags read) of an NBT document; see the module docstring."""
+    b = buf if isinstance(buf, bytes) else bytes(buf)
+    n = len(b)
+    if n < 3 or b[0] != COMPOUND:
         raise NbtError("not NBT (the root is not a compound)")
-    _, pos = r.string(1)
-    out, _ = r.compound(pos, 0, keep)
-    return out
+    pos = 3 + (b[1] << 8 | b[2])
+    if pos > n:
+        raise NbtError("a string runs past the NBT at byte 1")
+    kb = _bytes_keys(keep)
+    SIZE, ASIZE, UNPACK, DT, frombuffer = _SIZE, _ASIZE, _UNPACK, _DT, np.frombuffer
+    root = {}
+    left = limit
+    # the open container: out (dict, list, or None while skipping), its keep, its list
+    # item tag (None: a compound) and items left; its parents wait on `stack`
+    out, k, item, cnt = root, kb, None, 0
+    stack = []
+    while True:
+        if item is None:               # a compound: its next named tag
+            if pos >= n:
+                raise NbtError(f"NBT ends early at byte {pos} (wants 1 more)")
+            t = b[pos]
+            if t == END:
+                pos += 1
+                if not stack:
+                    break
+                out, k, item, cnt = stack.pop()
+                continue
+            if pos + 3 > n:
+                raise NbtError(f"NBT ends early at byte {pos + 1}")
+            s = pos + 3
+            pos = s + (b[pos + 1] << 8 | b[pos + 2])
+            if pos > n:
+                raise NbtError(f"a string runs past the NBT at byte {s - 2}")
+            name = sub = None
+            if out is not None:
+                if k is None:
+                    name = b[s:pos].decode("utf-8", "replace")
+                else:
+                    key = b[s:pos]
+                    if key in k:
+                        sub = k[key]
+                        name = key.decode("utf-8", "replace")
+                    # else: skipped, name stays None
+        else:                          # a list: its next item
+            if cnt == 0:
+                out, k, item, cnt = stack.pop()   # a list is never the root
+                continue
+            cnt -= 1
+            t, sub, name = item, k, (True if out is not None else None)
+        left -= 1
+        if left < 0:
+            raise TooMany(f"more than {limit:,} NBT tags")
+        build = name is not None
+        # the value of tag t at pos
+        if t in SIZE:
+            e = pos + SIZE[t]
+            if e > n:
+                raise NbtError(f"NBT ends early at byte {pos} (wants {SIZE[t]} more)")
+            v = UNPACK[t](b, pos)[0] if build else None
+            pos = e
+        elif t == STRING:
+            if pos + 2 > n:
+                raise NbtError(f"NBT ends early at byte {pos}")
+            e = pos + 2 + (b[pos] << 8 | b[pos + 1])
+            if e > n:
+                raise NbtError(f"a string runs past the NBT at byte {pos}")
+            v = b[pos + 2:e].decode("utf-8", "replace") if build else None
+            pos = e
+        elif t in ASIZE:
+            c = _length(b, pos, n, ASIZE[t])
+            v = frombuffer(b, DT[t], c, pos + 4) if build else None
+            pos += 4 + c * ASIZE[t]
+        elif t == LIST:
+            if pos + 1 > n:
+                raise NbtError(f"NBT ends early at byte {pos} (wants 1 more)")
+            it = b[pos]
+            if it in SIZE:
+                c = _length(b, pos + 1, n, SIZE[it])
+                v = frombuffer(b, DT[it], c, pos + 5) if build else None
+                pos += 5 + c * SIZE[it]
+            elif it == END:
+                _length(b, pos + 1, n, 0)
+                v = [] if build else None
+                pos += 5
+            elif it > LONGS:
+                raise NbtError(f"unknown list item tag {it} at byte {pos}")
+            else:
+                c = _length(b, pos + 1, n, 1)
+                pos += 5
+                v = [] if build else None
+                if c:
+                    if build:
+                        if name is True:
+                            out.append(v)
+                        else:
+                            out[name] = v
+                    if len(stack) >= MAX_DEPTH - 1:
+                        raise Hostile("NBT nested deeper than 512 levels")
+                    stack.append((out, k, item, cnt))
+                    out, k, item, cnt = v, sub, it, c
+                    continue
+        elif t == COMPOUND:
+            if len(stack) >= MAX_DEPTH - 1:
+                raise Hostile("NBT nested deeper than 512 levels")
+            v = {} if build else None
+            if build:
+                if name is True:
+                    out.append(v)
+                else:
+                    out[name] = v
+            stack.append((out, k, item, cnt))
+            out, k, item, cnt = v, sub, None, 0
+            continue
+        else:
+            raise NbtError(f"unknown tag {t} at byte {pos}")
+        if build:
+            if name is True:
+                out.append(v)
+            else:
+                out[name] = v
+    return root, limit - left
+
+
+def parse(buf, keep=None, limit: int = MAX_TAGS) -> dict:
+    """The root compound of an NBT document (its name dropped)."""
+    return read(buf, keep, limit)[0]

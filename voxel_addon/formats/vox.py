@@ -10,8 +10,11 @@ R (v + 1/2 - pivot) - 1/2 + t for the rotations R and translations t of the nTRN
 nodes above it, outermost last. Hidden nodes and layers are left out.
 
 Hostile input: every size is checked against its parent chunk before anything is
-allocated; nesting, node counts and voxel counts are bounded; a fault is a VoxError
-(ValueError) with a one-line reason.
+allocated; nesting, node counts and voxel counts are bounded; the scene graph must be
+a tree (a node reached twice, shared or in a cycle, is refused: 16 groups of two
+children naming one node place 65,536 copies) and is walked once with budgets of
+MAX_INSTANCES placed models and MAX_PLACED placed voxels before anything is placed;
+a fault is a VoxError (ValueError) with a one-line reason.
 """
 from __future__ import annotations
 
@@ -22,6 +25,15 @@ import numpy as np
 
 MAX_SIDE = 256
 MAX_NODES = 1 << 16
+MAX_INSTANCES = 1 << 15
+MAX_CHUNKS = 1 << 18   # models (2 chunks each), nodes, materials, layers, ...
+MAX_MODELS = 1 << 16
+MAX_ENTRIES = 256      # one dictionary (node attributes, a frame: a handful)
+MAX_ENTRIES_ALL = 1 << 20
+# voxels over all instances. Placing one costs ~400 B in the world's edits
+# (world.set_blocks: 1M voxels took 480 MB, 12 s); raise it when that is leaner
+MAX_PLACED = 1 << 20
+MAX_STORED = 4 * MAX_PLACED   # voxels over all models, placed or not
 MAX_T = 1 << 24  # translations; a world is far smaller along z anyway
 _I = struct.Struct("<i")
 _HEAD = struct.Struct("<4sii")
@@ -66,8 +78,8 @@ class Scene(NamedTuple):
 # ---- reading -----------------------------------------------------------------
 def _chunks(buf, pos, end):
     """(id, content start, content end, children start, children end) of the chunks
-    in [pos, end)."""
-    out = []
+    in [pos, end), one at a time, at most MAX_CHUNKS."""
+    k = 0
     while pos < end:
         if pos + 12 > end:
             raise VoxError(f"chunk header cut at byte {pos}")
@@ -75,14 +87,17 @@ def _chunks(buf, pos, end):
         c0 = pos + 12
         if n < 0 or m < 0 or c0 + n + m > end:
             raise VoxError(f"chunk {cid!r} at byte {pos} runs past its parent")
-        out.append((cid, c0, c0 + n, c0 + n, c0 + n + m))
+        k += 1
+        if k > MAX_CHUNKS:
+            raise VoxError(f"more than {MAX_CHUNKS:,} chunks")
+        yield cid, c0, c0 + n, c0 + n, c0 + n + m
         pos = c0 + n + m
-    return out
 
 
 class _Cursor:
-    def __init__(self, buf, pos, end):
+    def __init__(self, buf, pos, end, spent):
         self.buf, self.pos, self.end = buf, pos, end
+        self.spent = spent   # [dictionary entries read so far in the file]
 
     def int(self):
         if self.pos + 4 > self.end:
@@ -103,7 +118,16 @@ class _Cursor:
         n = self.int()
         if n < 0 or n * 8 > self.end - self.pos:
             raise VoxError("a dictionary larger than its chunk")
+        if n > MAX_ENTRIES:
+            raise VoxError(f"a dictionary of {n} entries (more than {MAX_ENTRIES})")
+        self.spent[0] += n
+        if self.spent[0] > MAX_ENTRIES_ALL:
+            raise VoxError(f"more than {MAX_ENTRIES_ALL:,} dictionary entries")
         return {self.string(): self.string() for _ in range(n)}
+
+    def hidden(self):
+        """A node's attributes, only what the reader uses of them kept."""
+        return {"_hidden": "1"} if self.dict().get("_hidden") == "1" else {}
 
 
 def rotation(bits: int) -> np.ndarray:
@@ -128,14 +152,16 @@ def read(data: bytes) -> Scene:
     buf = memoryview(data)
     if len(buf) < 8 or bytes(buf[:4]) != b"VOX ":
         raise VoxError("not a MagicaVoxel file (no 'VOX ' header)")
-    top = _chunks(buf, 8, len(buf))
-    if not top or top[0][0] != b"MAIN":
+    top = next(_chunks(buf, 8, len(buf)), None)
+    if top is None or top[0] != b"MAIN":
         raise VoxError("no MAIN chunk")
-    _, _, _, k0, k1 = top[0]
+    _, _, _, k0, k1 = top
     models, sizes, nodes, layers = [], [], {}, {}
     palette = None
+    spent = [0]
+    stored = 0
     for cid, c0, c1, _, _ in _chunks(buf, k0, k1):
-        cur = _Cursor(buf, c0, c1)
+        cur = _Cursor(buf, c0, c1, spent)
         if cid == b"SIZE":
             s = (cur.int(), cur.int(), cur.int())
             if not all(1 <= v <= MAX_SIDE for v in s):
@@ -144,11 +170,18 @@ def read(data: bytes) -> Scene:
         elif cid == b"XYZI":
             if len(sizes) != len(models) + 1:
                 raise VoxError("XYZI without its SIZE")
+            if len(models) >= MAX_MODELS:
+                raise VoxError(f"more than {MAX_MODELS:,} models")
             n = cur.int()
             if n < 0 or 4 * n > c1 - cur.pos:
                 raise VoxError(f"{n} voxels do not fit their chunk")
-            a = np.frombuffer(buf, np.uint8, 4 * n, cur.pos).reshape(n, 4)
             s = sizes[-1]
+            if n > s[0] * s[1] * s[2]:
+                raise VoxError(f"{n} voxels in a model of {s[0]}x{s[1]}x{s[2]}")
+            stored += n
+            if stored > MAX_STORED:
+                raise VoxError(f"the models hold more than {MAX_STORED:,} voxels")
+            a = np.frombuffer(buf, np.uint8, 4 * n, cur.pos).reshape(n, 4)
             if n and ((a[:, :3] >= np.array(s)).any()):
                 raise VoxError(f"a voxel outside its model's size {s}")
             models.append(Model(s, a[a[:, 3] != 0]))
@@ -160,7 +193,7 @@ def read(data: bytes) -> Scene:
         elif cid in (b"nTRN", b"nGRP", b"nSHP"):
             if len(nodes) >= MAX_NODES:
                 raise VoxError("too many scene nodes")
-            nid, attrs = cur.int(), cur.dict()
+            nid, attrs = cur.int(), cur.hidden()
             if cid == b"nTRN":
                 child, _, layer, frames = cur.int(), cur.int(), cur.int(), cur.int()
                 if frames < 1 or frames > 4096:
@@ -180,7 +213,11 @@ def read(data: bytes) -> Scene:
                 n = cur.int()
                 if n < 0 or 4 * n > c1 - cur.pos:
                     raise VoxError("nGRP children do not fit their chunk")
-                nodes[nid] = ("G", attrs, [cur.int() for _ in range(n)])
+                if n > MAX_NODES:
+                    raise VoxError(f"nGRP with {n} children (more than {MAX_NODES:,} nodes)")
+                kids = np.frombuffer(buf, "<i4", n, cur.pos).tolist()
+                cur.pos += 4 * n
+                nodes[nid] = ("G", attrs, kids)
             else:
                 n = cur.int()
                 if n < 1 or n > c1 - cur.pos:
@@ -190,6 +227,8 @@ def read(data: bytes) -> Scene:
                 nodes[nid] = ("S", attrs, m)
         elif cid == b"LAYR":
             lid, attrs = cur.int(), cur.dict()
+            if len(layers) >= MAX_NODES:
+                raise VoxError("too many layers")
             layers[lid] = attrs.get("_hidden") == "1"
     if len(sizes) != len(models):
         raise VoxError("SIZE without its XYZI")
@@ -197,23 +236,27 @@ def read(data: bytes) -> Scene:
         raise VoxError("no models")
     if palette is None:
         palette = default_palette()
-    return Scene(models, _instances(nodes, layers, len(models)), palette)
+    return Scene(models, _instances(nodes, layers, models), palette)
 
 
-def _instances(nodes, layers, nmodels) -> list:
+def _instances(nodes, layers, models) -> list:
+    """The placed models of the scene graph, walked once from node 0; a node reached
+    twice is refused the moment it is reached again (nothing is copied first)."""
     if not nodes:  # a file without a scene: every model at the origin, unrotated
-        return [Instance(i, np.eye(3, dtype=np.int64), np.zeros(3, np.int64))
-                for i in range(nmodels)]
+        out = [Instance(i, np.eye(3, dtype=np.int64), np.zeros(3, np.int64))
+               for i in range(len(models))]
+        _placed(sum(len(m.xyzi) for m in models), len(out))
+        return out
     if 0 not in nodes:
         raise VoxError("scene graph without its root node 0")
     out = []
+    placed = 0
+    seen = {0}
     stack = [(0, np.eye(3, dtype=np.int64), np.zeros(3, np.int64), 0)]
-    steps = 0
     while stack:
         nid, rot, t, depth = stack.pop()
-        steps += 1
-        if depth > 64 or steps > 4 * MAX_NODES:
-            raise VoxError("scene graph too deep or cyclic")
+        if depth > 64:
+            raise VoxError("scene graph nested deeper than 64 nodes")
         node = nodes.get(nid)
         if node is None:
             raise VoxError(f"scene graph refers to missing node {nid}")
@@ -223,14 +266,35 @@ def _instances(nodes, layers, nmodels) -> list:
             _, _, child, layer, r, tt = node
             if layers.get(layer):
                 continue
-            stack.append((child, rot @ r, rot @ tt + t, depth + 1))
+            kids = (child,)
         elif node[0] == "G":
-            stack += [(c, rot, t, depth + 1) for c in reversed(node[2])]
+            kids = node[2]
         else:
-            if not 0 <= node[2] < nmodels:
+            if not 0 <= node[2] < len(models):
                 raise VoxError(f"nSHP refers to missing model {node[2]}")
+            placed += len(models[node[2]].xyzi)
+            _placed(placed, len(out) + 1)
             out.append(Instance(node[2], rot, t))
+            continue
+        for c in kids:
+            if c not in nodes:
+                raise VoxError(f"scene graph refers to missing node {c}")
+            if c in seen:
+                raise VoxError(f"scene graph reaches node {c} twice (shared or cyclic; "
+                               "MagicaVoxel writes a tree)")
+            seen.add(c)
+        if node[0] == "T":
+            stack.append((child, rot @ r, rot @ tt + t, depth + 1))
+        else:
+            stack += [(c, rot, t, depth + 1) for c in reversed(kids)]
     return out
+
+
+def _placed(voxels: int, instances: int) -> None:
+    if instances > MAX_INSTANCES:
+        raise VoxError(f"the scene places more than {MAX_INSTANCES:,} models")
+    if voxels > MAX_PLACED:
+        raise VoxError(f"the scene places more than {MAX_PLACED:,} voxels")
 
 
 def voxels(scene: Scene) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -42,6 +42,8 @@ def decode(codec: str, blob: bytes, size: int) -> bytes:
     """Decompress exactly `size` bytes; raises ValueError on damaged data or a wrong
     size. Hostile input: never more than `size` + 1 bytes are inflated (a 65 KB zstd
     frame can declare 2 GiB of zeros, a zlib stream 1000x its size)."""
+    if not isinstance(blob, (bytes, bytearray, memoryview)):  # SQLite columns are untyped
+        raise ValueError(f"a {type(blob).__name__} where a blob belongs")
     if codec == "zlib":
         return inflate(blob, size)
     if codec == "zstd":

@@ -23,6 +23,11 @@ def add_parser(sub):
                    help="Minecraft: only chunks touching blocks [X0, X1) x [Z0, Z1)")
     p.add_argument("--replace", action="store_true",
                    help="Minecraft: overwrite chunks the world already has")
+    p.add_argument("--resources", action="append", metavar="JAR_OR_PACK",
+                   help="Minecraft: the game's client .jar (or 'minecraft': the newest in "
+                        "the launcher folders) and resource packs (.zip or folders) laid "
+                        "over it in the order given; kept in the world for renders, bakes "
+                        "and the live view (repeatable)")
     p.add_argument("--generator", help="generator of a new world (default: empty)")
     p.add_argument("--seed", type=int, default=0, help="seed of a new world (default 0)")
     return p
@@ -40,13 +45,24 @@ def _open(args):
                         loader=False)
 
 
+def _stack(specs) -> list[str]:
+    """The stack's paths, absolute, bottom first; each source opened once (a bad pack
+    is refused before the world opens)."""
+    from ..mcres import Stack
+    stack = Stack.open(specs)
+    try:
+        return [str(Path(p).resolve()) for p in stack.paths]
+    finally:
+        stack.close()
+
+
 def run(args):
     src = args.source
     if not src.exists():
         raise VoxelError(f"{src} does not exist")
     is_vox = src.is_file() and src.suffix.lower() == ".vox"
-    if is_vox and (args.area or args.replace or args.y_min is not None):
-        raise VoxelError("--area, --replace and --y-min are for Minecraft worlds")
+    if is_vox and (args.area or args.replace or args.y_min is not None or args.resources):
+        raise VoxelError("--area, --replace, --y-min and --resources are for Minecraft worlds")
     if not is_vox and tuple(args.at) != (0, 0, 0):
         raise VoxelError("--at is for .vox files (Minecraft chunks keep their place)")
     if args.area and not (args.area[0] < args.area[2] and args.area[1] < args.area[3]):
@@ -58,6 +74,7 @@ def run(args):
     else:
         from ..formats import minecraft
         minecraft.regions_of(src)
+        resources = _stack(args.resources) if args.resources else None
     t0 = time.perf_counter()
     with Writing(args.world, "import", "importing into") as w:
         world = w.own(_open(args))
@@ -67,7 +84,8 @@ def run(args):
             rep = minecraft.Report()
             w.kept = lambda: f"{rep.chunks} chunks were written and kept" if rep.chunks else None
             minecraft.import_world(world, src, y_min=args.y_min, area=args.area,
-                                   replace=args.replace, progress=Progress("importing"), report=rep)
+                                   replace=args.replace, progress=Progress("importing"), report=rep,
+                                   resources=resources)
     if is_vox:
         note(f"{r['voxels']} voxels from {r['models']} models ({r['instances']} placed) "
              f"into box {' '.join(map(str, r['box']))} in {time.perf_counter() - t0:.2f} s")

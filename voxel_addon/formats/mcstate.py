@@ -20,6 +20,7 @@ import json
 import numpy as np
 
 from ..core.errors import VoxelError
+from ..mcres.states import parse_key, state_key  # noqa: F401  (the one spelling)
 from ..storage import mcbiomes
 
 KEY = "mc_states"
@@ -57,24 +58,6 @@ RENAMED = {"mountains": "windswept_hills", "snowy_mountains": "snowy_slopes",
            "shattered_savanna": "windswept_savanna", "gravelly_mountains": "windswept_gravelly_hills",
            "tall_birch_forest": "old_growth_birch_forest", "wooded_badlands_plateau": "wooded_badlands",
            "nether": "nether_wastes"}
-
-
-def state_key(name: str, props: dict | None) -> str:
-    name = name if ":" in name else f"minecraft:{name}"
-    if not props:
-        return name
-    return name + "[" + ",".join(f"{k}={props[k]}" for k in sorted(props)) + "]"
-
-
-def parse_key(key: str) -> tuple[str, dict]:
-    """`minecraft:name[k=v,…]` → (name, {k: v})."""
-    name, _, rest = key.partition("[")
-    props = {}
-    for part in rest.rstrip("]").split(","):
-        k, eq, v = part.partition("=")
-        if eq:
-            props[k] = v
-    return name, props
 
 
 def load(meta: dict, key: str, empty):

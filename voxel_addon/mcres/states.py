@@ -68,6 +68,20 @@ def parse_props(key: str) -> dict:
     return out
 
 
+def state_key(name: str, props: dict | None) -> str:
+    """A block state's one spelling: `minecraft:name[k=v,…]`, properties sorted."""
+    name = name if ":" in name else f"minecraft:{name}"
+    if not props:
+        return name
+    return name + "[" + ",".join(f"{k}={props[k]}" for k in sorted(props)) + "]"
+
+
+def parse_key(key: str) -> tuple[str, dict]:
+    """`minecraft:name[k=v,…]` → (name, {k: v})."""
+    name, _, rest = key.partition("[")
+    return name, (parse_props(rest.rstrip("]")) if rest else {})
+
+
 def _text(v) -> str:
     return str(v).lower() if isinstance(v, bool) else str(v)
 

@@ -13,7 +13,7 @@ import pytest
 from voxel_addon.core import colors
 from voxel_addon.core.blocks import REGISTRY
 from voxel_addon.formats import mcstate, minecraft
-from voxel_addon.storage import mcbiomes
+from voxel_addon.storage import minecraft as mcbiomes
 from voxel_addon.world import World
 
 from . import mcfiles as mc

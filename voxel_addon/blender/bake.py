@@ -53,6 +53,19 @@ def image(name: str, kind: str = "color") -> bpy.types.Image:
     return img
 
 
+def sprite(name: str, rgba: np.ndarray) -> bpy.types.Image:
+    """The packed image of a Minecraft sprite (bake.Bake.images: the player's pack)."""
+    key = f"voxel_mc_{name}"
+    img = bpy.data.images.get(key)
+    if img is None:
+        h, w = rgba.shape[:2]
+        img = bpy.data.images.new(key, w, h, alpha=True)
+        img.pixels.foreach_set((rgba.astype(np.float32) / 255.0)[::-1].ravel())
+        img.file_format = "PNG"
+        img.pack()
+    return img
+
+
 # ---------------------------------------------------------------- node helpers
 
 def _node(tree, kind, x, y, **props):
@@ -207,9 +220,9 @@ def _linear(c: float) -> float:
     return c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4
 
 
-def material(spec, style: str, light=None) -> bpy.types.Material:
+def material(spec, style: str, light=None, images=None) -> bpy.types.Material:
     """The material of `spec`; `light` is the bake's light atlas image (light_images)
-    or None when light travels in colour attributes."""
+    or None when light travels in colour attributes; `images` the bake's sprites."""
     key = f"{spec.name}|{style}|{light.name if light is not None else '-'}"
     for m in bpy.data.materials:
         if m.get("voxel_key") == key:
@@ -223,7 +236,9 @@ def material(spec, style: str, light=None) -> bpy.types.Material:
     t.links.new(bsdf.outputs[0], out.inputs["Surface"])
     bsdf.inputs["Roughness"].default_value = 0.9
     uv = _node(t, "ShaderNodeUVMap", -700, 0, uv_map="UVMap")
-    tex = _node(t, "ShaderNodeTexImage", -450, 100, image=image(spec.texture),
+    img = sprite(spec.image, images[spec.image]) if spec.image \
+        else image(spec.texture)
+    tex = _node(t, "ShaderNodeTexImage", -450, 100, image=img,
                 interpolation="Closest", extension="REPEAT")
     t.links.new(uv.outputs[0], tex.inputs[0])
     colour = tex.outputs["Color"]
@@ -358,7 +373,8 @@ def build_steps(bk, *, style: str = "blender", collection=None, hours: float = 1
         if link:
             bpy.context.scene.collection.children.link(collection)
     light = light_images(bk, style, hours)
-    mats = [material(s, style, light) for s in bk.materials]
+    mats = [material(s, style, None if s.per_vertex else light,
+                     bk.images) for s in bk.materials]
     objs = []
     for i, part in enumerate(bk.parts):
         yield "objects", i / max(len(bk.parts), 1)

@@ -56,6 +56,8 @@ def run(args):
     with World.open(args.world, readonly=True, loader=False) as world:
         bk = bake.bake_world(world, x0, y0, x1, y1, per=args.per, method=args.method,
                              instances=args.instances, light=args.light, progress=progress)
+    if bk.note:
+        note(f"bake: {bk.note}")
     try:
         import bpy
     except ImportError as e:

@@ -11,7 +11,7 @@ Voxels written by other means (generation, edits, .vox) have state 0: today's lo
 
 Biomes: one per voxel column, the biome at the column's highest block (1.18+ section
 palettes of 4×4×4 cells; 1.15–1.17 1024 cells; older 256 per column), written to
-storage.mcbiomes beside the chunks.
+storage/minecraft.py beside the chunks.
 """
 from __future__ import annotations
 
@@ -21,11 +21,9 @@ import numpy as np
 
 from ..core.errors import VoxelError
 from ..mcres.states import parse_key, state_key  # noqa: F401  (the one spelling)
-from ..storage import mcbiomes
+from ..storage import minecraft as mcfile
 
-KEY = "mc_states"
-COLOR_KEY = "mc_color_states"
-RESOURCES = "mc_resources"
+KEY, COLOR_KEY, RESOURCES, Y_MIN = mcfile.STATES, mcfile.COLOR_STATES, mcfile.RESOURCES, mcfile.Y_MIN
 LIMIT = 1 << 16
 DEFAULT_BIOME = "minecraft:plains"
 
@@ -82,7 +80,7 @@ class States:
         self.index = {s: i for i, s in enumerate(self.list)}
         self.colors = {int(k): v for k, v in load(file.meta, COLOR_KEY, {}).items()}
         self.color_of = {v: k for k, v in self.colors.items()}
-        self.biomes = mcbiomes.names(file.meta) or [DEFAULT_BIOME]
+        self.biomes = mcfile.names(file.meta) or [DEFAULT_BIOME]
         self.biome_index = {b: i for i, b in enumerate(self.biomes)}
         self.changed = set()
 
@@ -122,7 +120,7 @@ class States:
                 return 0
             i = self.biome_index[name] = len(self.biomes)
             self.biomes.append(name)
-            self.changed.add(mcbiomes.NAMES)
+            self.changed.add(mcfile.NAMES)
         return i
 
     def stage(self) -> None:
@@ -131,8 +129,8 @@ class States:
             self.file.stage_meta(KEY, json.dumps(self.list))
         if COLOR_KEY in self.changed:
             self.file.stage_meta(COLOR_KEY, json.dumps({str(k): v for k, v in self.colors.items()}))
-        if mcbiomes.NAMES in self.changed:
-            self.file.stage_meta(mcbiomes.NAMES, json.dumps(self.biomes))
+        if mcfile.NAMES in self.changed:
+            self.file.stage_meta(mcfile.NAMES, json.dumps(self.biomes))
         self.changed.clear()
 
     def columns(self, ch, blocks: np.ndarray, y_min: int) -> np.ndarray | None:

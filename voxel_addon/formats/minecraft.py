@@ -31,7 +31,7 @@ from ..core import chunk as C
 from ..core import colors
 from ..core.blocks import REGISTRY
 from ..core.errors import VoxelError
-from ..storage import mcbiomes
+from ..storage import minecraft as mcfile
 from . import anvil, mapping, mcstate, nbt, region
 from .budget import Budget, Exceeded
 from .region import External, Region, RegionError
@@ -299,6 +299,7 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
                 report.version = version if version is not None else ch.version
                 report.y_min = y_min if y_min is not None else (
                     -64 if report.version >= anvil.V_NO_LEVEL else 0)
+                world.file.stage_meta(mcfile.Y_MIN, str(report.y_min))
             if ch.status not in anvil.DONE:
                 report.unfinished[ch.status] += 1
             else:
@@ -313,7 +314,7 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
             kept = world.store_chunks(batch, replace=replace, since=start)
             report.chunks += len(batch) - len(kept)
             report.kept += len(kept)
-            mcbiomes.write(world.file, [(k, b) for k, b in biomes if k not in set(kept)])
+            mcfile.write(world.file, [(k, b) for k, b in biomes if k not in set(kept)])
             batch, biomes = [], []
             yield done, len(todo)
     if old and old == len(report.damaged) and not (report.chunks or report.unfinished):

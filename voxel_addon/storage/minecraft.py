@@ -1,8 +1,14 @@
-"""Biomes of imported Minecraft chunks (issue 30): one biome per voxel column, for
-grass, foliage and water tints. A table of our own beside SPEC 3's, created on first
-write: `mc_biomes(cx, cy, data)`, `data` the zlib of 256 uint8 `[lx + 16*ly]`
-indexing the names in meta `mc_biome_names` (a JSON list). Deleting a chunk leaves
-its row: a later import writes it again, and a row without a chunk tints nothing."""
+"""What a Minecraft import keeps in the world file for a resource stack (issue 30;
+formats/mcstate.py fills it, the bake and the drawing read it).
+
+Meta (JSON): `mc_states` the state palette (`minecraft:name[k=v,…]`, entry 0 empty;
+a voxel's small data indexes it, except the `color` block's), `mc_color_states`
+({colour index: state index}), `mc_resources` (the stack's paths, bottom first),
+`mc_y_min` (the Minecraft y of z 0), `mc_biome_names`.
+Biomes, one per voxel column, for grass, foliage and water tints: a table of our own
+beside SPEC 3's, created on first write: `mc_biomes(cx, cy, data)`, `data` the zlib
+of 256 uint8 `[lx + 16*ly]` indexing `mc_biome_names`. Deleting a chunk leaves its
+row: a later import writes it again, and a row without a chunk tints nothing."""
 from __future__ import annotations
 
 import json
@@ -11,6 +17,10 @@ import zlib
 
 import numpy as np
 
+STATES = "mc_states"
+COLOR_STATES = "mc_color_states"
+RESOURCES = "mc_resources"
+Y_MIN = "mc_y_min"
 NAMES = "mc_biome_names"
 SCHEMA = """CREATE TABLE IF NOT EXISTS mc_biomes(cx INTEGER, cy INTEGER, data BLOB NOT NULL,
     PRIMARY KEY (cx, cy))"""

@@ -419,6 +419,67 @@ def plants(bk, style, collection, hours) -> list:
     return out
 
 
+def far_material(water: bool, style: str) -> bpy.types.Material:
+    """The far levels' one material (two with water): Base Color from the per-vertex
+    colour "far" (albedo, times the light at the bake's hour for style "gltf")."""
+    name = f"voxel_far{'_water' if water else ''}_{style}"
+    m = bpy.data.materials.get(name)
+    if m is not None:
+        return m
+    m = bpy.data.materials.new(name)
+    t = compat.node_tree(m)
+    t.nodes.clear()
+    out = _node(t, "ShaderNodeOutputMaterial", 600, 0)
+    bsdf = _node(t, "ShaderNodeBsdfPrincipled", 300, 0)
+    t.links.new(bsdf.outputs[0], out.inputs["Surface"])
+    bsdf.inputs["Roughness"].default_value = 0.9
+    attr = _node(t, "ShaderNodeVertexColor", 0, 0, layer_name="far")
+    t.links.new(attr.outputs["Color"], bsdf.inputs["Base Color"])
+    if water:
+        bsdf.inputs["Alpha"].default_value = 0.7
+        m.surface_render_method = "BLENDED"
+        if style == "gltf":
+            m["voxel_alpha"] = "BLEND"
+    return m
+
+
+def far_objects(parts, *, style: str = "blender", collection=None, hours: float = 12.0) -> list:
+    """One object per far level (bake.lod.FarPart) in `collection`."""
+    from ..light import daytime, shade as eq41
+    if collection is None:
+        collection = bpy.data.collections.new("Voxel Far")
+        bpy.context.scene.collection.children.link(collection)
+    objs = []
+    for fp in parts:
+        albedo = np.where(fp.albedo <= 0.04045, fp.albedo / 12.92,
+                          ((fp.albedo + 0.055) / 1.055) ** 2.4).astype(np.float32)
+        if style == "gltf":   # open sky, no block light: eq. 4.1 at the hour
+            n = len(albedo)
+            albedo = np.clip(eq41(albedo, np.zeros((n, 3), np.float32), np.zeros(n, np.float32),
+                                  np.ones(n, np.float32), fp.normals, daytime.at(hours)), 0, 1)
+        tris = np.concatenate([fp.ground, fp.water]).astype(np.int32)
+        me = bpy.data.meshes.new(fp.name)
+        me.vertices.add(len(fp.positions))
+        me.vertices.foreach_set("co", fp.positions.astype(np.float32).ravel())
+        me.loops.add(3 * len(tris))
+        me.loops.foreach_set("vertex_index", tris.ravel())
+        me.polygons.add(len(tris))
+        me.polygons.foreach_set("loop_start", np.arange(0, 3 * len(tris), 3, dtype=np.int32))
+        me.materials.append(far_material(False, style))
+        if len(fp.water):
+            me.materials.append(far_material(True, style))
+            idx = np.r_[np.zeros(len(fp.ground), np.int32), np.ones(len(fp.water), np.int32)]
+            me.polygons.foreach_set("material_index", idx)
+        me.update(calc_edges=True)
+        a = me.color_attributes.new("far", "FLOAT_COLOR", "POINT")
+        a.data.foreach_set("color", np.hstack([albedo, np.ones((len(albedo), 1))]).astype(
+            np.float32).ravel())
+        ob = bpy.data.objects.new(fp.name, me)
+        collection.objects.link(ob)
+        objs.append(ob)
+    return objs
+
+
 def export_glb(path, objects, *, instances: bool = False) -> None:
     """Write `objects` (and nothing else) through Blender's glTF exporter, then the
     alpha modes and atlas samplers (bake.glb.touch_up)."""

@@ -201,14 +201,17 @@ def run(gen):
 
 def steps(blocks: np.ndarray, origin=(0, 0, 0), *, per: str = "region", method: str = "greedy",
           instances: bool = False, light: str = "atlas", backend: str | None = None,
-          progress=None, tile: int = 64, data=None, palette=None, models=None):
+          progress=None, tile: int = 64, data=None, palette=None, models=None,
+          window=None):
     """The bake as a generator of short steps (yields (stage, fraction)) that returns
     the Bake: a modal operator runs one step per timer tick and can stop in between.
     per "tile" cuts the region into `tile`×`tile` objects. `data` (the region's small
     data) and `palette` ((n, 3) uint8, core.colors): `color` voxels get one material
     per colour (the texture tinted), so a .vox keeps its colours in Blender and glTF.
     `models` (bake.models.Models): Minecraft voxels the resource stack knows are baked
-    from their models into a Part of their own and left out of the greedy path."""
+    from their models into a Part of their own and left out of the greedy path.
+    `window` (x, y, w, h) in `blocks`: only that part becomes objects (and plants),
+    the rest is context (its light and faces; bake.tiles: one tile of a big region)."""
     from .. import meshing
     if per not in ("region", "chunk", "tile"):
         raise VoxelError(f"per must be 'region', 'chunk' or 'tile', not {per!r}")
@@ -248,7 +251,13 @@ def steps(blocks: np.ndarray, origin=(0, 0, 0), *, per: str = "region", method: 
     if data is not None:
         dring = np.zeros(ring.shape, np.uint16, order="F")
         dring[1:-1, 1:-1] = data
-    wins = windows(per, ox, oy, W, H, tile)
+    if window is None:
+        window = (0, 0, W, H)
+    wx, wy, ww, wh = map(int, window)
+    if not (0 <= wx and 0 <= wy and ww > 0 and wh > 0 and wx + ww <= W and wy + wh <= H):
+        raise VoxelError(f"window {window} is not inside the {W}x{H} blocks")
+    wins = [(n, x + wx, y + wy, w, h) for n, x, y, w, h in
+            windows(per, ox + wx, oy + wy, ww, wh, tile)]
     meshed = []  # (name, quads, x, y, (the light near them, its offset))
     for i, (name, x, y, w, h) in enumerate(wins):
         yield stage("mesh", i / len(wins))
@@ -290,17 +299,21 @@ def steps(blocks: np.ndarray, origin=(0, 0, 0), *, per: str = "region", method: 
                           px[sl], py[sl], AW, AH)
         parts.append(p)
     images = {}
+    if mm is not None:
+        v = mm.voxel
+        mm = mm.subset((v[:, 0] >= wx) & (v[:, 0] < wx + ww) & (v[:, 1] >= wy) & (v[:, 1] < wy + wh))
     if mm is not None and mm.quads:
         near = (lit[PAD - 1:PAD + W + 1, PAD - 1:PAD + H + 1], (1, 1, 0))
         parts.append(MD.part_and_materials(mm, models.res, blocks, (ox, oy, oz), *near, specs, images))
     plants = {}
     if instances:
         for bid in shape_ids:
-            xyz = np.argwhere(blocks == bid)
+            xyz = np.argwhere(blocks[wx:wx + ww, wy:wy + wh] == bid)
             if len(xyz):
-                plants[REGISTRY.blocks[bid].name] = (xyz + (ox, oy, oz)).astype(np.int32)
+                plants[REGISTRY.blocks[bid].name] = (xyz + (ox + wx, oy + wy, oz)).astype(np.int32)
     yield stage("baked", 1.0)
-    return Bake((ox, oy, ox + W, oy + H), parts, specs, plants, texels, faces, images)
+    return Bake((ox + wx, oy + wy, ox + wx + ww, oy + wy + wh), parts, specs, plants, texels,
+                faces, images)
 
 
 LIGHT_TILE, REACH = 64, 16  # light travels < 16 voxels: a 16-column margin is exact

@@ -17,7 +17,7 @@ import traceback
 from pathlib import Path
 
 AREAS = ["storage", "generation", "light", "meshing", "bake", "render", "world", "viewport", "edit",
-         "far", "formats"]
+         "far", "formats", "cluster"]
 
 
 class Context:

@@ -3,6 +3,7 @@
     objects = build(bk, style="blender"|"gltf", collection=None, hours=12.0)
     build_steps(...)  # the same as a generator of short steps (modal operators)
     export_glb(path, objects, instances=False)
+    glb_bytes(bk, hours=12.0, instances=False)  # a fresh scene -> .glb bytes (tiles)
 
 Materials (one per bake.MaterialSpec and light source): Principled BSDF, Base Color
 from the block texture (Closest, REPEAT), alpha clip (Round) for alpha_test, blended
@@ -23,6 +24,7 @@ Linear) or, for light="vertex", from colour attributes.
 from __future__ import annotations
 
 import math
+import threading
 
 import bpy
 import numpy as np
@@ -494,3 +496,29 @@ def export_glb(path, objects, *, instances: bool = False) -> None:
     modes = {m.name: m["voxel_alpha"] for m in bpy.data.materials
              if m.get("voxel_alpha", "OPAQUE") != "OPAQUE"}
     glb.touch_up(path, modes, plain="voxel_shade_")
+
+
+_LOCK = threading.Lock()  # bpy is one state per process: one bake at a time
+
+
+def glb_bytes(bk, *, hours: float = 12.0, instances: bool = False) -> bytes | None:
+    """`bk` (style "gltf") as the bytes of a self-contained .glb, built in a fresh empty
+    scene so the bytes do not depend on what this process baked before (a cluster
+    worker's tile equals the one-process run's); None when the bake has no objects.
+    Safe from worker threads: calls are serialised."""
+    import contextlib
+    import io
+    import os
+    import tempfile
+    with _LOCK:
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+        objs = build(bk, style="gltf", hours=hours)
+        if not objs:
+            return None
+        with tempfile.TemporaryDirectory(prefix="voxel_glb_") as d:
+            path = os.path.join(d, "bake.glb")
+            # the exporter logs INFO lines to stdout
+            with contextlib.redirect_stdout(io.StringIO()):
+                export_glb(path, objs, instances=instances)
+            with open(path, "rb") as f:
+                return f.read()

@@ -8,8 +8,8 @@ import sys
 from ..core.errors import VoxelError
 
 # Order is the order of `--help`. A command's module may be missing until its issue lands.
-COMMANDS = ["generate", "info", "dump", "edit", "map", "render", "bake", "importer", "exporter",
-            "bench"]
+COMMANDS = ["generate", "info", "dump", "edit", "map", "render", "animate", "bake", "importer",
+            "exporter", "far", "bench"]
 
 
 class _Parser(argparse.ArgumentParser):

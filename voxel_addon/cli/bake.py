@@ -1,13 +1,15 @@
-"""bake: a block region -> .glb through Blender's own glTF exporter (bpy in-process)."""
+"""bake: a block region -> .glb through Blender's own glTF exporter (bpy in-process);
+--per tile --out DIR: one .glb per 64×64 tile, in this process or on a Dask cluster."""
 from __future__ import annotations
 
 import contextlib
 import io
+import threading
 import time
 from pathlib import Path
 
 from ..core.errors import VoxelError
-from .common import add_world, note
+from .common import Progress, add_world, note, write_whole
 
 
 def add_parser(sub):
@@ -19,7 +21,9 @@ def add_parser(sub):
     p.add_argument("--lod", type=int, nargs=4, metavar=("X", "Y", "NEAR", "FAR"),
                    help="instead of --region: the chunks within NEAR of block (X, Y) in full, "
                         "far terrain beyond out to FAR chunks, one object per level")
-    p.add_argument("--out", type=Path, required=True, metavar="F.glb", help="output .glb")
+    p.add_argument("--out", type=Path, required=True, metavar="F.glb|DIR",
+                   help="output .glb; with --per tile a folder takes one tile_X_Y.glb per "
+                        "tile (X Y: its first block column; tiles already there are kept)")
     p.add_argument("--per", choices=("region", "chunk", "tile"), default="region",
                    help="one object for the region (default), one per chunk, or one per "
                         "64×64 tile (big regions)")
@@ -32,6 +36,8 @@ def add_parser(sub):
                         "ignore a second UV set)")
     p.add_argument("--time", default="12:00", help="time of day of the exported light (HH:MM)")
     p.add_argument("--blend", type=Path, help="also save the baked scene as this .blend")
+    from .. import cluster
+    cluster.add_arguments(p)
     return p
 
 
@@ -39,17 +45,24 @@ def run(args):
     from .. import bake
     from ..world import World
     from ..light import daytime
-    if args.out.suffix.lower() != ".glb":
-        raise VoxelError(f"--out must end in .glb (got {args.out.name})")
     if not args.world.exists():
         raise VoxelError(f"world file {args.world} does not exist")
     hours = daytime.parse_time(args.time)
+    if (args.region is None) == (args.lod is None):
+        raise VoxelError("give --region X0 Y0 X1 Y1 or --lod X Y NEAR FAR (one of them)")
+    if args.out.suffix.lower() != ".glb":
+        if args.lod:
+            raise VoxelError("--lod writes one .glb: --out must end in .glb")
+        if args.per != "tile":
+            raise VoxelError(f"--out must end in .glb (got {args.out.name}); a folder "
+                             "takes --per tile")
+        return _tiles(args, hours)
+    if getattr(args, "workers", None) is not None or getattr(args, "scheduler", None):
+        raise VoxelError("--workers/--scheduler bake tiles: use --per tile --out DIR")
     try:  # fail before the long work, not after it
         args.out.parent.mkdir(parents=True, exist_ok=True)
     except OSError as e:
         raise VoxelError(f"cannot create folder {args.out.parent}: {e.strerror}") from None
-    if (args.region is None) == (args.lod is None):
-        raise VoxelError("give --region X0 Y0 X1 Y1 or --lod X Y NEAR FAR (one of them)")
     if args.lod:
         from ..bake import lod
         lx, ly, near, far = args.lod
@@ -94,3 +107,81 @@ def run(args):
     note(f"bake: {len(objs)} objects, {bk.triangles + sum(p.triangles for p in far_parts)} triangles, "
          f"{len(bk.materials)} materials in {time.perf_counter() - t0:.1f} s")
     print(args.out)
+
+
+def _tiles(args, hours):
+    """--per tile --out DIR: every tile on its own (bake.tiles), one .glb each. This
+    process reads the tiles' blocks and writes the files (temp name, then rename, so
+    a file there is complete and a re-run skips it); the tiles are baked here or on
+    the cluster by the same function, so the files are the same."""
+    from .. import cluster
+    from ..bake import check_region, tiles
+    from ..world import World
+    if args.blend:
+        raise VoxelError("--blend needs --out F.glb (a folder gets one .glb per tile)")
+    out = args.out
+    region = check_region(*args.region)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise VoxelError(f"cannot create folder {out}: {e.strerror}") from None
+    plan = tiles.plan(*region)
+    todo = [t for t in plan if not (out / f"{t[0]}.glb").is_file()]
+    shared = {"method": args.method, "instances": args.instances, "light": args.light,
+              "hours": hours}
+    t0 = time.perf_counter()
+    written = empty = 0
+    with cluster.session(args) as pool:  # the cluster is checked before the slow reads
+        pool = pool or cluster.Serial()
+        with World.open(args.world, readonly=True, loader=False) as world:
+            # read as the tasks go out: the client never holds every tile's blocks
+            cuts = _Sized((tiles.cut(world, region, t) for t in todo), len(todo))
+            for c, glb in pool.map(tile_glb, cuts, shared=shared,
+                                   progress=Progress("bake", "tiles")):
+                if glb is None:
+                    empty += 1
+                else:
+                    write_whole(out / f"{c['name']}.glb", glb)
+                    written += 1
+    note(f"bake: {written} tiles written, {len(plan) - len(todo)} already there, {empty} empty "
+         f"in {time.perf_counter() - t0:.1f} s")
+    print(out)
+
+
+class _Sized:
+    """A lazy iterable that knows its length (Pool.map's progress)."""
+
+    def __init__(self, it, n):
+        self.it, self.n = it, n
+
+    def __iter__(self):
+        return iter(self.it)
+
+    def __len__(self):
+        return self.n
+
+
+def tile_glb(cut, shared):
+    """One tile (bake.tiles.cut) -> its .glb bytes, or None when it has no faces. The
+    task of --per tile --out DIR, here and on cluster workers. bpy works only on a
+    process's main thread (elsewhere it crashes), and a Dask worker runs tasks on other
+    threads: there the tile goes to a helper process (cli.helper)."""
+    if cut["empty"]:  # air only: nothing to bake, no bpy needed
+        return None
+    if threading.current_thread() is threading.main_thread():
+        return _tile_glb(cut, shared)
+    from . import helper
+    return helper.call(_tile_glb, cut, shared)
+
+
+def _tile_glb(cut, shared):
+    import socket
+    from ..bake import tiles
+    try:
+        from ..blender import bake as BB
+    except ImportError as e:
+        raise VoxelError(f"bake needs the bpy module (pip install bpy) on {socket.gethostname()}: "
+                         f"{e}") from None
+    bk = tiles.bake(cut, method=shared["method"], instances=shared["instances"],
+                    light=shared["light"])
+    return BB.glb_bytes(bk, hours=shared["hours"], instances=shared["instances"])

@@ -108,3 +108,11 @@ class Writing:
         if err is None or err is e:
             return  # a user mistake says it already; a bug keeps its traceback
         raise err from None
+
+
+def write_whole(path: Path, data: bytes) -> None:
+    """Write under a temporary name, then rename: a killed run leaves no half file
+    under the real name, so a file that is there is complete (resumable outputs)."""
+    tmp = path.with_name(f".{path.name}.part")
+    tmp.write_bytes(data)
+    tmp.replace(path)

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import time
 
+from .. import cluster
 from ..core.errors import VoxelError
 from .common import Progress, Writing, add_world, note
 
@@ -19,6 +20,7 @@ def add_parser(sub):
     p.add_argument("--generator", help="overworld (default) or flat; new worlds only")
     p.add_argument("--backend", choices=BACKENDS,
                    help="generation backend (default: OpenCL when a device is present)")
+    cluster.add_arguments(p)
     return p
 
 
@@ -32,7 +34,10 @@ def run(args):
             raise VoxelError("--seed is needed to create a new world")
         if not args.world.parent.is_dir():
             raise VoxelError(f"folder {args.world.parent} does not exist")
-    with Writing(args.world, "generation", "generating into") as w:
+    cluster.check_writable(args)
+    # the cluster first: an unreachable one leaves no file created or changed
+    with cluster.session(args) as pool, \
+            Writing(args.world, "generation", "generating into") as w:
         if args.world.exists():
             world = w.own(World.open(args.world, backend=args.backend, loader=False))
             if args.seed is not None and args.seed != world.seed:
@@ -60,7 +65,13 @@ def run(args):
             show(n, total)
         w.kept = lambda: f"{done[0]} of {done[1]} new chunks were written and kept" \
             if done[0] else None
-        made = world.generate_area(keys, progress)
+        if pool is None:
+            made = world.generate_area(keys, progress)
+        else:
+            from ..cluster import generate
+            made, computed = generate.run(world, pool, keys, args.backend, progress)
+            note(f"workers computed {computed} chunks")
         dt = time.perf_counter() - t0
         note(f"{made} new chunks in {dt:.2f} s, {len(keys) - made} already present; "
              f"{world.file.chunk_count()} chunks in {args.world}")
+

@@ -6,6 +6,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
+from .. import cluster
 from ..core.errors import VoxelError
 from .common import Progress, Writing, add_world, note
 
@@ -30,6 +31,7 @@ def add_parser(sub):
                         "and the live view (repeatable)")
     p.add_argument("--generator", help="generator of a new world (default: empty)")
     p.add_argument("--seed", type=int, default=0, help="seed of a new world (default 0)")
+    cluster.add_arguments(p)
     return p
 
 
@@ -61,6 +63,7 @@ def run(args):
     if not src.exists():
         raise VoxelError(f"{src} does not exist")
     is_vox = src.is_file() and src.suffix.lower() == ".vox"
+    resources = None
     if is_vox and (args.area or args.replace or args.y_min is not None or args.resources):
         raise VoxelError("--area, --replace, --y-min and --resources are for Minecraft worlds")
     if not is_vox and tuple(args.at) != (0, 0, 0):
@@ -75,21 +78,34 @@ def run(args):
         from ..formats import minecraft
         minecraft.regions_of(src)
         resources = _stack(args.resources) if args.resources else None
+    if is_vox and (args.workers is not None or args.scheduler):
+        raise VoxelError("--workers and --scheduler are for Minecraft worlds")
+    cluster.check_writable(args)
     t0 = time.perf_counter()
-    with Writing(args.world, "import", "importing into") as w:
+    computed = None
+    # the cluster first: an unreachable one leaves no file created or changed
+    with cluster.session(args) as pool, Writing(args.world, "import", "importing into") as w:
         world = w.own(_open(args))
         if is_vox:
             r = magica.import_vox(world, src, args.at)
         else:
             rep = minecraft.Report()
             w.kept = lambda: f"{rep.chunks} chunks were written and kept" if rep.chunks else None
-            minecraft.import_world(world, src, y_min=args.y_min, area=args.area,
-                                   replace=args.replace, progress=Progress("importing"), report=rep,
-                                   resources=resources)
+            if pool is None:
+                minecraft.import_world(world, src, y_min=args.y_min, area=args.area,
+                                       replace=args.replace, progress=Progress("importing"),
+                                       report=rep, resources=resources)
+            else:
+                from ..cluster import imports
+                computed = imports.run(world, pool, src, y_min=args.y_min, area=args.area,
+                                       replace=args.replace, progress=Progress("importing"),
+                                       report=rep, resources=resources)
     if is_vox:
         note(f"{r['voxels']} voxels from {r['models']} models ({r['instances']} placed) "
              f"into box {' '.join(map(str, r['box']))} in {time.perf_counter() - t0:.2f} s")
         return 0
+    if computed is not None:
+        note(f"workers read {computed} chunks")
     dt = time.perf_counter() - t0
     lines = rep.lines()
     lines[0] += f" in {dt:.2f} s ({rep.chunks / max(dt, 1e-9):.0f} chunks/s)"

@@ -39,6 +39,11 @@ class Budget:
         if self.tags < 0:
             raise Exceeded(self.tags_message())
 
+    def spent(self) -> tuple[int, int]:
+        """(bytes, tags) charged so far: what a cluster worker reports for one chunk,
+        so the writer charges the import's budget with it."""
+        return self._bytes0 - self.bytes, self._tags0 - self.tags
+
     def tags_message(self) -> str:
         return (f"more than {self._tags0:,} NBT tags in this import (the region files hold "
                 "far more tags than real ones)")

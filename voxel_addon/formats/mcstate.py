@@ -85,7 +85,9 @@ class States:
         self.changed = set()
 
     def of(self, name: str, props: dict | None) -> int:
-        key = state_key(name, props)
+        return self.of_key(state_key(name, props))
+
+    def of_key(self, key: str) -> int:
         i = self.index.get(key)
         if i is None:
             if len(self.list) >= LIMIT:
@@ -134,33 +136,38 @@ class States:
         self.changed.clear()
 
     def columns(self, ch, blocks: np.ndarray, y_min: int) -> np.ndarray | None:
-        """(16, 16) biome indices [lx, ly] of a chunk: the biome at each column's
-        highest block (the lowest cell where a column is empty)."""
-        solid = blocks != 0
-        top = np.where(solid.any(axis=2), blocks.shape[2] - 1 - np.argmax(solid[:, :, ::-1], axis=2), 0)
-        y = top + y_min                             # Minecraft y of each column's top
-        lx = np.arange(16)[:, None].repeat(16, 1)
-        mz = 15 - np.arange(16)[None, :].repeat(16, 0)      # voxel ly → Minecraft z
-        cell_xz = (mz >> 2) * 4 + (lx >> 2)
-        if ch.biomes is not None:                   # 1.13–1.17
-            b = ch.biomes
-            if b.size == 256:
-                ids = b[mz * 16 + lx]
-            else:
-                ids = b[np.clip(y >> 2, 0, 63) * 16 + cell_xz]
-            uniq, inv = np.unique(ids, return_inverse=True)
-            return np.array([self.biome(int(u)) for u in uniq], np.uint8)[inv].reshape(16, 16)
-        secs = {s.y: s.biomes for s in ch.sections if s.biomes is not None}
-        if not secs:
-            return None
-        ys = sorted(secs)
-        out = np.zeros((16, 16), np.uint8)
-        sy = np.clip(y >> 4, ys[0], ys[-1])
-        for s in np.unique(sy).tolist():
-            near = min(ys, key=lambda v: abs(v - s))
-            names, idx = secs[near]
-            glob = np.array([self.biome(n) for n in names], np.uint8)
-            m = sy == s
-            cells = ((y[m] & 15) >> 2) * 16 + cell_xz[m]
-            out[m] = glob[0] if idx is None else glob[idx[cells]]
-        return out
+        return columns(ch, blocks, y_min, self.biome)
+
+
+def columns(ch, blocks: np.ndarray, y_min: int, biome) -> np.ndarray | None:
+    """(16, 16) biome indices [lx, ly] of a chunk: the biome at each column's highest
+    block (the lowest cell where a column is empty); `biome` (a name or a legacy id →
+    an index) numbers them."""
+    solid = blocks != 0
+    top = np.where(solid.any(axis=2), blocks.shape[2] - 1 - np.argmax(solid[:, :, ::-1], axis=2), 0)
+    y = top + y_min                             # Minecraft y of each column's top
+    lx = np.arange(16)[:, None].repeat(16, 1)
+    mz = 15 - np.arange(16)[None, :].repeat(16, 0)      # voxel ly → Minecraft z
+    cell_xz = (mz >> 2) * 4 + (lx >> 2)
+    if ch.biomes is not None:                   # 1.13–1.17
+        b = ch.biomes
+        if b.size == 256:
+            ids = b[mz * 16 + lx]
+        else:
+            ids = b[np.clip(y >> 2, 0, 63) * 16 + cell_xz]
+        uniq, inv = np.unique(ids, return_inverse=True)
+        return np.array([biome(int(u)) for u in uniq], np.uint8)[inv].reshape(16, 16)
+    secs = {s.y: s.biomes for s in ch.sections if s.biomes is not None}
+    if not secs:
+        return None
+    ys = sorted(secs)
+    out = np.zeros((16, 16), np.uint8)
+    sy = np.clip(y >> 4, ys[0], ys[-1])
+    for s in np.unique(sy).tolist():
+        near = min(ys, key=lambda v: abs(v - s))
+        names, idx = secs[near]
+        glob = np.array([biome(n) for n in names], np.uint8)
+        m = sy == s
+        cells = ((y[m] & 15) >> 2) * 16 + cell_xz[m]
+        out[m] = glob[0] if idx is None else glob[idx[cells]]
+    return out

@@ -119,6 +119,12 @@ class Region:
     def payload(self, cx: int, cz: int, budget=None) -> bytes:
         """The chunk's NBT bytes; RegionError when it cannot be had, budget.Exceeded
         when `budget` (a budget.Budget, charged) has not that much left."""
+        return unpack(self.path.name, cx, cz, *self.raw(cx, cz), budget)
+
+    def raw(self, cx: int, cz: int) -> tuple[int, memoryview]:
+        """(compression type, compressed body) of the chunk, its place and length
+        checked (sectors read on demand): what `unpack` turns into NBT elsewhere
+        (a cluster worker)."""
         off, count = self.entries[(cx, cz)]
         where = f"{self.path.name} chunk ({cx}, {cz})"
         if count == 0:
@@ -134,19 +140,26 @@ class Region:
             raise RegionError(f"{where}: length {length} does not fit its {count} sectors")
         if kind & 0x80:
             raise External(f"{where}: stored in an external .mcc file (not read)")
-        body = raw[5:4 + length]
-        left = MAX_NBT if budget is None else min(MAX_NBT, max(budget.bytes, 0))
-        try:
-            out = decompress(kind, body, left)
-        except _Over:
-            if left < MAX_NBT:
-                budget.spend_bytes(left + 1)   # raises Exceeded
-            raise RegionError(f"{where}: NBT larger than {MAX_NBT >> 20} MiB") from None
-        except ValueError as e:
-            raise RegionError(f"{where}: {e}") from None
-        if budget is not None:
-            budget.spend_bytes(len(out))
-        return out
+        return kind, raw[5:4 + length]
+
+
+def unpack(name: str, cx: int, cz: int, kind: int, body, budget=None) -> bytes:
+    """Region.raw's answer decompressed, never past MAX_NBT (a worker decodes with
+    that per-chunk limit too) nor past what `budget` has left (charged);
+    RegionError naming the chunk, budget.Exceeded when the budget is spent."""
+    where = f"{name} chunk ({cx}, {cz})"
+    left = MAX_NBT if budget is None else min(MAX_NBT, max(budget.bytes, 0))
+    try:
+        out = decompress(kind, body, left)
+    except _Over:
+        if left < MAX_NBT:
+            budget.spend_bytes(left + 1)   # raises Exceeded
+        raise RegionError(f"{where}: NBT larger than {MAX_NBT >> 20} MiB") from None
+    except ValueError as e:
+        raise RegionError(f"{where}: {e}") from None
+    if budget is not None:
+        budget.spend_bytes(len(out))
+    return out
 
 
 class _Over(ValueError):

@@ -40,6 +40,13 @@ class Mesh:
     def quads(self) -> int:
         return len(self.sprite)
 
+    def subset(self, keep: np.ndarray) -> "Mesh":
+        """The quads where KEEP (N,) is true."""
+        v4 = np.repeat(keep, 4)
+        return Mesh(self.positions[v4], self.uvs[v4], self.normals[v4], self.sprite[keep],
+                    self.tint[keep], self.layer[keep], self.shade[keep], self.voxel[keep],
+                    self.sprites, self.drawn)
+
 
 def to_minecraft(vx, vy, vz, y_min: int) -> tuple[int, int, int]:
     """Voxel → Minecraft block position (formats/README's mapping, inverted)."""

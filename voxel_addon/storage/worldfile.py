@@ -349,6 +349,10 @@ class WorldFile:
             blocks = self._to_reg[blocks]
         return blocks, data
 
+    def decode_row(self, row):
+        """(blocks, data-or-None) in registry ids of a row from encode_chunk."""
+        return self._decode((row[0], row[1]), row[2], row[3], row[4])
+
     @staticmethod
     def _decode_light(codec, blob):
         if blob is None:
@@ -397,12 +401,12 @@ class WorldFile:
                      light=None) -> tuple:
         """A ready-to-write row; thread-safe, so callers can encode outside locks.
         `light` only when it is the chunk's final light (see the schema)."""
-        codec = codec or codecs.default()
-        ids = blocks if self._identity else self._to_file[blocks]
-        dblob = None if data is None or not data.any() else codecs.encode(codec, C.to_linear(data))
-        lblob = None if light is None else codecs.encode(codec, C.to_linear(light))
-        return (int(key[0]), int(key[1]), codec, codecs.encode(codec, C.to_linear(ids)), dblob,
-                lblob)
+        return self.encoder(codec).row(key, blocks, data, light)
+
+    def encoder(self, codec: str | None = None) -> "Encoder":
+        """encode_chunk without the file: picklable, so other processes (cluster
+        workers) make the very rows this file would."""
+        return Encoder(codec or codecs.default(), None if self._identity else self._to_file)
 
     def save(self, rows=(), edits=(), stale_light=(), resolve=None) -> dict:
         """Encoded chunk rows (from encode_chunk) and (x, y, z, block, data) edits in
@@ -505,6 +509,25 @@ class WorldFile:
             if self.db is not None:
                 self.db.close()
                 self.db = None
+
+
+class Encoder:
+    """Chunk rows in one file's block numbering (WorldFile.encoder)."""
+
+    def __init__(self, codec: str, to_file=None):
+        self.codec, self.to_file = codec, to_file  # to_file None: ids are the registry's
+
+    def row(self, key, blocks, data=None, light=None) -> tuple:
+        codec = self.codec
+        ids = blocks if self.to_file is None else self.to_file[blocks]
+        lblob = None if light is None else codecs.encode(codec, C.to_linear(light))
+        return (int(key[0]), int(key[1]), codec, codecs.encode(codec, C.to_linear(ids)),
+                self.data(data), lblob)
+
+    def data(self, data):
+        """A row's data blob (None when there are no data values)."""
+        return None if data is None or not data.any() else \
+            codecs.encode(self.codec, C.to_linear(data))
 
 
 class _Transaction:

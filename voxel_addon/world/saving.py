@@ -245,21 +245,37 @@ class Saving:
         holds is kept; with it the chunk is written, and edits saved since time
         `since` (made while the import ran, by any process) are applied again over
         it. This session's own unsaved changes stay on top. Returns the keys kept."""
-        self.writable()
         items = {tuple(k): (b, d) for k, b, d in items}
-        rows = {k: self.file.encode_chunk(k, b, d) for k, (b, d) in items.items()}
-        stale = {(k[0] + i, k[1] + j) for k in items for i in (-1, 0, 1) for j in (-1, 0, 1)}
+        rows = [self.file.encode_chunk(k, b, d) for k, (b, d) in items.items()]
+        return self.store_rows(rows, items, replace=replace, since=since)
+
+    def store_rows(self, rows, items=None, *, replace: bool = True,
+                   since: float | None = None) -> list:
+        """store_chunks for rows encoded elsewhere (WorldFile.encoder: a cluster
+        worker), decided the same way; `items` {key: (blocks, data)} their arrays
+        when at hand, else a row is decoded only where arrays are needed (edits to
+        apply again, an active copy). Returns the keys kept."""
+        self.writable()
+        rows = {(int(r[0]), int(r[1])): r for r in rows}
+        arrays = dict(items or {})
+        stale = {(k[0] + i, k[1] + j) for k in rows for i in (-1, 0, 1) for j in (-1, 0, 1)}
         kept, final = [], {}
+
+        def of(key):
+            got = arrays.get(key)
+            if got is None:
+                got = arrays[key] = self.file.decode_row(rows[key])
+            return got
 
         def resolve(key, version):
             if not replace and self.file.has_chunk(key):
                 kept.append(key)
                 return None
-            b, d = items[key]
             later = self.file.edits_in(key, since) if replace and since is not None else ()
             if not later:
-                final[key] = (b, d)
+                final[key] = None  # the row's own arrays (decoded when needed)
                 return rows[key]
+            b, d = of(key)
             b, d = b.copy(order="F"), None if d is None else d.copy(order="F")
             for x, y, z, bid, v in later:
                 d = C.put(b, d, x & 15, y & 15, z, bid, v)
@@ -269,13 +285,14 @@ class Saving:
         with self._flush_lock:
             new = self.file.save(list(rows.values()), stale_light=stale, resolve=resolve)
             with self._lock:
-                for k, (b, d) in final.items():
+                for k, got in final.items():
                     mine = self._mine.get(k)
                     if not mine:  # an own snapshot would be merged over the import anyway
                         self._saving.pop(k, None)
                     self.corrupt.pop(k, None)
                     c = self.chunks.get(k)
                     if c is not None:
+                        b, d = got or of(k)
                         b, d = b.copy(order="F"), None if d is None else d.copy(order="F")
                         for (x, y, z), (bid, v) in (mine or {}).items():
                             d = C.put(b, d, x & 15, y & 15, z, bid, v)

@@ -1,0 +1,107 @@
+"""The cluster commands' one writer commits through the versioned write path: a chunk
+another writer stored while the job ran is kept (generate; import without
+--replace), an edit saved meanwhile is applied again over an imported chunk (import
+--replace), and the workers' decoding stays inside the hostile-input budgets. The
+tasks run in this process (cluster.Serial, the same functions the workers run), and
+the other writer is a second World on the same file, writing between two batches."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from voxel_addon import cluster
+from voxel_addon.cluster import generate, imports
+from voxel_addon.core import chunk as C
+from voxel_addon.core.blocks import REGISTRY
+from voxel_addon.core.errors import VoxelError
+from voxel_addon.formats import budget, minecraft
+from voxel_addon.world import World
+from tests.formats import hostile as H
+from tests.formats import mcfiles as mc
+
+STONE = {0: np.full((16, 16, 16), "minecraft:stone", object)}
+
+
+def _save(path, n=8):
+    mc.write_region(path / "region", {(x, 0): mc.chunk_nbt(x, 0, STONE) for x in range(n)})
+    return path
+
+
+def _glass():
+    return np.full(C.SHAPE, REGISTRY.id("glass"), np.uint16, order="F")
+
+
+def _meanwhile(path, act):
+    """A progress callback doing `act(other world)` once, after the first commit."""
+    done = []
+
+    def progress(n, total):
+        if n and not done:
+            done.append(n)
+            with World.open(path, loader=False) as other:
+                act(other)
+    return progress, done
+
+
+@pytest.fixture
+def small_commits(monkeypatch):
+    monkeypatch.setenv("VOXEL_COMMIT", "2")
+
+
+def test_generate_keeps_a_chunk_stored_meanwhile(tmp_path, small_commits):
+    p = tmp_path / "w.sqlite"
+    keys = [(x, 0) for x in range(6)]
+    progress, done = _meanwhile(p, lambda o: o.store_chunks([(keys[-1], _glass(), None)]))
+    with World.create(p, seed=3, generator="flat", backend="numpy", loader=False) as w:
+        made, computed = generate.run(w, cluster.Serial(), keys, "numpy", progress)
+        assert done and done[0] < len(keys)  # the other writer came between two batches
+        assert computed == 6 and made == 5
+        assert (w.file.read_chunk(keys[-1])[0] == REGISTRY.id("glass")).all()
+
+
+def test_import_keeps_a_chunk_stored_meanwhile(tmp_path, small_commits):
+    save, p = _save(tmp_path / "save"), tmp_path / "w.sqlite"
+    last = minecraft.to_key(7, 0)
+    progress, done = _meanwhile(p, lambda o: o.store_chunks([(last, _glass(), None)]))
+    rep = minecraft.Report()
+    with World.create(p, seed=0, generator="empty", loader=False) as w:
+        imports.run(w, cluster.Serial(), save, progress=progress, report=rep)
+        assert done and (rep.chunks, rep.kept) == (7, 1)
+        assert (w.file.read_chunk(last)[0] == REGISTRY.id("glass")).all()
+        assert (w.file.read_chunk(minecraft.to_key(6, 0))[0] != REGISTRY.id("glass")).all()
+
+
+def test_import_replace_applies_edits_saved_meanwhile(tmp_path, small_commits):
+    save, p = _save(tmp_path / "save"), tmp_path / "w.sqlite"
+    key = minecraft.to_key(7, 0)
+    x, y = key[0] * 16 + 3, key[1] * 16 + 4
+    with World.create(p, seed=0, generator="empty", loader=False) as w:
+        minecraft.import_world(w, save)
+
+    def edit(o):
+        o.set_block(x, y, 200, "glass")
+        o.flush()
+    progress, done = _meanwhile(p, edit)
+    rep = minecraft.Report()
+    with World.open(p, loader=False) as w:
+        imports.run(w, cluster.Serial(), save, replace=True, progress=progress, report=rep)
+        assert done and rep.chunks == 8
+        blocks, _ = w.file.read_chunk(key)
+        assert blocks[3, 4, 200] == REGISTRY.id("glass")  # the import did not undo it
+        assert blocks[3, 4, 201] == 0
+
+
+def test_workers_decode_inside_the_budgets(tmp_path, monkeypatch):
+    bomb = tmp_path / "bomb"
+    mc.write_region(bomb / "region", {(0, 0): mc.chunk_nbt(0, 0, STONE),
+                                      (1, 0): H.tag_bomb(1 << 20)})
+    with World.create(tmp_path / "a.sqlite", seed=0, generator="empty", loader=False) as w:
+        with pytest.raises(VoxelError, match=r"chunk \(1, 0\).*in one chunk.*import refused"):
+            imports.run(w, cluster.Serial(), bomb)
+    # the import's budget: charged by the writer with what the workers decoded
+    save = _save(tmp_path / "save", 4)
+    monkeypatch.setattr(budget, "TAGS_FLOOR", 50)
+    monkeypatch.setattr(budget, "TAGS_PER_INPUT", 0)
+    with World.create(tmp_path / "b.sqlite", seed=0, generator="empty", loader=False) as w:
+        with pytest.raises(VoxelError, match="more than 50 NBT tags in this import"):
+            imports.run(w, cluster.Serial(), save)

@@ -1,0 +1,316 @@
+"""`import` of a Minecraft world on a cluster. The writer reads the region files and
+sends each chunk's compressed bytes; workers decompress, parse and convert it and
+encode its blocks row. The writer handles results in the order the one-process
+import reads chunks, so colours join the world's palette in the same order (the
+same data values, the same blobs bit for bit); it commits in batches through
+World.store_rows (each chunk decided inside the transaction, as the one-process
+import: a chunk another writer stored meanwhile is kept unless --replace, and with
+--replace the edits saved since the import started are applied again), the palette
+and how far it got (meta `import_job`) in the same transaction, so a run killed
+and started again does only what is missing.
+
+Hostile input: a worker decodes with the per-chunk limits (region.MAX_NBT,
+anvil.CHUNK_TAGS; a chunk past the tag limit refuses the import) and reports what
+it decoded; the writer charges the import's budget.Budget with that in the same
+order, so a spent budget refuses the import at the chunk the one-process import
+would.
+
+On resume: without --replace every chunk of the plan already in the file is ours
+(the first run refused to start over any), so it is skipped; with --replace the
+plan's first `done` chunks are."""
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ..storage import minecraft as mcfile
+from . import knob, task_size
+
+COMMIT = 64  # chunks per transaction
+JOB = "import_job"
+
+
+class _LocalPalette:
+    """formats.minecraft._Palettes on a worker: block states get chunk-local indices
+    (1, 2, ... in the order met; `local`: (state key, rgb or None) each), which the
+    writer maps to the world's state palette or, for dye states, their colours; the
+    same for biomes (`biomes`: names in the order met)."""
+
+    def __init__(self):
+        from types import SimpleNamespace
+        self.ids: dict = {}
+        self.local: list = []
+        self.biomes: dict = {}
+        self.report = SimpleNamespace(blocks={})
+
+    def of(self, name: str, props=None):
+        from ..core.blocks import REGISTRY
+        from ..formats import mapping
+        from ..formats.mcstate import state_key
+        key = (name, tuple(sorted(props.items())) if props else ())
+        got = self.ids.get(key)
+        if got is None:
+            block, rgb, how = mapping.lookup(name)
+            bid, d = REGISTRY.id(block), 0
+            if bid:
+                self.local.append((state_key(name, props),
+                                   None if rgb is None else tuple(int(v) for v in rgb)))
+                d = len(self.local)
+            got = self.ids[key] = (bid, d)
+            self.report.blocks.setdefault(name, [block, how, 0])
+        return got
+
+    def biome(self, name) -> int:
+        return self.biomes.setdefault(name, len(self.biomes))
+
+
+def read(item, shared):
+    """Worker: one (result, (bytes, tags) decoded, where) per (index, (region name,
+    cx, cz, kind, body)) of the task; result: ("ok", version, row without data, local
+    data or None, rgbs, block counts, dropped), ("unfinished", version, status),
+    ("damaged", message, before 1.13?) or ("hostile", message)."""
+    from ..formats import anvil, mcstate, minecraft, nbt
+    from ..formats.budget import Budget, Exceeded
+    from ..formats.region import MAX_NBT, RegionError, unpack
+    out = []
+    for _, (name, cx, cz, kind, body) in item:
+        where = f"{name} chunk ({cx}, {cz})"
+        b = Budget(MAX_NBT, anvil.CHUNK_TAGS)  # the per-chunk limits; the writer charges the rest
+        try:
+            ch = anvil.read(unpack(name, cx, cz, kind, body, b), b)
+        except Exceeded as e:  # nbt.Hostile too: refuses the import, as in one process
+            out.append((("hostile", f"{where}: {e}; import refused"), b.spent(), where))
+            continue
+        except (RegionError, anvil.ChunkError, nbt.NbtError) as e:
+            msg = str(e)
+            full = msg if msg.startswith(name) else f"{where}: {msg}"
+            out.append((("damaged", full, "before 1.13" in msg), b.spent(), where))
+            continue
+        if ch.status not in anvil.DONE:
+            out.append((("unfinished", ch.version, ch.status), b.spent(), where))
+            continue
+        pal = _LocalPalette()
+        blocks, data, dropped = minecraft.convert(ch, shared["y_min"], pal)
+        row = shared["encoder"].row(minecraft.to_key(cx, cz), blocks)
+        cols = mcstate.columns(ch, blocks, shared["y_min"], pal.biome)
+        out.append((("ok", ch.version, row, data, pal.local, pal.report.blocks, dropped,
+                     minecraft.to_key(cx, cz), cols, list(pal.biomes)), b.spent(), where))
+    return out
+
+
+def _signature(files, y_min, area, replace) -> str:
+    h = hashlib.sha256(json.dumps([y_min, area and list(area), bool(replace)]).encode())
+    for f in files:
+        st = f.stat()
+        h.update(f"{f.resolve()}\0{st.st_size}\0{st.st_mtime_ns}\0".encode())
+    return h.hexdigest()[:16]
+
+
+def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=None,
+        report=None, resources=None) -> int:
+    """Like formats.minecraft.import_world, `report` (a minecraft.Report) filled as it
+    goes; returns how many chunks the workers read."""
+    import time
+    from ..core.errors import VoxelError
+    from ..formats import anvil, minecraft
+    from ..formats.budget import Budget
+    from ..formats.region import External, RegionError
+    world.writable()
+    f = world.file
+    todo = minecraft.plan(path, area)
+    sig = _signature(minecraft.regions_of(path), y_min, area, replace)
+    job = _job(f.meta.get(JOB), sig)
+    have = {minecraft.to_key(cx, cz) for _, cx, cz in todo} & set(f.chunk_keys())
+    if job is None and have and not replace:
+        raise VoxelError(f"{len(have)} of the {len(todo)} chunks are already in "
+                         f"{f.path} (imported before, or generated); "
+                         "import with --replace (Blender: Replace) to overwrite them")
+    start = job["done"] if job else 0
+    # edits saved from the first run's start on survive a replace (store_rows)
+    since = job.get("since", time.time()) if job else time.time()
+
+    def skip(i, key):
+        if job is None:
+            return False
+        return key in have if not replace else i < start
+
+    # each chunk: sent to a worker, or settled here (a place the file cannot give)
+    plan, local = [], {}
+    for i, (reg, cx, cz) in enumerate(todo):
+        if skip(i, minecraft.to_key(cx, cz)):
+            continue
+        try:
+            reg.raw(cx, cz)
+        except External:
+            local[i] = (("external",), (0, 0), None)
+            continue
+        except RegionError as e:
+            local[i] = (("damaged", str(e), False), (0, 0), None)
+            continue
+        plan.append((i, reg, cx, cz))
+    version = minecraft.level_version(path) if Path(path).is_dir() else None
+    if version is not None and version < anvil.V_FLATTENING:  # refused before any write
+        raise VoxelError(f"{Path(path).name}: level.dat has DataVersion {version}, before 1.13 "
+                         "(numeric block ids); open and save the world in Minecraft 1.13 "
+                         "or newer first")
+    budget = Budget.of_input(sum(r.stored for r in {id(t[0]): t[0] for t in todo}.values()))
+    if version is None:
+        version = _first_version(todo, budget)
+    report = minecraft.Report() if report is None else report
+    report.version = version
+    report.y_min = y_min if y_min is not None else (
+        (-64 if version >= anvil.V_NO_LEVEL else 0) if version is not None else 0)
+    shared = {"y_min": report.y_min, "encoder": f.encoder()}
+    step = task_size(len(plan), pool.size, most=64)  # a chunk is quick here: bigger tasks
+
+    def tasks():  # the bytes are copied as tasks go out, not all at once
+        for j in range(0, len(plan), step):
+            yield tuple((i, (reg.path.name, cx, cz, kind, bytes(body)))
+                        for i, reg, cx, cz in plan[j:j + step]
+                        for kind, body in [reg.raw(cx, cz)])
+
+    f.set_meta(JOB, json.dumps({"sig": sig, "done": start, "since": since}))
+    w = _Writer(world, report, sig, progress, len(plan) + len(local), budget)
+    w.replace, w.since = replace, since
+    w.meta = {mcfile.Y_MIN: str(report.y_min)}    # staged with the first batch, as in one process
+    if resources is not None:
+        w.meta[mcfile.RESOURCES] = json.dumps([str(r) for r in resources])
+    order = sorted([p[0] for p in plan] + list(local))
+    ready: dict = dict(local)
+    computed, pos = 0, 0
+    every = knob("COMMIT", COMMIT)
+    try:
+        for task, results in pool.map(read, tasks(), shared=shared):
+            computed += len(task)
+            for (i, _), r in zip(task, results):
+                ready[i] = r
+            while pos < len(order) and order[pos] in ready:  # the one-process order
+                w.settle(ready.pop(order[pos]))
+                pos += 1
+                if len(w.batch) >= every:
+                    w.commit(order[pos - 1] + 1)
+        while pos < len(order):  # no tasks at all: only local ones
+            w.settle(ready.pop(order[pos]))
+            pos += 1
+        w.commit(len(todo))
+    except BaseException:
+        w.commit(order[pos - 1] + 1 if pos else start)  # keep what is settled
+        raise
+    f.set_meta(JOB, "")
+    if w.old and w.old == len(report.damaged) and not (report.chunks or report.unfinished):
+        # nothing written: a world Minecraft never saved in 1.13+ is refused whole
+        raise VoxelError(f"none of the {w.old} chunks is from Minecraft 1.13 or newer, nothing "
+                         f"was imported ({report.damaged[0]})")
+    return computed
+
+
+def _job(raw, sig):
+    """The unfinished job of the same import (same files, same options), or None."""
+    try:
+        job = json.loads(raw) if raw else None
+    except ValueError:
+        return None
+    ok = isinstance(job, dict) and job.get("sig") == sig and isinstance(job.get("done"), int) \
+        and isinstance(job.get("since", 0.0), (int, float))
+    return job if ok else None
+
+
+def _first_version(todo, budget):
+    """DataVersion of the first readable chunk (what the one-process import uses);
+    what it decodes is charged to the import's budget (a hostile file is refused)."""
+    from ..core.errors import VoxelError
+    from ..formats import anvil, nbt
+    from ..formats.budget import Exceeded
+    from ..formats.region import RegionError
+    for reg, cx, cz in todo:
+        try:
+            return anvil.read(reg.payload(cx, cz, budget), budget).version
+        except Exceeded as e:
+            raise VoxelError(f"{reg.path.name} chunk ({cx}, {cz}): {e}; import refused") \
+                from None
+        except (RegionError, anvil.ChunkError, nbt.NbtError):
+            continue
+    return None
+
+
+class _Writer:
+    """Results in plan order into the report, the palette and batches of rows."""
+
+    def __init__(self, world, report, sig, progress, total, budget):
+        from ..core import colors
+        self.world, self.report, self.sig, self.budget = world, report, sig, budget
+        self.replace, self.since, self.old = False, None, 0
+        self.progress, self.total, self.done = progress, total, 0
+        from ..formats import mcstate
+        self.palette = colors.parse(world.file.meta)
+        self.states = mcstate.States(world.file)
+        self.grown = False
+        self.batch, self.biomes, self.meta = [], [], {}
+        self.enc = world.file.encoder()
+
+    def settle(self, got) -> None:
+        from ..core import colors
+        from ..core.errors import VoxelError
+        from ..formats.budget import Exceeded
+        r, (nbytes, tags), where = got
+        rep = self.report
+        self.done += 1
+        try:  # what the worker decoded, charged in the one-process order
+            self.budget.spend_bytes(nbytes)
+            self.budget.spend_tags(tags)
+        except Exceeded as e:
+            raise VoxelError(f"{where}: {e}; import refused") from None
+        what = r[0]
+        if what == "external":
+            rep.external += 1
+        elif what == "hostile":
+            raise VoxelError(r[1])
+        elif what == "damaged":
+            rep.damaged.append(r[1])
+            self.old += r[2]
+        elif what == "unfinished":
+            rep.unfinished[r[2]] += 1
+        else:
+            _, _, row, data, local, counts, dropped, key, cols, bnames = r
+            for name, (b, how, n) in counts.items():
+                rep.blocks.setdefault(name, [b, how, 0])[2] += n
+            rep.dropped += dropped
+            remap = np.zeros(len(local) + 1, np.uint16)   # as formats.minecraft._Palettes
+            for j, (skey, rgb) in enumerate(local, 1):
+                st = self.states.of_key(skey)
+                if rgb is not None:
+                    self.palette, remap[j] = self.states.color(st, self.palette, rgb)
+                    self.grown = True
+                else:
+                    remap[j] = st
+            blob = None if data is None else self.enc.data(remap[data])
+            self.batch.append(row[:4] + (blob,) + row[5:])
+            if cols is not None:
+                glob = np.array([self.states.biome(n) for n in bnames], np.uint8)
+                self.biomes.append((key, glob[cols]))
+
+    def commit(self, upto: int) -> None:
+        from ..core import colors
+        f = self.world.file
+        if self.grown:  # in the transaction of the chunks that use it, as in one process
+            f.stage_meta(colors.KEY, colors.dump(self.palette))
+            self.grown = False
+        self.states.stage()
+        if self.batch:
+            for k, v in self.meta.items():
+                f.stage_meta(k, v)
+            self.meta = {}
+        f.stage_meta(JOB, json.dumps({"sig": self.sig, "done": upto, "since": self.since}))
+        if self.batch:
+            kept = self.world.store_rows(self.batch, replace=self.replace, since=self.since)
+            self.report.chunks += len(self.batch) - len(kept)
+            self.report.kept += len(kept)
+            mcfile.write(f, [(k, b) for k, b in self.biomes if k not in set(kept)])
+            self.batch, self.biomes = [], []
+        else:
+            f.save()  # the staged meta alone
+        if self.progress:
+            self.progress(self.done, self.total)

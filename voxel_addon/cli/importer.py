@@ -47,17 +47,6 @@ def _open(args):
                         loader=False)
 
 
-def _stack(specs) -> list[str]:
-    """The stack's paths, absolute, bottom first; each source opened once (a bad pack
-    is refused before the world opens)."""
-    from ..mcres import Stack
-    stack = Stack.open(specs)
-    try:
-        return [str(Path(p).resolve()) for p in stack.paths]
-    finally:
-        stack.close()
-
-
 def run(args):
     src = args.source
     if not src.exists():
@@ -77,7 +66,9 @@ def run(args):
     else:
         from ..formats import minecraft
         minecraft.regions_of(src)
-        resources = _stack(args.resources) if args.resources else None
+        if args.resources:
+            from ..mcres.stack import resolve
+            resources = resolve(args.resources)
     if is_vox and (args.workers is not None or args.scheduler):
         raise VoxelError("--workers and --scheduler are for Minecraft worlds")
     cluster.check_writable(args)

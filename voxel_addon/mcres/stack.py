@@ -159,3 +159,14 @@ class Stack:
     def close(self):
         for s in self.sources:
             s.close()
+
+
+def resolve(specs) -> list[str]:
+    """The absolute paths of a stack (bottom first) from SPECS, each source opened
+    once so that a bad pack is refused in one line before anything is written; what
+    the import keeps in the world (formats/mcstate.py)."""
+    stack = Stack.open(specs)
+    try:
+        return [str(Path(p).resolve()) for p in stack.paths]
+    finally:
+        stack.close()

@@ -115,3 +115,16 @@ def test_the_glb_is_valid(bpy, mc_world, tmp_path, validate):
     prims = [pr for me in doc["meshes"] if me["name"].startswith("minecraft_")
              for pr in me["primitives"]]
     assert prims and all("COLOR_0" in pr["attributes"] for pr in prims)
+
+
+def test_blenders_bake_job_uses_the_stack(bpy, mc_world):
+    """The panel's bake (blender/job.Job) bakes the same models as bake_world."""
+    from voxel_addon.blender import job
+    from voxel_addon.world import World
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    with World.open(mc_world[0], readonly=True, loader=False) as w:
+        objs = job.Job(w, (0, -16, 16, 0), light="vertex").run()
+    names = {o.name for o in objs}
+    assert any(n.startswith("minecraft_") for n in names), names
+    mats = {m.name for o in objs for m in o.data.materials}
+    assert any(n.startswith("voxel_mc_poppy") for n in mats), mats

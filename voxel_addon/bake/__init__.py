@@ -121,13 +121,21 @@ def colors_of(world, x0, y0, x1, y1):
     return np.asfortranarray(d[ox:ox + x1 - x0, oy:oy + y1 - y0]), colors.parse(world.file.meta)
 
 
+def inputs(world, x0, y0, x1, y1, blocks) -> tuple[dict, str]:
+    """What steps() needs of a world beside the region's blocks: the small data and
+    palette (`color` voxels), the Minecraft models (bake.models), and a note (why a
+    world's resource stack was not used, or "")."""
+    from . import models as MD
+    data, palette = colors_of(world, x0, y0, x1, y1)
+    models, note = MD.of_world(world, x0, y0, x1, y1, blocks, data)
+    return dict(data=data, palette=palette, models=models), note
+
+
 def bake_world(world, x0, y0, x1, y1, **kw) -> Bake:
     x0, y0, x1, y1 = check_region(x0, y0, x1, y1)
-    data, palette = colors_of(world, x0, y0, x1, y1)
     blocks = region_of(world, x0, y0, x1, y1)
-    from . import models as MD
-    models, note = MD.of_world(world, x0, y0, x1, y1, blocks, data)
-    bk = bake_blocks(blocks, origin=(x0, y0, 0), data=data, palette=palette, models=models, **kw)
+    extra, note = inputs(world, x0, y0, x1, y1, blocks)
+    bk = bake_blocks(blocks, origin=(x0, y0, 0), **extra, **kw)
     bk.note = note
     return bk
 

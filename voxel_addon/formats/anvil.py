@@ -39,7 +39,7 @@ class Section(NamedTuple):
     palette: list           # block names
     indices: np.ndarray | None  # (4096,) uint16 into palette; None: all palette[0]
     props: list | None = None   # each palette entry's properties ({str: str}), or None
-    biomes: tuple | None = None  # 1.18+: (names, (64,) cell indices or None), cells y*16+z*4+x
+    biomes: tuple | None = None  # 1.18+: (names, packed longs or None): cells() unpacks them
 
 
 class Chunk(NamedTuple):
@@ -122,17 +122,25 @@ def read(payload: bytes, budget=None) -> Chunk:
 
 
 def _biomes(b):
-    """A 1.18+ section's biomes: (names, (64,) indices or None), None when damaged
-    (biomes only tint: a bad one is not worth refusing the chunk)."""
+    """A 1.18+ section's biomes: (names, packed longs or None), None when damaged
+    (biomes only tint: a bad one is not worth refusing the chunk). Unpacked only for
+    the sections a column's top reaches (cells)."""
     if not isinstance(b, dict):
         return None
     names, data = b.get("palette"), b.get("data")
     if not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names):
         return None
-    if data is None:
-        return (names, None)
-    if not isinstance(data, np.ndarray) or data.dtype != np.dtype(">i8"):
+    if data is not None and not (isinstance(data, np.ndarray) and data.dtype == np.dtype(">i8")):
         return None
+    return (names, data)
+
+
+def cells(biomes) -> np.ndarray | None:
+    """A section's 64 biome cells (indices into its names, cell y*16 + z*4 + x), all
+    0 when it has one biome; None when the longs do not fit the palette."""
+    names, data = biomes
+    if data is None:
+        return np.zeros(64, np.int32)
     bits = max(1, (len(names) - 1).bit_length())
     per = 64 // bits
     if len(data) != -(-64 // per):
@@ -140,8 +148,7 @@ def _biomes(b):
     w = data.astype(">u8").astype(np.uint64)
     shifts = np.arange(per, dtype=np.uint64) * np.uint64(bits)
     idx = ((w[:, None] >> shifts[None, :]) & np.uint64((1 << bits) - 1)).reshape(-1)[:64]
-    idx = idx.astype(np.int32)
-    return (names, np.minimum(idx, len(names) - 1))
+    return np.minimum(idx.astype(np.int32), len(names) - 1)
 
 
 def bits_for(n: int) -> int:

@@ -83,6 +83,7 @@ class States:
         self.biomes = mcfile.names(file.meta) or [DEFAULT_BIOME]
         self.biome_index = {b: i for i, b in enumerate(self.biomes)}
         self.changed = set()
+        self._memo: dict = {}       # section biome palettes → their world indices
 
     def of(self, name: str, props: dict | None) -> int:
         return self.of_key(state_key(name, props))
@@ -136,25 +137,27 @@ class States:
         self.changed.clear()
 
     def columns(self, ch, blocks: np.ndarray, y_min: int) -> np.ndarray | None:
-        return columns(ch, blocks, y_min, self.biome)
+        return columns(ch, blocks, y_min, self.biome, self._memo)
 
 
-def columns(ch, blocks: np.ndarray, y_min: int, biome) -> np.ndarray | None:
+_LX = np.arange(16)[:, None].repeat(16, 1)             # voxel lx = Minecraft x
+_MZ = 15 - np.arange(16)[None, :].repeat(16, 0)        # voxel ly → Minecraft z
+_CELL_XZ = (_MZ >> 2) * 4 + (_LX >> 2)                 # a column's 4×4 biome cell
+
+
+def columns(ch, blocks: np.ndarray, y_min: int, biome, memo: dict | None = None) -> np.ndarray | None:
     """(16, 16) biome indices [lx, ly] of a chunk: the biome at each column's highest
     block (the lowest cell where a column is empty); `biome` (a name or a legacy id →
-    an index) numbers them."""
-    solid = blocks != 0
-    top = np.where(solid.any(axis=2), blocks.shape[2] - 1 - np.argmax(solid[:, :, ::-1], axis=2), 0)
+    an index) numbers them, `memo` keeps a section palette's numbers between calls."""
+    from .anvil import cells
+    memo = {} if memo is None else memo
+    # the highest non-air z per column (0 when empty): a max over z + 1 where solid
+    top = np.maximum(((blocks != 0) * np.arange(1, blocks.shape[2] + 1, dtype=np.int16)).max(axis=2) - 1, 0)
     y = top + y_min                             # Minecraft y of each column's top
-    lx = np.arange(16)[:, None].repeat(16, 1)
-    mz = 15 - np.arange(16)[None, :].repeat(16, 0)      # voxel ly → Minecraft z
-    cell_xz = (mz >> 2) * 4 + (lx >> 2)
+    lx, mz, cell_xz = _LX, _MZ, _CELL_XZ
     if ch.biomes is not None:                   # 1.13–1.17
         b = ch.biomes
-        if b.size == 256:
-            ids = b[mz * 16 + lx]
-        else:
-            ids = b[np.clip(y >> 2, 0, 63) * 16 + cell_xz]
+        ids = b[mz * 16 + lx] if b.size == 256 else b[np.clip(y >> 2, 0, 63) * 16 + cell_xz]
         uniq, inv = np.unique(ids, return_inverse=True)
         return np.array([biome(int(u)) for u in uniq], np.uint8)[inv].reshape(16, 16)
     secs = {s.y: s.biomes for s in ch.sections if s.biomes is not None}
@@ -163,11 +166,14 @@ def columns(ch, blocks: np.ndarray, y_min: int, biome) -> np.ndarray | None:
     ys = sorted(secs)
     out = np.zeros((16, 16), np.uint8)
     sy = np.clip(y >> 4, ys[0], ys[-1])
-    for s in np.unique(sy).tolist():
+    for s in sorted(set(sy.ravel().tolist())):
         near = min(ys, key=lambda v: abs(v - s))
-        names, idx = secs[near]
-        glob = np.array([biome(n) for n in names], np.uint8)
+        names, _ = secs[near]
+        key = tuple(names)
+        glob = memo.get(key)
+        if glob is None:
+            glob = memo[key] = np.array([biome(n) for n in names], np.uint8)
+        idx = cells(secs[near])
         m = sy == s
-        cells = ((y[m] & 15) >> 2) * 16 + cell_xz[m]
-        out[m] = glob[0] if idx is None else glob[idx[cells]]
+        out[m] = glob[0] if idx is None else glob[idx[((y[m] & 15) >> 2) * 16 + cell_xz[m]]]
     return out

@@ -146,6 +146,9 @@ def _files() -> dict[str, bytes]:
                 for d in ("north", "south", "west", "east")}}]},
         "blockstates/grass_block.json": {"variants": {"snowy=false": {"model": "block/grass_block"},
                                                       "snowy=true": {"model": "block/stone"}}},
+        # drawn by code in the game: a model without elements
+        "models/block/chest.json": {"parent": "builtin/entity", "textures": {"particle": "block/oak_planks"}},
+        "blockstates/chest.json": {"variants": {"facing=north": {"model": "block/chest"}}},
         "models/block/oak_leaves.json": {"parent": "block/cube_all", "textures": {"all": "block/oak_leaves"}},
         "blockstates/oak_leaves.json": {"variants": {"": {"model": "block/oak_leaves"}}},
         "models/block/glass.json": {"parent": "block/cube_all", "textures": {"all": "block/glass"}},

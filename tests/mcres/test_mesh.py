@@ -14,8 +14,8 @@ from . import packfiles as pf
 
 PALETTE = ["", "minecraft:stone", "minecraft:oak_stairs[facing=east,half=bottom,shape=straight]",
            "minecraft:glass", "minecraft:grass_block[snowy=false]", "minecraft:mystery_block",
-           "minecraft:poppy"]
-STONE, STAIR, GLASS, GRASS, MYSTERY, POPPY = range(1, 7)
+           "minecraft:poppy", "minecraft:chest[facing=north]"]
+STONE, STAIR, GLASS, GRASS, MYSTERY, POPPY, CHEST = range(1, 8)
 
 
 @pytest.fixture(scope="module")
@@ -34,6 +34,7 @@ def scene():
     s[4, 4, 0] = GRASS
     s[3, 3, 1] = MYSTERY               # unknown to the stack: the project's own look
     s[2, 3, 1] = POPPY
+    s[1, 3, 1] = CHEST                 # no elements (drawn by code in the game): our look
     opaque = np.zeros(s.shape, bool)
     opaque[4, 0, 1] = True             # a voxel of the project's own
     opaque[3, 3, 1] = True             # the mystery block, drawn the project's way
@@ -63,6 +64,7 @@ def test_whole_cubes_show_only_faces_toward_open_space(res):
     assert got == want
     assert not m.drawn[3, 3, 1] and m.drawn[1, 1, 1] and not m.drawn[4, 0, 1]
     assert len(quads_of(m, (3, 3, 1))) == 0
+    assert not m.drawn[1, 3, 1] and len(quads_of(m, (1, 3, 1))) == 0
 
 
 def test_a_stair_loses_the_faces_against_whole_neighbours(res):

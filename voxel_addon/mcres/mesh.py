@@ -5,7 +5,8 @@ way), the state palette, which other voxels are opaque cubes, the box's biomes. 
 voxel whose state the stack knows gets its shape's quads; a quad with a cullface is
 dropped when the neighbour there is a whole opaque cube (a full shape, or an opaque
 voxel of the project's own) or the same see-through state (glass beside glass).
-Voxels inside (all six neighbours whole) are skipped before any shape is looked at,
+A state whose model has no elements (the game draws chests, beds, signs and water
+by code) keeps today's look. Voxels inside (all six neighbours whole) are skipped before any shape is looked at,
 so a stone hill costs its surface only. Weighted variants are drawn by each voxel's
 Minecraft position (`to_minecraft`), as the game draws them.
 """
@@ -71,6 +72,8 @@ def build(res, palette: list, state: np.ndarray, opaque: np.ndarray, *, origin=(
         if bs is None:
             continue
         sh = res.shape(name, props)
+        if not sh.quads:      # drawn by code in the game (chests, beds, water): today's look
+            continue
         shapes[i] = (name, props, sh)
         full_of[i] = sh.full
         opts = bs.variants if bs.variants is not None else bs.parts

@@ -80,6 +80,10 @@ def test_the_lod_glb_is_valid(bpy, baked, tmp_path, validate):
     doc, _ = glb.read(out)
     names = {n["name"] for n in doc["nodes"]}
     assert {p.name for p in far} <= names
+    # in Blender's own style too: one object per level, water on its own material
+    obs = BB.far_objects(far, style="blender")
+    assert len(obs) == len(far) and all(len(o.data.polygons) == p.triangles
+                                        for o, p in zip(obs, far))
 
 
 def test_cli_lod(tmp_path, capsys):

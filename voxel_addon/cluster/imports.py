@@ -70,7 +70,8 @@ class _LocalPalette:
 def read(item, shared):
     """Worker: one (result, (bytes, tags) decoded, where) per (index, (region name,
     cx, cz, kind, body)) of the task; result: ("ok", version, row without data, local
-    data or None, rgbs, block counts, dropped), ("unfinished", version, status),
+    data or None, local states, block counts, dropped, key, local biome columns or
+    None, local biome names), ("unfinished", version, status),
     ("damaged", message, before 1.13?) or ("hostile", message)."""
     from ..formats import anvil, mcstate, minecraft, nbt
     from ..formats.budget import Budget, Exceeded

@@ -54,12 +54,15 @@ def test_whole_cubes_show_only_faces_toward_open_space(res):
     m = build(res, PALETTE, s, opaque, biomes=biomes, biome_names=["minecraft:plains",
                                                                     "minecraft:desert"])
     hides = (s == STONE) | (s == GRASS) | opaque
+    # an east-facing bottom stair covers its bottom (-z) and its east side (+x) whole
+    covers = {STAIR: {4, 1}}
     want = 0
     for x, y, z in np.argwhere(s == STONE):
         for d, (dx, dy, dz) in enumerate(OFFSETS):
             nx, ny, nz = x + dx, y + dy, z + dz
             inside = 0 <= nx < 5 and 0 <= ny < 5 and 0 <= nz < 4
-            want += not (inside and hides[nx, ny, nz])
+            hidden = inside and (hides[nx, ny, nz] or (d ^ 1) in covers.get(s[nx, ny, nz], ()))
+            want += not hidden
     got = sum(len(quads_of(m, v)) for v in np.argwhere(s == STONE))
     assert got == want
     assert not m.drawn[3, 3, 1] and m.drawn[1, 1, 1] and not m.drawn[4, 0, 1]
@@ -81,6 +84,18 @@ def test_a_stair_loses_the_faces_against_whole_neighbours(res):
     assert any(np.allclose(p[:, 0], 0) for p, n in zip(pos, nrm) if n[0] < 0)
     # 11 quads in the model (6 + 5): the bottom and the two east faces culled
     assert len(q) == 11 - 2 - 1
+
+
+@pytest.mark.parametrize("facing, half, sides", [
+    ("east", "bottom", {"-z", "+x"}), ("north", "bottom", {"-z", "+y"}),
+    ("west", "top", {"+z", "-x"}), ("south", "top", {"+z", "-y"})])
+def test_the_sides_a_stair_covers(res, facing, half, sides):
+    """A stair hides the faces against its flat bottom (top) and back, nothing else."""
+    sh = res.shape("oak_stairs", {"facing": facing, "half": half, "shape": "straight"})
+    names = ("-x", "+x", "-y", "+y", "-z", "+z")
+    assert {names[d] for d in range(6) if sh.faces[d]} == sides
+    assert all(res.shape("stone").faces) and not any(res.shape("glass").faces)
+    assert not any(res.shape("poppy").faces)
 
 
 def test_glass_beside_glass_and_layers(res):

@@ -4,7 +4,9 @@
 way), the state palette, which other voxels are opaque cubes, the box's biomes. Every
 voxel whose state the stack knows gets its shape's quads; a quad with a cullface is
 dropped when the neighbour there is a whole opaque cube (a full shape, or an opaque
-voxel of the project's own) or the same see-through state (glass beside glass).
+voxel of the project's own), a model whose opaque quads cover that side whole (a
+stair's bottom hides the top of the block below) or the same see-through state
+(glass beside glass).
 A state whose model has no elements (the game draws chests, beds, signs and water
 by code) keeps today's look. Voxels inside (all six neighbours whole) are skipped before any shape is looked at,
 so a stone hill costs its surface only. Weighted variants are drawn by each voxel's
@@ -64,6 +66,7 @@ def build(res, palette: list, state: np.ndarray, opaque: np.ndarray, *, origin=(
     W, H, D = state.shape
     known = state > 0
     full_of = np.zeros(len(palette), bool)        # per state: a whole opaque cube
+    side_of = np.zeros((len(palette), 6), bool)   # per state and side: covered whole
     shapes: dict = {}
     mixed = np.zeros(len(palette), bool)          # weighted or position-dependent
     for i in np.unique(state[known]).tolist():
@@ -76,6 +79,7 @@ def build(res, palette: list, state: np.ndarray, opaque: np.ndarray, *, origin=(
             continue
         shapes[i] = (name, props, sh)
         full_of[i] = sh.full
+        side_of[i] = sh.faces
         opts = bs.variants if bs.variants is not None else bs.parts
         mixed[i] = any(len(o) > 1 for _, o in opts)
     drawn = known & np.isin(state, list(shapes) or [-1])
@@ -87,6 +91,7 @@ def build(res, palette: list, state: np.ndarray, opaque: np.ndarray, *, origin=(
         inner &= pad[1 + dx:1 + dx + W, 1 + dy:1 + dy + H, 1 + dz:1 + dz + D]
     todo = np.argwhere(drawn & ~(inner & hides))
     padstate = np.pad(state, 1)
+    padrawn = np.pad(drawn, 1)
     sprites, sprite_ix = [], {}
     out = {k: [] for k in ("pos", "uv", "nrm", "sprite", "tint", "layer", "shade", "voxel")}
     ox, oy, oz = origin
@@ -103,6 +108,9 @@ def build(res, palette: list, state: np.ndarray, opaque: np.ndarray, *, origin=(
                 dx, dy, dz = OFFSETS[q.cull]
                 if pad[1 + x + dx, 1 + y + dy, 1 + z + dz]:
                     continue
+                ns = padstate[1 + x + dx, 1 + y + dy, 1 + z + dz]
+                if padrawn[1 + x + dx, 1 + y + dy, 1 + z + dz] and side_of[ns, q.cull ^ 1]:
+                    continue      # the neighbour's model covers the face toward us
                 if sh.layer != SOLID and padstate[1 + x + dx, 1 + y + dy, 1 + z + dz] == s:
                     continue
             if q.sprite not in sprite_ix:

@@ -42,6 +42,8 @@ class Shape:
     ao: bool = True
     full: bool = False    # a whole opaque cube: neighbours' faces against it are hidden
     layer: str = SOLID    # the most see-through layer of its quads
+    faces: tuple = (False,) * 6   # per side (core.blocks.FACES): opaque quads cover it
+                                  # whole (a stair's bottom and back): what it hides there
 
 
 def _layer(rgba: np.ndarray) -> str:
@@ -73,6 +75,21 @@ def first_frame(rgba: np.ndarray, meta) -> np.ndarray:
     if (row + 1) * fh > h:
         col, row = 0, 0
     return rgba[row * fh:(row + 1) * fh, col * fw:(col + 1) * fw]
+
+
+def _covers(quads, d: int) -> bool:
+    """Do the opaque quads on side D of the block (lying in its boundary plane) cover
+    it whole? Rasterised at 1/16 block (models are drawn on that grid)."""
+    axis, hi = d // 2, d % 2
+    grid = np.zeros((16, 16), bool)
+    for q in quads:
+        if q.layer != SOLID or q.face != d or not np.allclose(q.pos[:, axis], hi):
+            continue
+        uv = np.delete(q.pos, axis, axis=1) * 16
+        (a, b), (c, e) = np.floor(uv.min(axis=0) + 1e-6).astype(int), \
+            np.ceil(uv.max(axis=0) - 1e-6).astype(int)
+        grid[max(a, 0):min(c, 16), max(b, 0):min(e, 16)] = True
+    return bool(grid.all())
 
 
 class Resources:
@@ -151,6 +168,7 @@ class Resources:
                     shape.full = True     # overlays around it (grass sides) do not matter
         if shape.quads:
             shape.layer = max((q.layer for q in shape.quads), key=_ORDER.get)
+        shape.faces = tuple(shape.full or _covers(shape.quads, d) for d in range(6))
         return shape
 
     def _full(self, el) -> bool:

@@ -80,6 +80,12 @@ def test_models_with_the_stacks_textures_and_tints(mc_world, light):
     assert {REGISTRY.id(n) for n in ("stone", "grass", "planks", "glass", "flowers")} <= \
         set(p.block.tolist())
     assert len(p.light) == 4 * p.quads and (p.daylight > 0).any()
+    # the poppy's planes take its voxel's light: one value per quad
+    poppy = [i for i in range(p.quads)
+             if bk.materials[p.material[i]].image == "minecraft:block/poppy"]
+    assert poppy
+    for i in poppy:
+        assert np.ptp(p.daylight[4 * i:4 * i + 4]) == 0 and np.ptp(p.light[4 * i:4 * i + 4], axis=0).max() == 0
 
 
 def test_a_missing_stack_bakes_todays_look(mc_world, tmp_path):

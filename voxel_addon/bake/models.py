@@ -110,7 +110,12 @@ def part_and_materials(m, res, blocks, origin, light, offset, specs: list, image
                                       image=sprite if tex is not None else None, per_vertex=True))
         mat[i] = j
     local = m.positions - np.asarray(origin, np.float32)
-    s = sample(light, local + np.asarray(offset, np.float32), m.normals)
+    nrm = m.normals.copy()
+    flat = np.repeat(~m.shade, 4)     # unshaded quads (crosses): their voxel's own light,
+    if flat.any():                    # as the greedy path lights plants
+        local[flat] = np.repeat(m.voxel.astype(np.float32) + 0.5, 4, axis=0)[flat]
+        nrm[flat] = 0
+    s = sample(light, local + np.asarray(offset, np.float32), nrm)
     vx = m.voxel
     n = m.normals[::4]
     axis = np.argmax(np.abs(n), axis=1)      # the nearest cube face (core.blocks.FACES)

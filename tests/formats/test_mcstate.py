@@ -176,3 +176,9 @@ def test_cli_resources_are_checked_and_kept(tmp_path, capsys):
     with World.open(w, loader=False, readonly=True) as world:
         assert json.loads(world.file.meta[mcstate.RESOURCES]) == [str(jar.resolve()),
                                                                   str(pack.resolve())]
+    capsys.readouterr()
+    assert main(["info", "--world", str(w)]) == 0
+    got = json.loads(capsys.readouterr().out)["minecraft"]
+    assert got["resources"] == [str(jar.resolve()), str(pack.resolve())] and got["y_min"] == -64
+    assert got["states"] == 7 and set(got["biomes"]) == {"minecraft:plains", "minecraft:forest",
+                                                          "minecraft:desert"}

@@ -88,6 +88,28 @@ def test_models_with_the_stacks_textures_and_tints(mc_world, light):
         assert np.ptp(p.daylight[4 * i:4 * i + 4]) == 0 and np.ptp(p.light[4 * i:4 * i + 4], axis=0).max() == 0
 
 
+def test_model_textures_stand_as_the_greedy_paths(mc_world):
+    """On every side face the texture's v grows upward and its u to the right seen
+    from outside (cross(up, normal)), as the greedy path lays its tiles (Blender's
+    uv: v up), so sprites are not upside down or mirrored."""
+    from voxel_addon.core.blocks import REGISTRY as R
+    one = np.zeros((3, 3, 256), np.uint16)
+    one[1, 1, 5] = R.id("stone")
+    greedy = bake.bake_blocks(one, light="vertex").parts[0]
+    p = model_part(baked(mc_world[0], light="vertex"))
+    for part in (greedy, p):
+        pos, uv = part.positions.reshape(-1, 4, 3), part.uvs.reshape(-1, 4, 2)
+        n = part.normals.reshape(-1, 4, 3)[:, 0]
+        side = np.flatnonzero(np.abs(n[:, 2]) < 0.5)
+        assert len(side)
+        for i in side:
+            right = np.cross([0, 0, 1], n[i])
+            dz, dv = pos[i, :, 2] - pos[i, 0, 2], uv[i, :, 1] - uv[i, 0, 1]
+            dr, du = (pos[i] - pos[i, 0]) @ right, uv[i, :, 0] - uv[i, 0, 0]
+            assert (np.sign(np.round(dz, 6)) == np.sign(np.round(dv, 6))).all(), (part.name, i)
+            assert (np.sign(np.round(dr, 6)) == np.sign(np.round(du, 6))).all(), (part.name, i)
+
+
 def test_a_missing_stack_bakes_todays_look(mc_world, tmp_path):
     import shutil
     w, jar = mc_world

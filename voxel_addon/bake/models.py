@@ -120,7 +120,9 @@ def part_and_materials(m, res, blocks, origin, light, offset, specs: list, image
     n = m.normals[::4]
     axis = np.argmax(np.abs(n), axis=1)      # the nearest cube face (core.blocks.FACES)
     face = axis * 2 + (n[np.arange(m.quads), axis] > 0)
+    uvs = m.uvs.astype(np.float32)
+    uvs[:, 1] = 1.0 - uvs[:, 1]      # Minecraft's v runs down the texture, Blender's up
     return Part(f"minecraft_{origin[0]}_{origin[1]}", m.positions.astype(np.float32),
-                m.normals.astype(np.float32), m.uvs.astype(np.float32),
+                m.normals.astype(np.float32), uvs,
                 np.ascontiguousarray(s[:, :3]), np.ascontiguousarray(s[:, 3]), mat,
                 blocks[vx[:, 0], vx[:, 1], vx[:, 2]].astype(np.uint16), face.astype(np.uint8))

@@ -214,6 +214,16 @@ def test_layers_and_full_blocks(res):
     assert {q.tint for q in grass.quads if q.face == FACES["+z"]} == {0}
     assert {q.tint for q in grass.quads if q.face == FACES["-z"]} == {-1}
     assert res.shape("grass_block", {"snowy": "true"}).quads[0].sprite == "minecraft:block/stone"
+    # the overlay stands a little off the side under it (no z-fighting), outward
+    over = [q for q in grass.quads if q.sprite == "minecraft:block/grass_block_side_overlay"]
+    assert len(over) == 4
+    for q in over:
+        axis = q.face // 2
+        edge = 1.0 if q.face % 2 else 0.0
+        off = q.pos[:, axis] - edge
+        assert np.allclose(np.abs(off), 1 / 512) and np.sign(off[0]) == (1 if q.face % 2 else -1)
+    assert all(np.isin(q.pos[:, q.face // 2], (0, 1)).all() for q in grass.quads
+               if q.sprite == "minecraft:block/grass_block_side")
     assert res.shape("no_such_block") is None
 
 

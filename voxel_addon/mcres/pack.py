@@ -77,6 +77,26 @@ def first_frame(rgba: np.ndarray, meta) -> np.ndarray:
     return rgba[row * fh:(row + 1) * fh, col * fw:(col + 1) * fw]
 
 
+LIFT = 1 / 512   # blocks an overlay stands off the face under it
+
+
+def _lift_overlays(quads) -> None:
+    """A quad on the very place of an earlier one (grass sides' overlay) is drawn
+    after it in the game, in the same depth; a bake or a viewer would z-fight, so it
+    is lifted off along its normal (by LIFT per quad under it)."""
+    seen: dict = {}
+    for q in quads:
+        n = np.cross(q.pos[1] - q.pos[0], q.pos[2] - q.pos[0])
+        n = n / (np.linalg.norm(n) or 1.0)
+        # the same corners facing the same way (a plane's back is no overlay)
+        key = (tuple(sorted(map(tuple, np.round(q.pos, 5).tolist()))),
+               tuple(np.round(n, 3).tolist()))
+        k = seen.get(key, 0)
+        seen[key] = k + 1
+        if k:
+            q.pos = (q.pos + n * LIFT * k).astype(np.float32)
+
+
 def _covers(quads, d: int) -> bool:
     """Do the opaque quads on side D of the block (lying in its boundary plane) cover
     it whole? Rasterised at 1/16 block (models are drawn on that grid)."""
@@ -166,6 +186,7 @@ class Resources:
                         (t := self.texture(f["sprite"])) is None or t.layer == SOLID
                         for f in el["faces"].values()):
                     shape.full = True     # overlays around it (grass sides) do not matter
+        _lift_overlays(shape.quads)
         if shape.quads:
             shape.layer = max((q.layer for q in shape.quads), key=_ORDER.get)
         shape.faces = tuple(shape.full or _covers(shape.quads, d) for d in range(6))

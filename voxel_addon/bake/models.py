@@ -100,7 +100,9 @@ def part_and_materials(m, res, blocks, origin, light, offset, specs: list, image
         if j is None:
             sprite = m.sprites[sp] if sp >= 0 else None
             tex = res.texture(sprite) if sprite else None
-            short = (sprite or "missing").rpartition(":")[2].removeprefix("block/").replace("/", "_")
+            ns, _, path = (sprite or "minecraft:missing").rpartition(":")
+            short = ("" if ns == "minecraft" else f"{ns}_") + \
+                path.removeprefix("block/").replace("/", "_")   # unique: names key materials
             tint = None if key[2] == (255, 255, 255) else tuple(c / 255 for c in key[2])
             name = f"mc_{short}_{LAYERS[key[1]]}" + ("" if tint is None else "_%02x%02x%02x" % key[2])
             if tex is not None:

@@ -116,3 +116,9 @@ def test_only_cluster_imports_dask():
             if any(n.split(".")[0] in ("dask", "distributed") for n in names):
                 bad.append(str(path.relative_to(ROOT)))
     assert not bad, f"only voxel_addon/cluster/ may import Dask: {bad}"
+
+
+def test_minecraft_resources_stand_alone():
+    """mcres reads the player's files for the import, the bake and the drawing alike:
+    it may lean on core only, never on a world, a format or the GPU."""
+    assert table()["mcres"] == {"core": None}

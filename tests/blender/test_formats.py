@@ -43,6 +43,28 @@ def test_import_minecraft_operator(addon, tmp_path):
     assert REGISTRY[w.get_block(5, -5, 3)].name == "bricks"
 
 
+def test_import_minecraft_with_resources(addon, tmp_path):
+    """The stack given in the operator is checked (a bad pack: one line, nothing made)
+    and kept in the world, bottom first; the import keeps states."""
+    import json
+    bpy = addon
+    from tests.mcres import packfiles as pf
+    from voxel_addon.blender import session
+    save = _save(tmp_path)
+    jar = pf.write(tmp_path / "client.jar", jar=True)
+    bpy.context.scene.voxel.path = ""
+    with pytest.raises(RuntimeError, match="nope.zip"):
+        bpy.ops.import_scene.voxel_minecraft(filepath=str(save / "level.dat"),
+                                             resources=f"{jar}; {tmp_path / 'nope.zip'}")
+    assert not (tmp_path / "My World.sqlite").exists()
+    r = bpy.ops.import_scene.voxel_minecraft(filepath=str(save / "level.dat"),
+                                             resources=str(jar))
+    assert r == {"FINISHED"}
+    w = session.world(bpy.context.scene.voxel.path)
+    assert json.loads(w.file.meta["mc_resources"]) == [str(jar.resolve())]
+    assert "minecraft:bricks" in json.loads(w.file.meta["mc_states"])
+
+
 def test_vox_import_and_export_operators(addon, tmp_path):
     bpy = addon
     from voxel_addon.blender import session

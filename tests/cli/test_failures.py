@@ -143,7 +143,7 @@ def test_import_on_a_full_disk_keeps_the_batches_it_says(disk):
     try:
         with World.create(w, seed=0, generator="empty", loader=False):
             pass
-        disk(200 << 10)
+        disk(400 << 10)   # a batch is ~150 KiB: blocks and their kept states (issue 30)
         line = failed(cli("import", "--world", w, "--from", save), "disk full",
                       "chunks were written and kept; the rest was not written")
     finally:

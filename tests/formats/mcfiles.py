@@ -67,7 +67,7 @@ def nbt(root: dict) -> bytes:
 
 # ---- block states -------------------------------------------------------------
 def pack(indices, bits, spanning=False) -> list[int]:
-    """4096 indices -> signed 64-bit longs, the way Minecraft stores them."""
+    """4096 indices (or 64 biome cells) -> signed 64-bit longs, the way Minecraft stores them."""
     longs = []
     if spanning:
         acc, n = 0, 0
@@ -79,7 +79,7 @@ def pack(indices, bits, spanning=False) -> list[int]:
         longs = [(total >> (64 * i)) & (2**64 - 1) for i in range(count)]
     else:
         per = 64 // bits
-        for i in range(0, 4096, per):
+        for i in range(0, len(indices), per):
             w = 0
             for k, v in enumerate(indices[i:i + per]):
                 w |= int(v) << (k * bits)
@@ -87,27 +87,40 @@ def pack(indices, bits, spanning=False) -> list[int]:
     return [w - 2**64 if w >= 2**63 else w for w in longs]
 
 
-def section_nbt(y, names, version):
-    """names: (16, 16, 16) array [y][z][x] of block names (None: no block_states)."""
+def _entry(n: str) -> dict:
+    """A palette entry; `name[k=v,…]` gives it Properties (a stair without any faces north)."""
+    if "[" in n:
+        name, _, rest = n.partition("[")
+        return {"Name": name, "Properties": dict(p.split("=") for p in rest.rstrip("]").split(","))}
+    return {"Name": n, "Properties": {"facing": "north"}} if "stairs" in n else {"Name": n}
+
+
+def section_nbt(y, names, version, biomes=None):
+    """names: (16, 16, 16) array [y][z][x] of block names, `name[k=v,…]` with
+    properties; biomes (1.18+): (names, (64,) cell indices [y][z][x] or None)."""
     flat = names.reshape(-1)
     palette = list(dict.fromkeys(flat.tolist()))
-    pal = [{"Name": n, "Properties": {"facing": "north"}} if "stairs" in n else {"Name": n}
-           for n in palette]
+    pal = [_entry(n) for n in palette]
     idx = np.array([palette.index(n) for n in flat])
     bits = max(4, (len(palette) - 1).bit_length())
     states = {"palette": T("list", pal, "compound")}
     if len(palette) > 1 or version < 2844:
         states["data"] = T("longs", pack(idx, bits, spanning=version < 2529))
     if version >= 2844:
-        return {"Y": T("byte", y), "block_states": states,
-                "biomes": {"palette": T("list", ["minecraft:plains"])}}
+        bnames, bidx = biomes or (["minecraft:plains"], None)
+        b = {"palette": T("list", bnames)}
+        if bidx is not None:
+            b["data"] = T("longs", pack(np.asarray(bidx), max(1, (len(bnames) - 1).bit_length())))
+        return {"Y": T("byte", y), "block_states": states, "biomes": b}
     return {"Y": T("byte", y), "Palette": states["palette"], "BlockStates": states["data"],
             "BlockLight": T("bytes", [0] * 2048)}
 
 
-def chunk_nbt(cx, cz, sections: dict, version=3953, status="minecraft:full") -> bytes:
-    secs = T("list", [section_nbt(y, a, version) for y, a in sorted(sections.items())],
-             "compound")
+def chunk_nbt(cx, cz, sections: dict, version=3953, status="minecraft:full", biomes=None,
+              old_biomes=None) -> bytes:
+    """biomes: {section y: (names, cells)} (1.18+); old_biomes: Level.Biomes ints."""
+    secs = T("list", [section_nbt(y, a, version, (biomes or {}).get(y))
+                      for y, a in sorted(sections.items())], "compound")
     noise = {"Heightmaps": {"WORLD_SURFACE": T("longs", [7] * 37)},
              "block_entities": T("list", [{"id": "minecraft:chest", "x": 1, "y": 2, "z": 3,
                                            "Items": T("list", [], "compound")}], "compound"),
@@ -118,6 +131,8 @@ def chunk_nbt(cx, cz, sections: dict, version=3953, status="minecraft:full") -> 
     else:
         root = {"DataVersion": version,
                 "Level": {"xPos": cx, "zPos": cz, "Status": status, "Sections": secs, **noise}}
+        if old_biomes is not None:
+            root["Level"]["Biomes"] = T("ints", list(old_biomes))
     return nbt(root)
 
 

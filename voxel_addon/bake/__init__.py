@@ -44,6 +44,8 @@ class MaterialSpec:
     glow: float         # emission strength (block's glow); texture glow mask says where
     double_sided: bool
     tint: tuple | None = None  # sRGB 0..1 the texture is multiplied by (the `color` block)
+    image: str | None = None   # a Minecraft sprite (Bake.images) instead of `texture` (models.py)
+    per_vertex: bool = False   # light from colour attributes even in an atlas bake (models.py)
 
 
 @dataclass
@@ -76,6 +78,8 @@ class Bake:
     plants: dict[str, np.ndarray] = field(default_factory=dict)
     atlas: np.ndarray | None = None   # (AH, AW, 4) float32 light atlas (bake.atlas), or None
     atlas_face: np.ndarray | None = None  # (AH, AW) uint8 face code per texel
+    images: dict = field(default_factory=dict)  # sprite id -> (h, w, 4) uint8 (models.py)
+    note: str = ""      # why a world's resource stack was not used, or ""
 
     @property
     def light(self) -> str:
@@ -117,11 +121,23 @@ def colors_of(world, x0, y0, x1, y1):
     return np.asfortranarray(d[ox:ox + x1 - x0, oy:oy + y1 - y0]), colors.parse(world.file.meta)
 
 
+def inputs(world, x0, y0, x1, y1, blocks) -> tuple[dict, str]:
+    """What steps() needs of a world beside the region's blocks: the small data and
+    palette (`color` voxels), the Minecraft models (bake.models), and a note (why a
+    world's resource stack was not used, or "")."""
+    from . import models as MD
+    data, palette = colors_of(world, x0, y0, x1, y1)
+    models, note = MD.of_world(world, x0, y0, x1, y1, blocks, data)
+    return dict(data=data, palette=palette, models=models), note
+
+
 def bake_world(world, x0, y0, x1, y1, **kw) -> Bake:
     x0, y0, x1, y1 = check_region(x0, y0, x1, y1)
-    data, palette = colors_of(world, x0, y0, x1, y1)
-    return bake_blocks(region_of(world, x0, y0, x1, y1), origin=(x0, y0, 0), data=data,
-                       palette=palette, **kw)
+    blocks = region_of(world, x0, y0, x1, y1)
+    extra, note = inputs(world, x0, y0, x1, y1, blocks)
+    bk = bake_blocks(blocks, origin=(x0, y0, 0), **extra, **kw)
+    bk.note = note
+    return bk
 
 
 def _materials():
@@ -193,12 +209,15 @@ def run(gen):
 
 def steps(blocks: np.ndarray, origin=(0, 0, 0), *, per: str = "region", method: str = "greedy",
           instances: bool = False, light: str = "atlas", backend: str | None = None,
-          progress=None, tile: int = 64, data=None, palette=None, window=None):
+          progress=None, tile: int = 64, data=None, palette=None, models=None,
+          window=None):
     """The bake as a generator of short steps (yields (stage, fraction)) that returns
     the Bake: a modal operator runs one step per timer tick and can stop in between.
     per "tile" cuts the region into `tile`×`tile` objects. `data` (the region's small
     data) and `palette` ((n, 3) uint8, core.colors): `color` voxels get one material
     per colour (the texture tinted), so a .vox keeps its colours in Blender and glTF.
+    `models` (bake.models.Models): Minecraft voxels the resource stack knows are baked
+    from their models into a Part of their own and left out of the greedy path.
     `window` (x, y, w, h) in `blocks`: only that part becomes objects (and plants),
     the rest is context (its light and faces; bake.tiles: one tile of a big region)."""
     from .. import meshing
@@ -227,6 +246,14 @@ def steps(blocks: np.ndarray, origin=(0, 0, 0), *, per: str = "region", method: 
     mat_table, specs = _materials()
     shape_ids = np.flatnonzero(REGISTRY.shape >= 2)  # x and hash
 
+    mm = None
+    if models is not None:
+        from . import models as MD
+        yield stage("models", 0.0)
+        mm = MD.mesh(models, blocks, (ox, oy, oz))
+        if mm.drawn.any():       # the greedy path leaves them out (light keeps them)
+            padded = padded.copy(order="F")
+            padded[PAD:PAD + W, PAD:PAD + H][mm.drawn] = 0
     ring = padded[PAD - 1:PAD + W + 1, PAD - 1:PAD + H + 1]  # region + 1-voxel air ring
     dring = None
     if data is not None:
@@ -279,6 +306,13 @@ def steps(blocks: np.ndarray, origin=(0, 0, 0), *, per: str = "region", method: 
             p.uv2 = A.uvs(q, p.positions - np.asarray((ox + x, oy + y, oz), np.float32),
                           px[sl], py[sl], AW, AH)
         parts.append(p)
+    images = {}
+    if mm is not None:
+        v = mm.voxel
+        mm = mm.subset((v[:, 0] >= wx) & (v[:, 0] < wx + ww) & (v[:, 1] >= wy) & (v[:, 1] < wy + wh))
+    if mm is not None and mm.quads:
+        near = (lit[PAD - 1:PAD + W + 1, PAD - 1:PAD + H + 1], (1, 1, 0))
+        parts.append(MD.part_and_materials(mm, models.res, blocks, (ox, oy, oz), *near, specs, images))
     plants = {}
     if instances:
         for bid in shape_ids:
@@ -287,7 +321,7 @@ def steps(blocks: np.ndarray, origin=(0, 0, 0), *, per: str = "region", method: 
                 plants[REGISTRY.blocks[bid].name] = (xyz + (ox + wx, oy + wy, oz)).astype(np.int32)
     yield stage("baked", 1.0)
     return Bake((ox + wx, oy + wy, ox + wx + ww, oy + wy + wh), parts, specs, plants, texels,
-                faces)
+                faces, images)
 
 
 LIGHT_TILE, REACH = 64, 16  # light travels < 16 voxels: a 16-column margin is exact

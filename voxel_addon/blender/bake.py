@@ -55,6 +55,19 @@ def image(name: str, kind: str = "color") -> bpy.types.Image:
     return img
 
 
+def sprite(name: str, rgba: np.ndarray) -> bpy.types.Image:
+    """The packed image of a Minecraft sprite (bake.Bake.images: the player's pack)."""
+    key = f"voxel_mc_{name}"
+    img = bpy.data.images.get(key)
+    if img is None:
+        h, w = rgba.shape[:2]
+        img = bpy.data.images.new(key, w, h, alpha=True)
+        img.pixels.foreach_set((rgba.astype(np.float32) / 255.0)[::-1].ravel())
+        img.file_format = "PNG"
+        img.pack()
+    return img
+
+
 # ---------------------------------------------------------------- node helpers
 
 def _node(tree, kind, x, y, **props):
@@ -209,9 +222,9 @@ def _linear(c: float) -> float:
     return c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4
 
 
-def material(spec, style: str, light=None) -> bpy.types.Material:
+def material(spec, style: str, light=None, images=None) -> bpy.types.Material:
     """The material of `spec`; `light` is the bake's light atlas image (light_images)
-    or None when light travels in colour attributes."""
+    or None when light travels in colour attributes; `images` the bake's sprites."""
     key = f"{spec.name}|{style}|{light.name if light is not None else '-'}"
     for m in bpy.data.materials:
         if m.get("voxel_key") == key:
@@ -225,7 +238,9 @@ def material(spec, style: str, light=None) -> bpy.types.Material:
     t.links.new(bsdf.outputs[0], out.inputs["Surface"])
     bsdf.inputs["Roughness"].default_value = 0.9
     uv = _node(t, "ShaderNodeUVMap", -700, 0, uv_map="UVMap")
-    tex = _node(t, "ShaderNodeTexImage", -450, 100, image=image(spec.texture),
+    img = sprite(spec.image, images[spec.image]) if spec.image \
+        else image(spec.texture)
+    tex = _node(t, "ShaderNodeTexImage", -450, 100, image=img,
                 interpolation="Closest", extension="REPEAT")
     t.links.new(uv.outputs[0], tex.inputs[0])
     colour = tex.outputs["Color"]
@@ -360,7 +375,8 @@ def build_steps(bk, *, style: str = "blender", collection=None, hours: float = 1
         if link:
             bpy.context.scene.collection.children.link(collection)
     light = light_images(bk, style, hours)
-    mats = [material(s, style, light) for s in bk.materials]
+    mats = [material(s, style, None if s.per_vertex else light,
+                     bk.images) for s in bk.materials]
     objs = []
     for i, part in enumerate(bk.parts):
         yield "objects", i / max(len(bk.parts), 1)
@@ -403,6 +419,67 @@ def plants(bk, style, collection, hours) -> list:
         proto.parent = ob
         out += [ob, proto]
     return out
+
+
+def far_material(water: bool, style: str) -> bpy.types.Material:
+    """The far levels' one material (two with water): Base Color from the per-vertex
+    colour "far" (albedo, times the light at the bake's hour for style "gltf")."""
+    name = f"voxel_far{'_water' if water else ''}_{style}"
+    m = bpy.data.materials.get(name)
+    if m is not None:
+        return m
+    m = bpy.data.materials.new(name)
+    t = compat.node_tree(m)
+    t.nodes.clear()
+    out = _node(t, "ShaderNodeOutputMaterial", 600, 0)
+    bsdf = _node(t, "ShaderNodeBsdfPrincipled", 300, 0)
+    t.links.new(bsdf.outputs[0], out.inputs["Surface"])
+    bsdf.inputs["Roughness"].default_value = 0.9
+    attr = _node(t, "ShaderNodeVertexColor", 0, 0, layer_name="far")
+    t.links.new(attr.outputs["Color"], bsdf.inputs["Base Color"])
+    if water:
+        bsdf.inputs["Alpha"].default_value = 0.7
+        m.surface_render_method = "BLENDED"
+        if style == "gltf":
+            m["voxel_alpha"] = "BLEND"
+    return m
+
+
+def far_objects(parts, *, style: str = "blender", collection=None, hours: float = 12.0) -> list:
+    """One object per far level (bake.lod.FarPart) in `collection`."""
+    from ..light import daytime, shade as eq41
+    if collection is None:
+        collection = bpy.data.collections.new("Voxel Far")
+        bpy.context.scene.collection.children.link(collection)
+    objs = []
+    for fp in parts:
+        albedo = np.where(fp.albedo <= 0.04045, fp.albedo / 12.92,
+                          ((fp.albedo + 0.055) / 1.055) ** 2.4).astype(np.float32)
+        if style == "gltf":   # open sky, no block light: eq. 4.1 at the hour
+            n = len(albedo)
+            albedo = np.clip(eq41(albedo, np.zeros((n, 3), np.float32), np.zeros(n, np.float32),
+                                  np.ones(n, np.float32), fp.normals, daytime.at(hours)), 0, 1)
+        tris = np.concatenate([fp.ground, fp.water]).astype(np.int32)
+        me = bpy.data.meshes.new(fp.name)
+        me.vertices.add(len(fp.positions))
+        me.vertices.foreach_set("co", fp.positions.astype(np.float32).ravel())
+        me.loops.add(3 * len(tris))
+        me.loops.foreach_set("vertex_index", tris.ravel())
+        me.polygons.add(len(tris))
+        me.polygons.foreach_set("loop_start", np.arange(0, 3 * len(tris), 3, dtype=np.int32))
+        me.materials.append(far_material(False, style))
+        if len(fp.water):
+            me.materials.append(far_material(True, style))
+            idx = np.r_[np.zeros(len(fp.ground), np.int32), np.ones(len(fp.water), np.int32)]
+            me.polygons.foreach_set("material_index", idx)
+        me.update(calc_edges=True)
+        a = me.color_attributes.new("far", "FLOAT_COLOR", "POINT")
+        a.data.foreach_set("color", np.hstack([albedo, np.ones((len(albedo), 1))]).astype(
+            np.float32).ravel())
+        ob = bpy.data.objects.new(fp.name, me)
+        collection.objects.link(ob)
+        objs.append(ob)
+    return objs
 
 
 def export_glb(path, objects, *, instances: bool = False) -> None:

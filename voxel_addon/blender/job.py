@@ -78,7 +78,9 @@ class Job:
             return self.objects
         yield "read", 0.0
         blocks = bake.region_of(self.world, x0, y0, x1, y1)
-        self.bake = yield from bake.steps(blocks, origin=(x0, y0, 0), **self.kw)
+        extra, note = bake.inputs(self.world, x0, y0, x1, y1, blocks)  # colours, Minecraft models
+        self.bake = yield from bake.steps(blocks, origin=(x0, y0, 0), **extra, **self.kw)
+        self.bake.note = note
         del blocks
         self.collection = bpy.data.collections.new(self.name)
         self.objects = yield from BB.build_steps(self.bake, style=self.style,

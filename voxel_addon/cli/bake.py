@@ -16,8 +16,11 @@ def add_parser(sub):
     from ..meshing import METHODS
     p = sub.add_parser("bake", help="bake a block region into a glTF binary (.glb) with bpy")
     add_world(p)
-    p.add_argument("--region", type=int, nargs=4, required=True, metavar=("X0", "Y0", "X1", "Y1"),
+    p.add_argument("--region", type=int, nargs=4, metavar=("X0", "Y0", "X1", "Y1"),
                    help="half-open block columns [X0,X1) x [Y0,Y1), full height")
+    p.add_argument("--lod", type=int, nargs=4, metavar=("X", "Y", "NEAR", "FAR"),
+                   help="instead of --region: the chunks within NEAR of block (X, Y) in full, "
+                        "far terrain beyond out to FAR chunks, one object per level")
     p.add_argument("--out", type=Path, required=True, metavar="F.glb|DIR",
                    help="output .glb; with --per tile a folder takes one tile_X_Y.glb per "
                         "tile (X Y: its first block column; tiles already there are kept)")
@@ -45,7 +48,11 @@ def run(args):
     if not args.world.exists():
         raise VoxelError(f"world file {args.world} does not exist")
     hours = daytime.parse_time(args.time)
+    if (args.region is None) == (args.lod is None):
+        raise VoxelError("give --region X0 Y0 X1 Y1 or --lod X Y NEAR FAR (one of them)")
     if args.out.suffix.lower() != ".glb":
+        if args.lod:
+            raise VoxelError("--lod writes one .glb: --out must end in .glb")
         if args.per != "tile":
             raise VoxelError(f"--out must end in .glb (got {args.out.name}); a folder "
                              "takes --per tile")
@@ -56,7 +63,14 @@ def run(args):
         args.out.parent.mkdir(parents=True, exist_ok=True)
     except OSError as e:
         raise VoxelError(f"cannot create folder {args.out.parent}: {e.strerror}") from None
-    x0, y0, x1, y1 = bake.check_region(*args.region)
+    if args.lod:
+        from ..bake import lod
+        lx, ly, near, far = args.lod
+        if not 0 <= near < far:
+            raise VoxelError(f"--lod needs 0 <= NEAR < FAR, got {near} and {far}")
+        x0, y0, x1, y1 = lod.near_box(lx, ly, near)
+    else:
+        x0, y0, x1, y1 = bake.check_region(*args.region)
     big = (x1 - x0) * (y1 - y0) >= 64 * 64
     t0 = time.perf_counter()
 
@@ -64,9 +78,16 @@ def run(args):
         if big:
             note(f"bake: {stage} {100 * frac:3.0f}%  ({time.perf_counter() - t0:.1f} s)")
 
+    far_parts = []
     with World.open(args.world, readonly=True, loader=False) as world:
-        bk = bake.bake_world(world, x0, y0, x1, y1, per=args.per, method=args.method,
-                             instances=args.instances, light=args.light, progress=progress)
+        kw = dict(per=args.per, method=args.method, instances=args.instances, light=args.light,
+                  progress=progress)
+        if args.lod:
+            bk, far_parts = lod.bake_lod(world, lx, ly, near, far, **kw)
+        else:
+            bk = bake.bake_world(world, x0, y0, x1, y1, **kw)
+    if bk.note:
+        note(f"bake: {bk.note}")
     try:
         import bpy
     except ImportError as e:
@@ -74,6 +95,7 @@ def run(args):
     from ..blender import bake as BB
     bpy.ops.wm.read_factory_settings(use_empty=True)
     objs = BB.build(bk, style="gltf", hours=hours, progress=progress)
+    objs += BB.far_objects(far_parts, style="gltf", hours=hours)
     progress("export", 0.0)
     # The exporter logs INFO lines to stdout; keep stdout for our own result.
     with contextlib.redirect_stdout(io.StringIO()):
@@ -82,7 +104,7 @@ def run(args):
         raise VoxelError(f"Blender's glTF exporter did not write {args.out}")
     if args.blend:
         bpy.ops.wm.save_as_mainfile(filepath=str(args.blend.resolve()))
-    note(f"bake: {len(objs)} objects, {bk.triangles} triangles, "
+    note(f"bake: {len(objs)} objects, {bk.triangles + sum(p.triangles for p in far_parts)} triangles, "
          f"{len(bk.materials)} materials in {time.perf_counter() - t0:.1f} s")
     print(args.out)
 

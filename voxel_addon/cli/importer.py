@@ -24,6 +24,11 @@ def add_parser(sub):
                    help="Minecraft: only chunks touching blocks [X0, X1) x [Z0, Z1)")
     p.add_argument("--replace", action="store_true",
                    help="Minecraft: overwrite chunks the world already has")
+    p.add_argument("--resources", action="append", metavar="JAR_OR_PACK",
+                   help="Minecraft: the game's client .jar (or 'minecraft': the newest in "
+                        "the launcher folders) and resource packs (.zip or folders) laid "
+                        "over it in the order given; kept in the world for renders, bakes "
+                        "and the live view (repeatable)")
     p.add_argument("--generator", help="generator of a new world (default: empty)")
     p.add_argument("--seed", type=int, default=0, help="seed of a new world (default 0)")
     cluster.add_arguments(p)
@@ -47,8 +52,9 @@ def run(args):
     if not src.exists():
         raise VoxelError(f"{src} does not exist")
     is_vox = src.is_file() and src.suffix.lower() == ".vox"
-    if is_vox and (args.area or args.replace or args.y_min is not None):
-        raise VoxelError("--area, --replace and --y-min are for Minecraft worlds")
+    resources = None
+    if is_vox and (args.area or args.replace or args.y_min is not None or args.resources):
+        raise VoxelError("--area, --replace, --y-min and --resources are for Minecraft worlds")
     if not is_vox and tuple(args.at) != (0, 0, 0):
         raise VoxelError("--at is for .vox files (Minecraft chunks keep their place)")
     if args.area and not (args.area[0] < args.area[2] and args.area[1] < args.area[3]):
@@ -60,6 +66,9 @@ def run(args):
     else:
         from ..formats import minecraft
         minecraft.regions_of(src)
+        if args.resources:
+            from ..mcres.stack import resolve
+            resources = resolve(args.resources)
     if is_vox and (args.workers is not None or args.scheduler):
         raise VoxelError("--workers and --scheduler are for Minecraft worlds")
     cluster.check_writable(args)
@@ -76,12 +85,12 @@ def run(args):
             if pool is None:
                 minecraft.import_world(world, src, y_min=args.y_min, area=args.area,
                                        replace=args.replace, progress=Progress("importing"),
-                                       report=rep)
+                                       report=rep, resources=resources)
             else:
                 from ..cluster import imports
                 computed = imports.run(world, pool, src, y_min=args.y_min, area=args.area,
                                        replace=args.replace, progress=Progress("importing"),
-                                       report=rep)
+                                       report=rep, resources=resources)
     if is_vox:
         note(f"{r['voxels']} voxels from {r['models']} models ({r['instances']} placed) "
              f"into box {' '.join(map(str, r['box']))} in {time.perf_counter() - t0:.2f} s")

@@ -31,6 +31,13 @@ def run(args):
             "file_bytes": args.world.stat().st_size,
             "block_types": REGISTRY.describe(),
         }
+        from ..storage import minecraft as mcfile
+        if m.get(mcfile.STATES):   # a Minecraft import kept states (issue 30)
+            out["minecraft"] = {
+                "states": max(len(json.loads(m[mcfile.STATES])) - 1, 0),
+                "biomes": mcfile.names(m),
+                "resources": json.loads(m.get(mcfile.RESOURCES) or "null"),
+                "y_min": int(m.get(mcfile.Y_MIN) or 0)}
     finally:
         wf.close()
     print(json.dumps(out, indent=1))

@@ -26,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..storage import minecraft as mcfile
 from . import knob, task_size
 
 COMMIT = 64  # chunks per transaction
@@ -33,36 +34,46 @@ JOB = "import_job"
 
 
 class _LocalPalette:
-    """formats.minecraft._Palettes on a worker: colours get chunk-local indices
-    (1, 2, ... in the order met), which the writer maps to the world's palette."""
+    """formats.minecraft._Palettes on a worker: block states get chunk-local indices
+    (1, 2, ... in the order met; `local`: (state key, rgb or None) each), which the
+    writer maps to the world's state palette or, for dye states, their colours; the
+    same for biomes (`biomes`: names in the order met)."""
 
     def __init__(self):
         from types import SimpleNamespace
         self.ids: dict = {}
-        self.rgbs: list = []
+        self.local: list = []
+        self.biomes: dict = {}
         self.report = SimpleNamespace(blocks={})
 
-    def of(self, name: str):
+    def of(self, name: str, props=None):
         from ..core.blocks import REGISTRY
         from ..formats import mapping
-        got = self.ids.get(name)
+        from ..formats.mcstate import state_key
+        key = (name, tuple(sorted(props.items())) if props else ())
+        got = self.ids.get(key)
         if got is None:
             block, rgb, how = mapping.lookup(name)
-            d = 0
-            if rgb is not None:
-                self.rgbs.append(tuple(int(v) for v in rgb))
-                d = len(self.rgbs)
-            got = self.ids[name] = (REGISTRY.id(block), d)
+            bid, d = REGISTRY.id(block), 0
+            if bid:
+                self.local.append((state_key(name, props),
+                                   None if rgb is None else tuple(int(v) for v in rgb)))
+                d = len(self.local)
+            got = self.ids[key] = (bid, d)
             self.report.blocks.setdefault(name, [block, how, 0])
         return got
+
+    def biome(self, name) -> int:
+        return self.biomes.setdefault(name, len(self.biomes))
 
 
 def read(item, shared):
     """Worker: one (result, (bytes, tags) decoded, where) per (index, (region name,
     cx, cz, kind, body)) of the task; result: ("ok", version, row without data, local
-    data or None, rgbs, block counts, dropped), ("unfinished", version, status),
+    data or None, local states, block counts, dropped, key, local biome columns or
+    None, local biome names), ("unfinished", version, status),
     ("damaged", message, before 1.13?) or ("hostile", message)."""
-    from ..formats import anvil, minecraft, nbt
+    from ..formats import anvil, mcstate, minecraft, nbt
     from ..formats.budget import Budget, Exceeded
     from ..formats.region import MAX_NBT, RegionError, unpack
     out = []
@@ -85,8 +96,9 @@ def read(item, shared):
         pal = _LocalPalette()
         blocks, data, dropped = minecraft.convert(ch, shared["y_min"], pal)
         row = shared["encoder"].row(minecraft.to_key(cx, cz), blocks)
-        out.append((("ok", ch.version, row, data, pal.rgbs, pal.report.blocks, dropped),
-                    b.spent(), where))
+        cols = mcstate.columns(ch, blocks, shared["y_min"], pal.biome)
+        out.append((("ok", ch.version, row, data, pal.local, pal.report.blocks, dropped,
+                     minecraft.to_key(cx, cz), cols, list(pal.biomes)), b.spent(), where))
     return out
 
 
@@ -99,7 +111,7 @@ def _signature(files, y_min, area, replace) -> str:
 
 
 def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=None,
-        report=None) -> int:
+        report=None, resources=None) -> int:
     """Like formats.minecraft.import_world, `report` (a minecraft.Report) filled as it
     goes; returns how many chunks the workers read."""
     import time
@@ -164,6 +176,9 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
     f.set_meta(JOB, json.dumps({"sig": sig, "done": start, "since": since}))
     w = _Writer(world, report, sig, progress, len(plan) + len(local), budget)
     w.replace, w.since = replace, since
+    w.meta = {mcfile.Y_MIN: str(report.y_min)}    # staged with the first batch, as in one process
+    if resources is not None:
+        w.meta[mcfile.RESOURCES] = json.dumps([str(r) for r in resources])
     order = sorted([p[0] for p in plan] + list(local))
     ready: dict = dict(local)
     computed, pos = 0, 0
@@ -230,9 +245,11 @@ class _Writer:
         self.world, self.report, self.sig, self.budget = world, report, sig, budget
         self.replace, self.since, self.old = False, None, 0
         self.progress, self.total, self.done = progress, total, 0
+        from ..formats import mcstate
         self.palette = colors.parse(world.file.meta)
+        self.states = mcstate.States(world.file)
         self.grown = False
-        self.batch = []
+        self.batch, self.biomes, self.meta = [], [], {}
         self.enc = world.file.encoder()
 
     def settle(self, got) -> None:
@@ -258,18 +275,23 @@ class _Writer:
         elif what == "unfinished":
             rep.unfinished[r[2]] += 1
         else:
-            _, _, row, data, rgbs, counts, dropped = r
+            _, _, row, data, local, counts, dropped, key, cols, bnames = r
             for name, (b, how, n) in counts.items():
                 rep.blocks.setdefault(name, [b, how, 0])[2] += n
             rep.dropped += dropped
-            remap = np.zeros(len(rgbs) + 1, np.uint16)
-            if rgbs:
-                n0 = len(self.palette)
-                self.palette, idx = colors.add(self.palette, rgbs)
-                self.grown |= len(self.palette) != n0
-                remap[1:] = idx
+            remap = np.zeros(len(local) + 1, np.uint16)   # as formats.minecraft._Palettes
+            for j, (skey, rgb) in enumerate(local, 1):
+                st = self.states.of_key(skey)
+                if rgb is not None:
+                    self.palette, remap[j] = self.states.color(st, self.palette, rgb)
+                    self.grown = True
+                else:
+                    remap[j] = st
             blob = None if data is None else self.enc.data(remap[data])
             self.batch.append(row[:4] + (blob,) + row[5:])
+            if cols is not None:
+                glob = np.array([self.states.biome(n) for n in bnames], np.uint8)
+                self.biomes.append((key, glob[cols]))
 
     def commit(self, upto: int) -> None:
         from ..core import colors
@@ -277,12 +299,18 @@ class _Writer:
         if self.grown:  # in the transaction of the chunks that use it, as in one process
             f.stage_meta(colors.KEY, colors.dump(self.palette))
             self.grown = False
+        self.states.stage()
+        if self.batch:
+            for k, v in self.meta.items():
+                f.stage_meta(k, v)
+            self.meta = {}
         f.stage_meta(JOB, json.dumps({"sig": self.sig, "done": upto, "since": self.since}))
         if self.batch:
             kept = self.world.store_rows(self.batch, replace=self.replace, since=self.since)
             self.report.chunks += len(self.batch) - len(kept)
             self.report.kept += len(kept)
-            self.batch = []
+            mcfile.write(f, [(k, b) for k, b in self.biomes if k not in set(kept)])
+            self.batch, self.biomes = [], []
         else:
             f.save()  # the staged meta alone
         if self.progress:

@@ -221,3 +221,20 @@ def build(key, a: dict, version: int = 0) -> FarMesh:
                     (wz.max() + 1.0) if wet.any() else 0.0)))
     x0, y0 = grid.origin(key)
     return FarMesh(key, (x0, y0), s, v, ground, water, zr, version)
+
+
+def decode(m: FarMesh) -> dict:
+    """The packed vertices of M as arrays (what the far shader reads, without the
+    geomorph): positions (n, 3) float32 in blocks, normals (n, 3), albedo (n, 3)
+    sRGB 0..1, kind (n,) (GROUND, WATER, SKIRT). For bakes and tests."""
+    w0, w1 = m.vertices[:, 0], m.vertices[:, 1]
+    kx, ky = (w0 & 63).astype(np.float32), ((w0 >> 6) & 63).astype(np.float32)
+    pos = np.stack([m.origin[0] + kx * m.spacing + 0.5, m.origin[1] + ky * m.spacing + 0.5,
+                    ((w0 >> 12) & 8191).astype(np.float32) / 8.0], -1).astype(np.float32)
+    nx = (w1 & 255).astype(np.uint8).view(np.int8).astype(np.float32) / 127.0
+    ny = ((w1 >> 8) & 255).astype(np.uint8).view(np.int8).astype(np.float32) / 127.0
+    nz = np.sqrt(np.clip(1.0 - nx * nx - ny * ny, 0.0, 1.0))
+    c = (w1 >> 16) & 0xFFFF
+    rgb = np.stack([(c >> 11) * 255 // 31, ((c >> 5) & 63) * 255 // 63, (c & 31) * 255 // 31], -1)
+    return {"positions": pos, "normals": np.stack([nx, ny, nz], -1).astype(np.float32),
+            "albedo": (rgb / 255.0).astype(np.float32), "kind": ((w0 >> 25) & 3).astype(np.uint8)}

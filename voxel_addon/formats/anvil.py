@@ -23,10 +23,11 @@ V_PACKED = 2529      # 20w17a: indices never span two longs
 V_NO_LEVEL = 2844    # 21w43a: no Level wrapper, y from -64 (1.18)
 CHUNK_TAGS = 1 << 19
 DONE = {"full", "minecraft:full", "postprocessed", "fullchunk"}
-_SECTION = {"Y": None, "block_states": {"palette": {"Name": None}, "data": None},
-            "Palette": {"Name": None}, "BlockStates": None}
+_ENTRY = {"Name": None, "Properties": None}
+_SECTION = {"Y": None, "block_states": {"palette": _ENTRY, "data": None},
+            "Palette": _ENTRY, "BlockStates": None, "biomes": {"palette": None, "data": None}}
 KEEP = {"DataVersion": None, "Status": None, "sections": _SECTION,
-        "Level": {"Status": None, "Sections": _SECTION}}
+        "Level": {"Status": None, "Sections": _SECTION, "Biomes": None}}
 
 
 class ChunkError(ValueError):
@@ -35,14 +36,17 @@ class ChunkError(ValueError):
 
 class Section(NamedTuple):
     y: int                  # section index: blocks 16*y .. 16*y + 15
-    palette: list           # block names (properties dropped)
+    palette: list           # block names
     indices: np.ndarray | None  # (4096,) uint16 into palette; None: all palette[0]
+    props: list | None = None   # each palette entry's properties ({str: str}), or None
+    biomes: tuple | None = None  # 1.18+: (names, packed longs or None): cells() unpacks them
 
 
 class Chunk(NamedTuple):
     version: int
     status: str
     sections: list
+    biomes: np.ndarray | None = None  # 1.13–1.17: Level.Biomes (256 per column or 1024 cells)
 
 
 def read(payload: bytes, budget=None) -> Chunk:
@@ -90,12 +94,15 @@ def read(payload: bytes, budget=None) -> Chunk:
                 continue
         if not isinstance(palette, list) or not palette:
             raise ChunkError(f"section {s['Y']}: empty or damaged palette")
-        names = []
+        names, props = [], []
         for p in palette:
             name = p.get("Name") if isinstance(p, dict) else None
             if not isinstance(name, str):
                 raise ChunkError(f"section {s['Y']}: a palette entry without Name")
             names.append(name)
+            pr = p.get("Properties")
+            props.append({k: v for k, v in pr.items() if isinstance(v, str)}
+                         if isinstance(pr, dict) else None)
         idx = None
         if data is not None:
             if not isinstance(data, np.ndarray) or data.dtype != np.dtype(">i8"):
@@ -106,8 +113,42 @@ def read(payload: bytes, budget=None) -> Chunk:
                                  f"palette of {len(names)}")
         elif len(names) > 1:
             raise ChunkError(f"section {s['Y']}: {len(names)} palette entries and no data")
-        sections.append(Section(int(s["Y"]), names, idx))
-    return Chunk(version, status, sections)
+        sections.append(Section(int(s["Y"]), names, idx,
+                                props if any(props) else None, _biomes(s.get("biomes"))))
+    old = level.get("Biomes") if version < V_NO_LEVEL else None
+    if old is not None and not (isinstance(old, np.ndarray) and old.size in (256, 1024)):
+        old = None        # damaged biomes only lose their tints
+    return Chunk(version, status, sections, None if old is None else old.astype(np.int32))
+
+
+def _biomes(b):
+    """A 1.18+ section's biomes: (names, packed longs or None), None when damaged
+    (biomes only tint: a bad one is not worth refusing the chunk). Unpacked only for
+    the sections a column's top reaches (cells)."""
+    if not isinstance(b, dict):
+        return None
+    names, data = b.get("palette"), b.get("data")
+    if not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names):
+        return None
+    if data is not None and not (isinstance(data, np.ndarray) and data.dtype == np.dtype(">i8")):
+        return None
+    return (names, data)
+
+
+def cells(biomes) -> np.ndarray | None:
+    """A section's 64 biome cells (indices into its names, cell y*16 + z*4 + x), all
+    0 when it has one biome; None when the longs do not fit the palette."""
+    names, data = biomes
+    if data is None:
+        return np.zeros(64, np.int32)
+    bits = max(1, (len(names) - 1).bit_length())
+    per = 64 // bits
+    if len(data) != -(-64 // per):
+        return None
+    w = data.astype(">u8").astype(np.uint64)
+    shifts = np.arange(per, dtype=np.uint64) * np.uint64(bits)
+    idx = ((w[:, None] >> shifts[None, :]) & np.uint64((1 << bits) - 1)).reshape(-1)[:64]
+    return np.minimum(idx.astype(np.int32), len(names) - 1)
 
 
 def bits_for(n: int) -> int:

@@ -2,8 +2,9 @@
 
 `lookup(name)` -> (block name, rgb or None, how): `how` is "exact" (the table),
 "class" (a rule on the name: *_planks, *_log, *_wool, …) or "fallback" (nothing
-matched: stone, never air, so a build keeps its shape). Block states are ignored:
-stairs, slabs and walls become their material's full block. The 16 dye colours of
+matched: stone, never air, so a build keeps its shape). Block states do not change the type:
+stairs, slabs and walls become their material's full block (their state is kept beside,
+formats/mcstate.py, for a resource stack to draw). The 16 dye colours of
 wool, concrete, terracotta, glass and carpets become the `color` block with that
 colour (one texture, tinted) rather than 48 textures. Results are cached per name.
 """

@@ -19,6 +19,7 @@ applied over the imported one.
 from __future__ import annotations
 
 import gzip
+import json
 import time
 from collections import Counter
 from dataclasses import dataclass, field
@@ -30,7 +31,8 @@ from ..core import chunk as C
 from ..core import colors
 from ..core.blocks import REGISTRY
 from ..core.errors import VoxelError
-from . import anvil, mapping, nbt, region
+from ..storage import minecraft as mcfile
+from . import anvil, mapping, mcstate, nbt, region
 from .budget import Budget, Exceeded
 from .region import External, Region, RegionError
 
@@ -141,31 +143,40 @@ def to_key(cx: int, cz: int) -> tuple[int, int]:
 
 
 class _Palettes:
-    """Minecraft names -> (block id, data) with the world's colour palette."""
+    """Minecraft block states -> (block id, data): data is the state's index in the
+    world's state palette (formats/mcstate.py), or for the `color` block the index of
+    the state's own colour in the world's colour palette."""
 
     def __init__(self, world, report: Report):
         self.world, self.report = world, report
         self.colors = colors.parse(world.file.meta)
+        self.states = mcstate.States(world.file)
         self.ids: dict = {}
         self.changed = False
 
-    def of(self, name: str) -> tuple[int, int]:
-        got = self.ids.get(name)
+    def of(self, name: str, props: dict | None = None) -> tuple[int, int]:
+        key = (name, tuple(sorted(props.items())) if props else ())
+        got = self.ids.get(key)
         if got is None:
             block, rgb, how = mapping.lookup(name)
+            bid = REGISTRY.id(block)
             d = 0
-            if rgb is not None:
-                self.colors, idx = colors.add(self.colors, [rgb])
-                d = int(idx[0])
-                self.changed = True
-            got = self.ids[name] = (REGISTRY.id(block), d)
+            if bid:
+                st = self.states.of(name, props)
+                d = st
+                if rgb is not None:
+                    self.colors, d = self.states.color(st, self.colors, rgb)
+                    self.changed = True
+            got = self.ids[key] = (bid, d)
             self.report.blocks.setdefault(name, [block, how, 0])
         return got
 
     def save(self) -> None:
-        if self.changed:  # written with the next chunks, in their transaction
+        """Stage the palettes (written with the next chunks, in their transaction)."""
+        if self.changed:
             self.world.file.stage_meta(colors.KEY, colors.dump(self.colors))
             self.changed = False
+        self.states.stage()
 
 
 def convert(ch: anvil.Chunk, y_min: int, pal: _Palettes):
@@ -173,7 +184,7 @@ def convert(ch: anvil.Chunk, y_min: int, pal: _Palettes):
     blocks, data, dropped = C.empty(), None, 0
     counts = pal.report.blocks
     for s in ch.sections:
-        got = [pal.of(n) for n in s.palette]
+        got = [pal.of(n, p) for n, p in zip(s.palette, s.props or [None] * len(s.palette))]
         ids = np.array([g[0] for g in got], np.uint16)
         vals = np.array([g[1] for g in got], np.uint16)
         n = np.bincount(s.indices, minlength=len(got)) if s.indices is not None \
@@ -229,13 +240,15 @@ def plan(path, area=None) -> list[tuple[Region, int, int]]:
 
 
 def import_world(world, path, *, y_min=None, area=None, replace=False, progress=None,
-                 cancelled=None, report: Report | None = None) -> Report:
+                 cancelled=None, report: Report | None = None, resources=None) -> Report:
     """Import the chunks of a save folder / region files into `world` (see the
     module docstring). `progress(done, total)`; `cancelled()` -> True stops after
     the batch in hand (what was written stays); `report` is filled as it goes (what
-    is in the file when it fails)."""
+    is in the file when it fails). `resources`: the resource stack's paths (checked
+    by the caller), kept in the world's meta for renders, bakes and the live view."""
     report = Report() if report is None else report
-    for done, total in steps(world, path, report, y_min=y_min, area=area, replace=replace):
+    for done, total in steps(world, path, report, y_min=y_min, area=area, replace=replace,
+                             resources=resources):
         if progress:
             progress(done, total)
         if cancelled is not None and cancelled():
@@ -243,7 +256,8 @@ def import_world(world, path, *, y_min=None, area=None, replace=False, progress=
     return report
 
 
-def steps(world, path, report: Report, *, y_min=None, area=None, replace=False):
+def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
+          resources=None):
     """The import as a generator of (chunks done, total), one step per batch written,
     filling `report`. Closing it early keeps every batch written so far."""
     start = time.time()  # edits saved from now on survive a replace (store_chunks)
@@ -262,7 +276,9 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False):
     old = 0  # chunks from before 1.13: skipped like damaged ones, unless all are
     budget = Budget.of_input(sum(r.stored for r in {id(t[0]): t[0] for t in todo}.values()))
     pal = _Palettes(world, report)
-    batch = []
+    if resources is not None:   # written with the first batch
+        world.file.stage_meta(mcstate.RESOURCES, json.dumps([str(r) for r in resources]))
+    batch, biomes = [], []
     for done, (reg, cx, cz) in enumerate(todo, 1):
         try:
             ch = anvil.read(reg.payload(cx, cz, budget), budget)
@@ -283,18 +299,23 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False):
                 report.version = version if version is not None else ch.version
                 report.y_min = y_min if y_min is not None else (
                     -64 if report.version >= anvil.V_NO_LEVEL else 0)
+                world.file.stage_meta(mcfile.Y_MIN, str(report.y_min))
             if ch.status not in anvil.DONE:
                 report.unfinished[ch.status] += 1
             else:
                 blocks, data, dropped = convert(ch, report.y_min, pal)
                 report.dropped += dropped
                 batch.append((to_key(cx, cz), blocks, data))
+                cols = pal.states.columns(ch, blocks, report.y_min)
+                if cols is not None:
+                    biomes.append((to_key(cx, cz), cols))
         if len(batch) >= BATCH or (done == len(todo) and batch):
             pal.save()
             kept = world.store_chunks(batch, replace=replace, since=start)
             report.chunks += len(batch) - len(kept)
             report.kept += len(kept)
-            batch = []
+            mcfile.write(world.file, [(k, b) for k, b in biomes if k not in set(kept)])
+            batch, biomes = [], []
             yield done, len(todo)
     if old and old == len(report.damaged) and not (report.chunks or report.unfinished):
         # nothing written: a world Minecraft never saved in 1.13+ is refused whole

@@ -107,10 +107,17 @@ class IMPORT_SCENE_OT_voxel_minecraft(_IntoWorld, FileJob, bpy.types.Operator, I
                             description="Minecraft X0, Z0, X1, Z1 (chunks touching it)")
     replace: BoolProperty(name="Replace", default=False,
                           description="Overwrite chunks the world already has")
+    resources: StringProperty(
+        name="Resources", default="",
+        description="Minecraft's client .jar ('minecraft': the newest in the launcher "
+                    "folders) and resource packs (.zip or folders), separated by ';', each "
+                    "laid over the ones before; kept in the world so bakes show the "
+                    "world with their textures and models (empty: today's look)")
 
     def draw(self, context):
         col = self.layout.column()
         col.prop(self, "world")
+        col.prop(self, "resources")
         col.prop(self, "use_y_min")
         if self.use_y_min:
             col.prop(self, "y_min")
@@ -129,10 +136,17 @@ class IMPORT_SCENE_OT_voxel_minecraft(_IntoWorld, FileJob, bpy.types.Operator, I
         from ...formats import minecraft
         src = self.source()
         minecraft.regions_of(src)  # one clear line before anything is made
+        specs = [bpy.path.abspath(p.strip()) if p.strip() != "minecraft" else p.strip()
+                 for p in self.resources.split(";") if p.strip()]
+        resources = None
+        if specs:
+            from ...mcres.stack import resolve
+            resources = resolve(specs)
         self._report = minecraft.Report()
         world, _ = target_world(context, src, self.world, self)
         kw = dict(y_min=self.y_min if self.use_y_min else None,
-                  area=tuple(self.area) if self.use_area else None, replace=self.replace)
+                  area=tuple(self.area) if self.use_area else None, replace=self.replace,
+                  resources=resources)
         return _Job(_minecraft_steps(world, src, self._report, **kw), "import")
 
     def finish(self, context, job):

@@ -1,0 +1,158 @@
+"""A Minecraft import baked with the world's resource stack (issue 30 c): voxels the
+stack knows come from their models with the stack's textures and biome tints (one
+material per texture, layer and tint), the rest keeps today's look; a stack whose
+files are gone bakes today's look; the .glb is validator-clean."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from voxel_addon import bake
+from voxel_addon.core.blocks import REGISTRY
+
+from ..formats import mcfiles as mc
+from ..mcres import packfiles as pf
+
+AIR = "minecraft:air"
+
+
+def save_with_build(root):
+    """Chunk (0, 0): a stone floor at y 0, grass at its north-west, a stair, glass,
+    a poppy, a block the pack does not know; desert biome where x < 4."""
+    a = np.full((16, 16, 16), AIR, object)
+    a[0] = "minecraft:stone"
+    a[0, 0:2, 0:2] = "minecraft:grass_block[snowy=false]"
+    a[1, 5, 5] = "minecraft:oak_stairs[facing=east,half=bottom,shape=straight,waterlogged=false]"
+    a[1, 7, 7] = "minecraft:glass"
+    a[1, 9, 9] = "minecraft:poppy"
+    a[1, 11, 11] = "minecraft:gold_block"          # not in the pack: today's look
+    cells = np.zeros((4, 4, 4), int)
+    cells[:, :, 0] = 1
+    mc.write_region(root / "save" / "region", {(0, 0): mc.chunk_nbt(0, 0, {0: a}, biomes={
+        0: (["minecraft:forest", "minecraft:desert"], cells.reshape(-1))})})
+    return root / "save"
+
+
+@pytest.fixture(scope="module")
+def mc_world(tmp_path_factory):
+    from voxel_addon.cli import main
+    root = tmp_path_factory.mktemp("mcbake")
+    jar = pf.write(root / "client.jar", jar=True)
+    w = root / "w.sqlite"
+    assert main(["import", "--world", str(w), "--from", str(save_with_build(root)),
+                 "--resources", str(jar)]) == 0
+    return w, jar
+
+
+def baked(path, **kw):
+    from voxel_addon.world import World
+    with World.open(path, readonly=True, loader=False) as w:
+        return bake.bake_world(w, 0, -16, 16, 0, **kw)
+
+
+def model_part(bk):
+    got = [p for p in bk.parts if p.name.startswith("minecraft_")]
+    return got[0] if got else None
+
+
+@pytest.mark.parametrize("light", ["atlas", "vertex"])
+def test_models_with_the_stacks_textures_and_tints(mc_world, light):
+    bk = baked(mc_world[0], light=light)
+    p = model_part(bk)
+    assert p is not None and p.uv2 is None and not bk.note
+    specs = [bk.materials[i] for i in np.unique(p.material)]
+    assert all(s.per_vertex for s in specs)
+    by = {s.image: s for s in specs}
+    assert {"minecraft:block/stone", "minecraft:block/oak_planks", "minecraft:block/glass",
+            "minecraft:block/poppy", "minecraft:block/grass_block_top"} <= set(by)
+    assert by["minecraft:block/glass"].render == "blend"
+    # grass (x 0..1: the desert's columns) tinted by the desert's colormap pixel
+    tops = {s.tint for s in specs if s.image == "minecraft:block/grass_block_top"}
+    assert tops == {(0.0, 1.0, 7 / 255)}
+    # the sprites' pixels are the pack's
+    assert np.array_equal(bk.images["minecraft:block/stone"],
+                          pf.solid(pf.COLOURS["stone"]))
+    # the greedy parts leave the modelled voxels out, keep the gold block (the `color`
+    # block: today's look, its colour material)
+    others = [q for q in bk.parts if q is not p]
+    kinds = set(np.concatenate([q.block for q in others]).tolist())
+    assert kinds == {REGISTRY.id("color")}
+    assert {REGISTRY.id(n) for n in ("stone", "grass", "planks", "glass", "flowers")} <= \
+        set(p.block.tolist())
+    assert len(p.light) == 4 * p.quads and (p.daylight > 0).any()
+    # the poppy's planes take its voxel's light: one value per quad
+    poppy = [i for i in range(p.quads)
+             if bk.materials[p.material[i]].image == "minecraft:block/poppy"]
+    assert poppy
+    for i in poppy:
+        assert np.ptp(p.daylight[4 * i:4 * i + 4]) == 0 and np.ptp(p.light[4 * i:4 * i + 4], axis=0).max() == 0
+
+
+def test_model_textures_stand_as_the_greedy_paths(mc_world):
+    """On every side face the texture's v grows upward and its u to the right seen
+    from outside (cross(up, normal)), as the greedy path lays its tiles (Blender's
+    uv: v up), so sprites are not upside down or mirrored."""
+    from voxel_addon.core.blocks import REGISTRY as R
+    one = np.zeros((3, 3, 256), np.uint16)
+    one[1, 1, 5] = R.id("stone")
+    greedy = bake.bake_blocks(one, light="vertex").parts[0]
+    p = model_part(baked(mc_world[0], light="vertex"))
+    for part in (greedy, p):
+        pos, uv = part.positions.reshape(-1, 4, 3), part.uvs.reshape(-1, 4, 2)
+        n = part.normals.reshape(-1, 4, 3)[:, 0]
+        side = np.flatnonzero(np.abs(n[:, 2]) < 0.5)
+        assert len(side)
+        for i in side:
+            right = np.cross([0, 0, 1], n[i])
+            dz, dv = pos[i, :, 2] - pos[i, 0, 2], uv[i, :, 1] - uv[i, 0, 1]
+            dr, du = (pos[i] - pos[i, 0]) @ right, uv[i, :, 0] - uv[i, 0, 0]
+            assert (np.sign(np.round(dz, 6)) == np.sign(np.round(dv, 6))).all(), (part.name, i)
+            assert (np.sign(np.round(dr, 6)) == np.sign(np.round(du, 6))).all(), (part.name, i)
+
+
+def test_a_missing_stack_bakes_todays_look(mc_world, tmp_path):
+    import shutil
+    w, jar = mc_world
+    copy = tmp_path / "w.sqlite"
+    shutil.copy(w, copy)
+    from voxel_addon.world import World
+    with World.open(copy, loader=False) as world:
+        world.file.set_meta("mc_resources", '["/nowhere/client.jar"]')
+    bk = baked(copy)
+    assert model_part(bk) is None and "resource stack not read" in bk.note
+    assert REGISTRY.id("stone") in set(np.concatenate([p.block for p in bk.parts]).tolist())
+
+
+def test_the_glb_is_valid(bpy, mc_world, tmp_path, validate):
+    from voxel_addon.bake import glb
+    from voxel_addon.blender import bake as BB
+    bk = baked(mc_world[0])
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    objs = BB.build(bk, style="gltf")
+    out = tmp_path / "mc.glb"
+    BB.export_glb(out, objs)
+    report = validate(out)
+    assert report["issues"]["numErrors"] == 0, report["issues"]["messages"][:5]
+    doc, _ = glb.read(out)
+    names = {m["name"] for m in doc["materials"]}
+    assert any(n.startswith("voxel_mc_grass_block_top") for n in names), names
+    assert len(doc["images"]) >= 5
+    # model quads carry their light per vertex (COLOR_0), never the atlas's occlusion
+    mc = [m for m in doc["materials"] if m["name"].startswith("voxel_mc_")]
+    assert mc and not any("occlusionTexture" in m for m in mc)
+    prims = [pr for me in doc["meshes"] if me["name"].startswith("minecraft_")
+             for pr in me["primitives"]]
+    assert prims and all("COLOR_0" in pr["attributes"] for pr in prims)
+
+
+def test_blenders_bake_job_uses_the_stack(bpy, mc_world):
+    """The panel's bake (blender/job.Job) bakes the same models as bake_world."""
+    from voxel_addon.blender import job
+    from voxel_addon.world import World
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    with World.open(mc_world[0], readonly=True, loader=False) as w:
+        objs = job.Job(w, (0, -16, 16, 0), light="vertex").run()
+    names = {o.name for o in objs}
+    assert any(n.startswith("minecraft_") for n in names), names
+    mats = {m.name for o in objs for m in o.data.materials}
+    assert any(n.startswith("voxel_mc_poppy") for n in mats), mats

@@ -1,0 +1,179 @@
+"""What the Minecraft import keeps beyond block types (issue 30): each block's state
+and each column's biome, so a resource stack can draw the world as the game does.
+
+States: meta `mc_states` is the world's state palette, a JSON list of
+`minecraft:name[k=v,…]` (properties sorted), entry 0 the empty string. An imported
+voxel's small data is its state's index, except for the `color` block, whose data
+stays its colour (core.colors): meta `mc_color_states` ({colour index: state index})
+names the state of each colour an import made (every Minecraft dye state gets a
+colour entry of its own, so white wool and a white carpet stay apart). Air keeps 0.
+Voxels written by other means (generation, edits, .vox) have state 0: today's look.
+
+Biomes: one per voxel column, the biome at the column's highest block (1.18+ section
+palettes of 4×4×4 cells; 1.15–1.17 1024 cells; older 256 per column), written to
+storage/minecraft.py beside the chunks.
+"""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+from ..core.errors import VoxelError
+from ..mcres.states import parse_key, state_key  # noqa: F401  (the one spelling)
+from ..storage import minecraft as mcfile
+
+KEY, COLOR_KEY, RESOURCES, Y_MIN = mcfile.STATES, mcfile.COLOR_STATES, mcfile.RESOURCES, mcfile.Y_MIN
+LIMIT = 1 << 16
+DEFAULT_BIOME = "minecraft:plains"
+
+# 1.13–1.17 numeric biome ids (the common ones; others read as plains)
+LEGACY = dict(enumerate(
+    "ocean plains desert mountains forest taiga swamp river nether_wastes the_end "
+    "frozen_ocean frozen_river snowy_plains snowy_mountains mushroom_fields "
+    "mushroom_field_shore beach desert_hills wooded_hills taiga_hills mountain_edge jungle "
+    "jungle_hills sparse_jungle deep_ocean stony_shore snowy_beach birch_forest "
+    "birch_forest_hills dark_forest snowy_taiga snowy_taiga_hills old_growth_pine_taiga "
+    "giant_tree_taiga_hills windswept_forest savanna savanna_plateau badlands "
+    "wooded_badlands badlands_plateau small_end_islands end_midlands end_highlands "
+    "end_barrens warm_ocean lukewarm_ocean cold_ocean deep_warm_ocean deep_lukewarm_ocean "
+    "deep_cold_ocean deep_frozen_ocean".split()))
+LEGACY.update({127: "the_void", 129: "sunflower_plains", 130: "desert", 131: "windswept_gravelly_hills",
+               132: "flower_forest", 133: "taiga", 134: "swamp", 140: "ice_spikes",
+               149: "jungle", 151: "sparse_jungle", 155: "old_growth_birch_forest",
+               156: "old_growth_birch_forest", 157: "dark_forest", 158: "snowy_taiga",
+               160: "old_growth_spruce_taiga", 161: "old_growth_spruce_taiga",
+               162: "windswept_gravelly_hills", 163: "windswept_savanna",
+               164: "windswept_savanna", 165: "eroded_badlands", 166: "wooded_badlands",
+               167: "badlands", 168: "bamboo_jungle", 169: "bamboo_jungle",
+               170: "soul_sand_valley", 171: "crimson_forest", 172: "warped_forest",
+               173: "basalt_deltas", 174: "dripstone_caves", 175: "lush_caves"})
+# 1.18 renamed some: the tint table (mcres.tints) knows the new names
+RENAMED = {"mountains": "windswept_hills", "snowy_mountains": "snowy_slopes",
+           "snowy_tundra": "snowy_plains", "giant_tree_taiga": "old_growth_pine_taiga",
+           "giant_spruce_taiga": "old_growth_spruce_taiga", "wooded_mountains": "windswept_forest",
+           "jungle_edge": "sparse_jungle", "stone_shore": "stony_shore",
+           "shattered_savanna": "windswept_savanna", "gravelly_mountains": "windswept_gravelly_hills",
+           "tall_birch_forest": "old_growth_birch_forest", "wooded_badlands_plateau": "wooded_badlands",
+           "nether": "nether_wastes"}
+
+
+def load(meta: dict, key: str, empty):
+    raw = meta.get(key)
+    if not raw:
+        return empty
+    try:
+        got = json.loads(raw)
+    except ValueError:
+        raise VoxelError(f"the world's meta {key!r} is damaged") from None
+    if type(got) is not type(empty):
+        raise VoxelError(f"the world's meta {key!r} is damaged")
+    return got
+
+
+class States:
+    """The world's state palette, grown by an import and staged with its batches."""
+
+    def __init__(self, file):
+        self.file = file
+        self.list = load(file.meta, KEY, []) or [""]
+        self.index = {s: i for i, s in enumerate(self.list)}
+        self.colors = {int(k): v for k, v in load(file.meta, COLOR_KEY, {}).items()}
+        self.color_of = {v: k for k, v in self.colors.items()}
+        self.biomes = mcfile.names(file.meta) or [DEFAULT_BIOME]
+        self.biome_index = {b: i for i, b in enumerate(self.biomes)}
+        self.changed = set()
+        self._memo: dict = {}       # section biome palettes → their world indices
+
+    def of(self, name: str, props: dict | None) -> int:
+        return self.of_key(state_key(name, props))
+
+    def of_key(self, key: str) -> int:
+        i = self.index.get(key)
+        if i is None:
+            if len(self.list) >= LIMIT:
+                raise VoxelError(f"a world keeps at most {LIMIT} Minecraft block states")
+            i = self.index[key] = len(self.list)
+            self.list.append(key)
+            self.changed.add(KEY)
+        return i
+
+    def color(self, state: int, palette: np.ndarray, rgb) -> tuple[np.ndarray, int]:
+        """The colour index of a dye STATE (a palette entry of its own) and the palette."""
+        c = self.color_of.get(state)
+        if c is None:
+            if len(palette) >= LIMIT:
+                raise VoxelError(f"a world holds at most {LIMIT} colours")
+            c = len(palette)
+            palette = np.vstack([palette, np.asarray(rgb, np.uint8).reshape(1, 3)])
+            self.colors[c] = state
+            self.color_of[state] = c
+            self.changed.add(COLOR_KEY)
+        return palette, c
+
+    def biome(self, name) -> int:
+        if isinstance(name, (int, np.integer)):
+            name = LEGACY.get(int(name), "plains")
+        name = name if ":" in name else f"minecraft:{name}"
+        ns, _, short = name.partition(":")
+        name = f"{ns}:{RENAMED.get(short, short)}"
+        i = self.biome_index.get(name)
+        if i is None:
+            if len(self.biomes) >= 255:
+                return 0
+            i = self.biome_index[name] = len(self.biomes)
+            self.biomes.append(name)
+            self.changed.add(mcfile.NAMES)
+        return i
+
+    def stage(self) -> None:
+        """Stage what changed into the world file's meta (written with the next batch)."""
+        if KEY in self.changed:
+            self.file.stage_meta(KEY, json.dumps(self.list))
+        if COLOR_KEY in self.changed:
+            self.file.stage_meta(COLOR_KEY, json.dumps({str(k): v for k, v in self.colors.items()}))
+        if mcfile.NAMES in self.changed:
+            self.file.stage_meta(mcfile.NAMES, json.dumps(self.biomes))
+        self.changed.clear()
+
+    def columns(self, ch, blocks: np.ndarray, y_min: int) -> np.ndarray | None:
+        return columns(ch, blocks, y_min, self.biome, self._memo)
+
+
+_LX = np.arange(16)[:, None].repeat(16, 1)             # voxel lx = Minecraft x
+_MZ = 15 - np.arange(16)[None, :].repeat(16, 0)        # voxel ly → Minecraft z
+_CELL_XZ = (_MZ >> 2) * 4 + (_LX >> 2)                 # a column's 4×4 biome cell
+
+
+def columns(ch, blocks: np.ndarray, y_min: int, biome, memo: dict | None = None) -> np.ndarray | None:
+    """(16, 16) biome indices [lx, ly] of a chunk: the biome at each column's highest
+    block (the lowest cell where a column is empty); `biome` (a name or a legacy id →
+    an index) numbers them, `memo` keeps a section palette's numbers between calls."""
+    from .anvil import cells
+    memo = {} if memo is None else memo
+    # the highest non-air z per column (0 when empty): a max over z + 1 where solid
+    top = np.maximum(((blocks != 0) * np.arange(1, blocks.shape[2] + 1, dtype=np.int16)).max(axis=2) - 1, 0)
+    y = top + y_min                             # Minecraft y of each column's top
+    lx, mz, cell_xz = _LX, _MZ, _CELL_XZ
+    if ch.biomes is not None:                   # 1.13–1.17
+        b = ch.biomes
+        ids = b[mz * 16 + lx] if b.size == 256 else b[np.clip(y >> 2, 0, 63) * 16 + cell_xz]
+        uniq, inv = np.unique(ids, return_inverse=True)
+        return np.array([biome(int(u)) for u in uniq], np.uint8)[inv].reshape(16, 16)
+    secs = {s.y: s.biomes for s in ch.sections if s.biomes is not None}
+    if not secs:
+        return None
+    ys = sorted(secs)
+    out = np.zeros((16, 16), np.uint8)
+    sy = np.clip(y >> 4, ys[0], ys[-1])
+    for s in sorted(set(sy.ravel().tolist())):
+        near = min(ys, key=lambda v: abs(v - s))
+        names, _ = secs[near]
+        key = tuple(names)
+        glob = memo.get(key)
+        if glob is None:
+            glob = memo[key] = np.array([biome(n) for n in names], np.uint8)
+        idx = cells(secs[near])
+        m = sy == s
+        out[m] = glob[0] if idx is None else glob[idx[((y[m] & 15) >> 2) * 16 + cell_xz[m]]]
+    return out

@@ -13,7 +13,6 @@ import subprocess
 import sys
 import threading
 import time
-import tracemalloc
 import zlib
 from pathlib import Path
 
@@ -28,20 +27,12 @@ from voxel_addon.world import World
 from . import hostile as H
 from . import mcfiles as mc
 from . import voxfiles as vf
+from ..memory import peak_of
 
 MIB = 1 << 20
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def peak_of(fn):
-    """Peak traced bytes while fn runs (tracemalloc sees every bytes/NumPy buffer)."""
-    tracemalloc.start()
-    try:
-        fn()
-    finally:
-        peak = tracemalloc.get_traced_memory()[1]
-        tracemalloc.stop()
-    return peak
 
 
 # ---- through the CLI ----------------------------------------------------------------

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import sqlite3
 import struct
-import tracemalloc
 
 import numpy as np
 import pytest
@@ -23,6 +22,7 @@ from voxel_addon.world import World
 
 from . import mcfiles as mc
 from . import voxfiles as vf
+from ..memory import peak_of
 
 MIB = 1 << 20
 SETTINGS = settings(max_examples=120, deadline=None, derandomize=True, database=None,
@@ -55,12 +55,7 @@ def mutate(data: bytes, ops, start: int = 0) -> bytes:
 
 
 def bounded(fn, limit=64 * MIB):
-    tracemalloc.start()
-    try:
-        fn()
-    finally:
-        peak = tracemalloc.get_traced_memory()[1]
-        tracemalloc.stop()
+    peak = peak_of(fn)
     assert peak < limit, peak
 
 

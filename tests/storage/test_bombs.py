@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import gzip
 import sqlite3
-import tracemalloc
 import zlib
 
 import numpy as np
@@ -16,6 +15,8 @@ import zstandard
 from voxel_addon.core import chunk
 from voxel_addon.storage import CorruptChunk, WorldFile, codecs
 from voxel_addon.world import World
+
+from ..memory import peak_of
 
 SIZE = chunk.VOLUME * 2
 MIB = 1 << 20
@@ -47,14 +48,6 @@ def bombs():
             "gzip": zlib_bomb(64 * MIB, 31)}
 
 
-def peak_of(fn):
-    tracemalloc.start()
-    try:
-        fn()
-    finally:
-        peak = tracemalloc.get_traced_memory()[1]
-        tracemalloc.stop()
-    return peak
 
 
 @pytest.mark.parametrize("kind", ["zstd", "zlib", "zstd-undeclared"])

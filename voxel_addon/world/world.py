@@ -353,21 +353,12 @@ class World(Saving):
         call twice. When the save fails (disk full, file-size limit, a vanished
         drive) it raises and the file stays open with every unsaved edit kept in
         memory (`unsaved_edits`): calling close again retries."""
-        for s in list(self.streams):
-            s.close()
-        with self._lock:
-            self._stop = True
-            self._wake.notify_all()
-        if self._thread is not None:
-            self._thread.join()
-            self._thread = None
+        self._stop_threads()
         if self.file.db is not None:
             self.flush()
             self.file.close()
 
-    def discard(self) -> None:
-        """Stop streams and the loader and close the file without saving (its file
-        is gone: nothing can be written; the unsaved edits were rescued first)."""
+    def _stop_threads(self) -> None:
         for s in list(self.streams):
             s.close()
         with self._lock:
@@ -376,6 +367,11 @@ class World(Saving):
         if self._thread is not None:
             self._thread.join()
             self._thread = None
+
+    def discard(self) -> None:
+        """Stop streams and the loader and close the file without saving (its file
+        is gone: nothing can be written; the unsaved edits were rescued first)."""
+        self._stop_threads()
         self.file.close()
 
     def forget_unsaved(self) -> None:

@@ -27,9 +27,31 @@ def backends() -> tuple[str, str]:
     less CPU per chunk than the OpenCL sweeps here (1.1-1.5 vs 1.4-2.2 ms per kept
     chunk on 2 shared cores) and pocl builds the sweep kernels again for every new
     region shape (~1.5 s each), which streaming's varied rectangles keep hitting.
-    Meshing: OpenCL where present (~10x NumPy), else NumPy."""
+    Meshing: OpenCL where present (~10x NumPy) and not warming up (opencl.warm), else
+    NumPy."""
     from .. import opencl
-    return ("numpy", "opencl") if opencl.available() else ("numpy", "numpy")
+    return "numpy", opencl.pick(None)
+
+
+def warm(world) -> bool:
+    """Build and run once, in a background thread, the OpenCL kernels that streaming
+    WORLD wants (its generator's chunks, meshing), on a 3x3 of chunks at the origin;
+    until done, generation and meshing run NumPy (opencl.warm). False when nothing
+    was started (no device, or warmed already). Cold, on 2 busy cores: ~7 s for the
+    generator, ~1 s meshing; not the far surface's program (~1.5 s more before
+    OpenCL takes over; the far ring is off by default and builds it on first use)."""
+    from .. import meshing, opencl
+    g = world.generator
+
+    def job():
+        from ..generation import make_generator
+        gcl = make_generator(g.name, g.seed, g.params, "opencl")
+        keys = keys_of(-1, -1, 2, 2)
+        blocks = C.paste(zip(keys, gcl.generate(keys)), -1, -1, 2, 2)
+        with CL_LOCK:
+            meshing.build_chunks(blocks[15:-15, 15:-15], (0, 0), backend="opencl")
+
+    return opencl.warm(job)
 
 
 def keys_of(cx0: int, cy0: int, cx1: int, cy1: int) -> list[tuple[int, int]]:

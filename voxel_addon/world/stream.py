@@ -33,6 +33,8 @@ from ..core.errors import VoxelError
 from . import build
 
 NEAR = 6  # chunks: closer than this, work in half tiles (first payloads sooner)
+FIRST = 2  # ... and closer than this in quarter tiles: the first picture of a fresh
+# install comes from NumPy while OpenCL builds (2 x 2 chunks: ~0.5 s against ~1.5 s)
 MAINTAIN_S = 1.0  # seconds between keep-alive/unload/compact sweeps for one view
 
 
@@ -47,7 +49,9 @@ class Stream:
         self.distance = int(distance)
         self.tile = int(tile)
         self.margin = int(margin)
-        self.backends = backends or build.backends()
+        # None: build.backends() per batch, so the first batches run NumPy while an
+        # OpenCL warm-up (build.warm) builds the kernels
+        self.backends = backends
         # Two workers: while one waits on OpenCL (one queue: generation, meshing) the
         # other lights on the CPU (bench world: stream_view32_s per worker count).
         self._worker_backends = [self.backends] * max(1, int(workers))
@@ -271,7 +275,7 @@ class Stream:
             far = u > 0
             u[far] *= 1.5 - 0.5 * (vx[far] * d[0] + vy[far] * d[1]) / u[far]  # behind: x2
         i = int(np.argmin(u))
-        t = max(1, self.tile // 2) if u[i] < NEAR else self.tile
+        t = max(1, self.tile // (4 if u[i] < FIRST else 2)) if u[i] < NEAR else self.tile
         r = self.distance
         tx, ty = _tiling(cx - r, cx + r, t)(p[:, 0]), _tiling(cy - r, cy + r, t)(p[:, 1])
         return [pending[j] for j in np.flatnonzero((tx == tx[i]) & (ty == ty[i])).tolist()]

@@ -160,6 +160,13 @@ class LiveView:
         self._tick_fn, self._tick_ui_fn = self._tick, self._tick_ui  # (one object each)
 
     # ------------------------------------------------------------------ status
+    @staticmethod
+    def warming() -> bool:
+        """Whether OpenCL kernels are being built in the background (chunks come from
+        NumPy meanwhile: world.build.warm)."""
+        from ... import opencl
+        return opencl.warming()
+
     def problem(self, context) -> str | None:
         """Why the view cannot run here, as one sentence, or None."""
         import os

@@ -148,8 +148,12 @@ class VOXEL_PT_view(bpy.types.Panel):
                 col.label(text=problem, icon="ERROR")
             else:
                 st = LIVE.stats
+                # no chunk wanted yet (the stream not started) is loading too, never done
                 col.label(text=f"chunks {st['drawn']} / {st['wanted']}"
-                          + ("  loading…" if st["drawn"] < st["wanted"] else ""))
+                          + ("  loading…" if st["drawn"] < st["wanted"] or not st["wanted"]
+                             else ""))
+                if LIVE.warming():
+                    col.label(text="building OpenCL kernels (NumPy meanwhile)")
                 if v.far:
                     col.label(text=f"far tiles {st['far_drawn']} / {st['far_wanted']}")
                 col.label(text=f"last frame {st['ms']:.0f} ms ({st['quality']})")

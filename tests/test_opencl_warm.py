@@ -12,7 +12,7 @@ from voxel_addon import opencl
 @pytest.fixture
 def fresh(monkeypatch, cl_device):
     """A process that has not warmed up yet (warm runs once per process)."""
-    monkeypatch.setattr(opencl, "_warm", {"thread": None, "took": None, "error": None})
+    monkeypatch.setattr(opencl, "_warm", dict.fromkeys(opencl._warm))  # never warmed
 
 
 def test_numpy_until_the_warm_up_ends_then_opencl(fresh):
@@ -43,7 +43,7 @@ def test_a_failing_warm_up_is_kept_and_opencl_used_after(fresh):
 
 
 def test_no_warm_up_without_a_device(monkeypatch):
-    monkeypatch.setattr(opencl, "_warm", {"thread": None, "took": None, "error": None})
+    monkeypatch.setattr(opencl, "_warm", dict.fromkeys(opencl._warm))  # never warmed
     monkeypatch.setenv(opencl.SWITCH, "0")
     assert not opencl.warm(lambda: None) and not opencl.warm_state()["started"]
     assert opencl.pick(None) == "numpy"

@@ -176,7 +176,7 @@ def build(source: str, options: tuple[str, ...] = ()):
 
 
 # ---- warming up in the background ---------------------------------------------------
-_warm = {"thread": None, "took": None, "error": None}
+_warm = {"thread": None, "took": None, "error": None, "ended_at": None}
 
 
 def warm(job, name: str = "voxel-opencl-warm") -> bool:
@@ -201,6 +201,7 @@ def warm(job, name: str = "voxel-opencl-warm") -> bool:
             _warm["error"] = f"{type(e).__name__}: {e}"
         finally:
             _warm["took"] = time.perf_counter() - t0
+            _warm["ended_at"] = time.monotonic()
 
     t = threading.Thread(target=run, daemon=True, name=name)
     with _ctx_lock:
@@ -218,7 +219,8 @@ def warming() -> bool:
 
 
 def warm_state() -> dict:
-    """{"started", "running", "took" (seconds, None until done), "error"}."""
+    """{"started", "running", "took" (seconds, None until done), "ended_at"
+    (time.monotonic() then), "error"}."""
     t = _warm["thread"]
     return {"started": t is not None, "running": warming(), "took": _warm["took"],
-            "error": _warm["error"]}
+            "ended_at": _warm["ended_at"], "error": _warm["error"]}

@@ -205,7 +205,7 @@ def test_stream_during_the_opencl_warm_up_equals_one_shot(world_path, cl_device,
     after; the payloads are those of the one-shot path all the same."""
     from voxel_addon import opencl
     from voxel_addon.world import build
-    monkeypatch.setattr(opencl, "_warm", {"thread": None, "took": None, "error": None})
+    monkeypatch.setattr(opencl, "_warm", dict.fromkeys(opencl._warm))  # never warmed
     with World.create(world_path, seed=SEED) as w:
         assert build.warm(w)
         assert build.backends() == ("numpy", "numpy") and w.generator.backend_used == "numpy"

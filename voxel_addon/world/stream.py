@@ -66,6 +66,7 @@ class Stream:
         self._drawn: set = set()
         self._busy: set = set()     # keys a worker is doing now
         self._stop = False
+        self.first_at = None        # time.monotonic() of the first payload queued
         self._kept = (None, 0.0)  # view chunk and time of the last full _maintain
         self._area = (None, [])   # (view chunk, distance) and the keys in range
         world.streams.add(self)
@@ -175,6 +176,8 @@ class Stream:
                         and self.world.pver.get(p.key) == p.version:
                     self._emitted[p.key] = p.version
                     self._ready.append(p)
+                    if self.first_at is None:
+                        self.first_at = time.monotonic()
             # no wake-up: current payloads add no work (a worker's own job wakes the
             # others when it ends), and woken workers rescanning every key would take
             # the GIL from the editing thread (edit latency x2 at distance 32)

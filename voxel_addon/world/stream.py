@@ -182,6 +182,11 @@ class Stream:
             # others when it ends), and woken workers rescanning every key would take
             # the GIL from the editing thread (edit latency x2 at distance 32)
 
+    @property
+    def queued(self) -> int:
+        """Payloads waiting for the consumer's drain (no lock: a deque's length)."""
+        return len(self._ready)
+
     def wait_ready(self, timeout: float = 60.0) -> bool:
         """Block until every wanted chunk has a payload (tests, bench, CLI)."""
         end = time.monotonic() + timeout

@@ -343,8 +343,7 @@ class LiveView:
             return False
         if any(len(p.versions) < len(f.chunks) for p in self.panes.values()):
             return False  # a window has not drawn all we hold yet
-        _, ready, handed = f.stream.counts
-        return ready <= handed
+        return not f.stream.queued
 
     def _panel_redraw(self) -> None:
         import bpy

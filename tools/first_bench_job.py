@@ -54,6 +54,7 @@ def run(world: str, distance: int):
             raise RuntimeError(f"no whole view after 600 s: {s}")
         yield 0.02
     R["first_s"], R["whole_s"], R["chunks"] = first, time.perf_counter() - t0, s["wanted"]
+    R["frames"] = [[round(f.ms), f.drawn, f.quality] for f in LIVE.frames]  # (diagnosis)
     while opencl.warming():
         yield 0.1
     R["warm"] = opencl.warm_state()

@@ -47,3 +47,18 @@ def test_no_warm_up_without_a_device(monkeypatch):
     monkeypatch.setenv(opencl.SWITCH, "0")
     assert not opencl.warm(lambda: None) and not opencl.warm_state()["started"]
     assert opencl.pick(None) == "numpy"
+
+
+def test_a_generators_warm_up_runs_its_own_kernels_and_equals_numpy(fresh):
+    """PassGenerator.warm_opencl: OpenCL with the generator's own kernel objects (pocl
+    compiles again per kernel object), whatever the default; the NumPy twin's blocks."""
+    import numpy as np
+    from voxel_addon.generation import make_generator
+    gen = make_generator("overworld", 7)
+    keys = [(3, -2), (4, -2)]
+    assert opencl.warm(lambda: None)
+    opencl._warm["thread"].join(30)
+    got = gen.warm_opencl(keys)
+    assert gen._runner is not None  # the runner the default backend uses next
+    ref = make_generator("overworld", 7, None, "numpy").generate(keys)
+    assert all(np.array_equal(a, b) for a, b in zip(got, ref))

@@ -47,6 +47,7 @@ def test_new_world_show_brings_the_view_to_the_surface_and_terrain_fills_it(gui,
     print(f"\nShow -> first chunks ready {first['ready_s']:.1f} s, drawn {first['s']:.1f} s, "
           f"whole view {whole['s']:.1f} s; OpenCL warm-up {whole['warm']['took']} s")
     assert first["warm"]["started"] and first["ready_before_opencl"], (first, whole)
+    assert first["backends"] == ["numpy", "numpy"], first  # made while the kernels built
     assert first["s"] < FIRST_S and whole["s"] < WHOLE_S, (first, whole)
     assert any((cache / "pocl").iterdir()), "the kernels were built elsewhere: not cold"
     changed, texture = _terrain_fills(res, "first", part=True)

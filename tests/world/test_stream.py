@@ -212,6 +212,7 @@ def test_stream_during_the_opencl_warm_up_equals_one_shot(world_path, cl_device,
         with Stream(w, 3, tile=4) as s:
             s.set_view(40.0, -20.0, direction=(1, 1, 0))
             got = collect(s)
+            assert s.first_backends == ("numpy", "numpy") and s.first_at is not None
         opencl._warm["thread"].join(120)
         assert opencl.warm_state()["error"] is None
         assert build.backends() == ("numpy", "opencl") and w.generator.backend_used == "opencl"

@@ -73,6 +73,13 @@ class PassGenerator(Generator):
             yield self._run(keys[i:i + step], want, be)
             i += step
 
+    def warm_opencl(self, keys) -> list:
+        """generate(keys) on OpenCL whatever the default, with this generator's own
+        kernel objects: pocl compiles a kernel's work-group code again for every new
+        kernel object (~5 s), so a warm-up (world.build.warm) must run these ones."""
+        flat, _ = self._run([(int(a), int(b)) for a, b in keys], (), "opencl")
+        return [np.asarray(f).reshape(C.SHAPE, order="F") for f in flat]
+
     def generate(self, keys):
         out = []
         for flat, _ in self._batches(keys):

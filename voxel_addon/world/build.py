@@ -44,10 +44,12 @@ def warm(world) -> bool:
     g = world.generator
 
     def job():
-        from ..generation import make_generator
-        gcl = make_generator(g.name, g.seed, g.params, "opencl")
         keys = keys_of(-1, -1, 2, 2)
-        blocks = C.paste(zip(keys, gcl.generate(keys)), -1, -1, 2, 2)
+        if hasattr(g, "warm_opencl"):  # the world's own generator (its kernel objects)
+            arrays = g.warm_opencl(keys)
+        else:
+            arrays = g.generate(keys)
+        blocks = C.paste(zip(keys, arrays), -1, -1, 2, 2)
         with CL_LOCK:
             meshing.build_chunks(blocks[15:-15, 15:-15], (0, 0), backend="opencl")
 

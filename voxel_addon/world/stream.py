@@ -29,6 +29,7 @@ from collections import deque
 
 import numpy as np
 
+from .. import opencl
 from ..core.errors import VoxelError
 from . import build
 
@@ -67,6 +68,7 @@ class Stream:
         self._busy: set = set()     # keys a worker is doing now
         self._stop = False
         self.first_at = None        # time.monotonic() of the first payload queued
+        self.first_backends = None  # (light, meshing) of the first batch made
         self._kept = (None, 0.0)  # view chunk and time of the last full _maintain
         self._area = (None, [])   # (view chunk, distance) and the keys in range
         world.streams.add(self)
@@ -254,7 +256,7 @@ class Stream:
             if job is None:
                 with self._lock:
                     if self._changes == seen and not self._stop:
-                        self._wake.wait(0.5)
+                        self._wake.wait(0.05 if opencl.warming() else 0.5)
 
     def _pending(self, cx, cy, em, busy):
         """Keys in range without a current payload, not being done."""
@@ -283,6 +285,11 @@ class Stream:
             far = u > 0
             u[far] *= 1.5 - 0.5 * (vx[far] * d[0] + vy[far] * d[1]) / u[far]  # behind: x2
         i = int(np.argmin(u))
+        if u[i] >= FIRST and self.backends is None and opencl.warming():
+            # the OpenCL kernels still build: NumPy made the first picture (the chunks
+            # next to the view); more NumPy now would take the CPU from the build and
+            # leave big NumPy batches in flight when it ends: the whole view came later
+            return None
         t = max(1, self.tile // (4 if u[i] < FIRST else 2)) if u[i] < NEAR else self.tile
         r = self.distance
         tx, ty = _tiling(cx - r, cx + r, t)(p[:, 0]), _tiling(cy - r, cy + r, t)(p[:, 1])
@@ -294,8 +301,11 @@ class Stream:
         rest = {k for k in keys} - {p.key for p in done}
         if rest:
             xs, ys = [k[0] for k in rest], [k[1] for k in rest]
+            backends = backends or build.backends()
             done += build.light_and_mesh(world, min(xs), min(ys), max(xs) + 1, max(ys) + 1,
                                          backends_=backends)
+            if done and self.first_backends is None:
+                self.first_backends = backends
         with world.locked():  # compact now: _maintain's sweep over all chunks is throttled
             for p in done:
                 c = world.chunks.get(p.key)

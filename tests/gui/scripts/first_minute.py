@@ -52,11 +52,13 @@ def _first_terrain(gui, live, ocl, timeout=120.0):
             raise RuntimeError(f"the live view cannot draw: {why}")
         if first is None and s["drawn"] > 0:
             first = time.monotonic() - t0
-            warm, ready = ocl.warm_state(), live.feed.stream.first_at
+            stream = live.feed.stream
+            warm, ready = ocl.warm_state(), stream.first_at
             # the first payload was queued before the kernels were built (whenever
             # the main thread, busy compiling Blender's shaders, got to draw it)
             gui.result["first"] = {"s": first, "warm": warm, "stats": dict(s),
-                                   "ready_s": ready - t0, "ready_before_opencl":
+                                   "ready_s": ready - t0, "backends": stream.first_backends,
+                                   "ready_before_opencl":
                                    warm["ended_at"] is None or ready < warm["ended_at"]}
             yield from gui.screenshot("first")
         if first is not None and s["drawn"] >= s["wanted"] > 0:
@@ -89,10 +91,11 @@ def run(gui):
         assert bpy.ops.voxel.world_new() == {"FINISHED"}
     world = session.world(sc.voxel.path)
     eye = _eye(r3)
-    gui.result["before"] = {"eye": eye, "ground": firstview.ground(world, eye[0], eye[1])}
     ocl = importlib.import_module(f"{MOD}.voxel_addon.opencl")
     sc.voxel_view.show = True  # the View panel's Show in Viewport
     yield from _first_terrain(gui, live, ocl)
+    # (after Show: a chunk generated before it would build the OpenCL kernels first)
+    gui.result["before"] = {"eye": eye, "ground": firstview.ground(world, eye[0], eye[1])}
     yield from _wait_full(gui, live)
     yield from gui.screenshot("shown")
     eye = _eye(r3)

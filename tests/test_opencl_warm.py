@@ -21,7 +21,7 @@ def test_numpy_until_the_warm_up_ends_then_opencl(fresh):
     gate, ran = threading.Event(), []
     assert opencl.pick(None) == gen.backend_used == "opencl"
     assert opencl.warm(lambda: ran.append(gate.wait(30)))
-    assert not opencl.warm(lambda: None)          # once per process
+    assert not opencl.warm(lambda: None)          # one at a time
     assert opencl.warming() and opencl.pick(None) == "numpy" == gen.backend_used
     assert opencl.pick("opencl") == "opencl"      # asked for by name: the warm-up's own
     assert make_generator("overworld", 7, None, "opencl").backend_used == "opencl"

@@ -182,15 +182,13 @@ _warm = {"thread": None, "took": None, "error": None, "ended_at": None}
 def warm(job, name: str = "voxel-opencl-warm") -> bool:
     """Run JOB() (which asks for backend "opencl" explicitly) in a daemon thread; while
     it runs, pick(None) answers NumPy. False (nothing started) without a device or
-    when a warm-up ran or runs already. A failing JOB is kept (`warm_state`) and
+    while a warm-up runs (callers say what needs one: world.build.warm, once per
+    generator). A failing JOB is kept (`warm_state`) and
     OpenCL is used afterwards all the same: its own errors then surface where they
     happen. pyopencl lets go of the GIL while pocl compiles, so the NumPy work on
     other threads goes on (2 cores: they share the CPU)."""
     import time
-    with _ctx_lock:
-        if _warm["thread"] is not None:
-            return False
-    if not available():
+    if warming() or not available():
         return False
 
     def run():
@@ -205,10 +203,10 @@ def warm(job, name: str = "voxel-opencl-warm") -> bool:
 
     t = threading.Thread(target=run, daemon=True, name=name)
     with _ctx_lock:
-        if _warm["thread"] is not None:
+        if warming():
             return False
-        _warm["thread"] = t
-    t.start()
+        _warm.update(thread=t, took=None, error=None, ended_at=None)
+        t.start()
     return True
 
 

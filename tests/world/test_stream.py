@@ -218,3 +218,16 @@ def test_stream_during_the_opencl_warm_up_equals_one_shot(world_path, cl_device,
         assert build.backends() == ("numpy", "opencl") and w.generator.backend_used == "opencl"
     area, meshes = one_shot(world_path, 40.0, -20.0, 3)
     check_equal(got, area, meshes)
+
+
+def test_warm_up_once_per_generator(world_path, tmp_path, cl_device, monkeypatch):
+    from voxel_addon import opencl
+    from voxel_addon.world import build
+    monkeypatch.setattr(opencl, "_warm", dict.fromkeys(opencl._warm))  # never warmed
+    with World.create(world_path, seed=SEED, generator="flat") as a, \
+            World.create(tmp_path / "b.sqlite", seed=SEED, generator="flat") as b:
+        assert build.warm(a) and not build.warm(b)     # one at a time
+        opencl._warm["thread"].join(60)
+        assert not build.warm(a) and build.warm(b)     # each world's generator once
+        opencl._warm["thread"].join(60)
+        assert opencl.warm_state()["error"] is None

@@ -11,6 +11,7 @@ for chunks whose 3x3 did not change meanwhile (an edit raced us: done again late
 from __future__ import annotations
 
 import threading
+import weakref
 
 import numpy as np
 
@@ -36,12 +37,15 @@ def backends() -> tuple[str, str]:
 def warm(world) -> bool:
     """Build and run once, in a background thread, the OpenCL kernels that streaming
     WORLD wants (its generator's chunks, meshing), on a 3x3 of chunks at the origin;
-    until done, generation and meshing run NumPy (opencl.warm). False when nothing
-    was started (no device, or warmed already). Cold, on 2 busy cores: ~7 s for the
+    until done, generation and meshing run NumPy (opencl.warm). Once per generator
+    (each has its own kernel objects: another world's would compile again); False
+    when nothing was started (no device, warmed already, another warm-up running). Cold, on 2 busy cores: ~7 s for the
     generator, ~1 s meshing; not the far surface's program (~1.5 s more before
     OpenCL takes over; the far ring is off by default and builds it on first use)."""
     from .. import meshing, opencl
     g = world.generator
+    if g in _warmed:
+        return False
 
     def job():
         keys = keys_of(-1, -1, 2, 2)
@@ -53,7 +57,13 @@ def warm(world) -> bool:
         with CL_LOCK:
             meshing.build_chunks(blocks[15:-15, 15:-15], (0, 0), backend="opencl")
 
-    return opencl.warm(job)
+    started = opencl.warm(job)
+    if started:
+        _warmed.add(g)
+    return started
+
+
+_warmed: weakref.WeakSet = weakref.WeakSet()  # generators warm-up has run for
 
 
 def keys_of(cx0: int, cy0: int, cx1: int, cy1: int) -> list[tuple[int, int]]:

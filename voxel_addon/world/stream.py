@@ -235,8 +235,9 @@ class Stream:
                 em, busy = dict(self._emitted), set(self._busy)
             job = self._next(cx, cy, d, em, busy)
             if job is not None:
-                with self._lock:  # another worker may have claimed some meanwhile
-                    job = [k for k in job if k not in self._busy]
+                with self._lock:  # another worker may have claimed or done some meanwhile
+                    em, pv = self._emitted.get, self.world.pver.get
+                    job = [k for k in job if k not in self._busy and em(k, -1) != pv(k, -2)]
                     self._busy.update(job)
                     if not job:
                         continue

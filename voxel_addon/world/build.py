@@ -39,9 +39,10 @@ def warm(world) -> bool:
     WORLD wants (its generator's chunks, meshing), on a 3x3 of chunks at the origin;
     until done, generation and meshing run NumPy (opencl.warm). Once per generator
     (each has its own kernel objects: another world's would compile again); False
-    when nothing was started (no device, warmed already, another warm-up running). Cold, on 2 busy cores: ~7 s for the
-    generator, ~1 s meshing; not the far surface's program (~1.5 s more before
-    OpenCL takes over; the far ring is off by default and builds it on first use)."""
+    when nothing was started (no device, warmed already, another warm-up running).
+    Cold, on 2 busy cores: ~7 s for the generator, ~1 s meshing; not the far
+    surface's program (~1.5 s more before OpenCL takes over; the far ring is off by
+    default and builds it on first use)."""
     from .. import meshing, opencl
     g = world.generator
     if g in _warmed:

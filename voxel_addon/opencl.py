@@ -8,6 +8,13 @@ platform that is not the distro one, else the first with a device.
 
 VOXEL_OPENCL=0 (or off, no, false) makes this module report no device, as on a Mac
 or a Windows machine without an OpenCL driver: everything runs the NumPy path.
+
+Warming up (`warm`): a first build of our programs takes seconds (pocl compiles each
+kernel with LLVM, and again per work-group size at its first launch), which a
+fresh install would spend before its first picture. `warm(job)` runs JOB (builds and
+runs the kernels a caller will want) in a background thread; until it ends the
+default backend (`pick(None)`) is NumPy, so the first results come from the NumPy
+twins (bit-identical by design) while the kernels build, then OpenCL takes over.
 """
 from __future__ import annotations
 
@@ -72,11 +79,19 @@ def switched_off() -> bool:
     return os.environ.get(SWITCH, "").strip().lower() in ("0", "off", "no", "false")
 
 
-@lru_cache(maxsize=1)
 def context():
     """(context, queue, device) of the chosen platform; raises NoOpenCL."""
-    if switched_off():
+    if switched_off():  # read on every call: the switch holds after a first context
         raise NoOpenCL(f"OpenCL is switched off ({SWITCH}={os.environ[SWITCH]})")
+    with _ctx_lock:  # one context, also when a warm-up thread asks at the same time
+        return _context()
+
+
+_ctx_lock = threading.Lock()
+
+
+@lru_cache(maxsize=1)
+def _context():
     try:
         import pyopencl as cl
     except ImportError as e:  # pragma: no cover - depends on the machine
@@ -119,7 +134,7 @@ def pick(backend: str | None = None, what: str = "") -> str:
     or for "opencl" without a device). `what` names the caller in the message."""
     from .core.errors import VoxelError
     if backend is None:
-        return "opencl" if available() else "numpy"
+        return "opencl" if available() and not warming() else "numpy"
     if backend not in BACKENDS:
         raise VoxelError(f"unknown {what + ' ' if what else ''}backend {backend!r} "
                          f"(known: {', '.join(BACKENDS)})")
@@ -158,3 +173,52 @@ def build(source: str, options: tuple[str, ...] = ()):
     ctx, _, _ = context()
     with _lock:
         return cl.Program(ctx, source).build(options=list(options))
+
+
+# ---- warming up in the background ---------------------------------------------------
+_warm = {"thread": None, "took": None, "error": None, "ended_at": None}
+
+
+def warm(job, name: str = "voxel-opencl-warm") -> bool:
+    """Run JOB() (which asks for backend "opencl" explicitly) in a daemon thread; while
+    it runs, pick(None) answers NumPy. False (nothing started) without a device or
+    while a warm-up runs (callers say what needs one: world.build.warm, once per
+    generator). A failing JOB is kept (`warm_state`) and
+    OpenCL is used afterwards all the same: its own errors then surface where they
+    happen. pyopencl lets go of the GIL while pocl compiles, so the NumPy work on
+    other threads goes on (2 cores: they share the CPU)."""
+    import time
+    if warming() or not available():
+        return False
+
+    def run():
+        t0 = time.perf_counter()
+        try:
+            job()
+        except Exception as e:  # noqa: BLE001 - reported by warm_state, not fatal
+            _warm["error"] = f"{type(e).__name__}: {e}"
+        finally:
+            _warm["took"] = time.perf_counter() - t0
+            _warm["ended_at"] = time.monotonic()
+
+    t = threading.Thread(target=run, daemon=True, name=name)
+    with _ctx_lock:
+        if warming():
+            return False
+        _warm.update(thread=t, took=None, error=None, ended_at=None)
+        t.start()
+    return True
+
+
+def warming() -> bool:
+    """Whether a warm-up (`warm`) is running now."""
+    t = _warm["thread"]
+    return t is not None and t.is_alive()
+
+
+def warm_state() -> dict:
+    """{"started", "running", "took" (seconds, None until done), "ended_at"
+    (time.monotonic() then), "error"}."""
+    t = _warm["thread"]
+    return {"started": t is not None, "running": warming(), "took": _warm["took"],
+            "ended_at": _warm["ended_at"], "error": _warm["error"]}

@@ -42,3 +42,29 @@ def test_world_panel_shows_new_settings_or_the_open_worlds_own(bpy, scene):
     assert got[0][0] == "label" and got[0][1].startswith("Not open") and got[1:] == [("recreate",)]
     assert bpy.ops.voxel.world_open(filepath=v.path) == {"FINISHED"}
     assert ("info", "Generator", "Overworld") in lines(v)
+
+
+def test_view_panel_says_loading_until_every_wanted_chunk_is_drawn(bpy):
+    """ui/view.chunks_line: never done for a view with no chunk wanted yet (the
+    stream not started: the frame is sky) nor with chunks still to come (issue 28)."""
+    from voxel_addon.blender.ui.view import chunks_line
+    assert chunks_line({"drawn": 0, "wanted": 0}) == "chunks 0 / 0  loading…"
+    assert chunks_line({"drawn": 0, "wanted": 81}) == "chunks 0 / 81  loading…"
+    assert chunks_line({"drawn": 80, "wanted": 81}).endswith("loading…")
+    assert chunks_line({"drawn": 81, "wanted": 81}) == "chunks 81 / 81"
+
+
+def test_world_panel_says_numpy_while_opencl_builds(bpy, cl_device, monkeypatch):
+    """During the live view's OpenCL warm-up a new world would generate with NumPy."""
+    import threading
+    from voxel_addon import opencl
+    from voxel_addon.blender.ui.world import backend_line
+    monkeypatch.setattr(opencl, "_warm", dict.fromkeys(opencl._warm))  # never warmed
+    gate = threading.Event()
+    assert opencl.warm(lambda: gate.wait(30))
+    try:
+        assert backend_line() == ("info", "Generates with", "NumPy (CPU) until OpenCL is built")
+    finally:
+        gate.set()
+        opencl._warm["thread"].join(30)
+    assert backend_line() == ("info", "Generates with", "OpenCL")

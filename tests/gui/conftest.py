@@ -40,14 +40,15 @@ def app():
 @pytest.fixture
 def gui(app, tmp_path):
     """gui(script, **params) -> GuiResult: SCRIPT (a path, or a name under
-    tests/gui/scripts/) run in the real Blender with a fresh user folder."""
+    tests/gui/scripts/) run in the real Blender with a fresh user folder (the kernel
+    cache shared by the runs unless `env` names another)."""
     user = harness.fresh_user(tmp_path / "user")
 
-    def run(script, timeout=180.0, **params):
+    def run(script, timeout=180.0, env=None, **params):
         path = Path(script)
         if not path.is_absolute():
             path = Path(__file__).with_name("scripts") / path
-        return harness.run_gui(path, tmp_path / "out", user, params, timeout=timeout)
+        return harness.run_gui(path, tmp_path / "out", user, params, timeout=timeout, env=env)
 
     run.user = user
     return run

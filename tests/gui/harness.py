@@ -92,15 +92,16 @@ class GuiResult:
 
 
 def run_gui(script: Path, out: Path, user: Path, params: dict | None = None,
-            timeout: float = 180.0, size=SIZE, args=()) -> GuiResult:
-    """Run SCRIPT in the real Blender under Xvfb; fail with its traceback or on timeout."""
+            timeout: float = 180.0, size=SIZE, args=(), env: dict | None = None) -> GuiResult:
+    """Run SCRIPT in the real Blender under Xvfb; fail with its traceback or on timeout.
+    ENV: more environment for Blender (e.g. an empty kernel cache)."""
     why = app.gui_missing()
     if why:
         raise GuiError(f"GUI harness unavailable: {why}")
     out.mkdir(parents=True, exist_ok=True)
     log_path = out / "blender.log"
     params = {"VOXEL_GUI_OUT": str(out), "VOXEL_GUI_SCRIPT": str(Path(script).resolve()),
-              "VOXEL_GUI_PARAMS": json.dumps(params or {})}
+              "VOXEL_GUI_PARAMS": json.dumps(params or {}), **(env or {})}
     t0 = time.monotonic()
     with app.xserver(size) as x, \
             app.start(["--no-window-focus", *args, "--python", RUNNER], display=x.display,

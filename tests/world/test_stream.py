@@ -198,3 +198,36 @@ def test_stored_chunks_reach_a_live_stream(world_path):
             assert (new.mesh.quads["block"] == REGISTRY.id("bricks")).any()
     with World.open(world_path, loader=False) as w:
         assert w.get_block(5, 5, 50) == REGISTRY.id("bricks")
+
+
+def test_stream_during_the_opencl_warm_up_equals_one_shot(world_path, cl_device, monkeypatch):
+    """build.warm (the live view's first Show): NumPy while the kernels build, OpenCL
+    after; the payloads are those of the one-shot path all the same."""
+    from voxel_addon import opencl
+    from voxel_addon.world import build
+    monkeypatch.setattr(opencl, "_warm", dict.fromkeys(opencl._warm))  # never warmed
+    with World.create(world_path, seed=SEED) as w:
+        assert build.warm(w)
+        assert build.backends() == ("numpy", "numpy") and w.generator.backend_used == "numpy"
+        with Stream(w, 3, tile=4) as s:
+            s.set_view(40.0, -20.0, direction=(1, 1, 0))
+            got = collect(s)
+            assert s.first_backends == ("numpy", "numpy") and s.first_at is not None
+        opencl._warm["thread"].join(120)
+        assert opencl.warm_state()["error"] is None
+        assert build.backends() == ("numpy", "opencl") and w.generator.backend_used == "opencl"
+    area, meshes = one_shot(world_path, 40.0, -20.0, 3)
+    check_equal(got, area, meshes)
+
+
+def test_warm_up_once_per_generator(world_path, tmp_path, cl_device, monkeypatch):
+    from voxel_addon import opencl
+    from voxel_addon.world import build
+    monkeypatch.setattr(opencl, "_warm", dict.fromkeys(opencl._warm))  # never warmed
+    with World.create(world_path, seed=SEED, generator="flat") as a, \
+            World.create(tmp_path / "b.sqlite", seed=SEED, generator="flat") as b:
+        assert build.warm(a) and not build.warm(b)     # one at a time
+        opencl._warm["thread"].join(60)
+        assert not build.warm(a) and build.warm(b)     # each world's generator once
+        opencl._warm["thread"].join(60)
+        assert opencl.warm_state()["error"] is None

@@ -42,12 +42,12 @@ def missing() -> str | None:
 
 
 def run_job(area: str, args, result: Path, log: Path, timeout: float, simulate: bool,
-            blender=None, gpu: str | None = None) -> dict:
+            blender=None, gpu: str | None = None, env: dict | None = None) -> dict:
     """tools/AREA_bench_job.py in the Blender GUI with ARGS (BLENDER: which application,
-    e.g. "4.3"; GPU: its backend, "opengl" or "vulkan"; None: blender_app's defaults);
-    the JSON it wrote to RESULT."""
+    e.g. "4.3"; GPU: its backend, "opengl" or "vulkan"; None: blender_app's defaults;
+    ENV: more environment); the JSON it wrote to RESULT."""
     app().run(["--factory-startup", "-P", TOOLS / f"{area}_bench_job.py", "--", *args],
-              log=log, timeout=timeout, simulate=simulate, app=blender, gpu=gpu)
+              log=log, timeout=timeout, simulate=simulate, app=blender, gpu=gpu, env=env)
     if not result.exists():
         raise RuntimeError(f"the Blender job wrote nothing:\n{log.read_text(errors='replace')[-4000:]}")
     return json.loads(result.read_text())

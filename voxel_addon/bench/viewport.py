@@ -5,6 +5,8 @@ Rows: frame ms still at full quality and in draft (what a redraw costs while the
 view moves), our CPU time per redraw outside GL, the time from ticking Show to
 every chunk of distance 16 drawn (a generated file, and in the full run an empty
 file the stream generates), and the longest redraw and chunk upload while it streams.
+first_minute(): a fresh install's first Show (empty kernel cache) in every Blender and
+GPU backend: seconds to the first chunks and to the whole view.
 compare(): the live view against the same chunks baked into an object that Blender
 draws (Solid, Material Preview), one fresh Blender per side, at distance 16 (8 with
 --quick): redraw, memory and time to the picture as ratios, and what the live view's
@@ -30,6 +32,7 @@ def run(ctx):
     if why:
         yield ("viewport_skipped", 1, "", why)
         return
+    yield from first_minute(ctx)
     world, empty = ctx.tmp / "view.sqlite", ctx.tmp / "view_empty.sqlite"
     ctx.say("generating the distance-16 area (+ ring)")
     r = subprocess.run([sys.executable, "-m", "voxel_addon", "generate", "--world", str(world),
@@ -79,6 +82,35 @@ def run(ctx):
                    f"longest redraw while streaming ({R[f'frames16_{key}']} redraws), {key} file")
             yield (f"viewport_max_upload_{key}_ms", R[f"max_upload_{key}_ms"], "ms",
                    "longest chunk upload within one redraw while streaming")
+
+
+def first_minute(ctx, distance: int = 8):
+    """A fresh install's first Show (issue 28), in every installed Blender on each GPU
+    backend (tools/first_bench_job.py, one fresh Blender each): a new world, an empty
+    kernel cache (pocl's and pyopencl's); seconds from Show to the first chunks drawn
+    and to every chunk of the default distance drawn, and the OpenCL warm-up's build
+    time (NumPy streams meanwhile). Goals: 2 s and 5 s."""
+    from ..world import World
+    for blender, gpu in gui.variants():
+        tag = f"{blender.replace('.', '')}_{gpu}"
+        ctx.say(f"Blender {blender} GUI on {gpu}: first Show, empty kernel cache")
+        world, cache = ctx.tmp / f"first_{tag}.sqlite", ctx.tmp / f"first_{tag}_kernels"
+        World.create(world, seed=2019, generator="overworld").close()
+        out = ctx.tmp / f"first_{tag}.json"
+        env = {"POCL_CACHE_DIR": str(cache / "pocl"), "PYOPENCL_CACHE_DIR": str(cache / "pyopencl")}
+        R = gui.run_job("first", [out, world, distance], out, ctx.tmp / f"first_{tag}.log",
+                        timeout=900, simulate=False, blender=blender, gpu=gpu, env=env)
+        if not R.get("ok"):
+            raise RuntimeError(R.get("error"))
+        what = f"Blender {R['blender']} {R['backend']}, distance {distance} ({R['chunks']} chunks)"
+        yield (f"viewport_cold_first_chunks_{tag}_s", R["first_s"], "s",
+               f"fresh install (empty kernel cache, new world): tick Show -> first chunks drawn "
+               f"(OpenCL still building then: {R['warming_at_first']}); {what}; goal 2 s")
+        yield (f"viewport_cold_whole_view_{tag}_s", R["whole_s"], "s",
+               "the same -> every chunk drawn; goal 5 s")
+        yield (f"viewport_cold_opencl_warmup_{tag}_s", R["warm"]["took"] or 0.0, "s",
+               f"the OpenCL warm-up (generator + meshing kernels built and run) beside the "
+               f"NumPy stream{'; failed: ' + R['warm']['error'] if R['warm']['error'] else ''}")
 
 
 def backends(ctx, world):

@@ -442,7 +442,7 @@ class Runner:
         if any(u.kind != "2d" for u in self.units):
             raise ValueError("Runner.at evaluates 2D units only (lang.prune)")
         org = np.asarray(org, np.int64).reshape(-1, 2)
-        _, got = self._go(org.T.astype(np.int32).copy(), seed32, perm, want)
+        _, got = self._go(org.T.astype(np.int32).copy(), seed32, perm, want, chunks=False)
         return {k: np.ascontiguousarray(v) for k, v in got.items()}
 
     def run(self, keys, seed32, perm, want=()):
@@ -451,7 +451,7 @@ class Runner:
         org = (np.array(keys, np.int64).reshape(-1, 2).T * C.SIZE).astype(np.int32).copy()
         return self._go(org, seed32, perm, want)
 
-    def _go(self, org, seed32, perm, want):
+    def _go(self, org, seed32, perm, want, chunks=True):
         import pyopencl as cl
         q, n = self.queue, org.shape[1]
         borg = self._buf("org", org.nbytes)
@@ -491,8 +491,11 @@ class Runner:
                 q.finish()
                 key = f"unit{i} {u.kind} {'+'.join(u.outs) or 'blocks'}"
                 self.timings[key] = self.timings.get(key, 0.0) + time.perf_counter() - t0
-        out = np.zeros((n, C.VOLUME), np.uint16)
-        if blocks is not None:
+        # Runner.at wants no blocks: a zeroed (n, VOLUME) array here was 2 GiB per
+        # 16384-column surface batch, free in a venv (calloc's untouched pages) but ~1 s
+        # of page zeroing per batch under Blender's allocator (issue 28)
+        out = np.zeros((n, C.VOLUME) if chunks else (n, 0), np.uint16)
+        if blocks is not None and chunks:
             cl.enqueue_copy(q, out, blocks)
         got = {name: self._read_field(name, fields, n) for name in want}
         q.finish()

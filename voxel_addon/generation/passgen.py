@@ -28,9 +28,9 @@ class PassGenerator(Generator):
     surface_batch = {"opencl": 16384, "numpy": 2048}  # columns per evaluation
 
     def __init__(self, seed, params=None, backend=None):
+        self._asked = backend
         super().__init__(seed, params, backend)
-        self.backend_used = opencl.pick(backend, "generation")
-        self.backend = self.backend_used
+        opencl.pick(backend, "generation")  # an unknown or unusable one: refused now
         self.seed32 = noise.seed32(self.seed)
         self.perm = noise.perm_table(self.seed32)
         self.units = self.program().units()
@@ -41,8 +41,22 @@ class PassGenerator(Generator):
     def program(self):
         raise NotImplementedError
 
-    def _run(self, keys, want=()):
-        if self.backend_used == "opencl":
+    # Asked for no backend: OpenCL where present, decided per batch, so a generator
+    # made before a warm-up (opencl.warm) runs NumPy until the kernels are built.
+    @property
+    def backend_used(self) -> str:
+        return opencl.pick(self._asked)
+
+    @property
+    def backend(self) -> str:
+        return self.backend_used
+
+    @backend.setter
+    def backend(self, value) -> None:  # Generator.__init__'s; the choice is _asked
+        pass
+
+    def _run(self, keys, want=(), backend="numpy"):
+        if backend == "opencl":
             if self._runner is None:
                 from .cl import Runner
                 self._runner = Runner(self.units)
@@ -52,9 +66,19 @@ class PassGenerator(Generator):
 
     def _batches(self, keys, want=()):
         keys = [(int(a), int(b)) for a, b in keys]
-        step = self.batch_cl if self.backend_used == "opencl" else self.batch_np
-        for i in range(0, len(keys), step):
-            yield self._run(keys[i:i + step], want)
+        i = 0
+        while i < len(keys):
+            be = self.backend_used
+            step = self.batch_cl if be == "opencl" else self.batch_np
+            yield self._run(keys[i:i + step], want, be)
+            i += step
+
+    def warm_opencl(self, keys) -> list:
+        """generate(keys) on OpenCL whatever the default, with this generator's own
+        kernel objects: pocl compiles a kernel's work-group code again for every new
+        kernel object (~5 s), so a warm-up (world.build.warm) must run these ones."""
+        flat, _ = self._run([(int(a), int(b)) for a, b in keys], (), "opencl")
+        return [np.asarray(f).reshape(C.SHAPE, order="F") for f in flat]
 
     def generate(self, keys):
         out = []
@@ -98,15 +122,19 @@ class PassGenerator(Generator):
             return None
         xy = np.asarray(xy, np.int64).reshape(-1, 2)
         with self._surf_lock:
+            be = self.backend_used
             if self._surf is None:
+                self._surf = {}
+            run = self._surf.get(be)
+            if run is None:
                 units = prune(self.units, want)
-                if self.backend_used == "opencl":
+                if be == "opencl":
                     from .cl import Runner
                 else:
                     from .execute import Runner
-                self._surf = Runner(units, 1)
-            step = self.surface_batch[self.backend_used]
-            parts = [self._surf.at(xy[i:i + step], self.seed32, self.perm, want)
+                run = self._surf[be] = Runner(units, 1)
+            step = self.surface_batch[be]
+            parts = [run.at(xy[i:i + step], self.seed32, self.perm, want)
                      for i in range(0, len(xy), step)]
         f = {n: np.concatenate([p[n].reshape(-1) for p in parts]) if parts
              else np.zeros(0, np.int32) for n in want}

@@ -11,6 +11,7 @@ for chunks whose 3x3 did not change meanwhile (an edit raced us: done again late
 from __future__ import annotations
 
 import threading
+import weakref
 
 import numpy as np
 
@@ -27,9 +28,43 @@ def backends() -> tuple[str, str]:
     less CPU per chunk than the OpenCL sweeps here (1.1-1.5 vs 1.4-2.2 ms per kept
     chunk on 2 shared cores) and pocl builds the sweep kernels again for every new
     region shape (~1.5 s each), which streaming's varied rectangles keep hitting.
-    Meshing: OpenCL where present (~10x NumPy), else NumPy."""
+    Meshing: OpenCL where present (~10x NumPy) and not warming up (opencl.warm), else
+    NumPy."""
     from .. import opencl
-    return ("numpy", "opencl") if opencl.available() else ("numpy", "numpy")
+    return "numpy", opencl.pick(None)
+
+
+def warm(world) -> bool:
+    """Build and run once, in a background thread, the OpenCL kernels that streaming
+    WORLD wants (its generator's chunks, meshing), on a 3x3 of chunks at the origin;
+    until done, generation and meshing run NumPy (opencl.warm). Once per generator
+    (each has its own kernel objects: another world's would compile again); False
+    when nothing was started (no device, warmed already, another warm-up running).
+    Cold, on 2 busy cores: ~7 s for the generator, ~1 s meshing; not the far
+    surface's program (~1.5 s more before OpenCL takes over; the far ring is off by
+    default and builds it on first use)."""
+    from .. import meshing, opencl
+    g = world.generator
+    if g in _warmed:
+        return False
+
+    def job():
+        keys = keys_of(-1, -1, 2, 2)
+        if hasattr(g, "warm_opencl"):  # the world's own generator (its kernel objects)
+            arrays = g.warm_opencl(keys)
+        else:
+            arrays = g.generate(keys)
+        blocks = C.paste(zip(keys, arrays), -1, -1, 2, 2)
+        with CL_LOCK:
+            meshing.build_chunks(blocks[15:-15, 15:-15], (0, 0), backend="opencl")
+
+    started = opencl.warm(job)
+    if started:
+        _warmed.add(g)
+    return started
+
+
+_warmed: weakref.WeakSet = weakref.WeakSet()  # generators warm-up has run for
 
 
 def keys_of(cx0: int, cy0: int, cx1: int, cy1: int) -> list[tuple[int, int]]:

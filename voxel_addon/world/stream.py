@@ -29,10 +29,13 @@ from collections import deque
 
 import numpy as np
 
+from .. import opencl
 from ..core.errors import VoxelError
 from . import build
 
 NEAR = 6  # chunks: closer than this, work in half tiles (first payloads sooner)
+FIRST = 2  # ... and closer than this in quarter tiles: the first picture of a fresh
+# install comes from NumPy while OpenCL builds (2 x 2 chunks: ~0.5 s against ~1.5 s)
 MAINTAIN_S = 1.0  # seconds between keep-alive/unload/compact sweeps for one view
 
 
@@ -47,7 +50,9 @@ class Stream:
         self.distance = int(distance)
         self.tile = int(tile)
         self.margin = int(margin)
-        self.backends = backends or build.backends()
+        # None: build.backends() per batch, so the first batches run NumPy while an
+        # OpenCL warm-up (build.warm) builds the kernels
+        self.backends = backends
         # Two workers: while one waits on OpenCL (one queue: generation, meshing) the
         # other lights on the CPU (bench world: stream_view32_s per worker count).
         self._worker_backends = [self.backends] * max(1, int(workers))
@@ -62,6 +67,8 @@ class Stream:
         self._drawn: set = set()
         self._busy: set = set()     # keys a worker is doing now
         self._stop = False
+        self.first_at = None        # time.monotonic() of the first payload queued
+        self.first_backends = None  # (light, meshing) of the first batch made
         self._kept = (None, 0.0)  # view chunk and time of the last full _maintain
         self._area = (None, [])   # (view chunk, distance) and the keys in range
         world.streams.add(self)
@@ -171,9 +178,16 @@ class Stream:
                         and self.world.pver.get(p.key) == p.version:
                     self._emitted[p.key] = p.version
                     self._ready.append(p)
+                    if self.first_at is None:
+                        self.first_at = time.monotonic()
             # no wake-up: current payloads add no work (a worker's own job wakes the
             # others when it ends), and woken workers rescanning every key would take
             # the GIL from the editing thread (edit latency x2 at distance 32)
+
+    @property
+    def queued(self) -> int:
+        """Payloads waiting for the consumer's drain (no lock: a deque's length)."""
+        return len(self._ready)
 
     def wait_ready(self, timeout: float = 60.0) -> bool:
         """Block until every wanted chunk has a payload (tests, bench, CLI)."""
@@ -221,8 +235,9 @@ class Stream:
                 em, busy = dict(self._emitted), set(self._busy)
             job = self._next(cx, cy, d, em, busy)
             if job is not None:
-                with self._lock:  # another worker may have claimed some meanwhile
-                    job = [k for k in job if k not in self._busy]
+                with self._lock:  # another worker may have claimed or done some meanwhile
+                    em, pv = self._emitted.get, self.world.pver.get
+                    job = [k for k in job if k not in self._busy and em(k, -1) != pv(k, -2)]
                     self._busy.update(job)
                     if not job:
                         continue
@@ -242,7 +257,7 @@ class Stream:
             if job is None:
                 with self._lock:
                     if self._changes == seen and not self._stop:
-                        self._wake.wait(0.5)
+                        self._wake.wait(0.05 if opencl.warming() else 0.5)
 
     def _pending(self, cx, cy, em, busy):
         """Keys in range without a current payload, not being done."""
@@ -271,7 +286,12 @@ class Stream:
             far = u > 0
             u[far] *= 1.5 - 0.5 * (vx[far] * d[0] + vy[far] * d[1]) / u[far]  # behind: x2
         i = int(np.argmin(u))
-        t = max(1, self.tile // 2) if u[i] < NEAR else self.tile
+        if u[i] >= FIRST and self.backends is None and opencl.warming():
+            # the OpenCL kernels still build: NumPy made the first picture (the chunks
+            # next to the view); more NumPy now would take the CPU from the build and
+            # leave big NumPy batches in flight when it ends: the whole view came later
+            return None
+        t = max(1, self.tile // (4 if u[i] < FIRST else 2)) if u[i] < NEAR else self.tile
         r = self.distance
         tx, ty = _tiling(cx - r, cx + r, t)(p[:, 0]), _tiling(cy - r, cy + r, t)(p[:, 1])
         return [pending[j] for j in np.flatnonzero((tx == tx[i]) & (ty == ty[i])).tolist()]
@@ -282,8 +302,11 @@ class Stream:
         rest = {k for k in keys} - {p.key for p in done}
         if rest:
             xs, ys = [k[0] for k in rest], [k[1] for k in rest]
+            backends = backends or build.backends()
             done += build.light_and_mesh(world, min(xs), min(ys), max(xs) + 1, max(ys) + 1,
                                          backends_=backends)
+            if done and self.first_backends is None:
+                self.first_backends = backends
         with world.locked():  # compact now: _maintain's sweep over all chunks is throttled
             for p in done:
                 c = world.chunks.get(p.key)

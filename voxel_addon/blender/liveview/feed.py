@@ -9,8 +9,12 @@ import math
 class Feed:
     def __init__(self, path, world, distance):
         from ...world import Stream
+        from ...world.build import warm
         self.path, self.world, self.distance = path, world, distance
         self.chunks: dict = {}   # key -> Payload (.key, .mesh, .light, .version)
+        # a fresh install's first OpenCL builds take 10-20 s (2 cores): the first
+        # chunks come from NumPy meanwhile, OpenCL takes over once built (issue 28)
+        warm(world)
         self.stream = Stream(world, distance)
         self.wanted = 0          # chunks the stream means to show
         self.far = 0             # far distance (chunks; 0: no far ring)

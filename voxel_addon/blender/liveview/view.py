@@ -44,6 +44,7 @@ from .options import hours_of, settings_of, view_camera
 DRAFT_SCALE = 0.5    # draft frames render at this fraction of the region's size
 STILL_S = 0.25       # the view is still this long after its last change: full quality
 BUDGET_S = 0.004     # CPU time per redraw for taking in streamed chunks
+POLL_S = 0.05        # while loading: how often to look for new payloads between redraws
 KEPT_MAX = 8         # kept frames per window (one per region; quad view has four)
 
 
@@ -160,6 +161,13 @@ class LiveView:
         self._tick_fn, self._tick_ui_fn = self._tick, self._tick_ui  # (one object each)
 
     # ------------------------------------------------------------------ status
+    @staticmethod
+    def warming() -> bool:
+        """Whether OpenCL kernels are being built in the background (chunks come from
+        NumPy meanwhile: world.build.warm)."""
+        from ... import opencl
+        return opencl.warming()
+
     def problem(self, context) -> str | None:
         """Why the view cannot run here, as one sentence, or None."""
         import os
@@ -283,8 +291,11 @@ class LiveView:
                                  t_sub * 1e3))
         st.quality = q
         if drawn < S["wanted"] or (loading and not feed.far_loading):
-            # as long again as the frame took: the worker gets at least half the time
-            self._want_redraw(max(0.05, ms / 1e3))
+            # as long again as the frame took: the worker gets at least half the time;
+            # and only once it has handed something new (_tick): a frame holds the GIL
+            # throughout (~0.3 s on llvmpipe) and one without new chunks only slows
+            # the NumPy workers of a fresh install (issue 28)
+            self._want_redraw(max(0.05, ms / 1e3), news=True)
         elif loading:  # only far tiles to come: their builder needs the GIL more than we
             self._want_redraw(max(0.5, 4 * ms / 1e3))
         elif draft and vv.quality == "auto":  # once the view is still: a full frame
@@ -315,11 +326,24 @@ class LiveView:
             self.panes.pop(w).release()
 
     # ------------------------------------------------------------------ redraws
-    def _want_redraw(self, after: float) -> None:
+    def _want_redraw(self, after: float, news: bool = False) -> None:
+        """A redraw AFTER seconds; news: not before the stream has new payloads (or an
+        error) for us, checked every POLL_S."""
         import bpy
+        self._news = news
         if not self._timer_on:
             self._timer_on = True
             bpy.app.timers.register(self._tick_fn, first_interval=after)
+
+    _news = False
+
+    def _nothing_new(self) -> bool:
+        f = self.feed
+        if not self._news or f is None or f.stream.error is not None:
+            return False
+        if any(len(p.versions) < len(f.chunks) for p in self.panes.values()):
+            return False  # a window has not drawn all we hold yet
+        return not f.stream.queued
 
     def _panel_redraw(self) -> None:
         import bpy
@@ -340,6 +364,8 @@ class LiveView:
 
     def _tick(self):
         """Redraw while chunks stream in or a region still shows a draft frame."""
+        if self._nothing_new():
+            return POLL_S  # (the timer stays on)
         self._timer_on = False
         redraw()
         return None

@@ -8,8 +8,13 @@ import bpy
 def _target(world) -> tuple[float, float] | None:
     """The origin, or the middle of the generated chunks when the origin's is not one
     of them (a world generated elsewhere); None: the origin."""
-    keys = world.file.chunk_keys()
-    if not keys or (0, 0) in set(keys):
+    keys = set(world.file.chunk_keys())
+    # the origin's chunk made but not in the file yet counts too (in memory, or evicted
+    # and being written): which of the live view's chunks reached the file first is
+    # a matter of timing
+    with world.locked():
+        made = (0, 0) in world.chunks or (0, 0) in getattr(world, "_saving", ())
+    if not keys or made or (0, 0) in keys:
         return None
     xs, ys = zip(*keys)
     return ((min(xs) + max(xs) + 1) * 8.0, (min(ys) + max(ys) + 1) * 8.0)

@@ -80,6 +80,14 @@ def camera_of(obj):
     return Camera(p.x, p.y, p.z, yaw, pitch), math.degrees(obj.data.angle_y)
 
 
+def chunks_line(st: dict) -> str:
+    """The View panel's progress line from LIVE.stats: "loading…" until every wanted
+    chunk was drawn in a frame, and while no chunk is wanted yet (the stream not
+    started: 0 / 0 is not a finished view of sky)."""
+    done = st["wanted"] > 0 and st["drawn"] >= st["wanted"]
+    return f"chunks {st['drawn']} / {st['wanted']}" + ("" if done else "  loading…")
+
+
 class VOXEL_OT_render_view(bpy.types.Operator):
     bl_idname = "voxel.render_view"
     bl_label = "Render Voxel View"
@@ -148,8 +156,9 @@ class VOXEL_PT_view(bpy.types.Panel):
                 col.label(text=problem, icon="ERROR")
             else:
                 st = LIVE.stats
-                col.label(text=f"chunks {st['drawn']} / {st['wanted']}"
-                          + ("  loading…" if st["drawn"] < st["wanted"] else ""))
+                col.label(text=chunks_line(st))
+                if LIVE.warming():
+                    col.label(text="building OpenCL kernels (NumPy meanwhile)")
                 if v.far:
                     col.label(text=f"far tiles {st['far_drawn']} / {st['far_wanted']}")
                 col.label(text=f"last frame {st['ms']:.0f} ms ({st['quality']})")

@@ -117,6 +117,8 @@ def backend_line(backend: str | None = None) -> tuple:
     text = BACKEND_NAMES.get(backend, backend)
     if backend == "numpy" and opencl.why_not():
         text += ", no OpenCL"
+    elif backend == "numpy" and opencl.warming():
+        text += " until OpenCL is built"
     return ("info", "Generates with", text)
 
 

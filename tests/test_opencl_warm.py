@@ -1,0 +1,64 @@
+"""opencl.warm: kernels built in a background thread while the default backend is
+NumPy (issue 28: a fresh install's first picture does not wait for pocl)."""
+from __future__ import annotations
+
+import threading
+
+import pytest
+
+from voxel_addon import opencl
+
+
+@pytest.fixture
+def fresh(monkeypatch, cl_device):
+    """A process that has not warmed up yet (warm runs once per process)."""
+    monkeypatch.setattr(opencl, "_warm", dict.fromkeys(opencl._warm))  # never warmed
+
+
+def test_numpy_until_the_warm_up_ends_then_opencl(fresh):
+    from voxel_addon.generation import make_generator
+    gen = make_generator("overworld", 7)          # made before: decides per batch
+    gate, ran = threading.Event(), []
+    assert opencl.pick(None) == gen.backend_used == "opencl"
+    assert opencl.warm(lambda: ran.append(gate.wait(30)))
+    assert not opencl.warm(lambda: None)          # one at a time
+    assert opencl.warming() and opencl.pick(None) == "numpy" == gen.backend_used
+    assert opencl.pick("opencl") == "opencl"      # asked for by name: the warm-up's own
+    assert make_generator("overworld", 7, None, "opencl").backend_used == "opencl"
+    gate.set()
+    opencl._warm["thread"].join(30)
+    assert ran == [True] and not opencl.warming()
+    assert opencl.pick(None) == gen.backend_used == "opencl"
+    st = opencl.warm_state()
+    assert st["started"] and not st["running"] and st["took"] > 0 and st["error"] is None
+
+
+def test_a_failing_warm_up_is_kept_and_opencl_used_after(fresh):
+    def bad():
+        raise RuntimeError("build failed")
+    assert opencl.warm(bad)
+    opencl._warm["thread"].join(30)
+    assert opencl.warm_state()["error"] == "RuntimeError: build failed"
+    assert opencl.pick(None) == "opencl"
+
+
+def test_no_warm_up_without_a_device(monkeypatch):
+    monkeypatch.setattr(opencl, "_warm", dict.fromkeys(opencl._warm))  # never warmed
+    monkeypatch.setenv(opencl.SWITCH, "0")
+    assert not opencl.warm(lambda: None) and not opencl.warm_state()["started"]
+    assert opencl.pick(None) == "numpy"
+
+
+def test_a_generators_warm_up_runs_its_own_kernels_and_equals_numpy(fresh):
+    """PassGenerator.warm_opencl: OpenCL with the generator's own kernel objects (pocl
+    compiles again per kernel object), whatever the default; the NumPy twin's blocks."""
+    import numpy as np
+    from voxel_addon.generation import make_generator
+    gen = make_generator("overworld", 7)
+    keys = [(3, -2), (4, -2)]
+    assert opencl.warm(lambda: None)
+    opencl._warm["thread"].join(30)
+    got = gen.warm_opencl(keys)
+    assert gen._runner is not None  # the runner the default backend uses next
+    ref = make_generator("overworld", 7, None, "numpy").generate(keys)
+    assert all(np.array_equal(a, b) for a, b in zip(got, ref))

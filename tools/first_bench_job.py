@@ -1,0 +1,69 @@
+"""Blender side of the first-minute rows of voxel_addon/bench/viewport.py (there it is
+only a path): runs in the real Blender GUI under Xvfb, started as a script.
+
+    blender --factory-startup -P tools/first_bench_job.py -- OUT.json WORLD DISTANCE
+
+WORLD is a new, empty world file; the bench starts Blender with an empty kernel cache
+(POCL_CACHE_DIR, PYOPENCL_CACHE_DIR), as a fresh install has. The view looks at the
+origin from above; Show is ticked: seconds until a frame drew chunks and until every
+wanted chunk was drawn, with the OpenCL warm-up's time (issue 28).
+"""
+from __future__ import annotations
+
+import importlib.util
+import sys
+import time
+from pathlib import Path
+
+import bpy
+
+ROOT = Path(__file__).resolve().parents[1]
+_spec = importlib.util.spec_from_file_location("viewport_bench_job",
+                                               ROOT / "tools" / "viewport_bench_job.py")
+V = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(V)  # (its start() runs only as __main__)
+R: dict = {}
+
+
+def run(world: str, distance: int):
+    import voxel_addon
+    from voxel_addon import opencl
+    from voxel_addon.blender.liveview import LIVE
+    if not hasattr(bpy.types.Scene, "voxel_view"):
+        voxel_addon.register()
+    sc = bpy.context.scene
+    sc.voxel.path = world
+    vv = sc.voxel_view
+    vv.distance, vv.hours, vv.quality = distance, 12.0, "auto"
+    V.look(-44.0)
+    yield 0.5
+    t0 = time.perf_counter()
+    vv.show = True
+    first = None
+    while True:
+        V.area().tag_redraw()
+        s = LIVE.stats
+        if first is None and s["drawn"] > 0:
+            first = time.perf_counter() - t0
+            R["warming_at_first"] = opencl.warming()
+        if first is not None and s["drawn"] >= s["wanted"] > 0:
+            break
+        if LIVE.error:
+            raise RuntimeError(LIVE.error)
+        if time.perf_counter() - t0 > 600:
+            raise RuntimeError(f"no whole view after 600 s: {s}")
+        yield 0.02
+    R["first_s"], R["whole_s"], R["chunks"] = first, time.perf_counter() - t0, s["wanted"]
+    R["frames"] = [[round(f.ms), f.drawn, f.quality] for f in LIVE.frames]  # (diagnosis)
+    while opencl.warming():
+        yield 0.1
+    R["warm"] = opencl.warm_state()
+    R["blender"] = bpy.app.version_string
+    import gpu
+    R["backend"] = gpu.platform.backend_type_get()
+    vv.show = False
+
+
+if __name__ == "__main__":
+    args = sys.argv[sys.argv.index("--") + 1:]
+    V.drive(V.report(run(args[1], int(args[2])), R, Path(args[0])))

@@ -71,7 +71,7 @@ def run(args):
     hours = daytime.parse_time(hhmm or "12:00")
     if not 0 <= cam_args[2] <= 400:
         raise VoxelError("camera z must be between 0 and 400")
-    far_meshes = []
+    far_meshes, models = [], None
     if args.scene:
         data = source.scene_area(args.scene)
         sea = source.scene_sea_level(args.scene)
@@ -81,6 +81,7 @@ def run(args):
         try:
             data = source.world_area(world, cam_args[0], cam_args[1], s.distance,
                                      s.light_radius)
+            models = _models(world, data)
             if s.far:
                 from ..far import ring
                 far_meshes = ring(world.file, world.generator, cam_args[0], cam_args[1],
@@ -92,6 +93,8 @@ def run(args):
         s.sea_level = sea
     ctx = mgl.context()
     r = Renderer(ctx, s)
+    if models is not None:
+        r.set_models(*models)
     r.set_area(data.blocks, data.light, data.cx0, data.cy0, ring=True, method=args.aggregation,
                light_at=data.light_at, data=data.data)
     if data.palette is not None:
@@ -108,3 +111,32 @@ def run(args):
     print(f"{args.out}: {w}x{h}, {st['triangles']} triangles, {st['draw_calls']} draw calls")
     r.release()
     ctx.release()
+
+
+def _models(world, data):
+    """(model quads, sprites) of the area's Minecraft voxels that the world's resource
+    stack knows (issue 30), or None (no stack: today's look). The voxels they draw
+    become air in data.blocks (light was solved with them), as the bake leaves them
+    out of the greedy path."""
+    import numpy as np
+    from ..bake import models as MD
+    x0, y0 = data.cx0 * 16 - 1, data.cy0 * 16 - 1      # the blocks' one-voxel ring
+    blocks = data.blocks
+    md, note = MD.of_world(world, x0, y0, x0 + blocks.shape[0], y0 + blocks.shape[1],
+                           blocks, data.data)
+    if note:
+        print(note)
+    if md is None:
+        return None
+    m = MD.mesh(md, blocks, (x0, y0, 0))
+    if not m.quads:
+        return None
+    ring = ((m.voxel[:, 0] == 0) | (m.voxel[:, 1] == 0) | (m.voxel[:, 0] == blocks.shape[0] - 1)
+            | (m.voxel[:, 1] == blocks.shape[1] - 1))
+    blocks[m.drawn] = 0
+    m = m.subset(~ring)
+    images = []
+    for sid in m.sprites:
+        t = md.res.texture(sid)
+        images.append(t.rgba if t is not None else np.full((16, 16, 4), 255, np.uint8))
+    return m, images

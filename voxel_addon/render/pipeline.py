@@ -21,6 +21,7 @@ from .far import FarRing, near_edge
 from .device import Device
 from .frame import FrameBlock
 from .geometry import PASSES, Geometry, Stats
+from .models import NAMES as MODEL_PASSES, Models
 from .lightvol import LightVolume
 from .settings import Settings
 from .targets import Shape, Targets
@@ -40,6 +41,7 @@ class Renderer:
         self.geo = Geometry(dev)
         self.vol = LightVolume(dev, 1)  # nothing resident yet: open daylight everywhere
         self.blocks = BlockTextures(dev)
+        self.models = Models(dev)    # Minecraft model quads with the stack's sprites
         self.walls = Walls(dev)
         self.edges: dict = {}        # (cx, cy) -> its border columns' heights (walls.edges)
         self._walls_dirty = True
@@ -137,6 +139,14 @@ class Renderer:
         tint, indexed by the meshes' per-vertex colour (meshing.ChunkMesh.colors)."""
         if self.blocks.set_palette(rgb):
             self._graphs.clear()
+
+    def set_models(self, mesh, images) -> None:
+        """Minecraft model quads to draw instead of those shown (mcres.mesh.Mesh by duck
+        typing, in world voxels; None: none) and their sprites' RGBA images (top row
+        first, indexed by the mesh's `sprite`). The greedy meshes should leave the
+        voxels they draw out."""
+        self.models.set(mesh, images)
+        self._graphs.clear()
 
     def set_meshes(self, meshes: dict) -> None:
         """{(cx, cy): meshing.ChunkMesh} to draw instead of what was shown; the light
@@ -260,8 +270,11 @@ class Renderer:
         shaded = s.debug in graph.SHADED
         shadows = bool(s.shadows and (shaded or s.debug == "light") and sp["light_dir"][2] > 0.02)
         vis = geo.cull(cull_vp)
-        view = geo.batches(vis, PASSES)
-        seen = view.get("blend") is not None
+        view = dict(geo.batches(vis, PASSES))  # (a copy: the geometry caches its own)
+        models = bool(self.models.chunks)
+        if models:
+            view.update(self.models.batches(MODEL_PASSES))
+        seen = view.get("blend") is not None or view.get("m_blend") is not None
         use_oit = seen and s.transparency == "oit"  # one forward pass instead (oit.py)
         layers = s.peel_layers if seen and not use_oit else 0
         ssao = s.ssao and shaded
@@ -270,11 +283,11 @@ class Renderer:
         dof = s.dof and s.debug == "none" and not camera.ortho  # parallel rays: no blur
         T = self._targets(w, h, (layers, ssao, dof, shadows))
         sw = graph.Switches(T.samples, s.debug, shadows, layers, ssao, gods, dof, s.smooth_mag,
-                            s.msaa_alpha, s.per_sample, s.fog, s.fill_holes, use_oit)
+                            s.msaa_alpha, s.per_sample, s.fog, s.fill_holes, use_oit, models)
         G = self._graphs.get(sw)
         if G is None:
             G = self._graphs[sw] = graph.build(self.dev, T, sw, self.blocks, self.vol.tex,
-                                               self.walls.tex)
+                                               self.walls.tex, self.models.tex)
 
         F = self.frame
         fog_end = (s.distance + 0.5) * 16.0  # thick by the nearest edge of the shown area
@@ -296,7 +309,10 @@ class Renderer:
                                                s.shadow_fade, s.shadow_size)
             F.set(shadow_vp=light_vp, shadow_mat=shadow.BIAS @ light_vp, shadow_texel=texel,
                   shadow_bias=bias)
-            cast = geo.batches(geo.cull(light_vp), G.shadow.names, "shadow")
+            cast = geo.batches(geo.cull(light_vp), [n for n in G.shadow.names if n in PASSES],
+                               "shadow")
+            if models:
+                cast = {**cast, **self.models.batches(G.shadow.names)}
         for k in ("zenith", "horizon", "halo", "disc"):  # debug views: black where no surface
             F.set(**{f"sky_{k}": sp[k] if shaded else (0.0, 0.0, 0.0)})
         F.set(**sky_values(s, sp, hours, shaded, camera, self.area, h,
@@ -338,6 +354,7 @@ class Renderer:
     def release(self):
         self._release_targets()
         self.geo.release()
+        self.models.clear()
         self.vol.release()
         self.walls.release()
         self.blocks.release()

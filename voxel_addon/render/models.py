@@ -1,0 +1,130 @@
+"""Minecraft model quads (issue 30 d) on the device: the stack's sprites as one more
+texture array (blocktex.py's layout: 16x16 and its mip chain side by side, rows
+bottom first) and per chunk one triangle mesh per layer (solid, cutout, translucent),
+drawn by block.vert/frag with MODEL into the passes "m_opaque", "m_cutout" and
+"m_blend" beside the greedy ones. The quads come by duck typing (mcres.mesh.Mesh:
+positions, uvs, normals, sprite, tint, layer); this module never reads a stack.
+
+Vertex (uvec4): x, y in 1/1024 and z in 1/8192 of a block from the chunk's corner
+minus 16 (an overlay 1/512 off its base stays apart), the sprite (10 bits), uv (11
+bits each, v up as the texture rows), the normal (octahedral, 5 bits a side) and the
+tint (sRGB, 8 bits a channel)."""
+from __future__ import annotations
+
+import numpy as np
+
+NAMES = ("m_opaque", "m_cutout", "m_blend")   # per mcres layer (solid, cutout, translucent)
+MAX_SPRITES = 1024
+
+
+def sprite_array(images) -> np.ndarray:
+    """(n, 16, 32, 4) uint8 layers of (h, w, 4) RGBA sprites (top row first; larger
+    ones box-filtered to 16, smaller ones repeated)."""
+    from .. import textures
+    n = max(len(images), 1)
+    base = np.zeros((n, 16, 16, 4), np.uint8)
+    for i, im in enumerate(images):
+        a = np.asarray(im, np.uint8)
+        h, w = a.shape[:2]
+        if h >= 16 and w >= 16 and h % 16 == 0 and w % 16 == 0:
+            a = a.reshape(16, h // 16, 16, w // 16, 4).astype(np.float32).mean((1, 3))
+        else:
+            a = a[np.arange(16) * h // 16][:, np.arange(16) * w // 16]
+        base[i] = np.rint(a)[::-1]          # rows bottom first, as the device takes them
+    atlas = np.zeros((n, 16, 32, 4), np.uint8)
+    for lvl, a in enumerate(textures.mipmaps(base)):
+        s, x = 16 >> lvl, 32 - (32 >> lvl)
+        atlas[:, :s, x:x + s] = a
+    return atlas
+
+
+def _oct(n: np.ndarray) -> np.ndarray:
+    """Octahedral encoding of unit normals, 5 bits a side (0, 15, 30: -1, 0, 1)."""
+    n = n / np.maximum(np.abs(n).sum(1, keepdims=True), 1e-9)
+    e = n[:, :2].copy()
+    low = n[:, 2] < 0
+    e[low] = (1 - np.abs(n[low][:, [1, 0]])) * np.where(n[low, :2] >= 0, 1, -1)
+    q = np.clip(np.rint((e * 0.5 + 0.5) * 30), 0, 30).astype(np.uint32)
+    return q[:, 0] | q[:, 1] << 5
+
+
+def words(m, keep: np.ndarray, corner) -> tuple[np.ndarray, np.ndarray]:
+    """(vertices (4k, 4) uint32, indices (6k,) uint32) of the quads where KEEP."""
+    v4 = np.repeat(keep, 4)
+    p = m.positions[v4].astype(np.float64) - np.asarray(corner, np.float64) + 16.0
+    if len(p) and (p.min() < 0 or p[:, :2].max() >= 64 or p[:, 2].max() >= 512):
+        raise ValueError("a model quad lies outside its chunk's reach")
+    q = np.rint(p * (1024, 1024, 8192)).astype(np.uint32)
+    uv = m.uvs[v4].astype(np.float64)
+    uv[:, 1] = 1.0 - uv[:, 1]                       # Minecraft's v runs down the sprite
+    u = np.rint(np.clip(uv, 0, 1) * 2047).astype(np.uint32)
+    sp = np.repeat(np.maximum(m.sprite[keep], 0), 4).astype(np.uint32)
+    t = np.repeat(m.tint[keep].astype(np.uint32), 4, axis=0)
+    w = np.empty((len(p), 4), np.uint32)
+    w[:, 0] = np.minimum(q[:, 0], 65535) | np.minimum(q[:, 1], 65535) << 16
+    w[:, 1] = q[:, 2] | sp << 22
+    w[:, 2] = u[:, 0] | u[:, 1] << 11 | _oct(m.normals[v4].astype(np.float64)) << 22
+    w[:, 3] = t[:, 0] | t[:, 1] << 8 | t[:, 2] << 16
+    k = len(p) // 4
+    idx = (np.arange(k, dtype=np.uint32)[:, None] * 4 + np.array([0, 1, 2, 0, 2, 3], np.uint32))
+    return w, idx.reshape(-1)
+
+
+class Models:
+    """The shown chunks' model meshes and the sprites' texture."""
+
+    def __init__(self, dev):
+        self.dev = dev
+        self.tex = None
+        self.chunks: dict = {}    # (cx, cy) -> [trimesh or None per layer]
+        self.tris: dict = {}      # (cx, cy) -> [triangles per layer]
+
+    def set(self, mesh, images) -> None:
+        """Show MESH (model quads in world voxels) with its sprites' IMAGES instead
+        of what was shown (None: nothing)."""
+        self.clear()
+        if mesh is None or not mesh.quads:
+            return
+        if len(images) > MAX_SPRITES:
+            raise ValueError(f"more than {MAX_SPRITES} model sprites")
+        self.tex = self.dev.texture((32, 16), "rgba8", layers=max(len(images), 1),
+                                    data=sprite_array(images))
+        vox = np.floor(m_centres(mesh) / 16).astype(np.int64)
+        for key in {(int(a), int(b)) for a, b in vox[:, :2]}:
+            inside = (vox[:, 0] == key[0]) & (vox[:, 1] == key[1])
+            row, tris = [], []
+            for li in range(len(NAMES)):
+                keep = inside & (mesh.layer == li)
+                if not keep.any():
+                    row.append(None)
+                    tris.append(0)
+                    continue
+                w, idx = words(mesh, keep, (key[0] * 16, key[1] * 16, 0))
+                row.append(self.dev.trimesh(w, idx))
+                tris.append(len(idx) // 3)
+            self.chunks[key] = row
+            self.tris[key] = tris
+
+    def batches(self, names) -> dict:
+        """{pass name: [(trimesh, -1, triangles, origin)] or None} (not culled)."""
+        out = {}
+        for n in names:
+            if n not in NAMES:
+                continue
+            li = NAMES.index(n)
+            out[n] = [(row[li], -1, self.tris[k][li], (k[0] * 16.0, k[1] * 16.0, 0.0, 0.0))
+                      for k, row in self.chunks.items() if row[li] is not None] or None
+        return out
+
+    def clear(self) -> None:
+        for row in self.chunks.values():
+            self.dev.release(*row)
+        self.chunks, self.tris = {}, {}
+        if self.tex is not None:
+            self.dev.release(self.tex)
+            self.tex = None
+
+
+def m_centres(mesh) -> np.ndarray:
+    """Per quad the centre of its four corners."""
+    return mesh.positions.reshape(-1, 4, 3).mean(1)

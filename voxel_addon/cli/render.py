@@ -93,10 +93,10 @@ def run(args):
         s.sea_level = sea
     ctx = mgl.context()
     r = Renderer(ctx, s)
-    if models is not None:
-        r.set_models(*models)
     r.set_area(data.blocks, data.light, data.cx0, data.cy0, ring=True, method=args.aggregation,
                light_at=data.light_at, data=data.data)
+    if models:
+        r.set_models(models)
     if data.palette is not None:
         r.set_palette(data.palette)
     r.update_far(far_meshes)
@@ -114,29 +114,8 @@ def run(args):
 
 
 def _models(world, data):
-    """(model quads, sprites) of the area's Minecraft voxels that the world's resource
-    stack knows (issue 30), or None (no stack: today's look). The voxels they draw
-    become air in data.blocks (light was solved with them), as the bake leaves them
-    out of the greedy path."""
-    import numpy as np
-    from ..bake import models as MD
-    x0, y0 = data.cx0 * 16 - 1, data.cy0 * 16 - 1      # the blocks' one-voxel ring
-    blocks = data.blocks
-    md, note = MD.of_world(world, x0, y0, x0 + blocks.shape[0], y0 + blocks.shape[1],
-                           blocks, data.data)
-    if note:
-        print(note)
-    if md is None:
-        return None
-    m = MD.mesh(md, blocks, (x0, y0, 0))
-    if not m.quads:
-        return None
-    ring = ((m.voxel[:, 0] == 0) | (m.voxel[:, 1] == 0) | (m.voxel[:, 0] == blocks.shape[0] - 1)
-            | (m.voxel[:, 1] == blocks.shape[1] - 1))
-    blocks[m.drawn] = 0
-    m = m.subset(~ring)
-    images = []
-    for sid in m.sprites:
-        t = md.res.texture(sid)
-        images.append(t.rgba if t is not None else np.full((16, 16, 4), 255, np.uint8))
-    return m, images
+    """{key: the chunk's Minecraft model quads} of the area's voxels that the world's
+    resource stack knows (world/models.py; {} without one): the voxels they draw
+    become air in data.blocks (its light was solved with them)."""
+    from ..world import models
+    return models.build(world, data.blocks, data.data, data.cx0, data.cy0)

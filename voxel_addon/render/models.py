@@ -71,39 +71,73 @@ def words(m, keep: np.ndarray, corner) -> tuple[np.ndarray, np.ndarray]:
 
 
 class Models:
-    """The shown chunks' model meshes and the sprites' texture."""
+    """The shown chunks' model meshes and one texture of every sprite they have used
+    (a sprite keeps its layer while the renderer lives; new ones make the texture
+    again at the next frame: `commit`)."""
 
     def __init__(self, dev):
         self.dev = dev
         self.tex = None
         self.chunks: dict = {}    # (cx, cy) -> [trimesh or None per layer]
         self.tris: dict = {}      # (cx, cy) -> [triangles per layer]
+        self.layer: dict = {}     # sprite id -> layer of the texture
+        self.images: list = []    # per layer its RGBA (top row first)
+        self._stale = False
 
-    def set(self, mesh, images) -> None:
-        """Show MESH (model quads in world voxels) with its sprites' IMAGES instead
-        of what was shown (None: nothing)."""
-        self.clear()
-        if mesh is None or not mesh.quads:
-            return
-        if len(images) > MAX_SPRITES:
-            raise ValueError(f"more than {MAX_SPRITES} model sprites")
-        self.tex = self.dev.texture((32, 16), "rgba8", layers=max(len(images), 1),
-                                    data=sprite_array(images))
-        vox = np.floor(m_centres(mesh) / 16).astype(np.int64)
-        for key in {(int(a), int(b)) for a, b in vox[:, :2]}:
-            inside = (vox[:, 0] == key[0]) & (vox[:, 1] == key[1])
-            row, tris = [], []
-            for li in range(len(NAMES)):
-                keep = inside & (mesh.layer == li)
-                if not keep.any():
-                    row.append(None)
-                    tris.append(0)
-                    continue
-                w, idx = words(mesh, keep, (key[0] * 16, key[1] * 16, 0))
-                row.append(self.dev.trimesh(w, idx))
-                tris.append(len(idx) // 3)
-            self.chunks[key] = row
-            self.tris[key] = tris
+    def update(self, items: dict) -> None:
+        """{(cx, cy): the chunk's models (.mesh: mcres.mesh.Mesh in world voxels, .images:
+        {sprite id: RGBA}) or None (none)}."""
+        for key, cm in items.items():
+            key = (int(key[0]), int(key[1]))
+            self.remove([key])
+            if cm is None or not cm.mesh.quads:
+                continue
+            self._add(key, cm.mesh, cm.images, np.ones(cm.mesh.quads, bool))
+
+    def _add(self, key, mesh, images: dict, inside) -> None:
+        remap = np.zeros(len(mesh.sprites) + 1, np.int64)   # (-1, unset: the last, 0)
+        for i, sid in enumerate(mesh.sprites):
+            j = self.layer.get(sid)
+            if j is None:
+                if len(self.images) >= MAX_SPRITES:
+                    j = 0                      # (a pack past the limit: its first sprite)
+                else:
+                    j = self.layer[sid] = len(self.images)
+                    self.images.append(images[sid])
+                    self._stale = True
+            remap[i] = j
+        g = _Remapped(mesh, remap[mesh.sprite])
+        row, tris = [], []
+        for li in range(len(NAMES)):
+            keep = inside & (mesh.layer == li)
+            if not keep.any():
+                row.append(None)
+                tris.append(0)
+                continue
+            w, idx = words(g, keep, (key[0] * 16, key[1] * 16, 0))
+            row.append(self.dev.trimesh(w, idx))
+            tris.append(len(idx) // 3)
+        self.chunks[key] = row
+        self.tris[key] = tris
+
+    def remove(self, keys) -> None:
+        for k in keys:
+            row = self.chunks.pop((int(k[0]), int(k[1])), None)
+            if row is not None:
+                self.dev.release(*row)
+                del self.tris[(int(k[0]), int(k[1]))]
+
+    def commit(self) -> bool:
+        """Make the sprites' texture again if new ones came; returns whether it did
+        (the passes that bind it are made again)."""
+        if not self._stale:
+            return False
+        old = self.tex
+        self.tex = self.dev.texture((32, 16), "rgba8", layers=max(len(self.images), 1),
+                                    data=sprite_array(self.images))
+        self.dev.release(old)
+        self._stale = False
+        return True
 
     def batches(self, names) -> dict:
         """{pass name: [(trimesh, -1, triangles, origin)] or None} (not culled)."""
@@ -117,14 +151,14 @@ class Models:
         return out
 
     def clear(self) -> None:
-        for row in self.chunks.values():
-            self.dev.release(*row)
-        self.chunks, self.tris = {}, {}
-        if self.tex is not None:
-            self.dev.release(self.tex)
-            self.tex = None
+        self.remove(list(self.chunks))
+        self.dev.release(self.tex)
+        self.tex, self.layer, self.images, self._stale = None, {}, [], False
 
 
-def m_centres(mesh) -> np.ndarray:
-    """Per quad the centre of its four corners."""
-    return mesh.positions.reshape(-1, 4, 3).mean(1)
+class _Remapped:
+    """A mesh with its sprites as layers of the texture."""
+
+    def __init__(self, mesh, sprite):
+        self.positions, self.uvs, self.normals = mesh.positions, mesh.uvs, mesh.normals
+        self.tint, self.layer, self.sprite = mesh.tint, mesh.layer, sprite

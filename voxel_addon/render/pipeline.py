@@ -69,7 +69,7 @@ class Renderer:
         core.chunk.pack_layers of it: kept so, a third of the memory). Only these are
         uploaded: their batches are built again, their light goes into the volume once
         the light window (around the camera, prepare) needs it."""
-        meshes = {}
+        meshes, models = {}, {}
         for p in payloads:
             k = (int(p.key[0]), int(p.key[1]))
             light = p.light
@@ -77,9 +77,11 @@ class Renderer:
             if light is not None and tuple(shape) != (16, 16, 256):
                 raise ValueError(f"chunk {k}: light must be (16, 16, 256), got {shape}")
             meshes[k] = p.mesh
+            models[k] = getattr(p.mesh, "models", None)   # (world/models.py)
             self.lights[k] = light
             self.vol.forget(k)
         self.geo.update(meshes)
+        self.models.update(models)
         self._edges(meshes)
         self._shown()
 
@@ -87,6 +89,7 @@ class Renderer:
         """Stop showing these chunks (unknown keys are ignored); nothing else moves."""
         keys = [(int(k[0]), int(k[1])) for k in keys]
         self.geo.remove(keys)
+        self.models.remove(keys)
         for k in keys:
             self.lights.pop(k, None)
             self.edges.pop(k, None)
@@ -140,19 +143,20 @@ class Renderer:
         if self.blocks.set_palette(rgb):
             self._graphs.clear()
 
-    def set_models(self, mesh, images) -> None:
-        """Minecraft model quads to draw instead of those shown (mcres.mesh.Mesh by duck
-        typing, in world voxels; None: none) and their sprites' RGBA images (top row
-        first, indexed by the mesh's `sprite`). The greedy meshes should leave the
-        voxels they draw out."""
-        self.models.set(mesh, images)
-        self._graphs.clear()
+    def set_models(self, models: dict) -> None:
+        """Minecraft model quads to draw instead of those shown: {(cx, cy): .mesh
+        (mcres.mesh.Mesh by duck typing, world voxels), .images ({sprite id: RGBA, top
+        row first})}, as world/models.py makes them; after set_area (whose meshes
+        carry none). The greedy meshes should leave the voxels they draw out."""
+        self.models.remove(list(self.models.chunks))
+        self.models.update(models)
 
     def set_meshes(self, meshes: dict) -> None:
         """{(cx, cy): meshing.ChunkMesh} to draw instead of what was shown; the light
         known for chunks that stay is kept (set_light)."""
         self.remove_chunks([k for k in self.geo.keys if k not in meshes])
         self.geo.update(meshes)
+        self.models.update({k: getattr(m, "models", None) for k, m in meshes.items()})
         self._edges(meshes)
         self._shown()
 
@@ -260,6 +264,8 @@ class Renderer:
             self._walls_dirty = False
         geo = self.geo
         geo.commit()
+        if self.models.commit():  # new sprites: a new texture, bound by new passes
+            self._graphs.clear()
         # (the sky in steps of 15 s of the day: a dragged slider reuses the cached table)
         sp = sky.params(round(hours * 240.0) / 240.0, s.exposure)
         vp, inv_vp = cull_vp, _ = camera.matrices()

@@ -71,7 +71,7 @@ def run(args):
     hours = daytime.parse_time(hhmm or "12:00")
     if not 0 <= cam_args[2] <= 400:
         raise VoxelError("camera z must be between 0 and 400")
-    far_meshes, models = [], None
+    far_meshes = []
     if args.scene:
         data = source.scene_area(args.scene)
         sea = source.scene_sea_level(args.scene)
@@ -81,7 +81,6 @@ def run(args):
         try:
             data = source.world_area(world, cam_args[0], cam_args[1], s.distance,
                                      s.light_radius)
-            models = _models(world, data)
             if s.far:
                 from ..far import ring
                 far_meshes = ring(world.file, world.generator, cam_args[0], cam_args[1],
@@ -95,8 +94,8 @@ def run(args):
     r = Renderer(ctx, s)
     r.set_area(data.blocks, data.light, data.cx0, data.cy0, ring=True, method=args.aggregation,
                light_at=data.light_at, data=data.data)
-    if models:
-        r.set_models(models)
+    if data.models:
+        r.set_models(data.models)
     if data.palette is not None:
         r.set_palette(data.palette)
     r.update_far(far_meshes)
@@ -112,10 +111,3 @@ def run(args):
     r.release()
     ctx.release()
 
-
-def _models(world, data):
-    """{key: the chunk's Minecraft model quads} of the area's voxels that the world's
-    resource stack knows (world/models.py; {} without one): the voxels they draw
-    become air in data.blocks (its light was solved with them)."""
-    from ..world import models
-    return models.build(world, data.blocks, data.data, data.cx0, data.cy0)

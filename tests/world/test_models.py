@@ -89,6 +89,12 @@ def test_the_renderer_draws_payload_models(worlds):
             r = Renderer(ctx)
             r.update_chunks(got)
             imgs[name] = r.render(Camera(14, -18, 69, 120, -30), 12.0, (160, 100)).astype(int)
+            if name == "with":    # culled per chunk: none drawn looking away from the build
+                from voxel_addon.render.models import NAMES
+                cam = Camera(14, -18, 69, 120, -30).fitted(1.6, 70.0, 300.0)
+                assert r.models.batches(NAMES, cam.matrices()[0])["m_opaque"]
+                away = Camera(14, 30, 69, 0, 0).fitted(1.6, 70.0, 300.0)
+                assert not any(r.models.batches(NAMES, away.matrices()[0]).values())
             r.release()
     finally:
         ctx.release()

@@ -80,6 +80,7 @@ class Models:
         self.tex = None
         self.chunks: dict = {}    # (cx, cy) -> [trimesh or None per layer]
         self.tris: dict = {}      # (cx, cy) -> [triangles per layer]
+        self.zs: dict = {}        # (cx, cy) -> (lowest, highest) z of its quads
         self.layer: dict = {}     # sprite id -> layer of the texture
         self.images: list = []    # per layer its RGBA (top row first)
         self._stale = False
@@ -119,13 +120,15 @@ class Models:
             tris.append(len(idx) // 3)
         self.chunks[key] = row
         self.tris[key] = tris
+        z = mesh.positions[np.repeat(inside, 4), 2]
+        self.zs[key] = (float(z.min()), float(z.max()))
 
     def remove(self, keys) -> None:
         for k in keys:
             row = self.chunks.pop((int(k[0]), int(k[1])), None)
             if row is not None:
                 self.dev.release(*row)
-                del self.tris[(int(k[0]), int(k[1]))]
+                del self.tris[(int(k[0]), int(k[1]))], self.zs[(int(k[0]), int(k[1]))]
 
     def commit(self) -> bool:
         """Make the sprites' texture again if new ones came; returns whether it did
@@ -139,15 +142,25 @@ class Models:
         self._stale = False
         return True
 
-    def batches(self, names) -> dict:
-        """{pass name: [(trimesh, -1, triangles, origin)] or None} (not culled)."""
+    def batches(self, names, mvp) -> dict:
+        """{pass name: [(trimesh, -1, triangles, origin)] or None}: the chunks whose
+        quads' box may be inside the clip volume of MVP."""
+        from . import camera
+        keys = list(self.chunks)
+        if keys:
+            k = np.array(keys, np.float64)
+            zs = np.array([self.zs[c] for c in keys])
+            lo = np.c_[k * 16, zs[:, :1]] - 0.5
+            hi = np.c_[k * 16 + 16, zs[:, 1:]] + 0.5
+            seen = camera.visible_boxes(mvp, camera.boxes(lo, hi))
+            keys = [c for c, v in zip(keys, seen) if v]
         out = {}
         for n in names:
             if n not in NAMES:
                 continue
             li = NAMES.index(n)
-            out[n] = [(row[li], -1, self.tris[k][li], (k[0] * 16.0, k[1] * 16.0, 0.0, 0.0))
-                      for k, row in self.chunks.items() if row[li] is not None] or None
+            out[n] = [(self.chunks[c][li], -1, self.tris[c][li], (c[0] * 16.0, c[1] * 16.0, 0.0, 0.0))
+                      for c in keys if self.chunks[c][li] is not None] or None
         return out
 
     def clear(self) -> None:

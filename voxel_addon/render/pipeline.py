@@ -279,7 +279,7 @@ class Renderer:
         view = dict(geo.batches(vis, PASSES))  # (a copy: the geometry caches its own)
         models = bool(self.models.chunks)
         if models:
-            view.update(self.models.batches(MODEL_PASSES))
+            view.update(self.models.batches(MODEL_PASSES, cull_vp))
         seen = view.get("blend") is not None or view.get("m_blend") is not None
         use_oit = seen and s.transparency == "oit"  # one forward pass instead (oit.py)
         layers = s.peel_layers if seen and not use_oit else 0
@@ -318,7 +318,7 @@ class Renderer:
             cast = geo.batches(geo.cull(light_vp), [n for n in G.shadow.names if n in PASSES],
                                "shadow")
             if models:
-                cast = {**cast, **self.models.batches(G.shadow.names)}
+                cast = {**cast, **self.models.batches(G.shadow.names, light_vp)}
         for k in ("zenith", "horizon", "halo", "disc"):  # debug views: black where no surface
             F.set(**{f"sky_{k}": sp[k] if shaded else (0.0, 0.0, 0.0)})
         F.set(**sky_values(s, sp, hours, shaded, camera, self.area, h,

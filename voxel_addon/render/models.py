@@ -175,3 +175,22 @@ class _Remapped:
     def __init__(self, mesh, sprite):
         self.positions, self.uvs, self.normals = mesh.positions, mesh.uvs, mesh.normals
         self.tint, self.layer, self.sprite = mesh.tint, mesh.layer, sprite
+
+
+def edges(cm, key) -> np.ndarray:
+    """(4, 16) uint16 as walls.edges: the height of a chunk's border columns from
+    its model quads that face up (a model stone floor stands on the area's wall too)."""
+    out = np.zeros((4, 16), np.uint16)
+    if cm is None or not cm.mesh.quads:
+        return out
+    m = cm.mesh
+    up = m.normals[::4, 2] > 0.5
+    c = m.positions.reshape(-1, 4, 3).mean(1)[up]
+    x = np.floor(c[:, 0]).astype(np.int64) - 16 * key[0]
+    y = np.floor(c[:, 1]).astype(np.int64) - 16 * key[1]
+    top = np.ceil(c[:, 2]).astype(np.int64)
+    ok = (x >= 0) & (x < 16) & (y >= 0) & (y < 16)
+    x, y, top = x[ok], y[ok], top[ok]
+    for row, on, at in ((0, x == 0, y), (1, x == 15, y), (2, y == 0, x), (3, y == 15, x)):
+        np.maximum.at(out[row], at[on], top[on].astype(np.uint16))
+    return out

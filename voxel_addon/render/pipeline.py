@@ -21,7 +21,7 @@ from .far import FarRing, near_edge
 from .device import Device
 from .frame import FrameBlock
 from .geometry import PASSES, Geometry, Stats
-from .models import NAMES as MODEL_PASSES, Models
+from .models import NAMES as MODEL_PASSES, Models, edges as model_edges
 from .lightvol import LightVolume
 from .settings import Settings
 from .targets import Shape, Targets
@@ -150,6 +150,11 @@ class Renderer:
         carry none). The greedy meshes should leave the voxels they draw out."""
         self.models.remove(list(self.models.chunks))
         self.models.update(models)
+        for k, cm in models.items():   # (their tops stand on the area's wall too)
+            k = (int(k[0]), int(k[1]))
+            if k in self.edges:
+                self.edges[k] = np.maximum(self.edges[k], model_edges(cm, k))
+        self._walls_dirty = True
 
     def set_meshes(self, meshes: dict) -> None:
         """{(cx, cy): meshing.ChunkMesh} to draw instead of what was shown; the light
@@ -187,7 +192,10 @@ class Renderer:
 
     def _edges(self, meshes: dict) -> None:
         for k, m in meshes.items():
-            self.edges[(int(k[0]), int(k[1]))] = walls.edges(m)
+            k = (int(k[0]), int(k[1]))
+            e = walls.edges(m)
+            cm = getattr(m, "models", None)
+            self.edges[k] = e if cm is None else np.maximum(e, model_edges(cm, k))
 
     def _sync_light(self, camera) -> None:
         """The light window (Settings.light_radius chunks around the camera's chunk,

@@ -152,7 +152,7 @@ GUI_TESTS = "tests/gui"
 # the newest Blender on OpenGL (CI time: see README, Tests).
 GUI_EVERYWHERE = ["tests/gui/test_viewport.py", "tests/gui/test_edit_tool.py",
                   "tests/gui/test_first_minute.py", "tests/gui/test_installed.py"]
-GUI_VULKAN = GUI_EVERYWHERE[:3]
+GUI_VULKAN = GUI_EVERYWHERE[:3] + ["tests/gui/test_minecraft_stack_view.py"]
 
 
 def _blender_facing(app, user: Path, **extra) -> tuple[list, dict]:

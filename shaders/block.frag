@@ -16,6 +16,7 @@
 #endif
 
 //@ sampler sampler2DArray tex       // per layer the mip chain side by side (texel())
+//@ sampler sampler2DArray mc_tex    if MODEL  // the resource stack's sprites, laid out as tex
 //@ sampler sampler2DArray glow_tex  // 16x16 per layer: the mask times its blocks' glow
 //@ sampler sampler2D palette        // the world's colours, 256 a row (`color` blocks)
 //@ sampler gdepth2D opaque_depth   if PEEL
@@ -30,10 +31,15 @@
 // (level l, 16 >> l wide, at x = 32 - (32 >> l)); the texel index wraps (merged quads
 // repeat the texture), and GL's NEAREST_MIPMAP_LINEAR is done here: the level from the
 // derivatives, the nearest texel in the two levels around it, blended.
+#ifdef MODEL
+#define SPRITES mc_tex
+#else
+#define SPRITES tex
+#endif
 vec4 level_texel(vec2 t, int l) {  // t: level-0 texel coordinates
     int size = 16 >> l;
     ivec2 i = ivec2(floor(t / float(1 << l))) & (size - 1);  // (two's complement: wraps)
-    return texelFetch(tex, ivec3(i.x + 32 - (32 >> l), i.y, int(g_layer)), 0);
+    return texelFetch(SPRITES, ivec3(i.x + 32 - (32 >> l), i.y, int(g_layer)), 0);
 }
 
 vec4 texel(vec2 uv) {
@@ -93,12 +99,19 @@ void main() {
     if (c.a < 0.5) discard;
     c.a = 1.0;
 #endif
+#ifdef MODEL
+    c.rgb *= g_tint;  // (the game multiplies the encoded colour)
+#endif
     if (g_color != 0u)  // a `color` block: its texture tinted by the palette colour
         c.rgb *= texelFetch(palette, ivec2(int(g_color & 255u), int(g_color >> 8)), 0).rgb;
 #ifndef SHADOW
     vec3 n = gl_FrontFacing ? g_normal : -g_normal;  // double-sided passes
     ivec2 gi = ivec2(floor(g_uv * 16.0)) & 15;  // nearest, repeated
+#ifdef MODEL
+    float glow = 0.0;  // (its block's light is in the light volume)
+#else
     float glow = texelFetch(glow_tex, ivec3(gi, int(g_layer)), 0).r;  // (mask x block glow)
+#endif
 #if defined(PEEL) && PEEL == 1
     if (glow > 0.999 && water_fx) {  // water (blocktex.py's mark), the nearest layer
         float d = FETCH(opaque_depth, pc, gl_SampleID).r;

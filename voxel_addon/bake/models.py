@@ -11,7 +11,6 @@ cutout → alpha_test, translucent → blend).
 """
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 
 import numpy as np
@@ -40,40 +39,20 @@ def of_world(world, x0, y0, x1, y1, blocks, data) -> tuple[Models | None, str]:
     from ..storage import minecraft as mcfile
     meta = world.file.meta
     try:
-        paths = json.loads(meta.get(mcfile.RESOURCES) or "null")
-        palette = json.loads(meta.get(mcfile.STATES) or "[]")
-        cstates = {int(k): int(v) for k, v in json.loads(meta.get(mcfile.COLOR_STATES) or "{}").items()}
-        y_min = int(meta.get(mcfile.Y_MIN) or -64)
-    except (ValueError, TypeError, AttributeError):
+        got = mcfile.kept(meta)
+    except ValueError:
         return None, "the world's Minecraft states (meta) are damaged: today's look"
-    if not paths or not palette or data is None:
+    if got is None or data is None:
         return None, ""
+    paths, palette, cstates, y_min = got
     from ..mcres import Resources, Stack
     try:
         res = Resources(Stack.open(paths))
     except VoxelError as e:
         return None, f"resource stack not read ({e}): today's look"
-    state = np.where(blocks == 0, 0, data).astype(np.int32)
-    if cstates:
-        cmap = np.zeros(max(cstates) + 1, np.int32)
-        cmap[list(cstates)] = list(cstates.values())
-        col = blocks == COLOR
-        state[col] = np.where(data[col] < len(cmap), cmap[np.minimum(data[col], len(cmap) - 1)], 0)
-    else:
-        state[blocks == COLOR] = 0
-    state[state >= len(palette)] = 0
+    state = mcfile.states(blocks, data, palette, cstates, COLOR)
     names = mcfile.names(meta) or ["minecraft:plains"]
-    biomes = np.zeros(blocks.shape[:2], np.uint8)
-    for cy in range(y0 >> 4, ((y1 - 1) >> 4) + 1):
-        for cx in range(x0 >> 4, ((x1 - 1) >> 4) + 1):
-            b = mcfile.read(world.file, (cx, cy))
-            if b is None:
-                continue
-            ax, ay = max(cx * 16, x0), max(cy * 16, y0)
-            bx, by = min(cx * 16 + 16, x1), min(cy * 16 + 16, y1)
-            biomes[ax - x0:bx - x0, ay - y0:by - y0] = \
-                b[ax - cx * 16:bx - cx * 16, ay - cy * 16:by - cy * 16]
-    biomes = np.minimum(biomes, len(names) - 1)
+    biomes = mcfile.region(world.file, x0, y0, x1, y1, len(names))
     return Models(res, palette, state, biomes, names, y_min), ""
 
 

@@ -170,6 +170,7 @@ def frame_png(shot, shared) -> bytes:
                 far = ring(world.file, world.generator, cam.x, cam.y, s.far, s.distance)
         r.set_area(a.blocks, a.light, a.cx0, a.cy0, ring=True, method="greedy",
                    light_at=a.light_at, data=a.data)
+        r.set_models(a.models or {})
         if a.palette is not None:
             r.set_palette(a.palette)
         r.remove_far(list(r.far.tiles))

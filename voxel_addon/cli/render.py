@@ -94,6 +94,8 @@ def run(args):
     r = Renderer(ctx, s)
     r.set_area(data.blocks, data.light, data.cx0, data.cy0, ring=True, method=args.aggregation,
                light_at=data.light_at, data=data.data)
+    if data.models:
+        r.set_models(data.models)
     if data.palette is not None:
         r.set_palette(data.palette)
     r.update_far(far_meshes)
@@ -108,3 +110,4 @@ def run(args):
     print(f"{args.out}: {w}x{h}, {st['triangles']} triangles, {st['draw_calls']} draw calls")
     r.release()
     ctx.release()
+

@@ -103,6 +103,7 @@ class ChunkMesh:
     quads: np.ndarray      # the QUAD list, in vertex order (debug views, counts)
     colors: np.ndarray | None = None  # (V,) uint16 palette index per vertex (the `color`
     # block; core.colors), None when the chunk has none: the packed vertex has no bits left
+    models: object = None  # Minecraft model quads drawn beside (world/models.py), or None
 
 
 def _check_region(region_h):

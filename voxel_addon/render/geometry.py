@@ -229,6 +229,10 @@ def draw(dev, batches, stats: "Stats | None" = None, shadow: bool = False) -> No
     tris = 0
     for mesh, first, n, origin in batches:
         dev.push({"batch_origin": origin})
+        if first < 0:             # a triangle mesh of model quads (models.py): n triangles
+            dev.draw_tris(mesh)
+            tris += n
+            continue
         dev.draw(mesh, first, n)
         tris += 2 * n
     if stats is not None:

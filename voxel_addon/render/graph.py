@@ -39,6 +39,7 @@ class Switches:
     fog: bool
     fill_holes: bool
     oit: bool
+    models: bool = False  # Minecraft model quads shown (models.py): their passes too
 
 
 class Graph:
@@ -50,7 +51,7 @@ class Graph:
                 if x is not None for p in x.programs()]
 
 
-def build(dev, T, sw: Switches, blocks, vol, walls) -> Graph:
+def build(dev, T, sw: Switches, blocks, vol, walls, sprites=None) -> Graph:
     """T: targets.Targets (with what sw needs), blocks: blocktex.BlockTextures, vol:
     the light volume's texture, walls: the border columns' heights (walls.py)."""
     ms, dbg = sw.samples, DEBUG_DEFINE[sw.debug]
@@ -60,6 +61,11 @@ def build(dev, T, sw: Switches, blocks, vol, walls) -> Graph:
          "FOG": sw.fog and sw.debug == "none", "DEBUG": dbg}
     parts = [("opaque", {}), ("cutout", cut), ("cutout2", cut)]
     tex = blocks.bindings()
+    blend = [("blend", {})]
+    if sw.models:  # the stack's model quads: solid, cutout and translucent (models.py)
+        parts += [("m_opaque", {"MODEL": 1}), ("m_cutout", {**cut, "MODEL": 1})]
+        blend.append(("m_blend", {"MODEL": 1}))
+        tex = {**tex, "mc_tex": sprites}
 
     def block(defines):
         return dev.program("block.vert", "block.frag", defines)
@@ -74,7 +80,8 @@ def build(dev, T, sw: Switches, blocks, vol, walls) -> Graph:
 
     G = Graph()
     G.shadow = GeometryPass(dev, T.shadow_fb, [
-        (n, block({"SHADOW": 1, "ALPHA_TEST": n != "opaque"})) for n, _ in parts],
+        (n, block({"SHADOW": 1, "ALPHA_TEST": n != "opaque" and n != "m_opaque",
+                   "MODEL": n.startswith("m_")})) for n, _ in parts],
         DEPTH_LESS, **tex) if sw.shadows else None
     G.g = GeometryPass(dev, T.g.target, [(n, block({**g, **x})) for n, x in parts], DEPTH_LESS,
                        **tex)
@@ -82,7 +89,7 @@ def build(dev, T, sw: Switches, blocks, vol, walls) -> Graph:
                    clear=True, wall_tops=walls, tex=tex["tex"], **gbuf(T.g))
     if sw.oit:  # resolved into layer 0: the composite blends it as one peel layer
         G.transparency = oit.OIT(
-            GeometryPass(dev, T.oit_fb, [("blend", block({**g, **d, "OIT": 1}))],
+            GeometryPass(dev, T.oit_fb, [(n, block({**g, **d, **x, "OIT": 1})) for n, x in blend],
                          State("less", False, False, "add"),
                          light_vol=vol, **tex, **sm),
             Pass(dev, T.layer_fb[0], full("oit_resolve.frag", {"SAMPLES": ms}),
@@ -90,7 +97,7 @@ def build(dev, T, sw: Switches, blocks, vol, walls) -> Graph:
     else:  # no blending, the nearest remaining layer each time
         layer = full("deferred.frag", {**d, "LAYER": 1}) if sw.layers else None
         G.transparency = Peel(
-            [GeometryPass(dev, p.target, [("blend", block({**g, "PEEL": i + 1}))],
+            [GeometryPass(dev, p.target, [(n, block({**g, **x, "PEEL": i + 1})) for n, x in blend],
                           State("less", True, False), opaque_depth=T.g.depth,
                           prev_depth=T.peel[i - 1].depth if i else T.g.depth, **tex)
              for i, p in enumerate(T.peel[:sw.layers])],

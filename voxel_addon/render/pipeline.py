@@ -21,6 +21,7 @@ from .far import FarRing, near_edge
 from .device import Device
 from .frame import FrameBlock
 from .geometry import PASSES, Geometry, Stats
+from .models import NAMES as MODEL_PASSES, Models, edges as model_edges
 from .lightvol import LightVolume
 from .settings import Settings
 from .targets import Shape, Targets
@@ -40,6 +41,7 @@ class Renderer:
         self.geo = Geometry(dev)
         self.vol = LightVolume(dev, 1)  # nothing resident yet: open daylight everywhere
         self.blocks = BlockTextures(dev)
+        self.models = Models(dev)    # Minecraft model quads with the stack's sprites
         self.walls = Walls(dev)
         self.edges: dict = {}        # (cx, cy) -> its border columns' heights (walls.edges)
         self._walls_dirty = True
@@ -67,7 +69,7 @@ class Renderer:
         core.chunk.pack_layers of it: kept so, a third of the memory). Only these are
         uploaded: their batches are built again, their light goes into the volume once
         the light window (around the camera, prepare) needs it."""
-        meshes = {}
+        meshes, models = {}, {}
         for p in payloads:
             k = (int(p.key[0]), int(p.key[1]))
             light = p.light
@@ -75,9 +77,11 @@ class Renderer:
             if light is not None and tuple(shape) != (16, 16, 256):
                 raise ValueError(f"chunk {k}: light must be (16, 16, 256), got {shape}")
             meshes[k] = p.mesh
+            models[k] = getattr(p.mesh, "models", None)   # (world/models.py)
             self.lights[k] = light
             self.vol.forget(k)
         self.geo.update(meshes)
+        self.models.update(models)
         self._edges(meshes)
         self._shown()
 
@@ -85,6 +89,7 @@ class Renderer:
         """Stop showing these chunks (unknown keys are ignored); nothing else moves."""
         keys = [(int(k[0]), int(k[1])) for k in keys]
         self.geo.remove(keys)
+        self.models.remove(keys)
         for k in keys:
             self.lights.pop(k, None)
             self.edges.pop(k, None)
@@ -138,11 +143,25 @@ class Renderer:
         if self.blocks.set_palette(rgb):
             self._graphs.clear()
 
+    def set_models(self, models: dict) -> None:
+        """Minecraft model quads to draw instead of those shown: {(cx, cy): .mesh
+        (mcres.mesh.Mesh by duck typing, world voxels), .images ({sprite id: RGBA, top
+        row first})}, as world/models.py makes them; after set_area (whose meshes
+        carry none). The greedy meshes should leave the voxels they draw out."""
+        self.models.remove(list(self.models.chunks))
+        self.models.update(models)
+        for k, cm in models.items():   # (their tops stand on the area's wall too)
+            k = (int(k[0]), int(k[1]))
+            if k in self.edges:
+                self.edges[k] = np.maximum(self.edges[k], model_edges(cm, k))
+        self._walls_dirty = True
+
     def set_meshes(self, meshes: dict) -> None:
         """{(cx, cy): meshing.ChunkMesh} to draw instead of what was shown; the light
         known for chunks that stay is kept (set_light)."""
         self.remove_chunks([k for k in self.geo.keys if k not in meshes])
         self.geo.update(meshes)
+        self.models.update({k: getattr(m, "models", None) for k, m in meshes.items()})
         self._edges(meshes)
         self._shown()
 
@@ -173,7 +192,10 @@ class Renderer:
 
     def _edges(self, meshes: dict) -> None:
         for k, m in meshes.items():
-            self.edges[(int(k[0]), int(k[1]))] = walls.edges(m)
+            k = (int(k[0]), int(k[1]))
+            e = walls.edges(m)
+            cm = getattr(m, "models", None)
+            self.edges[k] = e if cm is None else np.maximum(e, model_edges(cm, k))
 
     def _sync_light(self, camera) -> None:
         """The light window (Settings.light_radius chunks around the camera's chunk,
@@ -250,6 +272,8 @@ class Renderer:
             self._walls_dirty = False
         geo = self.geo
         geo.commit()
+        if self.models.commit():  # new sprites: a new texture, bound by new passes
+            self._graphs.clear()
         # (the sky in steps of 15 s of the day: a dragged slider reuses the cached table)
         sp = sky.params(round(hours * 240.0) / 240.0, s.exposure)
         vp, inv_vp = cull_vp, _ = camera.matrices()
@@ -260,8 +284,11 @@ class Renderer:
         shaded = s.debug in graph.SHADED
         shadows = bool(s.shadows and (shaded or s.debug == "light") and sp["light_dir"][2] > 0.02)
         vis = geo.cull(cull_vp)
-        view = geo.batches(vis, PASSES)
-        seen = view.get("blend") is not None
+        view = dict(geo.batches(vis, PASSES))  # (a copy: the geometry caches its own)
+        models = bool(self.models.chunks)
+        if models:
+            view.update(self.models.batches(MODEL_PASSES, cull_vp))
+        seen = view.get("blend") is not None or view.get("m_blend") is not None
         use_oit = seen and s.transparency == "oit"  # one forward pass instead (oit.py)
         layers = s.peel_layers if seen and not use_oit else 0
         ssao = s.ssao and shaded
@@ -270,11 +297,11 @@ class Renderer:
         dof = s.dof and s.debug == "none" and not camera.ortho  # parallel rays: no blur
         T = self._targets(w, h, (layers, ssao, dof, shadows))
         sw = graph.Switches(T.samples, s.debug, shadows, layers, ssao, gods, dof, s.smooth_mag,
-                            s.msaa_alpha, s.per_sample, s.fog, s.fill_holes, use_oit)
+                            s.msaa_alpha, s.per_sample, s.fog, s.fill_holes, use_oit, models)
         G = self._graphs.get(sw)
         if G is None:
             G = self._graphs[sw] = graph.build(self.dev, T, sw, self.blocks, self.vol.tex,
-                                               self.walls.tex)
+                                               self.walls.tex, self.models.tex)
 
         F = self.frame
         fog_end = (s.distance + 0.5) * 16.0  # thick by the nearest edge of the shown area
@@ -296,7 +323,10 @@ class Renderer:
                                                s.shadow_fade, s.shadow_size)
             F.set(shadow_vp=light_vp, shadow_mat=shadow.BIAS @ light_vp, shadow_texel=texel,
                   shadow_bias=bias)
-            cast = geo.batches(geo.cull(light_vp), G.shadow.names, "shadow")
+            cast = geo.batches(geo.cull(light_vp), [n for n in G.shadow.names if n in PASSES],
+                               "shadow")
+            if models:
+                cast = {**cast, **self.models.batches(G.shadow.names, light_vp)}
         for k in ("zenith", "horizon", "halo", "disc"):  # debug views: black where no surface
             F.set(**{f"sky_{k}": sp[k] if shaded else (0.0, 0.0, 0.0)})
         F.set(**sky_values(s, sp, hours, shaded, camera, self.area, h,
@@ -338,6 +368,7 @@ class Renderer:
     def release(self):
         self._release_targets()
         self.geo.release()
+        self.models.clear()
         self.vol.release()
         self.walls.release()
         self.blocks.release()

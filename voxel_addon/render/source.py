@@ -19,6 +19,7 @@ class Area(NamedTuple):
     light_at: tuple[int, int]
     data: np.ndarray | None = None     # the blocks' small data (the `color` block's colour)
     palette: np.ndarray | None = None  # the world's colours, (n, 3) uint8 (core.colors)
+    models: dict | None = None         # Minecraft model quads per chunk (Renderer.set_models)
 
 
 def sea_level(generator) -> int:
@@ -52,9 +53,14 @@ def world_area(world, x: float, y: float, distance: int, light_radius: int = 8) 
     lx0, ly0, lx1, ly1 = window((cx0, cy0, cx1, cy1), light_radius)
     i, j = 16 * (lx0 - cx0), 16 * (ly0 - cy0)  # wide starts one chunk before cx0
     light = lightmod.region_light(wide[i:i + 16 * (lx1 - lx0 + 2), j:j + 16 * (ly1 - ly0 + 2)])
-    return Area(np.asfortranarray(wide[15:-15, 15:-15]), light, cx0, cy0, (lx0, ly0),
-                None if data is None else np.asfortranarray(data[15:-15, 15:-15]),
-                world.colors() if hasattr(world, "colors") else None)
+    blocks = np.asfortranarray(wide[15:-15, 15:-15])
+    data = None if data is None else np.asfortranarray(data[15:-15, 15:-15])
+    # with a resource stack its model blocks (air for the mesher from here on, their
+    # light solved above): world.model_quads
+    quads = getattr(world, "model_quads", None)
+    models = quads(blocks, data, cx0, cy0) if quads is not None else None
+    return Area(blocks, light, cx0, cy0, (lx0, ly0), data,
+                world.colors() if hasattr(world, "colors") else None, models or None)
 
 
 def _small_data(world, cx0, cy0, cx1, cy1):

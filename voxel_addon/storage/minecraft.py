@@ -60,3 +60,50 @@ def read(wf, key) -> np.ndarray | None:
     if len(raw) != 256:
         return None
     return np.frombuffer(raw, np.uint8).reshape(16, 16, order="F")
+
+
+def kept(meta: dict):
+    """(stack paths, state palette, {colour index: state}, y_min) a Minecraft import
+    kept in META, or None where it kept no stack or no states; ValueError when damaged."""
+    try:
+        paths = json.loads(meta.get(RESOURCES) or "null")
+        palette = json.loads(meta.get(STATES) or "[]")
+        cstates = {int(k): int(v) for k, v in json.loads(meta.get(COLOR_STATES) or "{}").items()}
+        y_min = int(meta.get(Y_MIN) or -64)
+    except (ValueError, TypeError, AttributeError) as e:
+        raise ValueError(str(e)) from None
+    if not paths or not palette:
+        return None
+    return paths, palette, cstates, y_min
+
+
+def states(blocks: np.ndarray, data: np.ndarray, palette: list, cstates: dict,
+           color: int) -> np.ndarray:
+    """Per voxel its state index (0: none) from the blocks' small data: a `color`
+    voxel (block id COLOR) keeps its state in CSTATES by its colour index."""
+    state = np.where(blocks == 0, 0, data).astype(np.int32)
+    col = blocks == color
+    if cstates:
+        cmap = np.zeros(max(cstates) + 1, np.int32)
+        cmap[list(cstates)] = list(cstates.values())
+        state[col] = np.where(data[col] < len(cmap), cmap[np.minimum(data[col], len(cmap) - 1)], 0)
+    else:
+        state[col] = 0
+    state[state >= len(palette)] = 0
+    return state
+
+
+def region(wf, x0: int, y0: int, x1: int, y1: int, n: int) -> np.ndarray:
+    """(x1 - x0, y1 - y0) uint8 biome indices of a box of columns (0 where none
+    is kept), below N (the names)."""
+    biomes = np.zeros((x1 - x0, y1 - y0), np.uint8)
+    for cy in range(y0 >> 4, ((y1 - 1) >> 4) + 1):
+        for cx in range(x0 >> 4, ((x1 - 1) >> 4) + 1):
+            b = read(wf, (cx, cy))
+            if b is None:
+                continue
+            ax, ay = max(cx * 16, x0), max(cy * 16, y0)
+            bx, by = min(cx * 16 + 16, x1), min(cy * 16 + 16, y1)
+            biomes[ax - x0:bx - x0, ay - y0:by - y0] = \
+                b[ax - cx * 16:bx - cx * 16, ay - cy * 16:by - cy * 16]
+    return np.minimum(biomes, max(n - 1, 0))

@@ -16,6 +16,7 @@ import weakref
 import numpy as np
 
 from ..core import chunk as C
+from . import models as mcmodels
 from .payload import Payload
 
 # Kernel objects (light, meshing) are shared per process and are not re-entrant:
@@ -114,8 +115,15 @@ def light_and_mesh(world, cx0: int, cy0: int, cx1: int, cy1: int, *, backends_=N
                    for c in map(world.chunks.get, keys_of(cx0, cy0, cx1, cy1)))
     # one solve for the whole rectangle: its ring is the only overhead
     lit = _run(lb, light.region_light, blocks, tile=max(cx1 - cx0, cy1 - cy0)) if need else None
-    meshes = _run(mb, meshing.build_chunks, blocks[15:-15, 15:-15], (cx0, cy0),
+    inner = blocks[15:-15, 15:-15]
+    # Minecraft model blocks (with the world's resource stack): air for the mesher
+    models = mcmodels.build(world, inner, None if data is None else data[15:-15, 15:-15],
+                            cx0, cy0)
+    meshes = _run(mb, meshing.build_chunks, inner, (cx0, cy0),
                   data=None if data is None else data[15:-15, 15:-15])
+    for k, m in models.items():
+        if k in meshes:
+            meshes[k].models = m
     return store(world, cx0, cy0, cx1, cy1, lit, meshes, ticks)
 
 

@@ -34,7 +34,7 @@ from ..core import chunk as C
 from ..core.blocks import REGISTRY
 from ..core.errors import VoxelError
 from ..meshing import tint
-from . import build
+from . import build, models as mcmodels
 from .payload import Payload
 
 S = C.SIZE
@@ -306,6 +306,12 @@ def _remesh(world, blocks, last, win) -> set:
     whole = any(world.chunks.get(k) is not None and world.chunks[k].mesh is None
                 for k in remesh)
     regions = None if whole else (r0, r1)
+    models = {}
+    if mcmodels.stack(world) is not None:  # Minecraft model blocks: air for the mesher
+        gx, gy = x0 + i, y0 + j
+        small = data if data is not None else np.array(
+            _gather(world, gx, gy, gx + sub.shape[0], gy + sub.shape[1], "data"), order="F")
+        models = mcmodels.build(world, sub, small, rx0, ry0)
     meshes = _mesh(meshing, sub, (rx0, ry0), remesh, regions, data)
     out = set()
     for k in remesh:
@@ -313,7 +319,8 @@ def _remesh(world, blocks, last, win) -> set:
         if c is None or k in world.corrupt:
             continue
         m = meshes[k] if regions is None else meshing.splice(c.mesh, meshes[k], r0, r1)
-        if _same(c.mesh, m):
+        m.models = models.get(k)
+        if _same(c.mesh, m) and m.models is None and getattr(c.mesh, "models", None) is None:
             continue  # e.g. a hidden face stayed hidden: no new payload
         c.mesh = m
         out.add(k)

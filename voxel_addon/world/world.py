@@ -111,6 +111,12 @@ class World(Saving):
     def seed(self) -> int:
         return self.file.seed
 
+    def model_quads(self, blocks, data, cx0: int, cy0: int) -> dict:
+        """{key: Minecraft model quads} of an area's chunks with the world's resource
+        stack, their voxels set to air in BLOCKS (world/models.py; {} without one)."""
+        from . import models
+        return models.build(self, blocks, data, cx0, cy0)
+
     def colors(self):
         """The world's colour palette ((n, 3) uint8, core.colors): the `color` block's
         data indexes it (meshes carry the index per vertex, ChunkMesh.colors). Parsed

@@ -39,6 +39,7 @@ class Still:
                 a, method = self._area
                 self.r.set_area(a.blocks, a.light, a.cx0, a.cy0, ring=True, method=method,
                                 light_at=a.light_at, data=a.data)
+                self.r.set_models(getattr(a, "models", None) or {})
                 if a.palette is not None:
                     self.r.set_palette(a.palette)
                 self._area = None

@@ -1,0 +1,33 @@
+"""The live view of a Minecraft import with the world's resource stack (issue 30 d):
+model blocks with the stack's sprites (the test pack's poppy is one flat red cross),
+against the same build imported without a stack (today's look)."""
+from __future__ import annotations
+
+import numpy as np
+
+from tests.bake.test_minecraft import save_with_build
+from tests.mcres import packfiles as pf
+
+
+def _red(img, rect):
+    x, y, wd, ht = rect
+    h = img.shape[0]
+    v = img[h - (y + ht):h - y, x:x + wd].astype(int).reshape(-1, 3)
+    return int(((v[:, 0] > 60) & (v[:, 0] > 3 * v[:, 1]) & (v[:, 0] > 3 * v[:, 2])).sum())
+
+
+def test_model_blocks_in_the_live_view(gui, tmp_path):
+    from voxel_addon.cli import main
+    jar = pf.write(tmp_path / "client.jar", jar=True)
+    save = save_with_build(tmp_path)
+    worlds = {}
+    for name, extra in (("with", ["--resources", str(jar)]), ("without", [])):
+        worlds[name] = str(tmp_path / f"{name}.sqlite")
+        assert main(["import", "--world", worlds[name], "--from", str(save), *extra]) == 0
+    res = gui("minecraft_stack_view.py", timeout=400, **worlds)
+    r = res.result
+    for name in worlds:
+        st = r["status"][name]
+        assert st["error"] in (None, "") and st["drawn"] >= st["wanted"] > 0, st
+    red = {n: _red(res.image(n), r["rect"]) for n in worlds}
+    assert red["with"] > 200 and red["without"] < red["with"] / 4, red

@@ -1,0 +1,68 @@
+"""CLI renders of a Minecraft import with the world's resource stack (issue 30 d):
+model blocks (a stair, glass, a poppy, the pack's stone) drawn with the stack's
+sprites; a stack whose files are gone draws today's look, pixel for pixel the same
+as an import without one."""
+from __future__ import annotations
+
+import shutil
+
+import numpy as np
+import pytest
+
+from ..bake.test_minecraft import save_with_build
+from ..mcres import packfiles as pf
+
+CAMERA = ["14", "-18", "69", "120", "-30"]
+
+
+@pytest.fixture(scope="module")
+def worlds(tmp_path_factory):
+    from voxel_addon.cli import main
+    root = tmp_path_factory.mktemp("mcdraw")
+    jar = pf.write(root / "client.jar", jar=True)
+    save = save_with_build(root)
+    out = {}
+    for name, extra in (("with", ["--resources", str(jar)]), ("without", [])):
+        out[name] = root / f"{name}.sqlite"
+        assert main(["import", "--world", str(out[name]), "--from", str(save), *extra]) == 0
+    return out, jar
+
+
+def render(world, out):
+    from PIL import Image
+    from voxel_addon.cli import main
+    assert main(["render", "--world", str(world), "--camera", *CAMERA, "--distance", "1",
+                 "--size", "160", "100", "--out", str(out)]) == 0
+    return np.asarray(Image.open(out).convert("RGB")).astype(int)
+
+
+def red(img):
+    """Pixels of the pack's poppy (220, 30, 30) however lit."""
+    r, g, b = img[..., 0], img[..., 1], img[..., 2]
+    return (r > 60) & (r > 3 * g) & (r > 3 * b)
+
+
+def test_model_blocks_with_the_stacks_sprites(worlds, tmp_path):
+    (w, jar) = worlds
+    a = render(w["with"], tmp_path / "with.png")
+    b = render(w["without"], tmp_path / "without.png")
+    # the project's flowers are no solid red square; the pack's poppy is (a cross)
+    assert red(a).sum() > 20 and red(b).sum() < red(a).sum() / 4
+    # the pack's stone is one flat grey (120): the floor's texels lose their spread
+    floor = slice(60, 90), slice(40, 120)
+    assert a[floor].std() < b[floor].std()
+    assert np.abs(a - b).max(axis=2).astype(bool).mean() > 0.2
+
+
+def test_a_missing_stack_draws_todays_look(worlds, tmp_path):
+    (w, jar) = worlds
+    gone = tmp_path / "with.sqlite"
+    shutil.copy(w["with"], gone)
+    moved = jar.with_suffix(".away")
+    jar.rename(moved)
+    try:
+        a = render(gone, tmp_path / "gone.png")
+    finally:
+        moved.rename(jar)
+    b = render(w["without"], tmp_path / "without.png")
+    assert np.array_equal(a, b)

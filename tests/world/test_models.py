@@ -1,0 +1,105 @@
+"""Minecraft model quads in the world's payloads (issue 30 d, live view): with the
+world's resource stack a batch's chunks carry their model quads and the greedy mesh
+leaves those voxels out; an edit meshes them again; the renderer draws them from
+payloads."""
+from __future__ import annotations
+
+import shutil
+
+import numpy as np
+import pytest
+
+from voxel_addon.core.blocks import REGISTRY
+
+from ..bake.test_minecraft import save_with_build
+from ..mcres import packfiles as pf
+
+POPPY = (9, -10, 65)     # the build's poppy (Minecraft 9, 1, 9) in voxels
+KEY = (0, -1)
+
+
+@pytest.fixture(scope="module")
+def worlds(tmp_path_factory):
+    from voxel_addon.cli import main
+    root = tmp_path_factory.mktemp("mcworld")
+    jar = pf.write(root / "client.jar", jar=True)
+    save = save_with_build(root)
+    out = {}
+    for name, extra in (("with", ["--resources", str(jar)]), ("without", [])):
+        out[name] = root / f"{name}.sqlite"
+        assert main(["import", "--world", str(out[name]), "--from", str(save), *extra]) == 0
+    return out
+
+
+def payload(path):
+    from voxel_addon.world import World, build
+    with World.open(path, readonly=True, loader=False) as w:
+        return {p.key: p for p in build.light_and_mesh(w, -1, -2, 2, 1)}[KEY]
+
+
+def flowers(mesh):
+    q = mesh.quads
+    return int((q["block"] == REGISTRY.id("flowers")).sum())
+
+
+def inside(centres, voxel):
+    """Quads whose centre is inside the voxel (not on its sides)."""
+    return np.all(np.abs(centres - (np.asarray(voxel) + 0.5)) < 0.49, axis=1)
+
+
+def test_payloads_carry_model_quads(worlds):
+    p, q = payload(worlds["with"]), payload(worlds["without"])
+    assert q.mesh.models is None and flowers(q.mesh) > 0
+    m = p.mesh.models
+    assert m is not None and flowers(p.mesh) == 0          # the greedy path leaves it out
+    pos = m.mesh.positions.reshape(-1, 4, 3).mean(1)
+    poppy = inside(pos, POPPY)
+    assert poppy.any()
+    assert {m.mesh.sprites[i] for i in m.mesh.sprite[poppy].tolist()} == {"minecraft:block/poppy"}
+    assert set(m.images) == set(m.mesh.sprites)
+
+
+def test_an_edit_meshes_the_models_again(worlds, tmp_path):
+    from voxel_addon.world import World, build
+    from voxel_addon.world.edit import edit
+    path = tmp_path / "w.sqlite"
+    shutil.copy(worlds["with"], path)
+    with World.open(path, loader=False) as w:
+        build.light_and_mesh(w, -1, -2, 2, 1)
+        edit(w, (*POPPY, 0))
+        m = w.chunks[KEY].mesh.models
+        pos = m.mesh.positions.reshape(-1, 4, 3).mean(1)
+        assert m is not None and not inside(pos, POPPY).any()
+        assert "minecraft:block/oak_planks" in m.mesh.sprites      # the stair stays
+
+
+def test_the_renderer_draws_payload_models(worlds):
+    from voxel_addon.render import Camera
+    from voxel_addon.render.pipeline import Renderer
+    from voxel_addon.render.device import mgl
+    ps = {}
+    for name in ("with", "without"):
+        from voxel_addon.world import World, build
+        with World.open(worlds[name], readonly=True, loader=False) as w:
+            ps[name] = build.light_and_mesh(w, -1, -2, 2, 1)
+    imgs = {}
+    ctx = mgl.context()
+    try:
+        for name, got in ps.items():
+            r = Renderer(ctx)
+            r.update_chunks(got)
+            # the stone floor's top (z 64) stands on the area's wall, model or not
+            assert r.edges[KEY].max() == 65 and (r.edges[KEY] == 65).mean() > 0.9
+            imgs[name] = r.render(Camera(14, -18, 69, 120, -30), 12.0, (160, 100)).astype(int)
+            if name == "with":    # culled per chunk: none drawn looking away from the build
+                from voxel_addon.render.models import NAMES
+                cam = Camera(14, -18, 69, 120, -30).fitted(1.6, 70.0, 300.0)
+                assert r.models.batches(NAMES, cam.matrices()[0])["m_opaque"]
+                away = Camera(14, 30, 69, 0, 0).fitted(1.6, 70.0, 300.0)
+                assert not any(r.models.batches(NAMES, away.matrices()[0]).values())
+            r.release()
+    finally:
+        ctx.release()
+    red = {k: ((a[..., 0] > 60) & (a[..., 0] > 3 * a[..., 1]) & (a[..., 0] > 3 * a[..., 2])).sum()
+           for k, a in imgs.items()}
+    assert red["with"] > 20 and red["without"] < red["with"] / 4

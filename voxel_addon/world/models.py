@@ -1,0 +1,93 @@
+"""Minecraft model quads of the chunks a batch meshes (issue 30 d), for the live view:
+with the world's resource stack (meta `mc_resources`, storage/minecraft.py) every
+voxel whose kept state the stack knows becomes its model's quads (mcres.mesh) and
+air for the greedy mesher (its light was solved with it); each chunk's mesh carries
+its quads and their sprites (`ChunkMesh.models`). No stack, or one whose files are
+gone: None, today's look. The stack is read once per world."""
+from __future__ import annotations
+
+import threading
+import weakref
+from typing import NamedTuple
+
+import numpy as np
+
+from ..core import chunk as C
+from ..core.blocks import REGISTRY
+
+_STACKS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+_LOCK = threading.Lock()
+
+
+class ChunkModels(NamedTuple):
+    """A chunk's model quads (mcres.mesh.Mesh, world voxels) and {sprite id: (h, w, 4)
+    uint8 RGBA, top row first} of the sprites its `sprites` names."""
+    mesh: object
+    images: dict
+
+
+def stack(world):
+    """(Resources, palette, colour states, y_min, biome names) of the world, or None."""
+    with _LOCK:
+        if world in _STACKS:
+            return _STACKS[world]
+        from ..storage import minecraft as mcfile
+        got = None
+        try:
+            kept = mcfile.kept(world.file.meta)
+        except ValueError:
+            kept = None
+        if kept is not None:
+            from ..core.errors import VoxelError
+            from ..mcres import Resources, Stack
+            paths, palette, cstates, y_min = kept
+            try:
+                got = (Resources(Stack.open(paths)), palette, cstates, y_min,
+                       mcfile.names(world.file.meta) or ["minecraft:plains"])
+            except VoxelError:
+                got = None   # files gone: today's look (the bake says so, the view draws it)
+        _STACKS[world] = got
+        return got
+
+
+def build(world, blocks: np.ndarray, data, cx0: int, cy0: int) -> dict:
+    """{key: ChunkModels} of the chunks of BLOCKS ((16w + 2, 16h + 2, 256): chunks from
+    (cx0, cy0) and a one-voxel ring) and the voxels they draw set to air in BLOCKS;
+    {} without a stack."""
+    st = stack(world) if data is not None else None
+    if st is None:
+        return {}
+    from ..mcres import mesh as M
+    from ..storage import minecraft as mcfile
+    res, palette, cstates, y_min, names = st
+    x0, y0 = cx0 * C.SIZE - 1, cy0 * C.SIZE - 1
+    W, H = blocks.shape[:2]
+    state = mcfile.states(blocks, data, palette, cstates, REGISTRY.id("color"))
+    if not state.any():
+        return {}
+    biomes = mcfile.region(world.file, x0, y0, x0 + W, y0 + H, len(names))
+    opaque = (REGISTRY.shape[blocks] == 1) & (REGISTRY.render[blocks] == 1)
+    m = M.build(res, palette, state, opaque, origin=(x0, y0, 0), y_min=y_min,
+                biomes=biomes, biome_names=names)
+    blocks[m.drawn] = 0
+    out = {}
+    if not m.quads:
+        return out
+    ck = (m.voxel[:, :2] - 1) // C.SIZE          # the chunk (from cx0, cy0) of each quad
+    inside = (m.voxel[:, 0] > 0) & (m.voxel[:, 1] > 0) & (m.voxel[:, 0] < W - 1) \
+        & (m.voxel[:, 1] < H - 1)
+    for i, j in {(int(a), int(b)) for a, b in ck[inside]}:
+        sub = m.subset(inside & (ck[:, 0] == i) & (ck[:, 1] == j))
+        used = sorted(set(sub.sprite.tolist()) - {-1})
+        sprites = [m.sprites[u] for u in used]
+        remap = np.full(len(m.sprites) + 1, -1, np.int32)
+        remap[used] = np.arange(len(used))
+        sub.sprite = remap[sub.sprite]
+        sub.sprites = sprites
+        images = {}
+        for sid in sprites:
+            t = res.texture(sid)
+            images[sid] = t.rgba if t is not None else np.full((16, 16, 4), 255, np.uint8)
+        out[(cx0 + i, cy0 + j)] = ChunkModels(sub, images)
+    return out
+

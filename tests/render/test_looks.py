@@ -52,7 +52,28 @@ def figures(gl) -> dict:
     return {"noon_sky_saturation_10": sat, "dusk_sea_over_sky": sea / sky}
 
 
+def band(gl) -> float:
+    """Below the horizon where nothing is drawn (no sea), at dusk, looking 87 degrees
+    beside the set sun as the desert reference scene does (its hard-edged red band):
+    the steepest change of brightness across 10 px of the row 30 degrees down, over
+    the row's mean."""
+    r = renderer(gl, floor(), fov=FOV)
+    try:
+        img = r.render(Camera(16, 16, 100, _sun_yaw(18.5) - 87, -20), 18.5, SIZE)
+    finally:
+        r.release()
+    t = math.tan(math.radians(-30 + 20)) / math.tan(math.radians(FOV / 2))
+    row = _luma(img[int(round(SIZE[1] / 2 * (1 - t)))])
+    return float(np.abs(row[10:] - row[:-10]).max() / row.mean())
+
+
 def test_noon_sky_saturated_and_dusk_sea_mirrors_the_sky(gl):
     f = figures(gl)
     assert f["noon_sky_saturation_10"] >= 0.28, f"noon sky washed out 10 degrees up: {f}"
     assert f["dusk_sea_over_sky"] >= 0.30, f"the dusk sea too dark against its sky: {f}"
+
+
+def test_no_band_of_the_sunset_down_the_haze(gl):
+    """The horizon's glow towards the sun belongs to the horizon: the haze looking down
+    is not a (hard-edged) vertical band of it."""
+    assert band(gl) < 0.05

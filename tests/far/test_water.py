@@ -17,7 +17,7 @@ KEY = (1, 1, 0)  # x 64..128, y 0..64: beyond the 32 x 32 area
 
 def _water_tile():
     a = tiles.empty()
-    a["height"][:] = 50
+    a["height"][:] = 20  # deep: the sea's colour
     a["top"][:] = REGISTRY.id("sand")
     a["water"][:] = SEA
     return mesh.build(KEY, a)
@@ -43,3 +43,13 @@ def _patch(gl, far: bool, hours: float) -> np.ndarray:
 def test_far_water_looks_like_the_sea_beside_it(gl, hours):
     far, sea = _patch(gl, True, hours), _patch(gl, False, hours)
     assert np.abs(far - sea).max() < 8, (far, sea)  # (flat albedo: 21-26)
+
+
+def test_shallow_far_water_shows_its_floor_deep_water_is_the_seas():
+    """A far water vertex's colour: over sand one block deep it shows the sand (as the
+    near water layer does by a beach), forty blocks deep it is deep water's colour
+    (water.glsl WATER_DEEP, linear (0.0018, 0.029, 0.08): sRGB ~ (15, 50, 81))."""
+    sand = mesh.palette()[REGISTRY.id("sand")]
+    shallow, deep = mesh._water_over(np.array([sand, sand]), np.array([1.0, 40.0]))
+    assert shallow.sum() > deep.sum() + 100, (shallow, deep)
+    assert np.abs(deep - [15, 50, 81]).max() < 3, deep

@@ -229,7 +229,8 @@ def task_demo(args) -> int:
 
 
 def _demo_render(world):
-    voxel("render", "--world", world, "--camera", "-40", "-40", "110", "45", "-20",
+    # far terrain beyond the generated area: the world goes on (no haze wall over a sea)
+    voxel("render", "--world", world, "--camera", "-40", "-40", "110", "45", "-20", "--far", "96",
           "--time", "10:30", "--size", "960", "540", "--out", DEMO / "demo.png")
 
 

@@ -40,6 +40,9 @@ WORLDS = {
     "mountains": (7, (4768, -3328), (4775, -3320, 45), (4690, -3440, 0), 12),
 }
 SCENES = ("ocean", "desert", "landscape", "cave")
+# far terrain (chunks) beyond the view distance: the world goes on past the generated
+# area instead of ending at a haze wall
+FAR = ("--far", 96)
 
 
 def cli(*args, env=None) -> None:
@@ -106,7 +109,7 @@ def render(out: Path, only=(), times=TIMES, extra=()) -> None:
         for name, (path, cam, dist) in ws.items():
             if not only or f"world_{name}" in only:
                 cli("render", "--world", path, "--camera", *cam, "--time", t, "--size", *SIZE,
-                    "--distance", dist, "--out", out / f"world_{name}_{tag}.png", *extra)
+                    "--distance", dist, *FAR, "--out", out / f"world_{name}_{tag}.png", *extra)
         print(f"rendered {t}", flush=True)
 
 
@@ -188,7 +191,7 @@ def readme(before: Path, after: Path, images: Path = ROOT / "docs" / "images") -
     path, cam, dist = ws["coast"]
     for t, name in (("10:30", "day.png"), ("17:45", "dusk.png")):
         cli("render", "--world", path, "--camera", *cam, "--time", t, "--size", *SIZE,
-            "--distance", dist, "--out", images / name)
+            "--distance", dist, *FAR, "--out", images / name)
     lit = after.parent / "worlds" / "coast_lamps.sqlite"
     shutil.copy(path, lit)
     # lamps along the beach and up the hill, in view of the coast's camera
@@ -202,11 +205,11 @@ def readme(before: Path, after: Path, images: Path = ROOT / "docs" / "images") -
         if z >= 0:  # not on the water
             cli("edit", "--world", lit, "--set", x, y, z + 1, LAMPS[i % len(LAMPS)])
     cli("render", "--world", lit, "--camera", *cam, "--time", "22:30", "--size", *SIZE,
-        "--distance", dist, "--out", images / "night_lamps.png")
+        "--distance", dist, *FAR, "--out", images / "night_lamps.png")
     for name, world in (("desert.png", "desert"), ("mountains.png", "mountains")):
         p, c, dd = ws[world]
         cli("render", "--world", p, "--camera", *c, "--time", "07:00", "--size", *SIZE,
-            "--distance", dd, "--out", images / name)
+            "--distance", dd, *FAR, "--out", images / name)
     grid(after, images / "times.jpg", scale=2)
     grid(after, images / "before_after.jpg", scale=3, before=before)
 

@@ -47,16 +47,26 @@ vec3 sky_radiance(vec3 d) {
 // brighter than that, else the horizon's sky. (After sunset the far air is still in
 // the sun and the horizon glows; the air around the eye is not, and neither is its
 // haze.)
-vec3 haze_color(vec3 d) {
-    vec2 h = d.xy / max(length(d.xy), 1e-5);
-    // the table's horizon row (sky_radiance at elevation 0: one row, no elevation mix)
-    vec2 s = sun_dir.xy / max(length(sun_dir.xy), 1e-5);
-    float a = acos(clamp(dot(h, s), -1.0, 1.0)) * (float(SKY_NA - 1) / 3.14159265);
+// The horizon row of the sky table (sky_radiance at elevation 0) at azimuth index a
+// from the sun, the Mie part by cosine c to the sun.
+vec3 horizon_sky(float a, float c) {
     int j = min(int(a), SKY_NA - 2);
     float fj = a - float(j);
-    vec3 sky = max(exp(mix(sky_a[j].rgb, sky_a[j + 1].rgb, fj)) - SKY_EPS, 0.0)
-             + phase_mie(dot(vec3(h, 0.0), sun_dir)) * max(exp(mix(sky_b[j].rgb, sky_b[j + 1].rgb, fj)) - SKY_EPS, 0.0);
+    return max(exp(mix(sky_a[j].rgb, sky_a[j + 1].rgb, fj)) - SKY_EPS, 0.0)
+         + phase_mie(c) * max(exp(mix(sky_b[j].rgb, sky_b[j + 1].rgb, fj)) - SKY_EPS, 0.0);
+}
+
+vec3 haze_color(vec3 d) {
+    vec2 h = d.xy / max(length(d.xy), 1e-5);
+    vec2 s = sun_dir.xy / max(length(sun_dir.xy), 1e-5);
+    float a = acos(clamp(dot(h, s), -1.0, 1.0)) * (float(SKY_NA - 1) / 3.14159265);
+    // Looking down, the way through the air is short and the horizon's glow towards the
+    // sun is not in it: the haze turns to the local air's light. Without it the glow ran
+    // straight down the screen below the sunset (a hard-edged red band over the ground
+    // and the background below the horizon).
+    float down = smoothstep(-0.05, 0.7, -d.z);
     vec3 local = day_ambient + day_direct * (0.2 + 0.8 * pow(max(dot(h, sky_light_dir.xy), 0.0), 8.0));
+    vec3 sky = mix(horizon_sky(a, dot(vec3(h, 0.0), sun_dir)), local, down);
     const vec3 Y = vec3(0.2126, 0.7152, 0.0722);
     float q = dot(sky, Y) / max(dot(local, Y), 1e-6);
     float k = inversesqrt(1.0 + q * q);  // ~1 where the sky is the dimmer, ~1/q where not

@@ -117,6 +117,19 @@ vec4 shade_surface(vec4 albedo, vec3 p, vec3 n, float glow) {
         o = vec4(o.rgb * (1.0 - f) + r * f, o.a + f * (1.0 - o.a));
     }
 #endif
+#if !defined(LAYER) && !defined(OIT) && DEBUG == 0
+    // Opaque water (the far tiles': no peeled layer behind them) looks like the open sea
+    // (water.glsl's sea_color, haze apart) and the near water: its body (far/mesh.py's
+    // colour of the water over its floor, deep water's where deep) and the sky's
+    // reflection. Its albedo alone made it a flat blue, another colour than the near
+    // water and the sea plane beside it, and dark under a bright dusk sky.
+    if (water && water_fx) {
+        vec3 v = eye_dir(p);
+        vec3 m = water_normal(p, n, eye_dist(p));
+        float f = fresnel(0.02, max(dot(-v, m), 0.12));
+        o = vec4(mix(c, reflection(p, v, m, day, false) * day, f) * albedo.a, albedo.a);
+    }
+#endif
 #ifdef FOG
     // outdoor air: none in caves (the surface's daylight stands for the way's)
     float h = haze(cam_pos, p) * sqrt(day);

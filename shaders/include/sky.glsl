@@ -10,9 +10,17 @@
 // Sky without the disc: the atmosphere colour fog blends toward (§5.4.3).
 vec3 sky_base(vec3 n) { return n.z >= 0.0 ? sky_radiance(n) : sky_below(n); }
 
+// The open sky a little more colourful than the single-scattering model's (it read
+// washed out at noon, issue 28): chroma x up to 1.3 from the horizon up (none at the
+// horizon, where surfaces fade into the haze's colour of the same model: no seam).
+vec3 sky_vivid(vec3 c, vec3 n) {
+    float luma = dot(c, vec3(0.2126, 0.7152, 0.0722));
+    return max(luma + (1.0 + 0.3 * smoothstep(0.0, 0.35, n.z)) * (c - luma), 0.0);
+}
+
 // The disc is measured in pixels (screen space) so it stays round (fig. 5.24).
 vec3 sky_color(vec3 n, float d_px, float size_px) {
-    vec3 c = sky_base(n);
+    vec3 c = sky_vivid(sky_base(n), n);
     float k = pow(min(1.0, size_px / max(d_px, 1e-3)), 8.0);
     if (dot(n, sky_light_dir) > 0.0) c += sky_disc * k * smoothstep(-0.01, 0.02, n.z);
     return c + stars(n);

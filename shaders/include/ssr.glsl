@@ -11,7 +11,7 @@
 //@ sampler sampler2D ssr_color  if defined(LAYER)  // the opaque scene, premultiplied
 //@ sampler sampler2D ssr_front  if defined(LAYER)  // its distance (r; 1e9: none)
 
-#define SSR_STEPS 14
+#define SSR_STEPS 16  // 0.5 .. ~220 blocks
 
 // where world point q lands on screen (uv) and whether it does
 bool ssr_uv(vec3 q, out vec2 uv) {
@@ -26,7 +26,11 @@ float ssr_behind(vec3 q, vec2 uv, vec2 size) {
 }
 
 // (colour, weight) of what the ray from p along unit r meets on screen; weight 0 where
-// it leaves the screen first or passes behind something without meeting it
+// it leaves the screen first or meets nothing. Every way it ends fades: towards the
+// screen's edges, towards the march's reach, and where the ray passes far behind the
+// surface (it went behind something: it marches on for what is beyond, as a ray past a
+// tree meets the hill behind it). Cut off at once, each showed as a hard edge between
+// the scene's and the sky's reflection.
 vec4 ssr_trace(vec3 p, vec3 r) {
     vec2 size = vec2(textureSize(ssr_front, 0));
     float t0 = 0.0, t = 0.5;
@@ -35,8 +39,8 @@ vec4 ssr_trace(vec3 p, vec3 r) {
         vec3 q = p + r * t;
         if (q.z > 256.0 || !ssr_uv(q, uv)) return vec4(0.0);  // (nothing above the world)
         float b = ssr_behind(q, uv, size);
-        if (b > 0.0) {
-            if (b > (t - t0) * 1.5 + 0.5) return vec4(0.0);  // passed behind, not into it
+        float thick = (t - t0) * 1.5 + 0.5;
+        if (b > 0.0 && b < 2.0 * thick) {
             for (int k = 0; k < 5; k++) {  // the surface between t0 and t
                 float tm = 0.5 * (t0 + t);
                 vec2 um;
@@ -45,12 +49,13 @@ vec4 ssr_trace(vec3 p, vec3 r) {
             }
             vec4 c = texelFetch(ssr_color, ivec2(uv * size), 0);
             vec2 e = abs(uv - 0.5) * 2.0;  // fade towards the screen's edges
-            float w = (1.0 - smoothstep(0.85, 1.0, max(e.x, e.y))) * c.a
-                    * (1.0 - smoothstep(80.0, 160.0, t));  // (far hits: coarse steps)
+            float w = (1.0 - smoothstep(0.7, 1.0, max(e.x, e.y))) * c.a
+                    * (1.0 - smoothstep(110.0, 215.0, t))  // (far hits: coarse steps)
+                    * (1.0 - smoothstep(thick, 2.0 * thick, b));  // (behind, not into it)
             return vec4(c.rgb / max(c.a, 1e-3), w);
         }
         t0 = t;
-        t *= 1.5;  // 0.5 .. ~100 blocks
+        t *= 1.5;
     }
     return vec4(0.0);
 }

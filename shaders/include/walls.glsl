@@ -8,7 +8,7 @@
 #define WALLS_GLSL
 #include "include/eye.glsl"
 
-//@ sampler sampler2DArray wall_tops  if !defined(LAYER)  // a row per side (x0, x1, y0, y1): column heights
+//@ sampler sampler2DArray wall_tops  if !defined(LAYER)  // a row per side (x0, x1, y0, y1): column heights; + 4: top side layers, + 8: filler layers
 //@ sampler sampler2DArray tex        if !defined(LAYER)  // the block textures (stone's layer: wall_layer)
 
 // the height (top z + 1) of border column `along` (blocks from the area's low corner)
@@ -17,6 +17,19 @@ float wall_top(int row, float along) {
     int i = int(floor(along));
     if (i < 0 || i >= textureSize(wall_tops, 0).x) return 0.0;
     return texelFetch(wall_tops, ivec3(i, row, 0), 0).r * 65535.0;
+}
+
+// The texture layer of the wall at p on side `row`: the top block's side for its top
+// block, its filler (dirt under grass) for FILLER (render/walls.py) more, then stone
+// (wall_layer), as the closed area's real faces show them.
+int wall_texture(int row, vec3 p) {
+    float along = row < 2 ? p.y - area_box.y : p.x - area_box.x;
+    int i = clamp(int(floor(along)), 0, textureSize(wall_tops, 0).x - 1);
+    float below = texelFetch(wall_tops, ivec3(i, row, 0), 0).r * 65535.0 - floor(p.z);
+    int k = below <= 1.0 ? 4 : below <= 4.0 ? 8 : 0;
+    if (k == 0) return wall_layer;
+    int l = int(texelFetch(wall_tops, ivec3(i, row + k, 0), 0).r * 65535.0 + 0.5);
+    return l > 0 ? l : wall_layer;
 }
 
 // Where the ray through uv meets the wall: the point (on the border plane), its normal
@@ -49,7 +62,7 @@ bool wall_hit(vec2 uv, out vec3 p, out vec3 n, out int row) {
     return false;
 }
 
-// The wall's albedo: stone's texture at the mip level of a pixel's size there (a
+// The wall's albedo: its block's texture (wall_texture) at the mip level of a pixel's size there (a
 // perspective pixel's angle star_px times the distance; an orthographic one's size
 // from the projection, uv and dy a pixel above it), as block.frag's texel() would pick
 vec4 wall_albedo(vec3 p, int row, vec2 uv, float dy) {
@@ -60,6 +73,6 @@ vec4 wall_albedo(vec3 p, int row, vec2 uv, float dy) {
     int l = int(clamp(floor(log2(max(texels, 1.0)) + 0.5), 0.0, 4.0));
     int size = 16 >> l;
     ivec2 i = ivec2(floor(t / float(1 << l))) & (size - 1);
-    return texelFetch(tex, ivec3(i.x + 32 - (32 >> l), i.y, wall_layer), 0);
+    return texelFetch(tex, ivec3(i.x + 32 - (32 >> l), i.y, wall_texture(row, p)), 0);
 }
 #endif

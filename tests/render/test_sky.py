@@ -154,3 +154,28 @@ def test_no_hole_into_the_caves_from_outside(gl, closed, walls):
         assert at_wall.mean() > 0.99, at_wall.mean()
     else:
         assert at_wall.mean() < 0.9, at_wall.mean()
+
+
+def _side_view(gl, closed: bool, walls: bool):
+    from voxel_addon.render import source
+    from voxel_addon.render.pipeline import Renderer
+    a = source.scene_area("landscape")
+    x0, y0 = 16 * a.cx0, 16 * a.cy0
+    r = Renderer(gl, Settings(msaa=1, dof=False, clouds=False, walls=walls, fade=False,
+                              fog=False, sea=False, ssao=False))
+    try:
+        r.set_area(a.blocks, a.light, a.cx0, a.cy0, ring=True, light_at=a.light_at, closed=closed)
+        return r.render(Camera(x0 - 30, y0 + 24, 78, 0, -12), 10.5, (160, 90)).astype(float)
+    finally:
+        r.release()
+
+
+def test_the_wall_shows_the_surface_layers_as_the_closed_area_does(gl):
+    """The live view's wall (walls.py: grass' side on top, dirt under it, then stone)
+    looks like the closed area's real faces, not a plain stone slab under the grass."""
+    closed, wall = _side_view(gl, True, False), _side_view(gl, False, True)
+
+    def brown(img):  # dirt (and logs): red over blue, red over green
+        return ((img[..., 0] > img[..., 2] + 12) & (img[..., 0] > img[..., 1])).mean()
+    # (stone alone: 0.42 of the closed area's share)
+    assert 0.6 < brown(wall) / brown(closed) < 1.5, (brown(wall), brown(closed))

@@ -54,6 +54,21 @@ def palette() -> np.ndarray:
     return out
 
 
+def _water_over(floor: np.ndarray, depth: np.ndarray) -> np.ndarray:
+    """(n, 3) sRGB 0..255: water `depth` blocks deep over a floor of that colour, as a
+    near water layer looks (block.frag's water_body: its own colour the more and the
+    floor the less the deeper it is) but reaching deep water's colour (the sea's,
+    water.glsl WATER_DEEP) where deep: shallow far water by a beach then looks like the
+    near water beside it, not deep blue up to the sand."""
+    k = (1.0 - np.exp(-np.maximum(depth, 0.0) * 0.25))[:, None]
+    f = np.array([0.5, 0.6, 0.5]) + (np.array([0.08, 0.2, 0.16]) - [0.5, 0.6, 0.5]) * k
+    own = (palette()[REGISTRY.id("water")] / 255.0) ** 2.2 * f   # linear
+    a = 0.3 + 0.7 * k
+    # (the floor under water gets less skylight: light/ takes a level per block of water)
+    lin = (floor / 255.0) ** 2.2 * np.exp(-0.5 * np.maximum(depth, 0.0))[:, None] * (1.0 - a) + own * a
+    return (lin ** (1 / 2.2) * 255.0).astype(np.float32)
+
+
 def _rgb565(c: np.ndarray) -> np.ndarray:
     c = np.clip(np.rint(c), 0, 255).astype(np.uint32)
     return ((c[..., 0] >> 3) << 11) | ((c[..., 1] >> 2) << 5) | (c[..., 2] >> 3)
@@ -205,13 +220,13 @@ def build(key, a: dict, version: int = 0) -> FarMesh:
         wzc = np.full((T + 1, T + 1), -1.0, np.float32)
         for sl in (np.s_[:-1, :-1], np.s_[1:, :-1], np.s_[1:, 1:], np.s_[:-1, 1:]):
             wzc[sl] = np.maximum(wzc[sl], np.where(cell, level_z, -1.0))
-        wcol = pal[REGISTRY.id("water")]
-        w1w = np.uint32(_rgb565(wcol)) << 16  # flat normal (0, 0, 1): nx = ny = 0
         wid = np.full((T + 1, T + 1), 0, np.uint32)
         wid[corner] = np.arange(nv, nv + corner.sum(), dtype=np.uint32)
         wtop = wzc[corner] + WATER_TOP
+        wcol = _water_over(col[corner], wtop - z[corner])
+        w1w = _rgb565(wcol) << 16  # flat normal (0, 0, 1): nx = ny = 0
         verts.append(np.stack([word0(wtop, WATER, kx[corner], ky[corner]),
-                               np.full(corner.sum(), w1w, np.uint32), word2(wtop)], -1))
+                               w1w.astype(np.uint32), word2(wtop)], -1))
         nv += int(corner.sum())
         water = _quads(cell, wzc, wid)
     v = np.concatenate([x.reshape(-1, 3) for x in verts]).astype(np.uint32)

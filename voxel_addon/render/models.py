@@ -178,7 +178,7 @@ class _Remapped:
 
 
 def edges(cm, key) -> np.ndarray:
-    """(4, 16) uint16 as walls.edges: the height of a chunk's border columns from
+    """(4, 16) uint16 as rows 0-3 of walls.edges: the height of a chunk's border columns from
     its model quads that face up (a model stone floor stands on the area's wall too)."""
     out = np.zeros((4, 16), np.uint16)
     if cm is None or not cm.mesh.quads:

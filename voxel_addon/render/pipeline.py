@@ -153,7 +153,7 @@ class Renderer:
         for k, cm in models.items():   # (their tops stand on the area's wall too)
             k = (int(k[0]), int(k[1]))
             if k in self.edges:
-                self.edges[k] = np.maximum(self.edges[k], model_edges(cm, k))
+                self.edges[k] = walls.raise_to(self.edges[k], model_edges(cm, k))
         self._walls_dirty = True
 
     def set_meshes(self, meshes: dict) -> None:
@@ -195,7 +195,7 @@ class Renderer:
             k = (int(k[0]), int(k[1]))
             e = walls.edges(m)
             cm = getattr(m, "models", None)
-            self.edges[k] = e if cm is None else np.maximum(e, model_edges(cm, k))
+            self.edges[k] = e if cm is None else walls.raise_to(e, model_edges(cm, k))
 
     def _sync_light(self, camera) -> None:
         """The light window (Settings.light_radius chunks around the camera's chunk,

@@ -61,6 +61,19 @@ def edges(mesh) -> np.ndarray:
     return out
 
 
+def raise_to(e, heights) -> np.ndarray:
+    """edges() `e` raised to `heights` ((4, 16), e.g. Minecraft model tops) where
+    those are higher; such columns show stone's side and filler (a model's sprites
+    are not block texture layers)."""
+    out = e.copy()
+    up = heights > e[:4]
+    stone = REGISTRY.id("stone")
+    out[:4][up] = heights[up]
+    out[4:8][up] = _SIDE[stone]
+    out[8:12][up] = _FILL[stone]
+    return out
+
+
 class Walls:
     """The border columns on the device: (width, 12) r16, row = side (x0, x1, y0, y1)
     for the heights, + 4 the top block's side layer, + 8 its filler's (edges), texel =

@@ -18,7 +18,7 @@ import numpy as np
 
 from .. import opencl, resources
 from ..core import chunk as C
-from .lang import _COST, Unit, nodes
+from .lang import Unit, lazy_blocks, nodes
 
 # No fast-math, no mad: IEEE results identical to NumPy's (see gpu/noise.h).
 OPTIONS = ("-cl-fp32-correctly-rounded-divide-sqrt",)
@@ -126,7 +126,7 @@ class _Gen:
         big kernels run scalar on pocl anyway (see README), so a branch costs little
         and e.g. cave noise is skipped outside cave regions. Same values, fewer ops."""
         order = nodes(roots)
-        lazy, owner = _lazy_blocks(order, roots)
+        lazy, owner = lazy_blocks(order, roots, LAZY_COST)
         out = []
         self._emit([e for e in order if e.id not in owner], lazy, owner, unit, done, out, 1)
         return out
@@ -331,47 +331,6 @@ class _GenV(_Gen):
 
 
 LAZY_COST = 12  # cheaper operands are computed unconditionally
-
-
-def _lazy_blocks(order, roots):
-    """Operands worth computing lazily: {node id: {slot: [exclusive nodes in order]}}
-    and owner {node id: (lazy node id, slot)} of the innermost block holding it. A
-    node is exclusive to an operand when every path from it to the roots goes
-    through that operand's edge, so skipping it cannot starve another user."""
-    users = {}
-    for e in order:
-        for a in e.a:
-            users.setdefault(a.id, []).append(e.id)
-    rootids = {r.id for r in roots}
-    pos = {e.id: i for i, e in enumerate(order)}
-    sub = {}  # node id -> ids of its subtree (itself included)
-    for e in order:
-        t = {e.id}
-        for a in e.a:
-            t |= sub[a.id]
-        sub[e.id] = t
-    byid = {e.id: e for e in order}
-    lazy, owner, size = {}, {}, {}
-    for e in order:
-        slots = {"and": (1,), "or": (1,), "select": (1, 2)}.get(e.op, ())
-        for i in slots:
-            o = e.a[i]
-            if o.id in rootids or users.get(o.id) != [e.id] or o.op == "const":
-                continue
-            excl = {o.id}
-            for nid in sorted(sub[o.id] - {o.id}, key=pos.get, reverse=True):
-                if nid not in rootids and all(u in excl for u in users[nid]):
-                    excl.add(nid)
-            members = sorted(excl, key=pos.get)
-            cost = sum(_COST.get(byid[n].op, 1) for n in members)
-            if cost < LAZY_COST:
-                continue
-            lazy.setdefault(e.id, {})[i] = [byid[n] for n in members]
-            for n in members:  # innermost block wins: smaller blocks come later
-                if n not in owner or len(members) < size[owner[n]]:
-                    owner[n] = (e.id, i)
-            size[(e.id, i)] = len(members)
-    return lazy, owner
 
 
 def source(units, size=C.SIZE) -> str:

@@ -91,10 +91,26 @@ def lerp(t, a, b):
 
 
 def grad3(h, x, y, z):
-    h = h & 15
-    u = np.where(h < 8, x, y)
-    v = np.where(h < 4, y, np.where((h == 12) | (h == 14), x, z))
-    return np.where(h & 1, -u, u) + np.where(h & 2, -v, v)
+    """h in 0..15 (perm & 15). Negation is a flip of the sign bit, done as an integer xor
+    (same bits as -u, about twice as fast as np.where on both signs)."""
+    u = np.where(h < 8, x, y).view(np.int32)
+    v = np.where(h < 4, y, np.where((h & 13) == 12, x, z)).view(np.int32)
+    s = h << 31
+    u ^= s
+    s = h & 2
+    s <<= 30
+    v ^= s
+    u = u.view(F)
+    u += v.view(F)
+    return u
+
+
+def _lerp_(t, a, b):
+    """lerp(t, a, b) reusing the new array b - a (b is a temporary of the caller)."""
+    d = b - a
+    d *= t
+    d += a
+    return d
 
 
 def grad2(h, x, y):
@@ -126,16 +142,18 @@ def perlin3(x, y, z, perm, s: int):
     Y, y = _lattice(y, (s >> 8) & 255)
     Z, z = _lattice(z, (s >> 16) & 255)
     u, v, w = fade(x), fade(y), fade(z)
+    g = perm & 15  # grad3 reads only the low 4 bits: one lookup instead of lookup + and
     A = perm[X] + Y
     AA, AB = perm[A] + Z, perm[A + 1] + Z
     B = perm[X + 1] + Y
     BA, BB = perm[B] + Z, perm[B + 1] + Z
     x1, y1, z1 = x - F(1), y - F(1), z - F(1)
-    return lerp(w,
-                lerp(v, lerp(u, grad3(perm[AA], x, y, z), grad3(perm[BA], x1, y, z)),
-                     lerp(u, grad3(perm[AB], x, y1, z), grad3(perm[BB], x1, y1, z))),
-                lerp(v, lerp(u, grad3(perm[AA + 1], x, y, z1), grad3(perm[BA + 1], x1, y, z1)),
-                     lerp(u, grad3(perm[AB + 1], x, y1, z1), grad3(perm[BB + 1], x1, y1, z1))))
+    L = _lerp_
+    return L(w,
+             L(v, L(u, grad3(g[AA], x, y, z), grad3(g[BA], x1, y, z)),
+               L(u, grad3(g[AB], x, y1, z), grad3(g[BB], x1, y1, z))),
+             L(v, L(u, grad3(g[AA + 1], x, y, z1), grad3(g[BA + 1], x1, y, z1)),
+               L(u, grad3(g[AB + 1], x, y1, z1), grad3(g[BB + 1], x1, y1, z1))))
 
 
 def octaves(fn, coords, perm, seed: int, salt: int, n: int = 4, lacunarity: float = 2.0,

@@ -201,6 +201,9 @@ def test_vector_kernels_every_op_exact(cl_device):
     from voxel_addon.generation import cl
     units = AllOps(5, None, "numpy").units
     assert [cl.vectorizable(u) for u in units if u.kind == "3d"] == [True, True, False]
+    # two-load lookups (perlin3_8r) only where x spans < 1 cell per row and y, z are
+    # lane-uniform: perlin3(x / 13, y / 17, z / 7) and not x / 3, x / 5 or y / 4, x / 6
+    assert len(re.findall(r"= perlin3_8r\(", cl.source(units))) == 1
     keys = [(0, 0), (-1, -1), (-3, 2), (5, -7), (-200, 130)]
     a = AllOps(5, None, "numpy").generate(keys)
     b = AllOps(5, None, "opencl").generate(keys)

@@ -16,7 +16,7 @@ F, I = np.float32, np.int32
 DT = {"f": F, "i": I, "b": bool}
 # Lazy operands (see Runner._eval): NumPy pays a gather per input, so only noise-sized
 # operands are worth it, and only where they are needed on at most this share of voxels.
-LAZY_COST = 30
+LAZY_COST = 20
 LAZY_SHARE = 0.7
 
 

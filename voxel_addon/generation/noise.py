@@ -121,45 +121,58 @@ def _grads3(perm):
 
 
 def _dot3(tab, i, x, y, z):
-    """grad3(perm[i] & 15, x, y, z) with the same bits, as gx*x + gy*y + gz*z (4x fewer
-    array passes than the selects): multiplying by 1 or -1 is exact and adding a zero to
-    a nonzero number changes nothing, so only an exact zero result can differ, in its
-    sign; those few (lattice planes) are recomputed with grad3."""
+    """grad3(perm[i] & 15, x, y, z) as gx*x + gy*y + gz*z: 4x fewer array passes than
+    the selects, and the same value except that an exact zero may have the other sign
+    (multiplying by +-1 is exact; adding a zero to a nonzero number changes nothing)."""
     gx, gy, gz, h = tab
     if np.ndim(i) == 0:
         return grad3(h[i], x, y, z)
-    r = gx[i] * x
-    r += gy[i] * y
-    r += gz[i] * z
-    zero = r == 0
-    if zero.any():
-        r[zero] = grad3(h[i[zero]], *(np.broadcast_to(c, r.shape)[zero] for c in (x, y, z)))
+    r = gx.take(i) * x  # take: ~30% faster than fancy indexing for these gathers
+    r += gy.take(i) * y
+    r += gz.take(i) * z
     return r
+
+
+def _sel3(tab, i, x, y, z):
+    return grad3(tab[3].take(i), x, y, z)
 
 
 _G2 = []  # grad2's 8 gradients: coefficients (x, y) and the diagonal factor
 
 
 def _dot2(perm, i, x, y):
-    """grad2(perm[i], x, y) with the same bits, as (gx*x + gy*y) * k (see _dot3: only
-    exact zeros can differ, in sign, and are recomputed with grad2)."""
+    """grad2(perm[i], x, y) as (gx*x + gy*y) * k, equal up to the sign of a zero (_dot3)."""
     if not _G2:
         one, zero = F(1), F(0)
         g = np.array([[grad2(np.int32(h), one if a == 0 else zero, one if a == 1 else zero)
                        for a in range(2)] for h in range(8)], F)
-        g = np.where(g == 0, zero, g)
         k = np.where(np.arange(8) & 4, F(float.fromhex("0x1.6a09e6p-1")), one).astype(F)
-        _G2.append((np.sign(g).astype(F), k))  # diagonals: g = +-k, so the sign
-    g, k = _G2[0]
+        g = np.sign(np.where(g == 0, zero, g)).astype(F)  # diagonals: g = +-k
+        _G2.append((g[:, 0].copy(), g[:, 1].copy(), k))
+    gx, gy, k = _G2[0]
     if np.ndim(i) == 0:
         return grad2(perm[i], x, y)
-    h = perm[i] & 7
-    r = g[h, 0] * x
-    r += g[h, 1] * y
-    r *= k[h]
+    h = perm.take(i) & 7
+    r = gx.take(h) * x
+    r += gy.take(h) * y
+    r *= k.take(h)
+    return r
+
+
+def _sel2(perm, i, x, y):
+    return grad2(perm.take(i), x, y)
+
+
+def _exact(fast, slow, coords, *args):
+    """fast(*coords, *args), whose gradients (_dot2/_dot3) may give a zero the other sign:
+    such a difference only ever yields a zero (x + 0 = x, x * 0 = 0), so the results
+    that are exactly zero (lattice planes, a few) are recomputed with the selects."""
+    if all(np.ndim(c) == 0 for c in coords):
+        return slow(*coords, *args)
+    r = fast(*coords, *args)
     zero = r == 0
     if zero.any():
-        r[zero] = grad2(h[zero], *(np.broadcast_to(c, r.shape)[zero] for c in (x, y)))
+        r[zero] = slow(*(np.broadcast_to(np.asarray(c, F), r.shape)[zero] for c in coords), *args)
     return r
 
 
@@ -185,29 +198,47 @@ def _lattice(v, shift: int):
 
 
 def perlin2(x, y, perm, s: int):
+    return _exact(_perlin2, _perlin2_sel, (x, y), perm, s)
+
+
+def _perlin2_sel(x, y, perm, s):
+    return _perlin2(x, y, perm, s, _sel2)
+
+
+def _perlin2(x, y, perm, s, dot=_dot2):
     X, x = _lattice(x, s & 255)
     Y, y = _lattice(y, (s >> 8) & 255)
     u, v = fade(x), fade(y)
-    A = perm[X] + Y
-    B = perm[X + 1] + Y
+    P = perm.take
+    A = P(X) + Y
+    B = P(X + 1) + Y
     x1, y1 = x - F(1), y - F(1)
-    L, d = _lerp_, _dot2
+    L, d = _lerp_, dot
     return L(v, L(u, d(perm, A, x, y), d(perm, B, x1, y)),
              L(u, d(perm, A + 1, x, y1), d(perm, B + 1, x1, y1)))
 
 
 def perlin3(x, y, z, perm, s: int):
+    return _exact(_perlin3, _perlin3_sel, (x, y, z), perm, s)
+
+
+def _perlin3_sel(x, y, z, perm, s):
+    return _perlin3(x, y, z, perm, s, _sel3)
+
+
+def _perlin3(x, y, z, perm, s, dot=_dot3):
     X, x = _lattice(x, s & 255)
     Y, y = _lattice(y, (s >> 8) & 255)
     Z, z = _lattice(z, (s >> 16) & 255)
     u, v, w = fade(x), fade(y), fade(z)
     g = _grads3(perm)
-    A = perm[X] + Y
-    AA, AB = perm[A] + Z, perm[A + 1] + Z
-    B = perm[X + 1] + Y
-    BA, BB = perm[B] + Z, perm[B + 1] + Z
+    P = perm.take
+    A = P(X) + Y
+    AA, AB = P(A) + Z, P(A + 1) + Z
+    B = P(X + 1) + Y
+    BA, BB = P(B) + Z, P(B + 1) + Z
     x1, y1, z1 = x - F(1), y - F(1), z - F(1)
-    L, d = _lerp_, _dot3
+    L, d = _lerp_, dot
     return L(w,
              L(v, L(u, d(g, AA, x, y, z), d(g, BA, x1, y, z)),
                L(u, d(g, AB, x, y1, z), d(g, BB, x1, y1, z))),

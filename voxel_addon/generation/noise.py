@@ -116,25 +116,28 @@ def _grads3(perm):
         g = np.array([[grad3(np.int32(h), *(one if a == b else zero for b in range(3)))
                        for a in range(3)] for h in range(16)], F)
         _G3.append(np.where(g == 0, zero, g))
-    g = _G3[0][perm & 15]
-    return g[:, 0].copy(), g[:, 1].copy(), g[:, 2].copy(), perm & 15
+    g = np.zeros((len(perm), 4), F)
+    g[:, :3] = _G3[0][perm & 15]
+    # one 16-byte gather per lookup instead of three 4-byte ones: rows as complex128
+    return g.view(np.complex128).ravel(), perm & 15
 
 
 def _dot3(tab, i, x, y, z):
     """grad3(perm[i] & 15, x, y, z) as gx*x + gy*y + gz*z: 4x fewer array passes than
     the selects, and the same value except that an exact zero may have the other sign
     (multiplying by +-1 is exact; adding a zero to a nonzero number changes nothing)."""
-    gx, gy, gz, h = tab
+    rows, h = tab
     if np.ndim(i) == 0:
         return grad3(h[i], x, y, z)
-    r = gx.take(i) * x  # take: ~30% faster than fancy indexing for these gathers
-    r += gy.take(i) * y
-    r += gz.take(i) * z
+    g = rows.take(i).view(F).reshape(np.shape(i) + (4,))  # take: faster than g[i]
+    r = g[..., 0] * x
+    r += g[..., 1] * y
+    r += g[..., 2] * z
     return r
 
 
 def _sel3(tab, i, x, y, z):
-    return grad3(tab[3].take(i), x, y, z)
+    return grad3(tab[1].take(i), x, y, z)
 
 
 _G2 = []  # grad2's 8 gradients: coefficients (x, y) and the diagonal factor
@@ -148,14 +151,15 @@ def _dot2(perm, i, x, y):
                        for a in range(2)] for h in range(8)], F)
         k = np.where(np.arange(8) & 4, F(float.fromhex("0x1.6a09e6p-1")), one).astype(F)
         g = np.sign(np.where(g == 0, zero, g)).astype(F)  # diagonals: g = +-k
-        _G2.append((g[:, 0].copy(), g[:, 1].copy(), k))
-    gx, gy, k = _G2[0]
+        rows = np.zeros((8, 4), F)
+        rows[:, 0], rows[:, 1], rows[:, 2] = g[:, 0], g[:, 1], k
+        _G2.append(rows.view(np.complex128).ravel())
     if np.ndim(i) == 0:
         return grad2(perm[i], x, y)
-    h = perm.take(i) & 7
-    r = gx.take(h) * x
-    r += gy.take(h) * y
-    r *= k.take(h)
+    g = _G2[0].take(perm.take(i) & 7).view(F).reshape(np.shape(i) + (4,))
+    r = g[..., 0] * x
+    r += g[..., 1] * y
+    r *= g[..., 2]
     return r
 
 

@@ -235,7 +235,7 @@ def _perlin3(x, y, z, perm, s, dot=_dot3):
     Y, y = _lattice(y, (s >> 8) & 255)
     Z, z = _lattice(z, (s >> 16) & 255)
     u, v, w = fade(x), fade(y), fade(z)
-    g = _grads3(perm)
+    g, g1 = _grads3(perm), _grads3(np.roll(perm, -1))  # g1 at i: g at i + 1
     P = perm.take
     A = P(X) + Y
     AA, AB = P(A) + Z, P(A + 1) + Z
@@ -246,8 +246,8 @@ def _perlin3(x, y, z, perm, s, dot=_dot3):
     return L(w,
              L(v, L(u, d(g, AA, x, y, z), d(g, BA, x1, y, z)),
                L(u, d(g, AB, x, y1, z), d(g, BB, x1, y1, z))),
-             L(v, L(u, d(g, AA + 1, x, y, z1), d(g, BA + 1, x1, y, z1)),
-               L(u, d(g, AB + 1, x, y1, z1), d(g, BB + 1, x1, y1, z1))))
+             L(v, L(u, d(g1, AA, x, y, z1), d(g1, BA, x1, y, z1)),
+               L(u, d(g1, AB, x, y1, z1), d(g1, BB, x1, y1, z1))))
 
 
 def octaves(fn, coords, perm, seed: int, salt: int, n: int = 4, lacunarity: float = 2.0,

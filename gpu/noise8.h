@@ -93,10 +93,21 @@ VX_INLINE vf8 perlin3_8(vf8 x, vf8 y, vf8 z, __constant const int* perm, uint s)
                                 vx_grad3_8(VX_GATHER8(vi8, perm, BB + 1), x1, y1, z1))));
 }
 
+// vx_grad3_8 for one h in every lane: the same selects with a scalar condition, and the
+// negations as sign-bit xors (the bits of -u)
+VX_INLINE vf8 vx_grad3s_8(int h, vf8 x, vf8 y, vf8 z) {
+    h &= 15;
+    vf8 u = h < 8 ? x : y;
+    vf8 v = h < 4 ? y : ((h == 12) | (h == 14)) ? x : z;
+    return as_float8(as_uint8(u) ^ (vu8)((uint)(h & 1) << 31))
+         + as_float8(as_uint8(v) ^ (vu8)((uint)(h & 2) << 30));
+}
+
 // perlin3_8 for a row whose x spans less than one lattice cell and whose y and z are
 // the same in every lane (cl.py proves it from the expressions): a lane's cell is
 // lane 0's or lane 7's, so each table lookup is two scalar loads and a select
-// instead of eight loads. The loads dominate perlin3_8; the values are the same.
+// instead of eight loads, and each gradient is computed for those two h with scalar
+// conditions (vx_grad3s_8) and then picked per lane. The values are the same.
 VX_INLINE vf8 perlin3_8r(vf8 x, vf8 y, vf8 z, __constant const int* perm, uint s) {
     vi8 ix = vx_ifloor8(x), iy = vx_ifloor8(y), iz = vx_ifloor8(z);
     vi8 X = (ix + (int)(s & 255u)) & 255;
@@ -109,18 +120,20 @@ VX_INLINE vf8 perlin3_8r(vf8 x, vf8 y, vf8 z, __constant const int* perm, uint s
     int A0 = perm[X0] + Y, A7 = perm[X7] + Y, B0 = perm[X0 + 1] + Y, B7 = perm[X7 + 1] + Y;
     int AA0 = perm[A0] + Z, AA7 = perm[A7] + Z, AB0 = perm[A0 + 1] + Z, AB7 = perm[A7 + 1] + Z;
     int BA0 = perm[B0] + Z, BA7 = perm[B7] + Z, BB0 = perm[B0 + 1] + Z, BB7 = perm[B7 + 1] + Z;
-#define VX_P2(i0, i7) select((vi8)perm[i7], (vi8)perm[i0], m)
+/* a corner's gradient for lane 0's h and lane 7's h (scalars), picked per lane */
+#define VX_GR(i0, i7, gx, gy, gz) \
+    select(vx_grad3s_8(perm[i7], gx, gy, gz), vx_grad3s_8(perm[i0], gx, gy, gz), m)
     vf8 x1 = x - 1.0f, y1 = y - 1.0f, z1 = z - 1.0f;
     vf8 r = vx_lerp8(w,
-        vx_lerp8(v, vx_lerp8(u, vx_grad3_8(VX_P2(AA0, AA7), x, y, z),
-                                vx_grad3_8(VX_P2(BA0, BA7), x1, y, z)),
-                    vx_lerp8(u, vx_grad3_8(VX_P2(AB0, AB7), x, y1, z),
-                                vx_grad3_8(VX_P2(BB0, BB7), x1, y1, z))),
-        vx_lerp8(v, vx_lerp8(u, vx_grad3_8(VX_P2(AA0 + 1, AA7 + 1), x, y, z1),
-                                vx_grad3_8(VX_P2(BA0 + 1, BA7 + 1), x1, y, z1)),
-                    vx_lerp8(u, vx_grad3_8(VX_P2(AB0 + 1, AB7 + 1), x, y1, z1),
-                                vx_grad3_8(VX_P2(BB0 + 1, BB7 + 1), x1, y1, z1))));
-#undef VX_P2
+        vx_lerp8(v, vx_lerp8(u, VX_GR(AA0, AA7, x, y, z),
+                                VX_GR(BA0, BA7, x1, y, z)),
+                    vx_lerp8(u, VX_GR(AB0, AB7, x, y1, z),
+                                VX_GR(BB0, BB7, x1, y1, z))),
+        vx_lerp8(v, vx_lerp8(u, VX_GR(AA0 + 1, AA7 + 1, x, y, z1),
+                                VX_GR(BA0 + 1, BA7 + 1, x1, y, z1)),
+                    vx_lerp8(u, VX_GR(AB0 + 1, AB7 + 1, x, y1, z1),
+                                VX_GR(BB0 + 1, BB7 + 1, x1, y1, z1))));
+#undef VX_GR
     return r;
 }
 

@@ -120,20 +120,26 @@ VX_INLINE vf8 perlin3_8r(vf8 x, vf8 y, vf8 z, __constant const int* perm, uint s
     int A0 = perm[X0] + Y, A7 = perm[X7] + Y, B0 = perm[X0 + 1] + Y, B7 = perm[X7 + 1] + Y;
     int AA0 = perm[A0] + Z, AA7 = perm[A7] + Z, AB0 = perm[A0 + 1] + Z, AB7 = perm[A7 + 1] + Z;
     int BA0 = perm[B0] + Z, BA7 = perm[B7] + Z, BB0 = perm[B0 + 1] + Z, BB7 = perm[B7 + 1] + Z;
-/* a corner's gradient for lane 0's h and lane 7's h (scalars), picked per lane */
+    vf8 x1 = x - 1.0f, y1 = y - 1.0f, z1 = z - 1.0f;
+#define VX_BODY vx_lerp8(w, \
+        vx_lerp8(v, vx_lerp8(u, VX_GR(AA0, AA7, x, y, z), VX_GR(BA0, BA7, x1, y, z)), \
+                    vx_lerp8(u, VX_GR(AB0, AB7, x, y1, z), VX_GR(BB0, BB7, x1, y1, z))), \
+        vx_lerp8(v, vx_lerp8(u, VX_GR(AA0 + 1, AA7 + 1, x, y, z1), \
+                                VX_GR(BA0 + 1, BA7 + 1, x1, y, z1)), \
+                    vx_lerp8(u, VX_GR(AB0 + 1, AB7 + 1, x, y1, z1), \
+                                VX_GR(BB0 + 1, BB7 + 1, x1, y1, z1))))
+    vf8 r;
+    if (X0 == X7) {  /* the whole row in one cell (most rows): one h per corner */
+#define VX_GR(i0, i7, gx, gy, gz) vx_grad3s_8(perm[i0], gx, gy, gz)
+        r = VX_BODY;
+#undef VX_GR
+    } else {  /* a corner's gradient for lane 0's h and lane 7's h, picked per lane */
 #define VX_GR(i0, i7, gx, gy, gz) \
     select(vx_grad3s_8(perm[i7], gx, gy, gz), vx_grad3s_8(perm[i0], gx, gy, gz), m)
-    vf8 x1 = x - 1.0f, y1 = y - 1.0f, z1 = z - 1.0f;
-    vf8 r = vx_lerp8(w,
-        vx_lerp8(v, vx_lerp8(u, VX_GR(AA0, AA7, x, y, z),
-                                VX_GR(BA0, BA7, x1, y, z)),
-                    vx_lerp8(u, VX_GR(AB0, AB7, x, y1, z),
-                                VX_GR(BB0, BB7, x1, y1, z))),
-        vx_lerp8(v, vx_lerp8(u, VX_GR(AA0 + 1, AA7 + 1, x, y, z1),
-                                VX_GR(BA0 + 1, BA7 + 1, x1, y, z1)),
-                    vx_lerp8(u, VX_GR(AB0 + 1, AB7 + 1, x, y1, z1),
-                                VX_GR(BB0 + 1, BB7 + 1, x1, y1, z1))));
+        r = VX_BODY;
 #undef VX_GR
+    }
+#undef VX_BODY
     return r;
 }
 

@@ -93,6 +93,56 @@ VX_INLINE vf8 perlin3_8(vf8 x, vf8 y, vf8 z, __constant const int* perm, uint s)
                                 vx_grad3_8(VX_GATHER8(vi8, perm, BB + 1), x1, y1, z1))));
 }
 
+// vx_grad3_8 for one h in every lane: the same selects with a scalar condition, and the
+// negations as sign-bit xors (the bits of -u)
+VX_INLINE vf8 vx_grad3s_8(int h, vf8 x, vf8 y, vf8 z) {
+    h &= 15;
+    vf8 u = h < 8 ? x : y;
+    vf8 v = h < 4 ? y : ((h == 12) | (h == 14)) ? x : z;
+    return as_float8(as_uint8(u) ^ (vu8)((uint)(h & 1) << 31))
+         + as_float8(as_uint8(v) ^ (vu8)((uint)(h & 2) << 30));
+}
+
+// perlin3_8 for a row whose x spans less than one lattice cell and whose y and z are
+// the same in every lane (cl.py proves it from the expressions): a lane's cell is
+// lane 0's or lane 7's, so each table lookup is two scalar loads and a select
+// instead of eight loads, and each gradient is computed for those two h with scalar
+// conditions (vx_grad3s_8) and then picked per lane. The values are the same.
+VX_INLINE vf8 perlin3_8r(vf8 x, vf8 y, vf8 z, __constant const int* perm, uint s) {
+    vi8 ix = vx_ifloor8(x), iy = vx_ifloor8(y), iz = vx_ifloor8(z);
+    vi8 X = (ix + (int)(s & 255u)) & 255;
+    int Y = (iy.s0 + (int)((s >> 8) & 255u)) & 255;
+    int Z = (iz.s0 + (int)((s >> 16) & 255u)) & 255;
+    x = x - convert_float8(ix); y = y - convert_float8(iy); z = z - convert_float8(iz);
+    vf8 u = vx_fade8(x), v = vx_fade8(y), w = vx_fade8(z);
+    int X0 = X.s0, X7 = X.s7;
+    vi8 m = X == (vi8)X0;  /* lanes in lane 0's cell */
+    int A0 = perm[X0] + Y, A7 = perm[X7] + Y, B0 = perm[X0 + 1] + Y, B7 = perm[X7 + 1] + Y;
+    int AA0 = perm[A0] + Z, AA7 = perm[A7] + Z, AB0 = perm[A0 + 1] + Z, AB7 = perm[A7 + 1] + Z;
+    int BA0 = perm[B0] + Z, BA7 = perm[B7] + Z, BB0 = perm[B0 + 1] + Z, BB7 = perm[B7 + 1] + Z;
+    vf8 x1 = x - 1.0f, y1 = y - 1.0f, z1 = z - 1.0f;
+#define VX_BODY vx_lerp8(w, \
+        vx_lerp8(v, vx_lerp8(u, VX_GR(AA0, AA7, x, y, z), VX_GR(BA0, BA7, x1, y, z)), \
+                    vx_lerp8(u, VX_GR(AB0, AB7, x, y1, z), VX_GR(BB0, BB7, x1, y1, z))), \
+        vx_lerp8(v, vx_lerp8(u, VX_GR(AA0 + 1, AA7 + 1, x, y, z1), \
+                                VX_GR(BA0 + 1, BA7 + 1, x1, y, z1)), \
+                    vx_lerp8(u, VX_GR(AB0 + 1, AB7 + 1, x, y1, z1), \
+                                VX_GR(BB0 + 1, BB7 + 1, x1, y1, z1))))
+    vf8 r;
+    if (X0 == X7) {  /* the whole row in one cell (most rows): one h per corner */
+#define VX_GR(i0, i7, gx, gy, gz) vx_grad3s_8(perm[i0], gx, gy, gz)
+        r = VX_BODY;
+#undef VX_GR
+    } else {  /* a corner's gradient for lane 0's h and lane 7's h, picked per lane */
+#define VX_GR(i0, i7, gx, gy, gz) \
+    select(vx_grad3s_8(perm[i7], gx, gy, gz), vx_grad3s_8(perm[i0], gx, gy, gz), m)
+        r = VX_BODY;
+#undef VX_GR
+    }
+#undef VX_BODY
+    return r;
+}
+
 // prev(dz) for a row of 8: 0 outside 0..255 (z is the same for the whole row)
 VX_INLINE vi8 vx_prev8(__global const ushort* p, int c, int z, int row) {
     if (z < 0 || z > 255) return (vi8)0;

@@ -187,7 +187,8 @@ class AllOps(PassGenerator):
             c = ((n3 > 0.1) & ~(r3 < 0.3)) | (p.read("w") > 0.2) | (p.read("flag") == 1)
             lazy = c & (L.perlin3(x / 5, y / 5, z / 3) > 0.0)    # computed inside an `if`
             arm = L.select(n2 > 0.0, L.ifloor(L.perlin3(x / 3, z / 3, y / 3) * 4.0), -i)
-            p.block(L.select(lazy, 9, 1 + (i + arm + L.select(c, 0, 3)) % 7))
+            lor = (r2 > 0.6) | (L.perlin3(x / 6, y / 4, z / 4) > 0.2)  # lazy `|`, nested
+            p.block(L.select(lazy, 9, 1 + (i + arm + L.select(c | lor, 0, 3)) % 7))
         with g.pass3d() as p:
             p.block(L.select((p.prev(-1) == 9) & (p.prev(1) != 9), 8, p.prev()))
         with g.pass3d() as p:
@@ -200,6 +201,9 @@ def test_vector_kernels_every_op_exact(cl_device):
     from voxel_addon.generation import cl
     units = AllOps(5, None, "numpy").units
     assert [cl.vectorizable(u) for u in units if u.kind == "3d"] == [True, True, False]
+    # two-load lookups (perlin3_8r) only where x spans < 1 cell per row and y, z are
+    # lane-uniform: perlin3(x / 13, y / 17, z / 7) and not x / 3, x / 5 or y / 4, x / 6
+    assert len(re.findall(r"= perlin3_8r\(", cl.source(units))) == 1
     keys = [(0, 0), (-1, -1), (-3, 2), (5, -7), (-200, 130)]
     a = AllOps(5, None, "numpy").generate(keys)
     b = AllOps(5, None, "opencl").generate(keys)
@@ -207,3 +211,23 @@ def test_vector_kernels_every_op_exact(cl_device):
         assert np.array_equal(x, y), f"chunk {k}: {(x != y).sum()} voxels differ"
     allb = np.concatenate([x.ravel() for x in a])
     assert set(np.unique(allb)) == set(range(10))   # every branch taken somewhere
+
+
+@pytest.mark.parametrize("gen", ["allops", "overworld"])
+def test_numpy_lazy_operands_change_nothing(gen, monkeypatch):
+    """execute.py computes lazy operands on gathered voxels: an oracle without OpenCL,
+    the same program evaluated eagerly (no lazy blocks) must give the same blocks."""
+    from voxel_addon.generation import execute, make_generator
+
+    def run():
+        g = AllOps(5, None, "numpy") if gen == "allops" else make_generator("overworld", 7, None, "numpy")
+        keys = [(0, 0), (-3, 2), (-200, 130)] if gen == "allops" else [(0, -12), (-3, -10), (255, -150)]
+        return g.generate(keys), g.units
+    monkeypatch.setattr(execute, "LAZY_SHARE", 2.0)   # always gather, however many voxels
+    lazy, units = run()
+    order = execute.nodes([r for u in units for r in u.roots()])
+    assert execute.lazy_blocks(order, [r for u in units for r in u.roots()], execute.LAZY_COST)[0]
+    monkeypatch.setattr(execute, "LAZY_COST", 10**9)  # nothing lazy
+    eager, _ = run()
+    for x, y in zip(lazy, eager):
+        assert np.array_equal(x, y), f"{(x != y).sum()} voxels differ"

@@ -18,7 +18,7 @@ import numpy as np
 
 from .. import opencl, resources
 from ..core import chunk as C
-from .lang import _COST, Unit, nodes
+from .lang import Unit, lazy_blocks, nodes
 
 # No fast-math, no mad: IEEE results identical to NumPy's (see gpu/noise.h).
 OPTIONS = ("-cl-fp32-correctly-rounded-divide-sqrt",)
@@ -54,10 +54,12 @@ class _Gen:
     def __init__(self, units, size=C.SIZE):
         self.units, self.size = units, size  # size: a domain's side (execute.Runner)
         self.fields = {}  # name -> (type, halo)
+        self.defs = {}    # name -> expression of a 2D field
         for u in units:
             if u.kind == "2d":
                 for n, e in u.outs.items():
                     self.fields[n] = (e.t, u.halo)
+                    self.defs[n] = e
 
     def expr(self, e, a, unit):
         op, k = e.op, e.k
@@ -126,7 +128,7 @@ class _Gen:
         big kernels run scalar on pocl anyway (see README), so a branch costs little
         and e.g. cave noise is skipped outside cave regions. Same values, fewer ops."""
         order = nodes(roots)
-        lazy, owner = _lazy_blocks(order, roots)
+        lazy, owner = lazy_blocks(order, roots, LAZY_COST)
         out = []
         self._emit([e for e in order if e.id not in owner], lazy, owner, unit, done, out, 1)
         return out
@@ -239,6 +241,15 @@ VECTOR = True  # False: every unit scalar (for comparisons)
 VLOCAL = LAYER // VLANES  # a 3D work-group: one z layer, one row of 8 voxels per item
 
 
+def _constant(e):
+    """The value of a constant (possibly converted) as a float, else None."""
+    while e.op in ("float", "int") and e.a[0].op in ("const", "float", "int"):
+        if e.op == "int":
+            return None
+        e = e.a[0]
+    return float(e.k) if e.op == "const" and e.t in ("f", "i") else None
+
+
 def vectorizable(u: Unit) -> bool:
     return (VECTOR and u.kind == "3d"
             and all(e.op in _VEC_OPS and e.t != "f3" for e in nodes(u.roots())))
@@ -277,7 +288,9 @@ class _GenV(_Gen):
         if op == "perlin2":
             return f"perlin2_8({a[0]}, {a[1]}, perm, s{k})"
         if op == "perlin3":
-            return f"perlin3_8({a[0]}, {a[1]}, {a[2]}, perm, s{k})"
+            sp = [self.span(x) for x in e.a]
+            row = sp[0] is not None and sp[0][0] < ROW_SPAN and sp[1] == sp[2] == (0.0, 0)
+            return f"perlin3_8{'r' if row else ''}({a[0]}, {a[1]}, {a[2]}, perm, s{k})"
         if op == "rand2":
             return f"vx_unit8(vx_hash2_8({a[0]}, {a[1]}, s{k}))"
         if op == "rand3":
@@ -291,6 +304,52 @@ class _GenV(_Gen):
         if op == "prev":
             return f"vx_prev8(prev, c, zs + ({k}), row)"
         raise ValueError(f"no 8-lane form of {op}")
+
+    def span(self, e):
+        """(bound on max - min, direction) of e over a row's 8 lanes (consecutive x,
+        one y and z), or None when unknown. Direction 1 / -1: the lanes are monotone
+        (correctly rounded + - * / by constants keep them so), 0: all lanes equal.
+        Reads of 2D fields at constant offsets follow the field's expression."""
+        memo = self.__dict__.setdefault("_spans", {})
+        if e.id not in memo:
+            memo[e.id] = self._span(e)
+        return memo[e.id]
+
+    def _span(self, e):
+        op, a = e.op, e.a
+        if op == "const" or op in ("y", "z"):
+            return (0.0, 0)
+        if op == "x":
+            return (float(VLANES - 1), 1)
+        if op == "read":
+            d = self.defs.get(e.k[0])
+            return None if e.k[1] is None or d is None else self.span(d)
+        if op == "prev":
+            return None
+        s = [self.span(x) for x in a]
+        if any(x is None for x in s):
+            return None
+        if all(x == (0.0, 0) for x in s):  # a function of lane-uniform values
+            return (0.0, 0)
+        if op == "float":  # int -> float32 rounds only beyond 2**24: at most 1 each end
+            return s[0] if a[0].t == "f" or s[0][1] == 0 else (s[0][0] + 2.0, s[0][1])
+        if op == "neg":
+            return (s[0][0], -s[0][1])
+        if op in ("add", "sub"):
+            d0, d1 = s[0][1], s[1][1] * (-1 if op == "sub" else 1)
+            if d0 and d1 and d0 != d1:
+                return None
+            return (s[0][0] + s[1][0], d0 or d1)
+        if op in ("mul", "div"):
+            k = [_constant(x) for x in a]
+            if k[1] is None and not (op == "mul" and k[0] is not None):
+                return None
+            c, v = (k[1], s[0]) if k[1] is not None else (k[0], s[1])
+            if c == 0:
+                return None if op == "div" else (0.0, 0)
+            f = abs(c) if op == "mul" else 1 / abs(c)
+            return (v[0] * f * 1.001, v[1] * (1 if c > 0 else -1))
+        return None
 
     def read(self, name, dx, dy, a=(), reach=0):
         t, hf = self.fields[name]
@@ -331,47 +390,7 @@ class _GenV(_Gen):
 
 
 LAZY_COST = 12  # cheaper operands are computed unconditionally
-
-
-def _lazy_blocks(order, roots):
-    """Operands worth computing lazily: {node id: {slot: [exclusive nodes in order]}}
-    and owner {node id: (lazy node id, slot)} of the innermost block holding it. A
-    node is exclusive to an operand when every path from it to the roots goes
-    through that operand's edge, so skipping it cannot starve another user."""
-    users = {}
-    for e in order:
-        for a in e.a:
-            users.setdefault(a.id, []).append(e.id)
-    rootids = {r.id for r in roots}
-    pos = {e.id: i for i, e in enumerate(order)}
-    sub = {}  # node id -> ids of its subtree (itself included)
-    for e in order:
-        t = {e.id}
-        for a in e.a:
-            t |= sub[a.id]
-        sub[e.id] = t
-    byid = {e.id: e for e in order}
-    lazy, owner, size = {}, {}, {}
-    for e in order:
-        slots = {"and": (1,), "or": (1,), "select": (1, 2)}.get(e.op, ())
-        for i in slots:
-            o = e.a[i]
-            if o.id in rootids or users.get(o.id) != [e.id] or o.op == "const":
-                continue
-            excl = {o.id}
-            for nid in sorted(sub[o.id] - {o.id}, key=pos.get, reverse=True):
-                if nid not in rootids and all(u in excl for u in users[nid]):
-                    excl.add(nid)
-            members = sorted(excl, key=pos.get)
-            cost = sum(_COST.get(byid[n].op, 1) for n in members)
-            if cost < LAZY_COST:
-                continue
-            lazy.setdefault(e.id, {})[i] = [byid[n] for n in members]
-            for n in members:  # innermost block wins: smaller blocks come later
-                if n not in owner or len(members) < size[owner[n]]:
-                    owner[n] = (e.id, i)
-            size[(e.id, i)] = len(members)
-    return lazy, owner
+ROW_SPAN = 0.9  # perlin3's x over a row spans less than this (cells): perlin3_8r
 
 
 def source(units, size=C.SIZE) -> str:

@@ -10,10 +10,68 @@ import numpy as np
 
 from ..core import chunk as C
 from . import noise as N
-from .lang import Unit, nodes
+from .lang import Unit, lazy_blocks, nodes
 
 F, I = np.float32, np.int32
 DT = {"f": F, "i": I, "b": bool}
+# Lazy operands (see Runner._eval): NumPy pays a gather per input, so only noise-sized
+# operands are worth it, and only where they are needed on at most this share of voxels.
+LAZY_COST = 20
+LAZY_SHARE = 0.7
+
+
+_PLANS: dict = {}  # (LAZY_COST, root node ids: unique in a process) -> _plan's analysis
+
+
+def _plan(roots):
+    """What _eval needs of a graph, analysed once per unit: lazy blocks, the nodes
+    computed at top level, what each consumes, and how often each is consumed."""
+    key = (LAZY_COST,) + tuple(r.id for r in roots)
+    if key in _PLANS:
+        return _PLANS[key]
+    order = nodes(roots)
+    lazy, owner = lazy_blocks(order, roots, LAZY_COST)
+    top = [e for e in order if e.id not in owner]
+    deps = {}
+    for e in top:
+        d = {a.id for a in e.a}
+        if e.id in lazy:  # a lazy node also consumes what its blocks read
+            inner = [n for ms in lazy[e.id].values() for n in ms]
+            d = {a.id for n in [e] + inner for a in n.a} - {n.id for n in inner}
+        deps[e.id] = d
+    count: dict[int, int] = {}
+    for d in deps.values():
+        for i in d:
+            count[i] = count.get(i, 0) + 1
+    if len(_PLANS) > 256:
+        _PLANS.clear()
+    _PLANS[key] = lazy, owner, top, deps, count
+    return _PLANS[key]
+
+
+class _Scope:
+    """Values on a subset of the voxels: the root scope holds arrays that broadcast over
+    the domain; a child holds 1D arrays over the voxels where its parent's mask is set."""
+
+    def __init__(self, parent, mask, shape):
+        self.parent, self.mask, self.v = parent, mask, {}
+        self.shape = shape if parent is None else (int(np.count_nonzero(mask)),)
+
+    def get(self, i):
+        if i not in self.v:  # a value of an outer scope, gathered once
+            self.v[i] = self._take(self.parent.get(i))
+        return self.v[i]
+
+    def _take(self, val):
+        if isinstance(val, tuple):
+            return tuple(self._take(x) for x in val)
+        if np.ndim(val) == 0:
+            return val
+        return np.broadcast_to(val, self.parent.shape)[self.mask]
+
+    def down(self, val):
+        """A root-scope (domain) value on this scope's voxels."""
+        return val if self.parent is None else self._take(self.parent.down(val))
 
 
 class Runner:
@@ -105,21 +163,75 @@ class Runner:
 
     # ---- expression evaluation ----------------------------------------------
     def _eval(self, roots):
-        order = nodes(roots)
-        uses: dict[int, int] = {}
-        for e in order:
-            for a in e.a:
-                uses[a.id] = uses.get(a.id, 0) + 1
+        """Values of roots (and nodes) by id. An expensive operand of & | select that
+        nothing else needs (lang.lazy_blocks, as cl.py's `if`s) is computed only on
+        the voxels where it decides the result, e.g. the second cave noise only where
+        the first passed: same values, fewer voxels."""
+        lazy, owner, top, deps, count = _plan(roots)
+        uses = dict(count)
         keep = {r.id for r in roots}
-        v: dict[int, object] = {}
-        for e in order:
-            v[e.id] = self._op(e, [v[a.id] for a in e.a])
-            for a in e.a:
-                uses[a.id] -= 1
-                if uses[a.id] == 0 and a.id not in keep:
-                    del v[a.id]
+        self._lazy, self._owner = lazy, owner
+        root = _Scope(None, None, self._shape())
+        v = root.v
+        for e in top:
+            self._node(e, root)
+            for i in deps[e.id]:
+                uses[i] -= 1
+                if uses[i] == 0 and i not in keep:
+                    del v[i]
         return v
 
+    def _shape(self):
+        d = self.dom
+        n = self.n
+        if d["kind"] == "2d":
+            return (n, d["w"], d["w"])
+        return (n, d["w"], d["w"], d["z"].shape[-1])
+
+    def _node(self, e, sc):
+        """Computes e into scope sc (sc.v holds values on sc's voxels)."""
+        slots = self._lazy.get(e.id)
+        if slots:
+            sc.v[e.id] = self._lazy_node(e, slots, sc)
+            return
+        a = [sc.get(x.id) for x in e.a]
+        if sc.mask is not None and (e.op in ("x", "y", "z", "prev", "lx", "ly", "c")
+                                    or (e.op == "read" and e.k[1] is not None)):
+            sc.v[e.id] = sc.down(self._op(e, a))  # computed on the chunk, then gathered
+        elif sc.mask is not None and e.op == "read":
+            sc.v[e.id] = self._read(e, a, sc)
+        else:
+            sc.v[e.id] = self._op(e, a)
+
+    def _block(self, e, i, sc):
+        """Operand i of lazy node e on the voxels of scope sc."""
+        for n in self._lazy[e.id].get(i, ()):
+            if self._owner.get(n.id) == (e.id, i):
+                self._node(n, sc)
+        return sc.get(e.a[i].id)
+
+    def _lazy_node(self, e, slots, sc):
+        c = np.broadcast_to(np.asarray(sc.get(e.a[0].id), bool), sc.shape)
+        on = int(np.count_nonzero(c))
+        size = c.size
+        if e.op in ("and", "or"):
+            need = c if e.op == "and" else ~c
+            k = on if e.op == "and" else size - on
+            if k == 0:
+                return c
+            if k > LAZY_SHARE * size:  # nearly everywhere: not worth the gathers
+                return _OPS[e.op](c, self._block(e, 1, sc))
+            out = c.copy()
+            out[need] = self._block(e, 1, _Scope(sc, need, None))
+            return out
+        share = {1: on, 2: size - on}
+        if all(share[i] > LAZY_SHARE * size for i in slots):
+            return np.where(c, self._block(e, 1, sc), self._block(e, 2, sc))
+        out = np.empty(sc.shape, DT[e.t])
+        for i, m in ((1, c), (2, ~c)):
+            if m.any():
+                out[m] = self._block(e, i, _Scope(sc, m, None))
+        return out
     def _op(self, e, a):
         op, k, d = e.op, e.k, self.dom
         if op == "const":
@@ -160,10 +272,12 @@ class Runner:
             return (h % np.uint32(k[1])).astype(I)
         raise ValueError(f"unknown op {op}")
 
-    def _read(self, e, a):
+    def _read(self, e, a, sc=None):
         name, dx, dy, reach = e.k
         arr, hf = self.fields[name]
         d = self.dom
+        if sc is not None:  # dynamic offsets on a scope's voxels: gather the indices
+            d = dict(d, **{k: sc.down(d[k]) for k in ("lx", "ly", "c")})
         off = hf - d["halo"]
         if dx is not None:  # constant offset: a slice
             w = d["w"]

@@ -548,3 +548,44 @@ def prune(units: list[Unit], want) -> list[Unit]:
         raise ValueError(f"no 2D pass writes {', '.join(sorted(missing))}")
     return halos([Unit("2d", dict(u.outs)) for u in reversed(keep)])
 
+
+def lazy_blocks(order, roots, min_cost):
+    """Operands worth computing lazily (cl.py: inside an `if`; execute.py: on the
+    voxels that need them): {node id: {slot: [exclusive nodes in order]}}
+    and owner {node id: (lazy node id, slot)} of the innermost block holding it. A
+    node is exclusive to an operand when every path from it to the roots goes
+    through that operand's edge, so skipping it cannot starve another user."""
+    users = {}
+    for e in order:
+        for a in e.a:
+            users.setdefault(a.id, []).append(e.id)
+    rootids = {r.id for r in roots}
+    pos = {e.id: i for i, e in enumerate(order)}
+    sub = {}  # node id -> ids of its subtree (itself included)
+    for e in order:
+        t = {e.id}
+        for a in e.a:
+            t |= sub[a.id]
+        sub[e.id] = t
+    byid = {e.id: e for e in order}
+    lazy, owner, size = {}, {}, {}
+    for e in order:
+        slots = {"and": (1,), "or": (1,), "select": (1, 2)}.get(e.op, ())
+        for i in slots:
+            o = e.a[i]
+            if o.id in rootids or users.get(o.id) != [e.id] or o.op == "const":
+                continue
+            excl = {o.id}
+            for nid in sorted(sub[o.id] - {o.id}, key=pos.get, reverse=True):
+                if nid not in rootids and all(u in excl for u in users[nid]):
+                    excl.add(nid)
+            members = sorted(excl, key=pos.get)
+            cost = sum(_COST.get(byid[n].op, 1) for n in members)
+            if cost < min_cost:
+                continue
+            lazy.setdefault(e.id, {})[i] = [byid[n] for n in members]
+            for n in members:  # innermost block wins: smaller blocks come later
+                if n not in owner or len(members) < size[owner[n]]:
+                    owner[n] = (e.id, i)
+            size[(e.id, i)] = len(members)
+    return lazy, owner

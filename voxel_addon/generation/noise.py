@@ -91,10 +91,101 @@ def lerp(t, a, b):
 
 
 def grad3(h, x, y, z):
-    h = h & 15
-    u = np.where(h < 8, x, y)
-    v = np.where(h < 4, y, np.where((h == 12) | (h == 14), x, z))
-    return np.where(h & 1, -u, u) + np.where(h & 2, -v, v)
+    """h in 0..15 (perm & 15). Negation is a flip of the sign bit, done as an integer xor
+    (same bits as -u, about twice as fast as np.where on both signs)."""
+    u = np.where(h < 8, x, y).view(np.int32)
+    v = np.where(h < 4, y, np.where((h & 13) == 12, x, z)).view(np.int32)
+    s = h << 31
+    u ^= s
+    s = h & 2
+    s <<= 30
+    v ^= s
+    u = u.view(F)
+    u += v.view(F)
+    return u
+
+
+_G3 = []  # grad3's 16 gradients as float32 (x, y, z) coefficients, made on first use
+
+
+def _grads3(perm):
+    """Per perm index: the gradient of perm[i] & 15 as coefficient tables gx, gy, gz
+    (each 1, -1 or +0, derived from grad3 itself), and perm & 15."""
+    if not _G3:
+        one, zero = F(1), F(0)
+        g = np.array([[grad3(np.int32(h), *(one if a == b else zero for b in range(3)))
+                       for a in range(3)] for h in range(16)], F)
+        _G3.append(np.where(g == 0, zero, g))
+    g = np.zeros((len(perm), 4), F)
+    g[:, :3] = _G3[0][perm & 15]
+    # one 16-byte gather per lookup instead of three 4-byte ones: rows as complex128
+    return g.view(np.complex128).ravel(), perm & 15
+
+
+def _dot3(tab, i, x, y, z):
+    """grad3(perm[i] & 15, x, y, z) as gx*x + gy*y + gz*z: 4x fewer array passes than
+    the selects, and the same value except that an exact zero may have the other sign
+    (multiplying by +-1 is exact; adding a zero to a nonzero number changes nothing)."""
+    rows, h = tab
+    if np.ndim(i) == 0:
+        return grad3(h[i], x, y, z)
+    g = rows.take(i).view(F).reshape(np.shape(i) + (4,))  # take: faster than g[i]
+    r = g[..., 0] * x
+    r += g[..., 1] * y
+    r += g[..., 2] * z
+    return r
+
+
+def _sel3(tab, i, x, y, z):
+    return grad3(tab[1].take(i), x, y, z)
+
+
+_G2 = []  # grad2's 8 gradients: coefficients (x, y) and the diagonal factor
+
+
+def _dot2(perm, i, x, y):
+    """grad2(perm[i], x, y) as (gx*x + gy*y) * k, equal up to the sign of a zero (_dot3)."""
+    if not _G2:
+        one, zero = F(1), F(0)
+        g = np.array([[grad2(np.int32(h), one if a == 0 else zero, one if a == 1 else zero)
+                       for a in range(2)] for h in range(8)], F)
+        k = np.where(np.arange(8) & 4, F(float.fromhex("0x1.6a09e6p-1")), one).astype(F)
+        g = np.sign(np.where(g == 0, zero, g)).astype(F)  # diagonals: g = +-k
+        rows = np.zeros((8, 4), F)
+        rows[:, 0], rows[:, 1], rows[:, 2] = g[:, 0], g[:, 1], k
+        _G2.append(rows.view(np.complex128).ravel())
+    if np.ndim(i) == 0:
+        return grad2(perm[i], x, y)
+    g = _G2[0].take(perm.take(i) & 7).view(F).reshape(np.shape(i) + (4,))
+    r = g[..., 0] * x
+    r += g[..., 1] * y
+    r *= g[..., 2]
+    return r
+
+
+def _sel2(perm, i, x, y):
+    return grad2(perm.take(i), x, y)
+
+
+def _exact(fast, slow, coords, *args):
+    """fast(*coords, *args), whose gradients (_dot2/_dot3) may give a zero the other sign:
+    such a difference only ever yields a zero (x + 0 = x, x * 0 = 0), so the results
+    that are exactly zero (lattice planes, a few) are recomputed with the selects."""
+    if all(np.ndim(c) == 0 for c in coords):
+        return slow(*coords, *args)
+    r = fast(*coords, *args)
+    zero = r == 0
+    if zero.any():
+        r[zero] = slow(*(np.broadcast_to(np.asarray(c, F), r.shape)[zero] for c in coords), *args)
+    return r
+
+
+def _lerp_(t, a, b):
+    """lerp(t, a, b) reusing the new array b - a (b is a temporary of the caller)."""
+    d = b - a
+    d *= t
+    d += a
+    return d
 
 
 def grad2(h, x, y):
@@ -111,31 +202,52 @@ def _lattice(v, shift: int):
 
 
 def perlin2(x, y, perm, s: int):
+    return _exact(_perlin2, _perlin2_sel, (x, y), perm, s)
+
+
+def _perlin2_sel(x, y, perm, s):
+    return _perlin2(x, y, perm, s, _sel2)
+
+
+def _perlin2(x, y, perm, s, dot=_dot2):
     X, x = _lattice(x, s & 255)
     Y, y = _lattice(y, (s >> 8) & 255)
     u, v = fade(x), fade(y)
-    A = perm[X] + Y
-    B = perm[X + 1] + Y
+    P = perm.take
+    A = P(X) + Y
+    B = P(X + 1) + Y
     x1, y1 = x - F(1), y - F(1)
-    return lerp(v, lerp(u, grad2(perm[A], x, y), grad2(perm[B], x1, y)),
-                lerp(u, grad2(perm[A + 1], x, y1), grad2(perm[B + 1], x1, y1)))
+    L, d = _lerp_, dot
+    return L(v, L(u, d(perm, A, x, y), d(perm, B, x1, y)),
+             L(u, d(perm, A + 1, x, y1), d(perm, B + 1, x1, y1)))
 
 
 def perlin3(x, y, z, perm, s: int):
+    return _exact(_perlin3, _perlin3_sel, (x, y, z), perm, s)
+
+
+def _perlin3_sel(x, y, z, perm, s):
+    return _perlin3(x, y, z, perm, s, _sel3)
+
+
+def _perlin3(x, y, z, perm, s, dot=_dot3):
     X, x = _lattice(x, s & 255)
     Y, y = _lattice(y, (s >> 8) & 255)
     Z, z = _lattice(z, (s >> 16) & 255)
     u, v, w = fade(x), fade(y), fade(z)
-    A = perm[X] + Y
-    AA, AB = perm[A] + Z, perm[A + 1] + Z
-    B = perm[X + 1] + Y
-    BA, BB = perm[B] + Z, perm[B + 1] + Z
+    g, g1 = _grads3(perm), _grads3(np.roll(perm, -1))  # g1 at i: g at i + 1
+    P = perm.take
+    A = P(X) + Y
+    AA, AB = P(A) + Z, P(A + 1) + Z
+    B = P(X + 1) + Y
+    BA, BB = P(B) + Z, P(B + 1) + Z
     x1, y1, z1 = x - F(1), y - F(1), z - F(1)
-    return lerp(w,
-                lerp(v, lerp(u, grad3(perm[AA], x, y, z), grad3(perm[BA], x1, y, z)),
-                     lerp(u, grad3(perm[AB], x, y1, z), grad3(perm[BB], x1, y1, z))),
-                lerp(v, lerp(u, grad3(perm[AA + 1], x, y, z1), grad3(perm[BA + 1], x1, y, z1)),
-                     lerp(u, grad3(perm[AB + 1], x, y1, z1), grad3(perm[BB + 1], x1, y1, z1))))
+    L, d = _lerp_, dot
+    return L(w,
+             L(v, L(u, d(g, AA, x, y, z), d(g, BA, x1, y, z)),
+               L(u, d(g, AB, x, y1, z), d(g, BB, x1, y1, z))),
+             L(v, L(u, d(g1, AA, x, y, z1), d(g1, BA, x1, y, z1)),
+               L(u, d(g1, AB, x, y1, z1), d(g1, BB, x1, y1, z1))))
 
 
 def octaves(fn, coords, perm, seed: int, salt: int, n: int = 4, lacunarity: float = 2.0,

@@ -10,27 +10,9 @@ import pytest
 from voxel_addon import bake
 from voxel_addon.core.blocks import REGISTRY
 
-from ..formats import mcfiles as mc
 from ..mcres import packfiles as pf
+from ..mcres.builds import save_with_build
 
-AIR = "minecraft:air"
-
-
-def save_with_build(root):
-    """Chunk (0, 0): a stone floor at y 0, grass at its north-west, a stair, glass,
-    a poppy, a block the pack does not know; desert biome where x < 4."""
-    a = np.full((16, 16, 16), AIR, object)
-    a[0] = "minecraft:stone"
-    a[0, 0:2, 0:2] = "minecraft:grass_block[snowy=false]"
-    a[1, 5, 5] = "minecraft:oak_stairs[facing=east,half=bottom,shape=straight,waterlogged=false]"
-    a[1, 7, 7] = "minecraft:glass"
-    a[1, 9, 9] = "minecraft:poppy"
-    a[1, 11, 11] = "minecraft:gold_block"          # not in the pack: today's look
-    cells = np.zeros((4, 4, 4), int)
-    cells[:, :, 0] = 1
-    mc.write_region(root / "save" / "region", {(0, 0): mc.chunk_nbt(0, 0, {0: a}, biomes={
-        0: (["minecraft:forest", "minecraft:desert"], cells.reshape(-1))})})
-    return root / "save"
 
 
 @pytest.fixture(scope="module")

@@ -3,10 +3,7 @@ model blocks with the stack's sprites (the test pack's poppy is one flat red cro
 against the same build imported without a stack (today's look)."""
 from __future__ import annotations
 
-import numpy as np
-
-from tests.bake.test_minecraft import save_with_build
-from tests.mcres import packfiles as pf
+from tests.mcres.builds import imported
 
 
 def _red(img, rect):
@@ -17,13 +14,8 @@ def _red(img, rect):
 
 
 def test_model_blocks_in_the_live_view(gui, tmp_path):
-    from voxel_addon.cli import main
-    jar = pf.write(tmp_path / "client.jar", jar=True)
-    save = save_with_build(tmp_path)
-    worlds = {}
-    for name, extra in (("with", ["--resources", str(jar)]), ("without", [])):
-        worlds[name] = str(tmp_path / f"{name}.sqlite")
-        assert main(["import", "--world", worlds[name], "--from", str(save), *extra]) == 0
+    paths, _ = imported(tmp_path)
+    worlds = {name: str(p) for name, p in paths.items()}
     res = gui("minecraft_stack_view.py", timeout=400, **worlds)
     r = res.result
     for name in worlds:

@@ -9,23 +9,14 @@ import shutil
 import numpy as np
 import pytest
 
-from ..bake.test_minecraft import save_with_build
-from ..mcres import packfiles as pf
+from ..mcres.builds import imported
 
 CAMERA = ["14", "-18", "69", "120", "-30"]
 
 
 @pytest.fixture(scope="module")
 def worlds(tmp_path_factory):
-    from voxel_addon.cli import main
-    root = tmp_path_factory.mktemp("mcdraw")
-    jar = pf.write(root / "client.jar", jar=True)
-    save = save_with_build(root)
-    out = {}
-    for name, extra in (("with", ["--resources", str(jar)]), ("without", [])):
-        out[name] = root / f"{name}.sqlite"
-        assert main(["import", "--world", str(out[name]), "--from", str(save), *extra]) == 0
-    return out, jar
+    return imported(tmp_path_factory.mktemp("mcdraw"))
 
 
 def render(world, out):

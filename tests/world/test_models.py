@@ -11,8 +11,7 @@ import pytest
 
 from voxel_addon.core.blocks import REGISTRY
 
-from ..bake.test_minecraft import save_with_build
-from ..mcres import packfiles as pf
+from ..mcres.builds import imported
 
 POPPY = (9, -10, 65)     # the build's poppy (Minecraft 9, 1, 9) in voxels
 KEY = (0, -1)
@@ -20,15 +19,7 @@ KEY = (0, -1)
 
 @pytest.fixture(scope="module")
 def worlds(tmp_path_factory):
-    from voxel_addon.cli import main
-    root = tmp_path_factory.mktemp("mcworld")
-    jar = pf.write(root / "client.jar", jar=True)
-    save = save_with_build(root)
-    out = {}
-    for name, extra in (("with", ["--resources", str(jar)]), ("without", [])):
-        out[name] = root / f"{name}.sqlite"
-        assert main(["import", "--world", str(out[name]), "--from", str(save), *extra]) == 0
-    return out
+    return imported(tmp_path_factory.mktemp("mcworld"))[0]
 
 
 def payload(path):

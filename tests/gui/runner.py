@@ -102,6 +102,23 @@ class Gui:
     def redraw(self):
         bpy.ops.wm.redraw_timer(type="DRAW_WIN_SWAP", iterations=1)
 
+    def until_drawn(self, area, live, timeout: float):
+        """Redraw `area` until the live view `live` says every wanted chunk is drawn at
+        full quality (or `timeout` s pass), then let it settle; returns its scalar
+        stats and error (use as `stats = yield from gui.until_drawn(...)`)."""
+        t0 = time.monotonic()
+        while time.monotonic() - t0 < timeout:
+            area.tag_redraw()
+            s = live.stats
+            if s["frames"] > 3 and s["drawn"] >= s["wanted"] > 0 and s["quality"] == "full":
+                break
+            yield 0.2
+        yield 1.0
+        area.tag_redraw()
+        yield 0.5
+        return {**{k: v for k, v in live.stats.items() if isinstance(v, (int, float, str))},
+                "error": live.error}
+
     def screenshot(self, name: str):
         """Generator: two ticks and a full redraw, then the X screen into NAME.png."""
         yield None

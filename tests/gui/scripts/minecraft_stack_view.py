@@ -2,7 +2,6 @@
 of two imports of one small build, with the resource stack (`with`) and without one
 (`without`), each screenshot once every chunk is drawn."""
 import math
-import time
 
 import bpy
 
@@ -32,17 +31,6 @@ def run(gui):
         yield 0.2
         sc.voxel.path = p[name]
         vv.distance, vv.hours, vv.show = 2, 12.0, True
-        t0 = time.monotonic()
-        while time.monotonic() - t0 < 120:
-            area.tag_redraw()
-            s = LIVE.stats
-            if s["frames"] > 3 and s["drawn"] >= s["wanted"] > 0 and s["quality"] == "full":
-                break
-            yield 0.2
-        yield 1.0
-        area.tag_redraw()
-        yield 0.5
-        gui.result["status"][name] = {**{k: v for k, v in LIVE.stats.items()
-                                         if isinstance(v, (int, float, str))}, "error": LIVE.error}
+        gui.result["status"][name] = yield from gui.until_drawn(area, LIVE, 120)
         gui.result["rect"] = gui.rect(gui.region(area))
         yield from gui.screenshot(name)

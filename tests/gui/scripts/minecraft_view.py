@@ -40,17 +40,6 @@ def run(gui):
     vv = sc.voxel_view
     vv.distance, vv.hours, vv.show = 3, 10.5, True
     from voxel_addon.blender.liveview import LIVE
-    t0 = time.monotonic()
-    while time.monotonic() - t0 < 180:
-        area.tag_redraw()
-        s = LIVE.stats
-        if s["frames"] > 3 and s["drawn"] >= s["wanted"] > 0 and s["quality"] == "full":
-            break
-        yield 0.2
-    yield 1.0
-    area.tag_redraw()
-    yield 0.5
-    gui.result["status"] = {**{k: v for k, v in LIVE.stats.items()
-                               if isinstance(v, (int, float, str))}, "error": LIVE.error}
+    gui.result["status"] = yield from gui.until_drawn(area, LIVE, 180)
     gui.result["rect"] = gui.rect(gui.region(area))
     yield from gui.screenshot("minecraft")

@@ -10,6 +10,7 @@ from __future__ import annotations
 import csv
 import importlib
 import platform
+import shutil
 import sys
 import tempfile
 import time
@@ -46,6 +47,14 @@ class Context:
 def run(out: Path, areas: list[str] | None = None, quick: bool = False) -> Path:
     out.mkdir(parents=True, exist_ok=True)
     ctx = Context(out, quick)
+    try:
+        return _run(ctx, areas)
+    finally:  # worlds and scratch files of every area: hundreds of MB per run
+        shutil.rmtree(ctx.tmp, ignore_errors=True)
+
+
+def _run(ctx: Context, areas: list[str] | None) -> Path:
+    out = ctx.out
     rows = [("machine", 0, "", f"{platform.machine()} {platform.processor() or ''} "
              f"{__import__('os').cpu_count()} cores, Python {platform.python_version()}")]
     for area in areas or AREAS:

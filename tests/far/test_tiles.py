@@ -21,9 +21,9 @@ def chunks_under(key):
 
 def cave_mouths(gen, key):
     """Samples whose ground voxel a cave carves (the generator's own `ent` field)."""
-    from voxel_addon.generation import execute, lang
+    from voxel_addon.generation import execute, lower
     X, Y = grid.columns(key)
-    r = execute.Runner(lang.prune(gen.units, ["ent"]), 1)
+    r = execute.Runner(lower.prune(gen.units, ["ent"]), 1)
     got = r.at(np.stack([X.ravel(), Y.ravel()], -1), gen.seed32, gen.perm, ["ent"])
     return got["ent"].reshape(X.shape) == 1
 

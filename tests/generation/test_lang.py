@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from voxel_addon.generation import lang as L
+from voxel_addon.generation import lower
 from voxel_addon.generation.passgen import PassGenerator
 
 README = Path(__file__).resolve().parents[2] / "voxel_addon/generation/README.md"
@@ -137,7 +138,7 @@ class Lazy(PassGenerator):
 def test_lowering_hoists_merges_and_stays_exact(cl_device):
     units = Lazy(2, None, "numpy").units
     u3 = [u for u in units if u.kind == "3d"][0]
-    ops = [e.op for e in L.nodes(u3.roots())]
+    ops = [e.op for e in lower.nodes(u3.roots())]
     assert "perlin2" not in ops            # column-only noise went to a hidden 2D field
     assert ops.count("rand3") == 1         # the repeated rand3 is computed once
     from voxel_addon.generation.cl import source

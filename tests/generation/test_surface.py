@@ -5,7 +5,7 @@ import pytest
 
 from voxel_addon.core import chunk as C
 from voxel_addon.core import surface
-from voxel_addon.generation import lang, make_generator
+from voxel_addon.generation import lower, make_generator
 from voxel_addon.generation import overworld as O
 
 SEED = 7
@@ -20,7 +20,7 @@ def _columns(gen, keys):
 
 def test_prune_keeps_only_what_the_fields_need():
     g = make_generator("overworld", SEED, None, "numpy")
-    units = lang.prune(g.units, ["groundZ", "top"])
+    units = lower.prune(g.units, ["groundZ", "top"])
     assert all(u.kind == "2d" for u in units)
     outs = [set(u.outs) for u in units]
     assert "groundZ" in outs[0] and "top" in outs[-1]
@@ -29,7 +29,7 @@ def test_prune_keeps_only_what_the_fields_need():
     full = {n: u.halo for u in g.units if u.kind == "2d" for n in u.outs}
     assert full["groundZ"] > 1
     with pytest.raises(ValueError, match="nothing"):
-        lang.prune(g.units, ["nothing"])
+        lower.prune(g.units, ["nothing"])
 
 
 @pytest.mark.parametrize("backend", ["numpy", "opencl"])

@@ -18,7 +18,7 @@ import numpy as np
 
 from .. import opencl, resources
 from ..core import chunk as C
-from .lang import Unit, lazy_blocks, nodes
+from .lower import Unit, lazy_blocks, nodes
 
 # No fast-math, no mad: IEEE results identical to NumPy's (see gpu/noise.h).
 OPTIONS = ("-cl-fp32-correctly-rounded-divide-sqrt",)
@@ -459,7 +459,7 @@ class Runner:
     def at(self, org, seed32, perm, want=()):
         """execute.Runner.at: 2D fields over the domains whose first column is org."""
         if any(u.kind != "2d" for u in self.units):
-            raise ValueError("Runner.at evaluates 2D units only (lang.prune)")
+            raise ValueError("Runner.at evaluates 2D units only (lower.prune)")
         org = np.asarray(org, np.int64).reshape(-1, 2)
         _, got = self._go(org.T.astype(np.int32).copy(), seed32, perm, want, chunks=False)
         return {k: np.ascontiguousarray(v) for k, v in got.items()}

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..core import chunk as C
 from . import noise as N
-from .lang import Unit, lazy_blocks, nodes
+from .lower import Unit, lazy_blocks, nodes
 
 F, I = np.float32, np.int32
 DT = {"f": F, "i": I, "b": bool}
@@ -103,12 +103,12 @@ class Runner:
 
     def at(self, org, seed32: int, perm: np.ndarray, want=()):
         """The 2D fields named in want, (n, size, size) [c, x, y], over the domains
-        whose first column is org (n, 2) (every unit must be 2D: lang.prune)."""
+        whose first column is org (n, 2) (every unit must be 2D: lower.prune)."""
         self._start(np.asarray(org, np.int64).reshape(-1, 2), seed32, perm)
         with np.errstate(all="ignore"):
             for u in self.units:
                 if u.kind != "2d":
-                    raise ValueError("Runner.at evaluates 2D units only (lang.prune)")
+                    raise ValueError("Runner.at evaluates 2D units only (lower.prune)")
                 self._unit2d(u)
         return {k: np.ascontiguousarray(self.field(k)) for k in want}
 
@@ -164,7 +164,7 @@ class Runner:
     # ---- expression evaluation ----------------------------------------------
     def _eval(self, roots):
         """Values of roots (and nodes) by id. An expensive operand of & | select that
-        nothing else needs (lang.lazy_blocks, as cl.py's `if`s) is computed only on
+        nothing else needs (lower.lazy_blocks, as cl.py's `if`s) is computed only on
         the voxels where it decides the result, e.g. the second cave noise only where
         the first passed: same values, fewer voxels."""
         lazy, owner, top, deps, count = _plan(roots)

@@ -14,7 +14,7 @@ from ..core import chunk as C
 from ..core.blocks import REGISTRY
 from . import noise
 from .base import Generator
-from .lang import prune
+from .lower import prune
 
 BACKENDS = opencl.BACKENDS
 
@@ -114,7 +114,7 @@ class PassGenerator(Generator):
                 "trees": np.zeros(h.shape, np.float32)}
 
     def surface(self, xy):
-        """Generator.surface from the 2D passes alone (lang.prune: no 3D pass, only
+        """Generator.surface from the 2D passes alone (lower.prune: no 3D pass, only
         the halos the wanted fields need), evaluated on 1-column domains, so the
         height and block are exactly those of the generated chunk's column."""
         want = self.surface_wants()

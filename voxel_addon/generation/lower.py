@@ -1,0 +1,211 @@
+"""Lowering the generator language (lang.py) to evaluation units: a 2D domain with the
+halo its readers need, or the 3D chunk volume; with the exact rewrites both backends
+share (common subexpressions, column-invariant work hoisted into 2D fields, pruning
+to the fields asked for, lazily computed costly operands). execute.py (NumPy) and
+cl.py (OpenCL C) run the units."""
+from __future__ import annotations
+
+from .lang import E, Program, const
+
+class Unit:
+    """One kernel: a 2D domain (chunk + halo columns) or the 3D chunk volume.
+
+    A 3D unit's `top` is the name of a 2D field (z above it is air, not computed)
+    or None (all 256 layers)."""
+
+    def __init__(self, kind, outs, halo=0, blk=None, top=None):
+        self.kind, self.outs, self.halo, self.blk, self.top = kind, outs, halo, blk, top
+
+    def roots(self):
+        r = list(self.outs.values())
+        if self.blk is not None:
+            r.append(self.blk)
+        return r
+
+
+def nodes(roots):
+    """Nodes reachable from roots, arguments before users."""
+    seen, order = set(), []
+    stack = [(r, False) for r in reversed(roots)]
+    while stack:
+        e, done = stack.pop()
+        if done:
+            order.append(e)
+            continue
+        if e.id in seen:
+            continue
+        seen.add(e.id)
+        stack.append((e, True))
+        stack.extend((a, False) for a in reversed(e.a) if a.id not in seen)
+    return order
+
+
+def _rebuild(roots, fn):
+    """Rewrite bottom-up: fn(e, new_args) -> replacement node or None (keep/copy e)."""
+    memo = {}
+    for e in nodes(roots):
+        a = tuple(memo[x.id] for x in e.a)
+        n = fn(e, a)
+        if n is None:
+            n = e if all(x is y for x, y in zip(a, e.a)) else E(e.op, a, e.t, e.k)
+        memo[e.id] = n
+    return [memo[r.id] for r in roots]
+
+
+def _subst_z(roots, at):
+    """Rewrite expressions with z := at (a column output evaluated as a 2D value)."""
+    def fn(e, a):
+        if e.op == "z":
+            return at
+        if e.op == "prev":
+            raise ValueError("a column output cannot depend on prev()")
+    return _rebuild(roots, fn)
+
+
+def cse(roots):
+    """Merge identical subexpressions (same op, payload and arguments): e.g. the same
+    rand3 written in a loop is computed once. Exact: the same ops on the same values."""
+    seen = {}
+
+    def fn(e, a):
+        key = (e.op, e.t, repr(e.k), tuple(x.id for x in a))  # repr keeps -0.0 apart
+        n = seen.get(key)
+        if n is None:
+            n = seen[key] = e if all(x is y for x, y in zip(a, e.a)) else E(e.op, a, e.t, e.k)
+        return n
+    return _rebuild(roots, fn)
+
+
+# Rough cost of a node when evaluated per voxel; hoisting pays above HOIST_COST.
+_COST = {"perlin2": 20, "perlin3": 30, "voronoi2": 60, "voronoi3": 150, "rand2": 6,
+         "rand3": 7, "irand2": 6, "div": 2, "sqrt": 2, "const": 0, "x": 0, "y": 0}
+HOIST_COST = 3
+
+
+def _hoist(index, roots):
+    """Move the column-invariant work of a 3D pass (parts depending on neither z nor
+    prev) into hidden 2D fields `_<pass>_<n>` computed once per column: NumPy already
+    broadcasts such values, the OpenCL kernel would redo them per voxel. Exact: the
+    same operations, only evaluated elsewhere. Returns (fields, new roots)."""
+    order = nodes(roots)
+    dep, cost = {}, {}
+    for e in order:
+        dep[e.id] = e.op in ("z", "prev") or any(dep[a.id] for a in e.a)
+        if not dep[e.id]:
+            cost[e.id] = _COST.get(e.op, 1) + sum(cost[a.id] for a in e.a)
+    # frontier: invariant nodes used by a z-dependent node (or roots themselves)
+    want = {r.id for r in roots if not dep[r.id] and r.t != "f3"}
+    for e in order:
+        if dep[e.id]:
+            want.update(a.id for a in e.a if not dep[a.id] and a.t != "f3")
+    fields, repl = {}, {}
+    for e in order:
+        if e.id in want and cost[e.id] >= HOIST_COST and e.op != "read":
+            name = f"_{index}_{len(fields)}"
+            if e.t == "b":  # fields hold numbers; bools travel as 0/1
+                fields[name] = E("select", (e, const(1), const(0)), "i")
+                repl[e.id] = E("ne", (E("read", (), "i", (name, 0, 0, 0)), const(0)), "b")
+            else:
+                fields[name] = e
+                repl[e.id] = E("read", (), e.t, (name, 0, 0, 0))
+    return fields, _rebuild(roots, lambda e, a: repl.get(e.id))
+
+
+def lower(prog: Program) -> list[Unit]:
+    units = []
+    for p in prog.passes:
+        if p.kind == "2d":
+            outs = dict(zip(p.outs, cse(list(p.outs.values()))))
+            units.append(Unit("2d", outs))
+            continue
+        top = None
+        roots = [p.blk]
+        if p.top_e is not None:
+            if any(e.op in ("z", "prev") for e in nodes([p.top_e])):
+                raise ValueError("top() must depend on the column only (not z or prev)")
+            if p.top_e.op == "read" and p.top_e.k[1:3] == (0, 0):
+                top = p.top_e.k[0]
+            else:
+                top = f"_{p.index}_top"
+                units.append(Unit("2d", {top: cse([p.top_e])[0]}))
+        fields, (blk,) = _hoist(p.index, cse(roots))
+        if fields:
+            units.append(Unit("2d", fields))
+        units.append(Unit("3d", {}, 0, blk, top))
+        for name, v in p.outs.items():
+            units.append(Unit("2d", {name: cse(_subst_z([v], p.at[name]))[0]}))
+    return halos(units)
+
+
+def halos(units: list[Unit]) -> list[Unit]:
+    """Set each 2D unit's halo, last unit first: a field must cover every reader's
+    domain plus reach."""
+    need: dict[str, int] = {}
+    for u in reversed(units):
+        if u.kind == "2d":
+            u.halo = max([need.get(n, 0) for n in u.outs] + [0])
+        for e in nodes(u.roots()):
+            if e.op == "read":
+                need[e.k[0]] = max(need.get(e.k[0], 0), u.halo + e.k[3])
+        if u.top is not None:
+            need[u.top] = max(need.get(u.top, 0), 0)
+    return units
+
+
+def prune(units: list[Unit], want) -> list[Unit]:
+    """The 2D units the fields `want` need, with halos for just those readers: e.g.
+    the height map and surface without the 3D passes and the wide halos that tree
+    crowns need (far terrain, far/README.md). A column output of a 3D pass is a 2D
+    unit already (lower: z := at), so no 3D unit is ever needed."""
+    need, keep = set(want), []
+    for u in reversed(units):
+        if u.kind != "2d" or not need & set(u.outs):
+            continue
+        keep.append(u)
+        need.update(e.k[0] for e in nodes(u.roots()) if e.op == "read")
+    missing = set(want) - {n for u in keep for n in u.outs}
+    if missing:
+        raise ValueError(f"no 2D pass writes {', '.join(sorted(missing))}")
+    return halos([Unit("2d", dict(u.outs)) for u in reversed(keep)])
+
+
+def lazy_blocks(order, roots, min_cost):
+    """Operands worth computing lazily (cl.py: inside an `if`; execute.py: on the
+    voxels that need them): {node id: {slot: [exclusive nodes in order]}}
+    and owner {node id: (lazy node id, slot)} of the innermost block holding it. A
+    node is exclusive to an operand when every path from it to the roots goes
+    through that operand's edge, so skipping it cannot starve another user."""
+    users = {}
+    for e in order:
+        for a in e.a:
+            users.setdefault(a.id, []).append(e.id)
+    rootids = {r.id for r in roots}
+    pos = {e.id: i for i, e in enumerate(order)}
+    sub = {}  # node id -> ids of its subtree (itself included)
+    for e in order:
+        t = {e.id}
+        for a in e.a:
+            t |= sub[a.id]
+        sub[e.id] = t
+    byid = {e.id: e for e in order}
+    lazy, owner, size = {}, {}, {}
+    for e in order:
+        slots = {"and": (1,), "or": (1,), "select": (1, 2)}.get(e.op, ())
+        for i in slots:
+            o = e.a[i]
+            if o.id in rootids or users.get(o.id) != [e.id] or o.op == "const":
+                continue
+            excl = {o.id}
+            for nid in sorted(sub[o.id] - {o.id}, key=pos.get, reverse=True):
+                if nid not in rootids and all(u in excl for u in users[nid]):
+                    excl.add(nid)
+            members = sorted(excl, key=pos.get)
+            cost = sum(_COST.get(byid[n].op, 1) for n in members)
+            if cost < min_cost:
+                continue
+            lazy.setdefault(e.id, {})[i] = [byid[n] for n in members]
+            for n in members:  # innermost block wins: smaller blocks come later
+                if n not in owner or len(members) < size[owner[n]]:
+                    owner[n] = (e.id, i)
+            size[(e.id, i)] = len(members)
+    return lazy, owner

@@ -81,7 +81,7 @@ def test_the_renderer_draws_payload_models(worlds):
             r.update_chunks(got)
             # the stone floor's top (z 64) stands on the area's wall, model or not
             assert r.edges[KEY][:4].max() == 65 and (r.edges[KEY][:4] == 65).mean() > 0.9
-            imgs[name] = r.render(Camera(14, -18, 69, 120, -30), 12.0, (160, 100)).astype(int)
+            imgs[name] = r.render(Camera(14, -18, 69, 120, -30), 12.0, (320, 200)).astype(int)
             if name == "with":    # culled per chunk: none drawn looking away from the build
                 from voxel_addon.render.models import NAMES
                 cam = Camera(14, -18, 69, 120, -30).fitted(1.6, 70.0, 300.0)

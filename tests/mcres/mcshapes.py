@@ -53,7 +53,7 @@ def _pane() -> dict:
             "west": {"uv": [7, 0, 0, 16], "texture": "#pane"},
             "east": {"uv": [0, 0, 7, 16], "texture": "#pane"}}),
         "noside": el([7, 0, 7], [9, 16, 9], {"north": {"uv": [9, 0, 7, 16], "texture": "#pane"}}),
-        "noside_alt": el([7, 0, 7], [9, 16, 9], {"south": {"uv": [7, 0, 9, 16], "texture": "#pane"}}),
+        "noside_alt": el([7, 0, 7], [9, 16, 9], {"east": {"uv": [7, 0, 9, 16], "texture": "#pane"}}),
     }
     out = {f"models/block/template_glass_pane_{k}.json": v for k, v in models.items()}
     for k in models:

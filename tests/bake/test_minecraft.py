@@ -100,6 +100,50 @@ def test_model_textures_stand_as_the_greedy_paths(mc_world):
             assert (np.sign(np.round(dr, 6)) == np.sign(np.round(du, 6))).all(), (part.name, i)
 
 
+def test_the_builds_shapes_come_out_in_the_bake(mc_world):
+    """Each slab, pane, door half, rail, torch and leaves block of the build: every
+    quad of its shape that nothing hides (no cullface, or air there) is in the bake at
+    its voxel (Minecraft (x, y, z) → voxel (x, −1−z, y + 64)), with the sprite's layer."""
+    from voxel_addon.mcres import Resources, Stack
+    from voxel_addon.mcres.states import parse_key
+    from ..mcres import builds
+    bk = baked(mc_world[0], light="vertex")
+    p = model_part(bk)
+    have = {}
+    for i, quad in enumerate(np.round(p.positions.reshape(-1, 4, 3), 4)):
+        have[frozenset(map(tuple, quad.tolist()))] = bk.materials[p.material[i]]
+    blocks = {**{(x, 1, z): k for (x, z), k in builds._joined("glass_pane", builds.PANE).items()},
+              **{(x, 1, z): f"minecraft:oak_slab[type={t}]" for (x, z), t in builds.SLABS.items()},
+              **{(x, y, z): f"minecraft:rail[shape={sh}]" for (x, z, y), sh in builds.RAILS.items()},
+              (builds.TORCH[0], 1, builds.TORCH[1]): "minecraft:torch",
+              **{(x, y, z): "minecraft:oak_leaves" for x, y, z in builds.LEAVES}}
+    for (x, z), (facing, hinge, opened) in builds.DOORS.items():
+        for y, half in ((1, "lower"), (2, "upper")):
+            blocks[x, y, z] = (f"minecraft:oak_door[facing={facing},half={half},hinge={hinge},"
+                               f"open={opened}]")
+    from voxel_addon.mcres.mesh import OFFSETS
+    from voxel_addon.world import World
+    res = Resources(Stack.open([mc_world[1]]))
+    render = {"solid": "opaque", "cutout": "alpha_test", "translucent": "blend"}
+    try:
+        with World.open(mc_world[0], readonly=True, loader=False) as w:
+            for (x, y, z), key in blocks.items():
+                v = np.array([x, -1 - z, y + 64])
+                sh = res.shape(*parse_key(key))
+                free = [q for q in sh.quads
+                        if q.cull < 0 or w.get_block(*map(int, v + OFFSETS[q.cull])) == 0]
+                assert free, key
+                blocks[x, y, z] = (v, free)
+        for key_v, (v, free) in blocks.items():
+            for q in free:
+                at = frozenset(map(tuple, np.round(q.pos + v, 4).tolist()))
+                assert at in have, (key_v, q.face)
+                m = have[at]
+                assert m.image == q.sprite and m.render == render[q.layer], (key_v, m)
+    finally:
+        res.close()
+
+
 def test_a_missing_stack_bakes_todays_look(mc_world, tmp_path):
     import shutil
     w, jar = mc_world
@@ -125,7 +169,9 @@ def test_the_glb_is_valid(bpy, mc_world, tmp_path, validate):
     assert report["issues"]["numErrors"] == 0, report["issues"]["messages"][:5]
     doc, _ = glb.read(out)
     names = {m["name"] for m in doc["materials"]}
-    assert any(n.startswith("voxel_mc_grass_block_top") for n in names), names
+    for sprite in ("grass_block_top", "oak_door_top", "oak_door_bottom", "glass_pane_top",
+                   "rail", "torch", "oak_leaves"):
+        assert any(n.startswith(f"voxel_mc_{sprite}") for n in names), (sprite, names)
     assert len(doc["images"]) >= 5
     # model quads carry their light per vertex (COLOR_0), never the atlas's occlusion
     mc = [m for m in doc["materials"] if m["name"].startswith("voxel_mc_")]

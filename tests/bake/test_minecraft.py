@@ -144,6 +144,26 @@ def test_the_builds_shapes_come_out_in_the_bake(mc_world):
         res.close()
 
 
+def test_the_floor_under_a_rail_is_lit_as_open_floor(mc_world):
+    """The rails (planks cubes in today's look) pass light with the stack: the stone
+    floor's top under them has the daylight of the open floor beside them."""
+    from ..mcres import builds
+    p = model_part(baked(mc_world[0], light="vertex"))
+    c = p.positions.reshape(-1, 4, 3).mean(1)
+    up = p.normals.reshape(-1, 4, 3)[:, 0, 2] > 0.5
+    day = p.daylight.reshape(-1, 4).mean(1)
+
+    def floor_top(x, z):
+        at = up & np.all(np.abs(c - (x + 0.5, -1 - z + 0.5, 65)) < 1e-3, axis=1)
+        assert at.sum() == 1, (x, z)
+        return float(day[at][0])
+    open_floor = floor_top(11, 9)
+    assert open_floor > 0.5
+    for (x, z, y), shape in builds.RAILS.items():
+        if y == 1 and shape == "north_south":      # (not beside the block they climb)
+            assert floor_top(x, z) == pytest.approx(open_floor, abs=0.02), (x, z)
+
+
 def test_a_missing_stack_bakes_todays_look(mc_world, tmp_path):
     import shutil
     w, jar = mc_world

@@ -58,3 +58,25 @@ def test_a_missing_stack_draws_todays_look(worlds, tmp_path):
         moved.rename(jar)
     b = render(w["without"], tmp_path / "without.png")
     assert np.array_equal(a, b)
+
+
+def test_cli_renders_light_the_stacks_model_blocks_as_open(worlds):
+    """The render's light (render.source.world_area) lets daylight through the
+    build's rails (planks cubes in today's look) with the stack, as the bake and the
+    live view do; without the stack they hold none."""
+    from voxel_addon.render.source import world_area
+    from voxel_addon.world import World
+    from ..mcres import builds
+    (w, _) = worlds
+    day = {}
+    for name in ("with", "without"):
+        with World.open(w[name], readonly=True, loader=False) as world:
+            a = world_area(world, 8, -8, 1)
+        lx0, ly0 = a.light_at
+
+        def at(x, z, y):
+            v = (x - 16 * lx0, -1 - z - 16 * ly0, y + 64)
+            return int(a.light[v]) >> 12
+        day[name] = [at(x, z, y) for (x, z, y) in builds.RAILS]
+    assert day["with"] == [15] * len(builds.RAILS)
+    assert day["without"] == [0] * len(builds.RAILS)

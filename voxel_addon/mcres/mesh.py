@@ -141,3 +141,30 @@ def build(res, palette: list, state: np.ndarray, opaque: np.ndarray, *, origin=(
                 np.array(out["sprite"], np.int32), np.array(out["tint"], np.uint8).reshape(-1, 3),
                 np.array(out["layer"], np.uint8), np.array(out["shade"], bool),
                 np.array(out["voxel"], np.int32).reshape(-1, 3), sprites, drawn)
+
+
+def light_blocks(res, palette: list, state: np.ndarray, blocks: np.ndarray) -> np.ndarray:
+    """BLOCKS for the light solve: a voxel drawn from a model that is no whole opaque
+    cube (a rail, door, fence, slab, torch…) passes light, as the game's: its
+    project block (a whole opaque cube for today's look, rails as planks) would leave
+    the floor under a rail and the sides next to a door dark. Voxels whose project
+    block emits or already passes light keep it. BLOCKS itself when nothing changes."""
+    from ..core.blocks import REGISTRY
+    from .states import parse_key
+    known = state > 0
+    if not known.any():
+        return blocks
+    opens = np.zeros(len(palette), bool)
+    for i in np.unique(state[known]).tolist():
+        name, props = parse_key(palette[i])
+        if res.blockstate(name) is None:
+            continue
+        sh = res.shape(name, props)
+        opens[i] = bool(sh.quads) and not sh.full
+    dark = REGISTRY.light_opaque & (REGISTRY.emission.max(axis=1) == 0)
+    where = opens[state] & dark[blocks]
+    if not where.any():
+        return blocks
+    out = blocks.copy(order="K")
+    out[where] = 0
+    return out

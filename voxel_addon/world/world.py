@@ -166,7 +166,7 @@ class World(Saving):
         return None
 
     def chunk_at(self, cx: int, cy: int) -> Chunk:
-        key = (cx, cy)
+        key = (int(cx), int(cy))   # NumPy ints activated an empty chunk (read-only)
         c = self.chunks.get(key)
         if c is None:
             c = self._activate([key])[0]

@@ -52,8 +52,7 @@ def test_models_with_the_stacks_textures_and_tints(mc_world, light):
     tops = {s.tint for s in specs if s.image == "minecraft:block/grass_block_top"}
     assert tops == {(0.0, 1.0, 7 / 255)}
     # the sprites' pixels are the pack's
-    assert np.array_equal(bk.images["minecraft:block/stone"],
-                          pf.solid(pf.COLOURS["stone"]))
+    assert np.array_equal(bk.images["minecraft:block/stone"], pf.texture("stone"))
     # the greedy parts leave the modelled voxels out, keep the gold block (the `color`
     # block: today's look, its colour material)
     others = [q for q in bk.parts if q is not p]
@@ -73,16 +72,25 @@ def test_models_with_the_stacks_textures_and_tints(mc_world, light):
 def test_model_textures_stand_as_the_greedy_paths(mc_world):
     """On every side face the texture's v grows upward and its u to the right seen
     from outside (cross(up, normal)), as the greedy path lays its tiles (Blender's
-    uv: v up), so sprites are not upside down or mirrored."""
+    uv: v up), so sprites are not upside down or mirrored. (A door's and a pane's
+    models mirror one side on purpose, as the game's: those are left out.)"""
     from voxel_addon.core.blocks import REGISTRY as R
     one = np.zeros((3, 3, 256), np.uint16)
     one[1, 1, 5] = R.id("stone")
     greedy = bake.bake_blocks(one, light="vertex").parts[0]
-    p = model_part(baked(mc_world[0], light="vertex"))
+    bk = baked(mc_world[0], light="vertex")
+    p = model_part(bk)
+
+    def bk_images(part):
+        return [bk.materials[m].image for m in part.material]
     for part in (greedy, p):
         pos, uv = part.positions.reshape(-1, 4, 3), part.uvs.reshape(-1, 4, 2)
         n = part.normals.reshape(-1, 4, 3)[:, 0]
         side = np.flatnonzero(np.abs(n[:, 2]) < 0.5)
+        if part is p:
+            mirrored = ("minecraft:block/oak_door_top", "minecraft:block/oak_door_bottom",
+                        "minecraft:block/glass_pane_top", "minecraft:block/glass")
+            side = [i for i in side if bk_images(part)[i] not in mirrored]
         assert len(side)
         for i in side:
             right = np.cross([0, 0, 1], n[i])
@@ -90,6 +98,70 @@ def test_model_textures_stand_as_the_greedy_paths(mc_world):
             dr, du = (pos[i] - pos[i, 0]) @ right, uv[i, :, 0] - uv[i, 0, 0]
             assert (np.sign(np.round(dz, 6)) == np.sign(np.round(dv, 6))).all(), (part.name, i)
             assert (np.sign(np.round(dr, 6)) == np.sign(np.round(du, 6))).all(), (part.name, i)
+
+
+def test_the_builds_shapes_come_out_in_the_bake(mc_world):
+    """Each slab, pane, door half, rail, torch and leaves block of the build: every
+    quad of its shape that nothing hides (no cullface, or air there) is in the bake at
+    its voxel (Minecraft (x, y, z) → voxel (x, −1−z, y + 64)), with the sprite's layer."""
+    from voxel_addon.mcres import Resources, Stack
+    from voxel_addon.mcres.states import parse_key
+    from ..mcres import builds
+    bk = baked(mc_world[0], light="vertex")
+    p = model_part(bk)
+    have = {}
+    for i, quad in enumerate(np.round(p.positions.reshape(-1, 4, 3), 4)):
+        have[frozenset(map(tuple, quad.tolist()))] = bk.materials[p.material[i]]
+    blocks = {**{(x, 1, z): k for (x, z), k in builds._joined("glass_pane", builds.PANE).items()},
+              **{(x, 1, z): f"minecraft:oak_slab[type={t}]" for (x, z), t in builds.SLABS.items()},
+              **{(x, y, z): f"minecraft:rail[shape={sh}]" for (x, z, y), sh in builds.RAILS.items()},
+              (builds.TORCH[0], 1, builds.TORCH[1]): "minecraft:torch",
+              **{(x, y, z): "minecraft:oak_leaves" for x, y, z in builds.LEAVES}}
+    for (x, z), (facing, hinge, opened) in builds.DOORS.items():
+        for y, half in ((1, "lower"), (2, "upper")):
+            blocks[x, y, z] = (f"minecraft:oak_door[facing={facing},half={half},hinge={hinge},"
+                               f"open={opened}]")
+    from voxel_addon.mcres.mesh import OFFSETS
+    from voxel_addon.world import World
+    res = Resources(Stack.open([mc_world[1]]))
+    render = {"solid": "opaque", "cutout": "alpha_test", "translucent": "blend"}
+    try:
+        with World.open(mc_world[0], readonly=True, loader=False) as w:
+            for (x, y, z), key in blocks.items():
+                v = np.array([x, -1 - z, y + 64])
+                sh = res.shape(*parse_key(key))
+                free = [q for q in sh.quads
+                        if q.cull < 0 or w.get_block(*map(int, v + OFFSETS[q.cull])) == 0]
+                assert free, key
+                blocks[x, y, z] = (v, free)
+        for key_v, (v, free) in blocks.items():
+            for q in free:
+                at = frozenset(map(tuple, np.round(q.pos + v, 4).tolist()))
+                assert at in have, (key_v, q.face)
+                m = have[at]
+                assert m.image == q.sprite and m.render == render[q.layer], (key_v, m)
+    finally:
+        res.close()
+
+
+def test_the_floor_under_a_rail_is_lit_as_open_floor(mc_world):
+    """The rails (planks cubes in today's look) pass light with the stack: the stone
+    floor's top under them has the daylight of the open floor beside them."""
+    from ..mcres import builds
+    p = model_part(baked(mc_world[0], light="vertex"))
+    c = p.positions.reshape(-1, 4, 3).mean(1)
+    up = p.normals.reshape(-1, 4, 3)[:, 0, 2] > 0.5
+    day = p.daylight.reshape(-1, 4).mean(1)
+
+    def floor_top(x, z):
+        at = up & np.all(np.abs(c - (x + 0.5, -1 - z + 0.5, 65)) < 1e-3, axis=1)
+        assert at.sum() == 1, (x, z)
+        return float(day[at][0])
+    open_floor = floor_top(11, 9)
+    assert open_floor > 0.5
+    for (x, z, y), shape in builds.RAILS.items():
+        if y == 1 and shape == "north_south":      # (not beside the block they climb)
+            assert floor_top(x, z) == pytest.approx(open_floor, abs=0.02), (x, z)
 
 
 def test_a_missing_stack_bakes_todays_look(mc_world, tmp_path):
@@ -117,7 +189,9 @@ def test_the_glb_is_valid(bpy, mc_world, tmp_path, validate):
     assert report["issues"]["numErrors"] == 0, report["issues"]["messages"][:5]
     doc, _ = glb.read(out)
     names = {m["name"] for m in doc["materials"]}
-    assert any(n.startswith("voxel_mc_grass_block_top") for n in names), names
+    for sprite in ("grass_block_top", "oak_door_top", "oak_door_bottom", "glass_pane_top",
+                   "rail", "torch", "oak_leaves"):
+        assert any(n.startswith(f"voxel_mc_{sprite}") for n in names), (sprite, names)
     assert len(doc["images"]) >= 5
     # model quads carry their light per vertex (COLOR_0), never the atlas's occlusion
     mc = [m for m in doc["materials"] if m["name"].startswith("voxel_mc_")]

@@ -1,5 +1,5 @@
 """The live view of a Minecraft import with the world's resource stack (issue 30 d):
-model blocks with the stack's sprites (the test pack's poppy is one flat red cross),
+model blocks with the stack's sprites (the test pack's poppy: a red bloom on a cross),
 against the same build imported without a stack (today's look)."""
 from __future__ import annotations
 

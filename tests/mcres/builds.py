@@ -11,9 +11,36 @@ from . import packfiles as pf
 AIR = "minecraft:air"
 
 
+def _joined(kind: str, cells, extra: str = "") -> dict:
+    """KIND (a fence or a pane) on CELLS (x, z): each joined to its neighbours of the
+    same kind, as the game stores it."""
+    out = {}
+    for x, z in cells:
+        sides = {"east": (x + 1, z) in cells, "west": (x - 1, z) in cells,
+                 "north": (x, z - 1) in cells, "south": (x, z + 1) in cells}
+        props = ",".join(f"{k}={str(v).lower()}" for k, v in sorted(sides.items()))
+        out[x, z] = f"minecraft:{kind}[{props}{extra}]"
+    return out
+
+
+FENCE = [(x, 3) for x in range(2, 6)]
+PANE = [(x, 6) for x in range(2, 6)] + [(5, 7)]
+SLABS = {(2, 9): "bottom", (3, 9): "top", (4, 9): "double"}
+# (x, z): (facing, hinge, open)
+DOORS = {(8, 3): ("south", "left", "false"), (10, 3): ("south", "left", "true")}
+# x 13 from the south: flat, flat, rising north onto a stone, flat on it
+RAILS = {(13, 9, 1): "north_south", (13, 8, 1): "north_south", (13, 7, 1): "ascending_north",
+         (13, 6, 2): "north_south"}
+TORCH = (6, 11)
+LEAVES = [(x, y, z) for x in (5, 6) for y in (1, 2) for z in (12, 13)]
+
+
 def save_with_build(root):
     """Chunk (0, 0): a stone floor at y 0, grass at its north-west, a stair, glass,
-    a poppy, a block the pack does not know; desert biome where x < 4."""
+    a poppy, a block the pack does not know, a fence and a glass pane row, slabs
+    (bottom, top, double), a closed and an open door, rails rising onto a block, a
+    torch and leaves; desert biome where x < 4. Nothing at the chunk's edges (the
+    floor stands alone there)."""
     a = np.full((16, 16, 16), AIR, object)
     a[0] = "minecraft:stone"
     a[0, 0:2, 0:2] = "minecraft:grass_block[snowy=false]"
@@ -21,6 +48,22 @@ def save_with_build(root):
     a[1, 7, 7] = "minecraft:glass"
     a[1, 9, 9] = "minecraft:poppy"
     a[1, 11, 11] = "minecraft:gold_block"          # not in the pack: today's look
+    for (x, z), k in _joined("oak_fence", FENCE, ",waterlogged=false").items():
+        a[1, z, x] = k
+    for (x, z), k in _joined("glass_pane", PANE, ",waterlogged=false").items():
+        a[1, z, x] = k
+    for (x, z), t in SLABS.items():
+        a[1, z, x] = f"minecraft:oak_slab[type={t},waterlogged=false]"
+    for (x, z), (facing, hinge, opened) in DOORS.items():
+        for y, half in ((1, "lower"), (2, "upper")):
+            a[y, z, x] = (f"minecraft:oak_door[facing={facing},half={half},hinge={hinge},"
+                          f"open={opened},powered=false]")
+    for (x, z, y), shape in RAILS.items():
+        a[y, z, x] = f"minecraft:rail[shape={shape},waterlogged=false]"
+    a[1, 6, 13] = "minecraft:stone"
+    a[1, TORCH[1], TORCH[0]] = "minecraft:torch"
+    for x, y, z in LEAVES:
+        a[y, z, x] = "minecraft:oak_leaves[distance=1,persistent=true,waterlogged=false]"
     cells = np.zeros((4, 4, 4), int)
     cells[:, :, 0] = 1
     mc.write_region(root / "save" / "region", {(0, 0): mc.chunk_nbt(0, 0, {0: a}, biomes={

@@ -1,10 +1,12 @@
 """A small resource pack written by the tests (the project never ships Minecraft's
 files): stairs with variants and uvlock, a multipart fence, a four-model parent chain,
-a rotated cross, a tinted grass block with a cutout overlay, cutout leaves, translucent
-glass, weighted variants, an animated texture and the two colormaps.
+a rotated cross, a tinted grass block with a cutout overlay, tinted cutout leaves,
+translucent glass, weighted variants, an animated texture and the two colormaps; and,
+with the game's own blockstate and model structure (`mcshapes`), slabs, a glass pane,
+a door, a standing torch and rails.
 
-Textures are solid colours (plus a marker pixel) so a test can tell which texture a
-face got from its pixels alone."""
+Textures are patterns drawn by code (`packtextures`): `texture(name)` gives a test the
+pixels a face should show."""
 from __future__ import annotations
 
 import functools
@@ -15,6 +17,8 @@ from pathlib import Path
 import numpy as np
 
 from voxel_addon.textures import png_bytes
+
+from . import mcshapes, packtextures
 
 MC = "assets/minecraft/"
 
@@ -27,10 +31,9 @@ def solid(rgb, size=16, alpha=255) -> np.ndarray:
     return a
 
 
-COLOURS = {"stone": (120, 120, 120), "oak_planks": (160, 130, 80), "dirt": (130, 90, 60),
-           "grass_block_top": (200, 200, 200), "grass_block_side": (130, 100, 70),
-           "glass": (200, 230, 255), "torch": (250, 200, 50), "poppy": (220, 30, 30),
-           "stone_mirrored": (110, 110, 130)}
+def texture(name: str) -> np.ndarray:
+    """The pixels of the pack's textures/block/NAME.png."""
+    return packtextures.all_textures()[name]
 
 
 def colormap(kind: str) -> np.ndarray:
@@ -149,7 +152,12 @@ def _files() -> dict[str, bytes]:
         # drawn by code in the game: a model without elements
         "models/block/chest.json": {"parent": "builtin/entity", "textures": {"particle": "block/oak_planks"}},
         "blockstates/chest.json": {"variants": {"facing=north": {"model": "block/chest"}}},
-        "models/block/oak_leaves.json": {"parent": "block/cube_all", "textures": {"all": "block/oak_leaves"}},
+        # leaves as the game's block/leaves: every face tinted by the foliage colour
+        "models/block/leaves.json": {"parent": "block/block", "textures": {"particle": "#all"},
+                                     "elements": [{"from": [0, 0, 0], "to": [16, 16, 16], "faces": {
+                                         d: {"texture": "#all", "cullface": d, "tintindex": 0}
+                                         for d in ("down", "up", "north", "south", "west", "east")}}]},
+        "models/block/oak_leaves.json": {"parent": "block/leaves", "textures": {"all": "block/oak_leaves"}},
         "blockstates/oak_leaves.json": {"variants": {"": {"model": "block/oak_leaves"}}},
         "models/block/glass.json": {"parent": "block/cube_all", "textures": {"all": "block/glass"}},
         "blockstates/glass.json": {"variants": {"": {"model": "block/glass"}}},
@@ -157,15 +165,9 @@ def _files() -> dict[str, bytes]:
                                           "textures": {"all": "block/sea_lantern"}},
         "blockstates/sea_lantern.json": {"variants": {"": {"model": "block/sea_lantern"}}},
     }
+    j.update(mcshapes.files())
     out = {MC + k: json.dumps(v).encode() for k, v in j.items()}
-    tex = {k: solid(c) for k, c in COLOURS.items()}
-    tex["glass"] = solid(COLOURS["glass"], alpha=128)
-    leaves = solid((60, 60, 60))
-    leaves[::2, ::2, 3] = 0
-    tex["oak_leaves"] = leaves
-    over = np.zeros((16, 16, 4), np.uint8)
-    over[:4, :, :] = (150, 150, 150, 255)           # the grass fringe on top, clear below
-    tex["grass_block_side_overlay"] = over
+    tex = packtextures.all_textures()
     tex["sea_lantern"] = np.concatenate([solid((10 * i, 40, 90)) for i in range(3)])   # 16×48
     for k, a in tex.items():
         out[MC + f"textures/block/{k}.png"] = png_bytes(a)

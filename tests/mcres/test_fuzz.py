@@ -43,20 +43,26 @@ def test_mutated_packs_fail_in_one_line(tmp_path):
     base = pf.files()
     names = [k for k in base if k.endswith(".json") and any(
         w in k for w in ("stairs", "fence", "cross", "poppy", "torch", "cube", "block.json",
-                         "stone.json", "grass_block"))]   # the files the shapes below read
+                         "stone.json", "grass_block", "slab", "pane", "door", "rail"))]   # what the shapes below read
     rng = np.random.default_rng(30)
     odd = []
+    jar = pf.write(tmp_path / "client.jar", jar=True)
     for n in range(150):
-        content = dict(base)
+        # the three mutated files in a pack over the whole one
+        content = {"pack.mcmeta": base["pack.mcmeta"]}
         for k in rng.choice(names, 3, replace=False):
             content[k] = json.dumps(mutate(rng, json.loads(base[k]))).encode()
         d = tmp_path / f"p{n}"
         d.mkdir()
-        r = Resources(Stack.open([pf.write(d, content)]))
+        r = Resources(Stack.open([jar, pf.write(d, content)]))
         for block, props in [("oak_stairs", {"facing": "east", "half": "top", "shape": "straight"}),
                              ("oak_fence", {"north": "true", "east": "false"}), ("poppy", {}),
                              ("grass_block", {"snowy": "false"}), ("stone", {}),
-                             ("wall_torch", {"facing": "east"})]:
+                             ("wall_torch", {"facing": "east"}), ("oak_slab", {"type": "top"}),
+                             ("glass_pane", {"north": "true", "east": "false", "west": "true"}),
+                             ("oak_door", {"facing": "west", "half": "upper", "hinge": "right",
+                                           "open": "true"}),
+                             ("rail", {"shape": "ascending_east"}), ("torch", {})]:
             try:
                 sh = r.shape(block, props, (n, 64, -n))
                 if sh is not None:

@@ -102,14 +102,14 @@ def test_the_default_uv_is_the_games(res):
 
 def test_face_corners_and_uv_corners_as_the_game(res):
     """The stone's south face (voxel -y) seen from outside: top-left corner first,
-    counter-clockwise, texture (0,0) at the top-left; the marker pixel sits there."""
+    counter-clockwise, texture (0,0) at the top-left: the pack's pixels as written."""
     q = next(q for q in res.shape("stone").quads if q.face == FACES["-y"])
     assert q.pos.tolist() == [[0, 0, 1], [0, 0, 0], [1, 0, 0], [1, 0, 1]]
     assert q.uv.tolist() == [[0, 0], [0, 1], [1, 1], [1, 0]]
     n = np.cross(q.pos[1] - q.pos[0], q.pos[2] - q.pos[0])
     assert n[1] < 0                            # counter-clockwise from outside: normal out
     tex = res.texture(q.sprite)
-    assert tex.rgba[0, 0, :3].tolist() == [1, 2, 3]
+    assert np.array_equal(tex.rgba, pf.texture("stone"))
 
 
 def test_java_random_is_javas():
@@ -176,7 +176,7 @@ def test_a_multipart_fence(res):
 
 def test_a_rescaled_45_degree_cross_reaches_the_corners(res):
     s = res.shape("poppy")
-    assert len(s.quads) == 4 and s.layer == "solid" and not s.ao and not s.full
+    assert len(s.quads) == 4 and s.layer == "cutout" and not s.ao and not s.full
     for q in s.quads:
         xy = q.pos[:, :2]
         # each plane runs corner to corner: from (0.05, 0.05) to (0.95, 0.95) or crossed

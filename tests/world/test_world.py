@@ -137,3 +137,13 @@ def test_colour_palette_follows_the_file(world_path):
         assert w.colors().tolist() == [[255, 255, 255], [1, 2, 3]]
     with World.open(world_path, loader=False, readonly=True) as w:
         assert w.colors()[1].tolist() == [1, 2, 3]
+
+
+def test_numpy_coordinates_read_the_stored_chunk(world_path):
+    """A voxel asked for with NumPy ints (a test's or a tool's array arithmetic) is
+    the stored one: such a key once activated an empty chunk in a read-only world."""
+    with World.create(world_path, seed=1, generator="flat") as w:
+        w.set_block(3, -7, 100, "stone")
+    with World.open(world_path, readonly=True) as w:
+        x, y, z = np.array([3, -7, 100])
+        assert w.get_block(x, y, z) == REGISTRY.id("stone") == w.get_block(3, -7, 100)

@@ -241,7 +241,12 @@ def steps(blocks: np.ndarray, origin=(0, 0, 0), *, per: str = "region", method: 
     padded = C.empty(np.uint16, W + 2 * PAD, H + 2 * PAD)
     padded[PAD:PAD + W, PAD:PAD + H] = blocks
     lit = None
-    for lit, frac in light_tiles(padded, backend):
+    seen = padded
+    if models is not None:     # model blocks that are no whole cube pass light
+        from . import models as MD
+        seen = padded.copy(order="F")
+        seen[PAD:PAD + W, PAD:PAD + H] = MD.light_blocks(models, blocks)
+    for lit, frac in light_tiles(seen, backend):
         yield stage("light", frac)
     mat_table, specs = _materials()
     shape_ids = np.flatnonzero(REGISTRY.shape >= 2)  # x and hash

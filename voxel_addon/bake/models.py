@@ -64,6 +64,12 @@ def mesh(models: Models, blocks: np.ndarray, origin):
                    y_min=models.y_min, biomes=models.biomes, biome_names=models.biome_names)
 
 
+def light_blocks(models: Models, blocks: np.ndarray) -> np.ndarray:
+    """The region's blocks as the light solve sees them (mcres.mesh.light_blocks)."""
+    from ..mcres import mesh as M
+    return M.light_blocks(models.res, models.palette, models.state, blocks)
+
+
 def part_and_materials(m, res, blocks, origin, light, offset, specs: list, images: dict):
     """(Part, specs grown) of a model mesh M: materials keyed by (sprite, layer, tint)."""
     from . import Part, MaterialSpec

@@ -5,8 +5,9 @@ way), the state palette, which other voxels are opaque cubes, the box's biomes. 
 voxel whose state the stack knows gets its shape's quads; a quad with a cullface is
 dropped when the neighbour there is a whole opaque cube (a full shape, or an opaque
 voxel of the project's own), a model whose opaque quads cover that side whole (a
-stair's bottom hides the top of the block below) or the same see-through state
-(glass beside glass).
+stair's bottom hides the top of the block below) or the same see-through block in
+any state (glass beside glass, a pane's arm against the pane it joins: the game's
+HalfTransparentBlock and IronBarsBlock skip those faces).
 A state whose model has no elements (the game draws chests, beds, signs and water
 by code) keeps today's look. Voxels inside (all six neighbours whole) are skipped before any shape is looked at,
 so a stone hill costs its surface only. Weighted variants are drawn by each voxel's
@@ -69,8 +70,11 @@ def build(res, palette: list, state: np.ndarray, opaque: np.ndarray, *, origin=(
     side_of = np.zeros((len(palette), 6), bool)   # per state and side: covered whole
     shapes: dict = {}
     mixed = np.zeros(len(palette), bool)          # weighted or position-dependent
+    block_of = np.full(len(palette), -1)          # per state: its block (name) number
+    names: dict = {}
     for i in np.unique(state[known]).tolist():
         name, props = parse_key(palette[i])
+        block_of[i] = names.setdefault(name, len(names))
         bs = res.blockstate(name)
         if bs is None:
             continue
@@ -111,8 +115,8 @@ def build(res, palette: list, state: np.ndarray, opaque: np.ndarray, *, origin=(
                 ns = padstate[1 + x + dx, 1 + y + dy, 1 + z + dz]
                 if padrawn[1 + x + dx, 1 + y + dy, 1 + z + dz] and side_of[ns, q.cull ^ 1]:
                     continue      # the neighbour's model covers the face toward us
-                if sh.layer != SOLID and padstate[1 + x + dx, 1 + y + dy, 1 + z + dz] == s:
-                    continue
+                if sh.layer != SOLID and ns and block_of[ns] == block_of[s]:
+                    continue      # glass against glass, a pane's arm against the next pane
             if q.sprite not in sprite_ix:
                 sprite_ix[q.sprite] = len(sprites) if q.sprite is not None else -1
                 if q.sprite is not None:
@@ -137,3 +141,30 @@ def build(res, palette: list, state: np.ndarray, opaque: np.ndarray, *, origin=(
                 np.array(out["sprite"], np.int32), np.array(out["tint"], np.uint8).reshape(-1, 3),
                 np.array(out["layer"], np.uint8), np.array(out["shade"], bool),
                 np.array(out["voxel"], np.int32).reshape(-1, 3), sprites, drawn)
+
+
+def light_blocks(res, palette: list, state: np.ndarray, blocks: np.ndarray) -> np.ndarray:
+    """BLOCKS for the light solve: a voxel drawn from a model that is no whole opaque
+    cube (a rail, door, fence, slab, torch…) passes light, as the game's: its
+    project block (a whole opaque cube for today's look, rails as planks) would leave
+    the floor under a rail and the sides next to a door dark. Voxels whose project
+    block emits or already passes light keep it. BLOCKS itself when nothing changes."""
+    from ..core.blocks import REGISTRY
+    from .states import parse_key
+    known = state > 0
+    if not known.any():
+        return blocks
+    opens = np.zeros(len(palette), bool)
+    for i in np.unique(state[known]).tolist():
+        name, props = parse_key(palette[i])
+        if res.blockstate(name) is None:
+            continue
+        sh = res.shape(name, props)
+        opens[i] = bool(sh.quads) and not sh.full
+    dark = REGISTRY.light_opaque & (REGISTRY.emission.max(axis=1) == 0)
+    where = opens[state] & dark[blocks]
+    if not where.any():
+        return blocks
+    out = blocks.copy(order="K")
+    out[where] = 0
+    return out

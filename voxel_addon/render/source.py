@@ -52,7 +52,9 @@ def world_area(world, x: float, y: float, distance: int, light_radius: int = 8) 
     data = _small_data(world, cx0 - 1, cy0 - 1, cx1 + 1, cy1 + 1)
     lx0, ly0, lx1, ly1 = window((cx0, cy0, cx1, cy1), light_radius)
     i, j = 16 * (lx0 - cx0), 16 * (ly0 - cy0)  # wide starts one chunk before cx0
-    light = lightmod.region_light(wide[i:i + 16 * (lx1 - lx0 + 2), j:j + 16 * (ly1 - ly0 + 2)])
+    lb = getattr(world, "light_blocks", None)   # a stack's model blocks pass light
+    seen = lb(wide, data) if lb is not None else wide
+    light = lightmod.region_light(seen[i:i + 16 * (lx1 - lx0 + 2), j:j + 16 * (ly1 - ly0 + 2)])
     blocks = np.asfortranarray(wide[15:-15, 15:-15])
     data = None if data is None else np.asfortranarray(data[15:-15, 15:-15])
     # with a resource stack its model blocks (air for the mesher from here on, their

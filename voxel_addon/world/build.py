@@ -114,7 +114,9 @@ def light_and_mesh(world, cx0: int, cy0: int, cx1: int, cy1: int, *, backends_=N
         need = any(c is not None and c.light is None
                    for c in map(world.chunks.get, keys_of(cx0, cy0, cx1, cy1)))
     # one solve for the whole rectangle: its ring is the only overhead
-    lit = _run(lb, light.region_light, blocks, tile=max(cx1 - cx0, cy1 - cy0)) if need else None
+    # model blocks that are no whole cube pass light (with the world's resource stack)
+    lit = _run(lb, light.region_light, mcmodels.light_blocks(world, blocks, data),
+               tile=max(cx1 - cx0, cy1 - cy0)) if need else None
     inner = blocks[15:-15, 15:-15]
     # Minecraft model blocks (with the world's resource stack): air for the mesher
     models = mcmodels.build(world, inner, None if data is None else data[15:-15, 15:-15],

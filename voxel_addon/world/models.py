@@ -91,3 +91,17 @@ def build(world, blocks: np.ndarray, data, cx0: int, cy0: int) -> dict:
         out[(cx0 + i, cy0 + j)] = ChunkModels(sub, images)
     return out
 
+
+
+def light_blocks(world, blocks: np.ndarray, data) -> np.ndarray:
+    """BLOCKS as the light solve should see them with the world's resource stack
+    (mcres.mesh.light_blocks: model blocks that are no whole cube pass light); BLOCKS
+    itself without a stack."""
+    st = stack(world) if data is not None else None
+    if st is None:
+        return blocks
+    from ..mcres import mesh as M
+    from ..storage import minecraft as mcfile
+    res, palette, cstates, _, _ = st
+    state = mcfile.states(blocks, data, palette, cstates, REGISTRY.id("color"))
+    return M.light_blocks(res, palette, state, blocks)

@@ -117,6 +117,12 @@ class World(Saving):
         from . import models
         return models.build(self, blocks, data, cx0, cy0)
 
+    def light_blocks(self, blocks, data):
+        """BLOCKS as the light solve sees them: with the world's resource stack its
+        model blocks that are no whole cube pass light (world/models.py)."""
+        from . import models
+        return models.light_blocks(self, blocks, data)
+
     def colors(self):
         """The world's colour palette ((n, 3) uint8, core.colors): the `color` block's
         data indexes it (meshes carry the index per vertex, ChunkMesh.colors). Parsed
@@ -160,7 +166,7 @@ class World(Saving):
         return None
 
     def chunk_at(self, cx: int, cy: int) -> Chunk:
-        key = (cx, cy)
+        key = (int(cx), int(cy))   # NumPy ints activated an empty chunk (read-only)
         c = self.chunks.get(key)
         if c is None:
             c = self._activate([key])[0]

@@ -144,8 +144,9 @@ def to_key(cx: int, cz: int) -> tuple[int, int]:
 
 class _Palettes:
     """Minecraft block states -> (block id, data): data is the state's index in the
-    world's state palette (formats/mcstate.py), or for the `color` block the index of
-    the state's own colour in the world's colour palette."""
+    world's state palette (formats/mcstate.py; stored as 0 where it is its block's
+    default: settle), or for the `color` block the index of the state's own colour in
+    the world's colour palette."""
 
     def __init__(self, world, report: Report):
         self.world, self.report = world, report
@@ -171,6 +172,9 @@ class _Palettes:
             self.report.blocks.setdefault(name, [block, how, 0])
         return got
 
+    def settle(self, ids, vals, counts):
+        return self.states.settle(ids, vals, counts)
+
     def save(self) -> None:
         """Stage the palettes (written with the next chunks, in their transaction)."""
         if self.changed:
@@ -180,10 +184,19 @@ class _Palettes:
 
 
 def convert(ch: anvil.Chunk, y_min: int, pal: _Palettes):
-    """(blocks, data or None, dropped voxels) of one chunk in world axes."""
+    """(blocks, data or None, dropped voxels) of one chunk in world axes; `pal.settle`
+    sees every palette entry's (block id, data, voxels) before data is written and
+    gives the data stored as 0 per block id (its default state, mcstate.States)."""
     blocks, data, dropped = C.empty(), None, 0
     counts = pal.report.blocks
+    secs = []
     for s in ch.sections:
+        if s.indices is None and len(s.palette) == 1:      # one block: often all air
+            bid, d = pal.of(s.palette[0], s.props[0] if s.props else None)
+            counts[s.palette[0]][2] += 4096
+            secs.append((s, np.array([bid], np.uint16), np.array([d], np.uint16),
+                         np.array([4096])))
+            continue
         got = [pal.of(n, p) for n, p in zip(s.palette, s.props or [None] * len(s.palette))]
         ids = np.array([g[0] for g in got], np.uint16)
         vals = np.array([g[1] for g in got], np.uint16)
@@ -192,32 +205,38 @@ def convert(ch: anvil.Chunk, y_min: int, pal: _Palettes):
         for name, k in zip(s.palette, n.tolist()):
             if k:
                 counts[name][2] += k
+        secs.append((s, ids, vals, n))
+    if not secs:
+        return blocks, data, dropped
+    dflt = pal.settle(np.concatenate([t[1] for t in secs]), np.concatenate([t[2] for t in secs]),
+                      np.concatenate([t[3] for t in secs]))
+    for s, ids, vals, n in secs:
         z0 = 16 * s.y - y_min
         lo, hi = max(z0, 0), min(z0 + 16, C.HEIGHT)
         if lo >= hi:
             dropped += int(n[ids != 0].sum())
             continue
+        vals = np.where(vals == dflt[ids], 0, vals).astype(np.uint16)
         if s.indices is None:
-            blocks[:, :, lo:hi] = ids[0]
+            if ids[0]:
+                blocks[:, :, lo:hi] = ids[0]
             if vals[0]:
                 if data is None:
                     data = C.empty()
                 data[:, :, lo:hi] = vals[0]
-        else:
-            # [y][z][x] -> [x][15 - z][y]
-            sec = s.indices.reshape(16, 16, 16).transpose(2, 1, 0)[:, ::-1, lo - z0:hi - z0]
-            blocks[:, :, lo:hi] = ids[sec]
-            if vals.any():
-                if data is None:
-                    data = C.empty()
-                data[:, :, lo:hi] = vals[sec]
-            if hi - lo < 16:
-                keep = np.zeros(len(ids), bool)
-                outside = np.ones(16, bool)
-                outside[lo - z0:hi - z0] = False
-                cut = s.indices.reshape(16, 4096 // 16)[outside].ravel()
-                keep[:] = ids != 0
-                dropped += int(keep[cut].sum())
+            continue
+        # [y][z][x] -> [x][15 - z][y]
+        sec = s.indices.reshape(16, 16, 16).transpose(2, 1, 0)[:, ::-1, lo - z0:hi - z0]
+        blocks[:, :, lo:hi] = ids[sec]
+        if vals.any():
+            if data is None:
+                data = C.empty()
+            data[:, :, lo:hi] = vals[sec]
+        if hi - lo < 16:
+            outside = np.ones(16, bool)
+            outside[lo - z0:hi - z0] = False
+            cut = s.indices.reshape(16, 4096 // 16)[outside].ravel()
+            dropped += int((ids != 0)[cut].sum())
     return blocks, data, dropped
 
 

@@ -4,8 +4,9 @@ and each column's biome, so a resource stack can draw the world as the game does
 States: meta `mc_states` is the world's state palette, a JSON list of
 `minecraft:name[k=v,…]` (properties sorted), entry 0 the empty string. Meta
 `mc_state_defaults` ({block name: state index}) gives each block type of the world
-its default state: the state most of its voxels have in the first chunk an import
-met it in (stone → minecraft:stone, water → water[level=0]), fixed from then on.
+its default state: the state most of its voxels have in the first chunk where an
+import meets at least SETTLE of them (stone → minecraft:stone, water →
+water[level=0]), fixed from then on.
 An imported voxel's small data is 0 when its state is its block's default, else its
 state's index: most voxels store 0, and a chunk's data blob is NULL or mostly zeros
 (storage/minecraft.py `states` reads them back). The `color` block's data stays its
@@ -34,6 +35,7 @@ from ..storage import minecraft as mcfile
 KEY, COLOR_KEY, RESOURCES, Y_MIN = mcfile.STATES, mcfile.COLOR_STATES, mcfile.RESOURCES, mcfile.Y_MIN
 DEFAULTS = mcfile.DEFAULTS
 LIMIT = 1 << 16
+SETTLE = 256   # voxels of a block in one chunk that decide its default state
 DEFAULT_BIOME = "minecraft:plains"
 
 # 1.13–1.17 numeric biome ids (the common ones; others read as plains)
@@ -117,25 +119,29 @@ class States:
         return i
 
     def settle(self, ids: np.ndarray, vals: np.ndarray, counts: np.ndarray) -> np.ndarray:
-        """The default state per block id (0: none) for a chunk whose palette entries
-        are block IDS with states VALS covering COUNTS voxels: a block id met for the
-        first time gets the state most of its voxels have here (ties: the lower
-        index). Values equal to their block's default are stored as 0."""
+        """The default state per block id (0: none yet) for a chunk whose palette
+        entries are block IDS with states VALS covering COUNTS voxels: a block id
+        without one gets the state most of its voxels have here (ties: the lower
+        index) once it covers SETTLE voxels in one chunk, so that a few flowing water
+        blocks do not decide water. Values equal to their block's default are stored
+        as 0; the others (an undecided block's too) as their index."""
         if self.legacy:
             return self.dflt
         new = (self.dflt[ids] == 0) & (ids != 0) & (ids != _COLOR)
         if new.any():
-            best: dict = {}
             tally: dict = {}
+            total: dict = {}
             for b, v, n in zip(ids[new].tolist(), vals[new].tolist(), counts[new].tolist()):
                 tally[b, v] = tally.get((b, v), 0) + n
+                total[b] = total.get(b, 0) + n
+            best: dict = {}
             for (b, v), n in tally.items():
-                if b not in best or (n, -v) > (best[b][0], -best[b][1]):
+                if total[b] >= SETTLE and (b not in best or (n, -v) > (best[b][0], -best[b][1])):
                     best[b] = (n, v)
             for b, (_, v) in best.items():
                 self.dflt[b] = v
                 self.defaults[REGISTRY[b].name] = v
-            self.changed.add(DEFAULTS)
+                self.changed.add(DEFAULTS)
         return self.dflt
 
     def color(self, state: int, palette: np.ndarray, rgb) -> tuple[np.ndarray, int]:

@@ -210,3 +210,19 @@ def test_readers_draw_models_of_chunks_without_data(tmp_path):
         ring[1:-1, 1:-1] = b
         got = world_models.build(w, ring, None, 0, -1)
         assert (0, -1) in got and got[(0, -1)].mesh.quads
+
+
+def test_a_floor_of_wool_keeps_its_colour(tmp_path):
+    """Enough `color` voxels to decide a default if colours took part: their data
+    stays their colour, never 0 for 'the usual one'."""
+    a = np.full((16, 16, 16), "minecraft:air", object)
+    a[0] = "minecraft:white_wool"
+    a[1, :8] = "minecraft:red_wool"
+    mc.write_region(tmp_path / "save" / "region", {(0, 0): mc.chunk_nbt(0, 0, {0: a})})
+    _import(tmp_path / "w.sqlite", tmp_path / "save")
+    got, meta = _read(tmp_path / "w.sqlite")
+    b, d, st = got[(0, -1)]
+    pal = colors.parse(meta)
+    assert "color" not in json.loads(meta[mcfile.DEFAULTS])
+    assert pal[d[:, :, 64]].tolist() == [[list(mapping.DYES["white"])] * 16] * 16
+    assert (st[:, 8:, 65] == "minecraft:red_wool").all() and (st[:, :, 64] == "minecraft:white_wool").all()

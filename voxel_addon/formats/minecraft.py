@@ -208,35 +208,39 @@ def convert(ch: anvil.Chunk, y_min: int, pal: _Palettes):
         secs.append((s, ids, vals, n))
     if not secs:
         return blocks, data, dropped
-    dflt = pal.settle(np.concatenate([t[1] for t in secs]), np.concatenate([t[2] for t in secs]),
+    ids_all = [np.zeros(1, np.uint16)] + [t[1] for t in secs]   # entry 0: air
+    vals_all = [np.zeros(1, np.uint16)] + [t[2] for t in secs]
+    dflt = pal.settle(np.concatenate(ids_all[1:]), np.concatenate(vals_all[1:]),
                       np.concatenate([t[3] for t in secs]))
+    ids_all, vals_all = np.concatenate(ids_all), np.concatenate(vals_all)
+    vals_all = np.where(vals_all == dflt[ids_all], 0, vals_all).astype(np.uint16)
+    # one table of every section's palette, one index per voxel in Minecraft order
+    # [y][z][x]: a single gather and transpose per chunk instead of one per section
+    lin = np.zeros((C.HEIGHT, 16, 16), np.int32)
+    off = 1
     for s, ids, vals, n in secs:
         z0 = 16 * s.y - y_min
         lo, hi = max(z0, 0), min(z0 + 16, C.HEIGHT)
         if lo >= hi:
             dropped += int(n[ids != 0].sum())
-            continue
-        vals = np.where(vals == dflt[ids], 0, vals).astype(np.uint16)
-        if s.indices is None:
-            if ids[0]:
-                blocks[:, :, lo:hi] = ids[0]
-            if vals[0]:
-                if data is None:
-                    data = C.empty()
-                data[:, :, lo:hi] = vals[0]
-            continue
-        # [y][z][x] -> [x][15 - z][y]
-        sec = s.indices.reshape(16, 16, 16).transpose(2, 1, 0)[:, ::-1, lo - z0:hi - z0]
-        blocks[:, :, lo:hi] = ids[sec]
-        if vals.any():
-            if data is None:
-                data = C.empty()
-            data[:, :, lo:hi] = vals[sec]
-        if hi - lo < 16:
-            outside = np.ones(16, bool)
-            outside[lo - z0:hi - z0] = False
-            cut = s.indices.reshape(16, 4096 // 16)[outside].ravel()
-            dropped += int((ids != 0)[cut].sum())
+        elif s.indices is None:
+            lin[lo:hi] = off
+        else:
+            np.add(s.indices.reshape(16, 16, 16)[lo - z0:hi - z0], off, out=lin[lo:hi],
+                   casting="unsafe")
+            if hi - lo < 16:
+                outside = np.ones(16, bool)
+                outside[lo - z0:hi - z0] = False
+                cut = s.indices.reshape(16, 4096 // 16)[outside].ravel()
+                dropped += int((ids != 0)[cut].sum())
+        off += len(ids)
+    # [y][z][x] -> [x][15 - z][y]
+    blocks[:] = ids_all[lin].transpose(2, 1, 0)[:, ::-1, :]
+    if vals_all.any():
+        data = C.empty()
+        data[:] = vals_all[lin].transpose(2, 1, 0)[:, ::-1, :]
+        if not data.any():
+            data = None
     return blocks, data, dropped
 
 

@@ -189,58 +189,61 @@ def convert(ch: anvil.Chunk, y_min: int, pal: _Palettes):
     gives the data stored as 0 per block id (its default state, mcstate.States)."""
     blocks, data, dropped = C.empty(), None, 0
     counts = pal.report.blocks
-    secs = []
+    ids_l, vals_l, n_l, secs = [], [], [], []
     for s in ch.sections:
+        start = len(ids_l)
         if s.indices is None and len(s.palette) == 1:      # one block: often all air
             bid, d = pal.of(s.palette[0], s.props[0] if s.props else None)
             counts[s.palette[0]][2] += 4096
-            secs.append((s, np.array([bid], np.uint16), np.array([d], np.uint16),
-                         np.array([4096])))
+            ids_l.append(bid)
+            vals_l.append(d)
+            n_l.append(4096)
+            secs.append((s, start, start + 1, None))
             continue
-        got = [pal.of(n, p) for n, p in zip(s.palette, s.props or [None] * len(s.palette))]
-        ids = np.array([g[0] for g in got], np.uint16)
-        vals = np.array([g[1] for g in got], np.uint16)
-        n = np.bincount(s.indices, minlength=len(got)) if s.indices is not None \
-            else np.array([4096] + [0] * (len(got) - 1))
-        for name, k in zip(s.palette, n.tolist()):
+        for name, p in zip(s.palette, s.props or [None] * len(s.palette)):
+            bid, d = pal.of(name, p)
+            ids_l.append(bid)
+            vals_l.append(d)
+        n = np.bincount(s.indices, minlength=len(s.palette)) if s.indices is not None \
+            else np.array([4096] + [0] * (len(s.palette) - 1))
+        nl = n.tolist()
+        for name, k in zip(s.palette, nl):
             if k:
                 counts[name][2] += k
-        secs.append((s, ids, vals, n))
+        n_l += nl
+        secs.append((s, start, len(ids_l), n))
     if not secs:
         return blocks, data, dropped
-    ids_all = [np.zeros(1, np.uint16)] + [t[1] for t in secs]   # entry 0: air
-    vals_all = [np.zeros(1, np.uint16)] + [t[2] for t in secs]
-    dflt = pal.settle(np.concatenate(ids_all[1:]), np.concatenate(vals_all[1:]),
-                      np.concatenate([t[3] for t in secs]))
-    ids_all, vals_all = np.concatenate(ids_all), np.concatenate(vals_all)
-    vals_all = np.where(vals_all == dflt[ids_all], 0, vals_all).astype(np.uint16)
-    # one table of every section's palette, one index per voxel in Minecraft order
-    # [y][z][x]: a single gather and transpose per chunk instead of one per section
-    lin = np.zeros((C.HEIGHT, 16, 16), np.int32)
-    off = 1
-    for s, ids, vals, n in secs:
+    ids_a, vals_a = np.array(ids_l, np.uint16), np.array(vals_l, np.uint16)
+    dflt = pal.settle(ids_a, vals_a, np.array(n_l))
+    vals_a[vals_a == dflt[ids_a]] = 0                   # a block's default state: 0
+    for s, i, j, n in secs:
+        ids, vals = ids_a[i:j], vals_a[i:j]
         z0 = 16 * s.y - y_min
         lo, hi = max(z0, 0), min(z0 + 16, C.HEIGHT)
         if lo >= hi:
-            dropped += int(n[ids != 0].sum())
-        elif s.indices is None:
-            lin[lo:hi] = off
-        else:
-            np.add(s.indices.reshape(16, 16, 16)[lo - z0:hi - z0], off, out=lin[lo:hi],
-                   casting="unsafe")
-            if hi - lo < 16:
-                outside = np.ones(16, bool)
-                outside[lo - z0:hi - z0] = False
-                cut = s.indices.reshape(16, 4096 // 16)[outside].ravel()
-                dropped += int((ids != 0)[cut].sum())
-        off += len(ids)
-    # [y][z][x] -> [x][15 - z][y]
-    blocks[:] = ids_all[lin].transpose(2, 1, 0)[:, ::-1, :]
-    if vals_all.any():
-        data = C.empty()
-        data[:] = vals_all[lin].transpose(2, 1, 0)[:, ::-1, :]
-        if not data.any():
-            data = None
+            dropped += 4096 if n is None and ids[0] else 0 if n is None else int(n[ids != 0].sum())
+            continue
+        if s.indices is None:
+            if ids[0]:
+                blocks[:, :, lo:hi] = ids[0]
+            if vals[0]:
+                if data is None:
+                    data = C.empty()
+                data[:, :, lo:hi] = vals[0]
+            continue
+        # [y][z][x] -> [x][15 - z][y]
+        sec = s.indices.reshape(16, 16, 16).transpose(2, 1, 0)[:, ::-1, lo - z0:hi - z0]
+        blocks[:, :, lo:hi] = ids[sec]
+        if vals.any():
+            if data is None:
+                data = C.empty()
+            data[:, :, lo:hi] = vals[sec]
+        if hi - lo < 16:
+            outside = np.ones(16, bool)
+            outside[lo - z0:hi - z0] = False
+            cut = s.indices.reshape(16, 4096 // 16)[outside].ravel()
+            dropped += int((ids != 0)[cut].sum())
     return blocks, data, dropped
 
 

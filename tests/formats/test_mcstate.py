@@ -55,14 +55,19 @@ def imported(tmp_path, chunks, version=3953, **kw):
 
 
 def state_at(world, x, y, z, y_min=-64):
-    states = json.loads(world.file.meta[mcstate.KEY])
+    """(block name, state, small data) of a Minecraft block, its state as the readers
+    see it (storage/minecraft.py states)."""
+    meta = world.file.meta
+    states = json.loads(meta[mcstate.KEY])
     vx, vy, vz = voxel(x, y, z, y_min)
     c = world.chunk_at(vx >> 4, vy >> 4)
     d = 0 if c.data is None else int(c.data[vx & 15, vy & 15, vz])
     b = REGISTRY[int(c.blocks[vx & 15, vy & 15, vz])].name
-    if b == "color":
-        return b, states[json.loads(world.file.meta[mcstate.COLOR_KEY])[str(d)]], d
-    return b, states[d], d
+    cstates = {int(k): v for k, v in json.loads(meta.get(mcstate.COLOR_KEY) or "{}").items()}
+    st = mcbiomes.states(c.blocks[vx & 15, vy & 15, vz:vz + 1], None if c.data is None else
+                         c.data[vx & 15, vy & 15, vz:vz + 1], states, cstates,
+                         REGISTRY.id("color"), mcbiomes.defaults(meta))
+    return b, states[int(st[0])], d
 
 
 def test_states_biomes_and_resources_are_kept(tmp_path):

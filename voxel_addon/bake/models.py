@@ -42,15 +42,15 @@ def of_world(world, x0, y0, x1, y1, blocks, data) -> tuple[Models | None, str]:
         got = mcfile.kept(meta)
     except ValueError:
         return None, "the world's Minecraft states (meta) are damaged: today's look"
-    if got is None or data is None:
+    if got is None or (data is None and got[4] is None):   # no data, no defaults: no states
         return None, ""
-    paths, palette, cstates, y_min = got
+    paths, palette, cstates, y_min, dflt = got
     from ..mcres import Resources, Stack
     try:
         res = Resources(Stack.open(paths))
     except VoxelError as e:
         return None, f"resource stack not read ({e}): today's look"
-    state = mcfile.states(blocks, data, palette, cstates, COLOR)
+    state = mcfile.states(blocks, data, palette, cstates, COLOR, dflt)
     names = mcfile.names(meta) or ["minecraft:plains"]
     biomes = mcfile.region(world.file, x0, y0, x1, y1, len(names))
     return Models(res, palette, state, biomes, names, y_min), ""

@@ -52,6 +52,7 @@ def run(ctx):
            "light atlas vs naive; issue 14 target <= 40, goal <= 30")
     yield ("bake_atlas_texels", bk.atlas.shape[0] * bk.atlas.shape[1], "",
            f"{bk.atlas.shape[1]}x{bk.atlas.shape[0]} light atlas")
+    yield from lod(ctx)
     try:
         import bpy
     except ImportError:
@@ -88,6 +89,26 @@ def run(ctx):
         ax.set_title(f"Bake {note}: {bk.triangles} triangles")
         ax.legend()
     ctx.plot("bake_stages", draw)
+
+
+def lod(ctx):
+    """`bake --lod X Y NEAR FAR` without Blender (bake.lod.bake_lod): the near square
+    in full, one far object per level; triangles per level and the time."""
+    from ..bake import lod as L
+    from ..world import World
+    near, far = (1, 8) if ctx.quick else (2, 16)
+    with World.create(ctx.tmp / "lod.sqlite", seed=2019, generator="overworld",
+                      loader=False) as w:
+        t0 = time.perf_counter()
+        bk, parts = L.bake_lod(w, 8.0, 8.0, near, far, light="vertex")
+        t = time.perf_counter() - t0
+    note = f"--lod 8 8 {near} {far}, overworld seed 2019 from an empty file"
+    yield ("bake_lod_s", t, "s", f"{note}: generate, near bake, far tiles (no Blender)")
+    yield ("bake_lod_near_triangles", bk.triangles, "", f"{note}: the near {2 * near + 1}^2 chunks")
+    for p in parts:
+        yield (f"bake_lod_far{p.level}_triangles", p.triangles, "",
+               f"{note}: far level {p.level} ({len(p.water)} of them water)")
+    yield ("bake_lod_objects", 1 + len(parts), "", f"{note}: near + one per far level")
 
 
 BIG = 256

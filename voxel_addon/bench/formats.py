@@ -2,7 +2,14 @@
 (24 sections, palettes of 2-9 entries, surface with plants and air above; zlib, as
 Minecraft writes it) imported into a new world (chunks/s, the whole import path:
 read, inflate, NBT, unpack, map, encode, one transaction per batch of 32), and a
-.vox round trip (import a 64^3 model half full, export it again)."""
+.vox round trip (import a 64^3 model half full, export it again).
+
+`import_mc_states_*` (issue 30): a survival-like 1.21 region (bench/mcsave.py: layered
+terrain, ore and stone blobs, caves, sea, trees, huts, block states and section
+biomes, 16 x 16 chunks, 8 x 8 with --quick) imported with its states and biomes kept:
+chunks/s (wall and CPU), the world file's bytes per chunk (and its small-data blobs
+alone), the import's peak traced memory (NumPy and Python, tracemalloc) and the
+resident arrays of a loaded imported chunk."""
 from __future__ import annotations
 
 import struct
@@ -89,6 +96,7 @@ def run(ctx):
            f"median of {len(times)}: a {n}x{n} region of 1.18+ chunks ({rep.chunks}), "
            f"{(folder / 'r.0.0.mca').stat().st_size >> 20} MB, into a new world")
     yield ("import_minecraft_region_s", t, "s", f"the same {n}x{n} region")
+    yield from states(ctx)
     grid = np.where(rng.random((64, 64, 64)) < 0.5, rng.integers(1, 256, (64, 64, 64)), 0)
     src = ctx.tmp / "m.vox"
     src.write_bytes(vox.write(grid.astype(np.uint8), rng.integers(0, 256, (256, 3))))
@@ -102,3 +110,50 @@ def run(ctx):
     yield ("import_vox_voxels_per_s", r["voxels"] / ti, "voxels/s",
            f"a 64^3 model, {r['voxels']} voxels, kept as edits, one transaction")
     yield ("export_vox_voxels_per_s", r["voxels"] / te, "voxels/s", "the same box out again")
+
+
+def states(ctx):
+    """The import_mc_states_* rows (module docstring)."""
+    import sqlite3
+    import tracemalloc
+    from . import mcsave
+    from ..formats import minecraft
+    from ..world import World
+    n = 8 if ctx.quick else 16
+    save = mcsave.save(ctx.tmp / "mcstates", n)
+    wall, cpu = [], []
+    for i in range(1 if ctx.quick else 3):
+        path = ctx.tmp / f"mcs{i}.sqlite"
+        t0, c0 = time.perf_counter(), time.process_time()
+        with World.create(path, seed=0, generator="empty", loader=False) as w:
+            rep = minecraft.import_world(w, save)
+        wall.append(time.perf_counter() - t0)
+        cpu.append(time.process_time() - c0)
+    note = f"{n}x{n} survival-like 1.21 chunks (bench/mcsave.py), states and biomes kept"
+    yield ("import_mc_states_chunks_per_s", rep.chunks / float(np.median(wall)), "chunks/s",
+           f"median of {len(wall)}: {note}; issue 30 goal >= 300")
+    yield ("import_mc_states_cpu_chunks_per_s", rep.chunks / float(np.median(cpu)), "chunks/s",
+           "the same, per second of this process's CPU time (less sensitive to load)")
+    with sqlite3.connect(path) as db:
+        blocks, data, nd = db.execute("SELECT SUM(LENGTH(blocks)), SUM(COALESCE(LENGTH(data), 0)),"
+                                      " SUM(data IS NOT NULL) FROM chunks").fetchone()
+    yield ("import_mc_states_file_bytes_per_chunk", path.stat().st_size / rep.chunks, "B",
+           f"world file size / chunks ({note})")
+    yield ("import_mc_states_data_bytes_per_chunk", data / rep.chunks, "B",
+           f"small-data blobs alone (states other than their block's default), {nd} of "
+           f"{rep.chunks} chunks have one; blocks blobs {blocks / rep.chunks:.0f} B")
+    tracemalloc.start()
+    with World.create(ctx.tmp / "mcs_mem.sqlite", seed=0, generator="empty", loader=False) as w:
+        minecraft.import_world(w, save)
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    yield ("import_mc_states_peak_mb", peak / 2 ** 20, "MB",
+           f"traced peak of the import ({rep.chunks} chunks, batches of {minecraft.BATCH})")
+    with World.open(path, loader=False, readonly=True) as w:
+        keys = list(w.file.chunk_keys())
+        tracemalloc.start()
+        got = [w.file.read_chunk(k) for k in keys]
+        held = tracemalloc.get_traced_memory()[0]
+        tracemalloc.stop()
+    yield ("import_mc_states_loaded_kb_per_chunk", held / len(got) / 1024, "KiB",
+           "blocks + small data of an imported chunk read back (data None when all default)")

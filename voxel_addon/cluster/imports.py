@@ -35,14 +35,17 @@ JOB = "import_job"
 
 class _LocalPalette:
     """formats.minecraft._Palettes on a worker: block states get chunk-local indices
-    (1, 2, ... in the order met; `local`: (state key, rgb or None) each), which the
-    writer maps to the world's state palette or, for dye states, their colours; the
-    same for biomes (`biomes`: names in the order met)."""
+    (1, 2, ... in the order met; `local`: (state key, rgb or None, block id) each),
+    which the writer maps to the world's state palette or, for dye states, their
+    colours, and to 0 for its block's default state (`voxels`: each local index's
+    voxels in the chunk, for the writer's mcstate.States.settle); the same for biomes
+    (`biomes`: names in the order met)."""
 
     def __init__(self):
         from types import SimpleNamespace
         self.ids: dict = {}
         self.local: list = []
+        self.voxels = None
         self.biomes: dict = {}
         self.report = SimpleNamespace(blocks={})
 
@@ -57,11 +60,16 @@ class _LocalPalette:
             bid, d = REGISTRY.id(block), 0
             if bid:
                 self.local.append((state_key(name, props),
-                                   None if rgb is None else tuple(int(v) for v in rgb)))
+                                   None if rgb is None else tuple(int(v) for v in rgb), bid))
                 d = len(self.local)
             got = self.ids[key] = (bid, d)
             self.report.blocks.setdefault(name, [block, how, 0])
         return got
+
+    def settle(self, ids, vals, counts):
+        """Keep each local index's voxels; no defaults here (the writer's)."""
+        self.voxels = np.bincount(vals, counts, minlength=len(self.local) + 1).astype(np.int64)
+        return np.zeros(int(ids.max()) + 1, np.uint16)
 
     def biome(self, name) -> int:
         return self.biomes.setdefault(name, len(self.biomes))
@@ -97,7 +105,7 @@ def read(item, shared):
         blocks, data, dropped = minecraft.convert(ch, shared["y_min"], pal)
         row = shared["encoder"].row(minecraft.to_key(cx, cz), blocks)
         cols = mcstate.columns(ch, blocks, shared["y_min"], pal.biome)
-        out.append((("ok", ch.version, row, data, pal.local, pal.report.blocks, dropped,
+        out.append((("ok", ch.version, row, data, (pal.local, pal.voxels), pal.report.blocks, dropped,
                      minecraft.to_key(cx, cz), cols, list(pal.biomes)), b.spent(), where))
     return out
 
@@ -279,14 +287,20 @@ class _Writer:
             for name, (b, how, n) in counts.items():
                 rep.blocks.setdefault(name, [b, how, 0])[2] += n
             rep.dropped += dropped
+            local, voxels = local
             remap = np.zeros(len(local) + 1, np.uint16)   # as formats.minecraft._Palettes
-            for j, (skey, rgb) in enumerate(local, 1):
+            ids = np.zeros(len(local) + 1, np.uint16)
+            for j, (skey, rgb, bid) in enumerate(local, 1):
                 st = self.states.of_key(skey)
+                ids[j] = bid
                 if rgb is not None:
                     self.palette, remap[j] = self.states.color(st, self.palette, rgb)
                     self.grown = True
                 else:
                     remap[j] = st
+            if voxels is not None:   # each block's default state is stored as 0
+                dflt = self.states.settle(ids, remap, voxels[:len(remap)])
+                remap = np.where(remap == dflt[ids], 0, remap).astype(np.uint16)
             blob = None if data is None else self.enc.data(remap[data])
             self.batch.append(row[:4] + (blob,) + row[5:])
             if cols is not None:

@@ -2,12 +2,20 @@
 and each column's biome, so a resource stack can draw the world as the game does.
 
 States: meta `mc_states` is the world's state palette, a JSON list of
-`minecraft:name[k=v,…]` (properties sorted), entry 0 the empty string. An imported
-voxel's small data is its state's index, except for the `color` block, whose data
-stays its colour (core.colors): meta `mc_color_states` ({colour index: state index})
-names the state of each colour an import made (every Minecraft dye state gets a
-colour entry of its own, so white wool and a white carpet stay apart). Air keeps 0.
-Voxels written by other means (generation, edits, .vox) have state 0: today's look.
+`minecraft:name[k=v,…]` (properties sorted), entry 0 the empty string. Meta
+`mc_state_defaults` ({block name: state index}) gives each block type of the world
+its default state: the state most of its voxels have in the first chunk where an
+import meets at least SETTLE of them (stone → minecraft:stone, water →
+water[level=0]), fixed from then on.
+An imported voxel's small data is 0 when its state is its block's default, else its
+state's index: most voxels store 0, and a chunk's data blob is NULL or mostly zeros
+(storage/minecraft.py `states` reads them back). The `color` block's data stays its
+colour (core.colors): meta `mc_color_states` ({colour index: state index}) names the
+state of each colour an import made (every Minecraft dye state gets a colour entry of
+its own, so white wool and a white carpet stay apart). Air keeps 0. Voxels written by
+other means (generation, edits, .vox) store 0: their block's default state where the
+world has one, else none (today's look). A world imported before defaults existed
+(states, no `mc_state_defaults`) keeps data = state index, also for later imports.
 
 Biomes: one per voxel column, the biome at the column's highest block (1.18+ section
 palettes of 4×4×4 cells; 1.15–1.17 1024 cells; older 256 per column), written to
@@ -19,12 +27,15 @@ import json
 
 import numpy as np
 
+from ..core.blocks import REGISTRY
 from ..core.errors import VoxelError
 from ..mcres.states import parse_key, state_key  # noqa: F401  (the one spelling)
 from ..storage import minecraft as mcfile
 
 KEY, COLOR_KEY, RESOURCES, Y_MIN = mcfile.STATES, mcfile.COLOR_STATES, mcfile.RESOURCES, mcfile.Y_MIN
+DEFAULTS = mcfile.DEFAULTS
 LIMIT = 1 << 16
+SETTLE = 256   # voxels of a block in one chunk that decide its default state
 DEFAULT_BIOME = "minecraft:plains"
 
 # 1.13–1.17 numeric biome ids (the common ones; others read as plains)
@@ -76,8 +87,17 @@ class States:
 
     def __init__(self, file):
         self.file = file
-        self.list = load(file.meta, KEY, []) or [""]
+        old = load(file.meta, KEY, [])
+        self.list = old or [""]
         self.index = {s: i for i, s in enumerate(self.list)}
+        # states imported before defaults existed: data stays the state index
+        self.legacy = bool(old) and DEFAULTS not in file.meta
+        self.defaults = {} if self.legacy else load(file.meta, DEFAULTS, {})
+        self.dflt = np.zeros(len(REGISTRY), np.uint16)   # per block id, 0: none yet
+        names = REGISTRY.names()
+        for n, st in self.defaults.items():
+            if n in names and isinstance(st, int) and 0 < st < len(self.list):
+                self.dflt[names.index(n)] = st
         self.colors = {int(k): v for k, v in load(file.meta, COLOR_KEY, {}).items()}
         self.color_of = {v: k for k, v in self.colors.items()}
         self.biomes = mcfile.names(file.meta) or [DEFAULT_BIOME]
@@ -97,6 +117,32 @@ class States:
             self.list.append(key)
             self.changed.add(KEY)
         return i
+
+    def settle(self, ids: np.ndarray, vals: np.ndarray, counts: np.ndarray) -> np.ndarray:
+        """The default state per block id (0: none yet) for a chunk whose palette
+        entries are block IDS with states VALS covering COUNTS voxels: a block id
+        without one gets the state most of its voxels have here (ties: the lower
+        index) once it covers SETTLE voxels in one chunk, so that a few flowing water
+        blocks do not decide water. Values equal to their block's default are stored
+        as 0; the others (an undecided block's too) as their index."""
+        if self.legacy:
+            return self.dflt
+        new = (self.dflt[ids] == 0) & (ids != 0) & (ids != _COLOR)
+        if new.any():
+            tally: dict = {}
+            total: dict = {}
+            for b, v, n in zip(ids[new].tolist(), vals[new].tolist(), counts[new].tolist()):
+                tally[b, v] = tally.get((b, v), 0) + n
+                total[b] = total.get(b, 0) + n
+            best: dict = {}
+            for (b, v), n in tally.items():
+                if total[b] >= SETTLE and (b not in best or (n, -v) > (best[b][0], -best[b][1])):
+                    best[b] = (n, v)
+            for b, (_, v) in best.items():
+                self.dflt[b] = v
+                self.defaults[REGISTRY[b].name] = v
+                self.changed.add(DEFAULTS)
+        return self.dflt
 
     def color(self, state: int, palette: np.ndarray, rgb) -> tuple[np.ndarray, int]:
         """The colour index of a dye STATE (a palette entry of its own) and the palette."""
@@ -130,6 +176,10 @@ class States:
         """Stage what changed into the world file's meta (written with the next batch)."""
         if KEY in self.changed:
             self.file.stage_meta(KEY, json.dumps(self.list))
+            if not self.legacy:   # the mark of this encoding, with the first states
+                self.changed.add(DEFAULTS)
+        if DEFAULTS in self.changed:
+            self.file.stage_meta(DEFAULTS, json.dumps(self.defaults, sort_keys=True))
         if COLOR_KEY in self.changed:
             self.file.stage_meta(COLOR_KEY, json.dumps({str(k): v for k, v in self.colors.items()}))
         if mcfile.NAMES in self.changed:
@@ -140,6 +190,7 @@ class States:
         return columns(ch, blocks, y_min, self.biome, self._memo)
 
 
+_COLOR = REGISTRY.id("color")
 _LX = np.arange(16)[:, None].repeat(16, 1)             # voxel lx = Minecraft x
 _MZ = 15 - np.arange(16)[None, :].repeat(16, 0)        # voxel ly → Minecraft z
 _CELL_XZ = (_MZ >> 2) * 4 + (_LX >> 2)                 # a column's 4×4 biome cell

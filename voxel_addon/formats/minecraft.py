@@ -144,8 +144,9 @@ def to_key(cx: int, cz: int) -> tuple[int, int]:
 
 class _Palettes:
     """Minecraft block states -> (block id, data): data is the state's index in the
-    world's state palette (formats/mcstate.py), or for the `color` block the index of
-    the state's own colour in the world's colour palette."""
+    world's state palette (formats/mcstate.py; stored as 0 where it is its block's
+    default: settle), or for the `color` block the index of the state's own colour in
+    the world's colour palette."""
 
     def __init__(self, world, report: Report):
         self.world, self.report = world, report
@@ -171,6 +172,9 @@ class _Palettes:
             self.report.blocks.setdefault(name, [block, how, 0])
         return got
 
+    def settle(self, ids, vals, counts):
+        return self.states.settle(ids, vals, counts)
+
     def save(self) -> None:
         """Stage the palettes (written with the next chunks, in their transaction)."""
         if self.changed:
@@ -180,44 +184,66 @@ class _Palettes:
 
 
 def convert(ch: anvil.Chunk, y_min: int, pal: _Palettes):
-    """(blocks, data or None, dropped voxels) of one chunk in world axes."""
+    """(blocks, data or None, dropped voxels) of one chunk in world axes; `pal.settle`
+    sees every palette entry's (block id, data, voxels) before data is written and
+    gives the data stored as 0 per block id (its default state, mcstate.States)."""
     blocks, data, dropped = C.empty(), None, 0
     counts = pal.report.blocks
+    ids_l, vals_l, n_l, secs = [], [], [], []
     for s in ch.sections:
-        got = [pal.of(n, p) for n, p in zip(s.palette, s.props or [None] * len(s.palette))]
-        ids = np.array([g[0] for g in got], np.uint16)
-        vals = np.array([g[1] for g in got], np.uint16)
-        n = np.bincount(s.indices, minlength=len(got)) if s.indices is not None \
-            else np.array([4096] + [0] * (len(got) - 1))
-        for name, k in zip(s.palette, n.tolist()):
+        start = len(ids_l)
+        if s.indices is None and len(s.palette) == 1:      # one block: often all air
+            bid, d = pal.of(s.palette[0], s.props[0] if s.props else None)
+            counts[s.palette[0]][2] += 4096
+            ids_l.append(bid)
+            vals_l.append(d)
+            n_l.append(4096)
+            secs.append((s, start, start + 1, None))
+            continue
+        for name, p in zip(s.palette, s.props or [None] * len(s.palette)):
+            bid, d = pal.of(name, p)
+            ids_l.append(bid)
+            vals_l.append(d)
+        n = np.bincount(s.indices, minlength=len(s.palette)) if s.indices is not None \
+            else np.array([4096] + [0] * (len(s.palette) - 1))
+        nl = n.tolist()
+        for name, k in zip(s.palette, nl):
             if k:
                 counts[name][2] += k
+        n_l += nl
+        secs.append((s, start, len(ids_l), n))
+    if not secs:
+        return blocks, data, dropped
+    ids_a, vals_a = np.array(ids_l, np.uint16), np.array(vals_l, np.uint16)
+    dflt = pal.settle(ids_a, vals_a, np.array(n_l))
+    vals_a[vals_a == dflt[ids_a]] = 0                   # a block's default state: 0
+    for s, i, j, n in secs:
+        ids, vals = ids_a[i:j], vals_a[i:j]
         z0 = 16 * s.y - y_min
         lo, hi = max(z0, 0), min(z0 + 16, C.HEIGHT)
         if lo >= hi:
-            dropped += int(n[ids != 0].sum())
+            dropped += 4096 if n is None and ids[0] else 0 if n is None else int(n[ids != 0].sum())
             continue
         if s.indices is None:
-            blocks[:, :, lo:hi] = ids[0]
+            if ids[0]:
+                blocks[:, :, lo:hi] = ids[0]
             if vals[0]:
                 if data is None:
                     data = C.empty()
                 data[:, :, lo:hi] = vals[0]
-        else:
-            # [y][z][x] -> [x][15 - z][y]
-            sec = s.indices.reshape(16, 16, 16).transpose(2, 1, 0)[:, ::-1, lo - z0:hi - z0]
-            blocks[:, :, lo:hi] = ids[sec]
-            if vals.any():
-                if data is None:
-                    data = C.empty()
-                data[:, :, lo:hi] = vals[sec]
-            if hi - lo < 16:
-                keep = np.zeros(len(ids), bool)
-                outside = np.ones(16, bool)
-                outside[lo - z0:hi - z0] = False
-                cut = s.indices.reshape(16, 4096 // 16)[outside].ravel()
-                keep[:] = ids != 0
-                dropped += int(keep[cut].sum())
+            continue
+        # [y][z][x] -> [x][15 - z][y]
+        sec = s.indices.reshape(16, 16, 16).transpose(2, 1, 0)[:, ::-1, lo - z0:hi - z0]
+        blocks[:, :, lo:hi] = ids[sec]
+        if vals.any():
+            if data is None:
+                data = C.empty()
+            data[:, :, lo:hi] = vals[sec]
+        if hi - lo < 16:
+            outside = np.ones(16, bool)
+            outside[lo - z0:hi - z0] = False
+            cut = s.indices.reshape(16, 4096 // 16)[outside].ravel()
+            dropped += int((ids != 0)[cut].sum())
     return blocks, data, dropped
 
 

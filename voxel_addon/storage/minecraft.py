@@ -1,10 +1,15 @@
 """What a Minecraft import keeps in the world file for a resource stack (issue 30;
 formats/mcstate.py fills it, the bake and the drawing read it).
 
-Meta (JSON): `mc_states` the state palette (`minecraft:name[k=v,…]`, entry 0 empty;
-a voxel's small data indexes it, except the `color` block's), `mc_color_states`
-({colour index: state index}), `mc_resources` (the stack's paths, bottom first),
-`mc_y_min` (the Minecraft y of z 0), `mc_biome_names`.
+Meta (JSON): `mc_states` the state palette (`minecraft:name[k=v,…]`, entry 0 empty),
+`mc_state_defaults` ({block name: state index}: each block type's usual state in
+this world), `mc_color_states` ({colour index: state index}), `mc_resources` (the
+stack's paths, bottom first), `mc_y_min` (the Minecraft y of z 0), `mc_biome_names`.
+A voxel's state (`states`): its small data when not 0, else its block's default, so
+the stone, dirt and water of a world store data 0 (a NULL or near-empty blob); the
+`color` block's data stays its colour, its state in `mc_color_states`. A world
+without `mc_state_defaults` (imported before it existed) has no defaults: its data
+is the state index itself, 0 none.
 Biomes, one per voxel column, for grass, foliage and water tints: a table of our own
 beside SPEC 3's, created on first write: `mc_biomes(cx, cy, data)`, `data` the zlib
 of 256 uint8 `[lx + 16*ly]` indexing `mc_biome_names`. Deleting a chunk leaves its
@@ -18,6 +23,7 @@ import zlib
 import numpy as np
 
 STATES = "mc_states"
+DEFAULTS = "mc_state_defaults"
 COLOR_STATES = "mc_color_states"
 RESOURCES = "mc_resources"
 Y_MIN = "mc_y_min"
@@ -62,26 +68,54 @@ def read(wf, key) -> np.ndarray | None:
     return np.frombuffer(raw, np.uint8).reshape(16, 16, order="F")
 
 
+def defaults(meta: dict) -> np.ndarray | None:
+    """(registry size,) int32 default state per block id, or None for a world whose
+    data are state indices (no `mc_state_defaults`); ValueError when damaged."""
+    raw = meta.get(DEFAULTS)
+    if raw is None:
+        return None
+    from ..core.blocks import REGISTRY
+    got = json.loads(raw or "{}")
+    if not isinstance(got, dict):
+        raise ValueError(f"{DEFAULTS} is not an object")
+    out = np.zeros(len(REGISTRY), np.int32)
+    known = set(REGISTRY.names())
+    for name, st in got.items():
+        if name in known and isinstance(st, int) and st >= 0:
+            out[REGISTRY.id(name)] = st
+    return out
+
+
 def kept(meta: dict):
-    """(stack paths, state palette, {colour index: state}, y_min) a Minecraft import
-    kept in META, or None where it kept no stack or no states; ValueError when damaged."""
+    """(stack paths, state palette, {colour index: state}, y_min, defaults) a
+    Minecraft import kept in META, or None where it kept no stack or no states;
+    ValueError when damaged."""
     try:
         paths = json.loads(meta.get(RESOURCES) or "null")
         palette = json.loads(meta.get(STATES) or "[]")
         cstates = {int(k): int(v) for k, v in json.loads(meta.get(COLOR_STATES) or "{}").items()}
         y_min = int(meta.get(Y_MIN) or -64)
+        dflt = defaults(meta)
     except (ValueError, TypeError, AttributeError) as e:
         raise ValueError(str(e)) from None
     if not paths or not palette:
         return None
-    return paths, palette, cstates, y_min
+    return paths, palette, cstates, y_min, dflt
 
 
-def states(blocks: np.ndarray, data: np.ndarray, palette: list, cstates: dict,
-           color: int) -> np.ndarray:
-    """Per voxel its state index (0: none) from the blocks' small data: a `color`
-    voxel (block id COLOR) keeps its state in CSTATES by its colour index."""
-    state = np.where(blocks == 0, 0, data).astype(np.int32)
+def states(blocks: np.ndarray, data: np.ndarray | None, palette: list, cstates: dict,
+           color: int, defaults: np.ndarray | None = None) -> np.ndarray:
+    """Per voxel its state index (0: none) from the blocks' small data (None: all 0)
+    and the world's DEFAULTS (see the module docstring): a `color` voxel (block id
+    COLOR) keeps its state in CSTATES by its colour index."""
+    if data is None:
+        data = np.zeros(blocks.shape, np.uint16)
+    if defaults is None:
+        state = np.where(blocks == 0, 0, data).astype(np.int32)
+    else:   # data 0: the block's default (air's is 0)
+        state = np.where(data == 0, defaults[np.minimum(blocks, len(defaults) - 1)],
+                         data).astype(np.int32)
+        state[blocks == 0] = 0
     col = blocks == color
     if cstates:
         cmap = np.zeros(max(cstates) + 1, np.int32)

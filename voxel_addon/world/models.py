@@ -27,7 +27,8 @@ class ChunkModels(NamedTuple):
 
 
 def stack(world):
-    """(Resources, palette, colour states, y_min, biome names) of the world, or None."""
+    """(Resources, palette, colour states, y_min, biome names, default states) of the
+    world, or None."""
     with _LOCK:
         if world in _STACKS:
             return _STACKS[world]
@@ -40,10 +41,10 @@ def stack(world):
         if kept is not None:
             from ..core.errors import VoxelError
             from ..mcres import Resources, Stack
-            paths, palette, cstates, y_min = kept
+            paths, palette, cstates, y_min, dflt = kept
             try:
                 got = (Resources(Stack.open(paths)), palette, cstates, y_min,
-                       mcfile.names(world.file.meta) or ["minecraft:plains"])
+                       mcfile.names(world.file.meta) or ["minecraft:plains"], dflt)
             except VoxelError:
                 got = None   # files gone: today's look (the bake says so, the view draws it)
         _STACKS[world] = got
@@ -54,15 +55,15 @@ def build(world, blocks: np.ndarray, data, cx0: int, cy0: int) -> dict:
     """{key: ChunkModels} of the chunks of BLOCKS ((16w + 2, 16h + 2, 256): chunks from
     (cx0, cy0) and a one-voxel ring) and the voxels they draw set to air in BLOCKS;
     {} without a stack."""
-    st = stack(world) if data is not None else None
-    if st is None:
+    st = stack(world)
+    if st is None or (data is None and st[5] is None):   # no data, no defaults: no states
         return {}
     from ..mcres import mesh as M
     from ..storage import minecraft as mcfile
-    res, palette, cstates, y_min, names = st
+    res, palette, cstates, y_min, names, dflt = st
     x0, y0 = cx0 * C.SIZE - 1, cy0 * C.SIZE - 1
     W, H = blocks.shape[:2]
-    state = mcfile.states(blocks, data, palette, cstates, REGISTRY.id("color"))
+    state = mcfile.states(blocks, data, palette, cstates, REGISTRY.id("color"), dflt)
     if not state.any():
         return {}
     biomes = mcfile.region(world.file, x0, y0, x0 + W, y0 + H, len(names))

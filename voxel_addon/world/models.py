@@ -98,11 +98,11 @@ def light_blocks(world, blocks: np.ndarray, data) -> np.ndarray:
     """BLOCKS as the light solve should see them with the world's resource stack
     (mcres.mesh.light_blocks: model blocks that are no whole cube pass light); BLOCKS
     itself without a stack."""
-    st = stack(world) if data is not None else None
-    if st is None:
+    st = stack(world)
+    if st is None or (data is None and st[5] is None):   # no data, no defaults: no states
         return blocks
     from ..mcres import mesh as M
     from ..storage import minecraft as mcfile
-    res, palette, cstates, _, _ = st
-    state = mcfile.states(blocks, data, palette, cstates, REGISTRY.id("color"))
+    res, palette, cstates, _, _, dflt = st
+    state = mcfile.states(blocks, data, palette, cstates, REGISTRY.id("color"), dflt)
     return M.light_blocks(res, palette, state, blocks)

@@ -268,6 +268,15 @@ class WorldFile:
         other process writes until it ends), under the file's lock."""
         return _Transaction(self)
 
+    def reading(self):
+        """`with wf.reading():` a burst of reads (read_chunk, fetch, ...) as one read
+        transaction, at one instant, under the file's lock: SQLite otherwise takes
+        and drops its shared lock for every statement, half the SQL time of a chunk
+        read. Keep it short (this file's writers wait for the lock; other processes
+        write on, unseen until it ends); no writes inside. Nests, also inside a
+        transaction (then it adds nothing)."""
+        return _Reading(self)
+
     def locked(self):
         """The file's lock (re-entrant): hold it around reads and writes that must
         see no other thread's write in between."""
@@ -335,10 +344,10 @@ class WorldFile:
         return blocks, data, self._decode_light(lcodec, lblob), v
 
     def _decode(self, key, codec, blob, dblob):
-        try:
-            blocks = C.from_linear(codecs.decode(codec, blob, C.VOLUME * 2)).copy(order="F")
+        try:  # decoded into new arrays: linear order is the (16, 16, 256) F order
+            blocks = codecs.decode_u16(codec, blob, C.VOLUME)
             data = None if dblob is None else \
-                C.from_linear(codecs.decode(codec, dblob, C.VOLUME * 2)).copy(order="F")
+                codecs.decode_u16(codec, dblob, C.VOLUME).reshape(C.SHAPE, order="F")
         except ValueError as e:
             raise CorruptChunk(f"chunk ({key[0]}, {key[1]}) in {self.path} is damaged ({e}); "
                                "it was left untouched") from None
@@ -347,7 +356,7 @@ class WorldFile:
                                "missing from block_types; it was left untouched")
         if not self._identity:
             blocks = self._to_reg[blocks]
-        return blocks, data
+        return blocks.reshape(C.SHAPE, order="F"), data
 
     def decode_row(self, row):
         """(blocks, data-or-None) in registry ids of a row from encode_chunk."""
@@ -358,7 +367,7 @@ class WorldFile:
         if blob is None:
             return None
         try:
-            return C.from_linear(codecs.decode(codec, blob, C.VOLUME * 2)).copy(order="F")
+            return codecs.decode_u16(codec, blob, C.VOLUME).reshape(C.SHAPE, order="F")
         except (ValueError, VoxelError):  # derived data: recomputed, never a failure
             return None
 
@@ -521,13 +530,43 @@ class Encoder:
         codec = self.codec
         ids = blocks if self.to_file is None else self.to_file[blocks]
         lblob = None if light is None else codecs.encode(codec, C.to_linear(light))
-        return (int(key[0]), int(key[1]), codec, codecs.encode(codec, C.to_linear(ids)),
+        return (int(key[0]), int(key[1]), codec, codecs.encode_u16(codec, C.to_linear(ids)),
                 self.data(data), lblob)
 
     def data(self, data):
         """A row's data blob (None when there are no data values)."""
         return None if data is None or not data.any() else \
             codecs.encode(self.codec, C.to_linear(data))
+
+
+class _Reading:
+    """BEGIN (deferred: a read transaction once it reads) … COMMIT under the file's
+    lock, unless a transaction is open already."""
+
+    def __init__(self, wf: WorldFile):
+        self.wf, self.began = wf, False
+
+    def __enter__(self):
+        wf = self.wf
+        wf._lock.acquire()
+        try:
+            if wf.db is not None and not wf.db.in_transaction:
+                wf.db.execute("BEGIN")
+                self.began = True
+        except BaseException:
+            wf._lock.release()
+            raise
+        return wf
+
+    def __exit__(self, exc_type, exc, tb):
+        db = self.wf.db
+        try:
+            if self.began and db is not None and db.in_transaction:
+                db.execute("COMMIT")  # a read transaction: nothing to write
+        finally:
+            self.began = False
+            self.wf._lock.release()
+        return False
 
 
 class _Transaction:

@@ -285,27 +285,38 @@ class World(Saving):
         a snapshot: its own stays)."""
         found: dict = {}
         vers: dict = {}
-        to_make = []
-        for key in keys:
-            with self._lock:
-                snap = self._saving.get(key)
-            if snap is not None:
-                c = found[key] = Chunk(key, snap[0].copy(order="F"),
-                                       None if snap[1] is None else snap[1].copy(order="F"))
-                c.light = snap[2]  # light arrays are replaced, never changed in place
-                vers[key] = None
+        to_make, read, bad = [], [], []
+        with self._lock:
+            snaps = {key: self._saving.get(key) for key in keys}
+        for key, snap in snaps.items():
+            if snap is None:
+                read.append(key)
                 continue
-            try:
-                blocks, data, light, v = self.file.fetch(key)
-            except CorruptChunk as e:
-                self._report_corrupt(key, str(e))
-                continue
-            vers[key] = v
-            if blocks is None:
-                to_make.append(key)
-            else:
-                c = found[key] = Chunk(key, blocks, data)
-                c.light = light
+            c = found[key] = Chunk(key, snap[0].copy(order="F"),
+                                   None if snap[1] is None else snap[1].copy(order="F"))
+            c.light = snap[2]  # light arrays are replaced, never changed in place
+            vers[key] = None
+        # one read transaction for the batch (a snapshot made meanwhile: load()'s
+        # eviction count sees it); the world's lock is never taken inside
+        with self.file.reading():
+            for key in read:
+                try:
+                    got = self.file.fetch(key)
+                except CorruptChunk as e:
+                    bad.append((key, str(e)))
+                    continue
+                vers[key] = got[3]
+                if got[0] is None:
+                    to_make.append(key)
+                else:
+                    found[key] = got
+        for key, msg in bad:
+            self._report_corrupt(key, msg)
+        for key in read:
+            got = found.get(key)
+            if got is not None:
+                c = found[key] = Chunk(key, got[0], got[1])
+                c.light = got[2]
                 c.compact()
         if to_make:
             with self._gen_lock:

@@ -94,7 +94,7 @@ def _with_zeros(frame: bytes, total: int) -> bytes | None:
 def decode_u16(codec: str, blob, count: int) -> np.ndarray:
     """decode() of `count` little-endian uint16 values into a new writable array (no
     copy of the decoded bytes: zstd writes into the array)."""
-    if codec == "zstd" and _zstd is not None and _LITTLE and \
+    if codec == "zstd" and _zstd is not None and LITTLE and \
             isinstance(blob, (bytes, bytearray, memoryview)):
         size = 2 * count
         try:
@@ -110,7 +110,7 @@ def decode_u16(codec: str, blob, count: int) -> np.ndarray:
     return np.frombuffer(decode(codec, blob, 2 * count), "<u2").astype(np.uint16)
 
 
-_LITTLE = sys.byteorder == "little"
+LITTLE = sys.byteorder == "little"
 
 
 def decode(codec: str, blob: bytes, size: int) -> bytes:

@@ -55,7 +55,7 @@ CREATE TABLE IF NOT EXISTS edits(x INTEGER, y INTEGER, z INTEGER, block INTEGER 
 # delete). Kept by triggers, so every writer of `chunks` keeps it right.
 VERSION_TABLE = (
     """CREATE TABLE IF NOT EXISTS chunk_versions(cx INTEGER, cy INTEGER, v INTEGER NOT NULL,
-        PRIMARY KEY (cx, cy))""",
+        PRIMARY KEY (cx, cy)) WITHOUT ROWID""",  # the key is the table: no second b-tree
     "CREATE INDEX IF NOT EXISTS chunk_versions_v ON chunk_versions(v)",
 ) + tuple(
     f"""CREATE TRIGGER IF NOT EXISTS chunk_version_{what} AFTER {what.upper()} ON chunks BEGIN
@@ -529,14 +529,22 @@ class Encoder:
     def row(self, key, blocks, data=None, light=None) -> tuple:
         codec = self.codec
         ids = blocks if self.to_file is None else self.to_file[blocks]
-        lblob = None if light is None else codecs.encode(codec, C.to_linear(light))
-        return (int(key[0]), int(key[1]), codec, codecs.encode_u16(codec, C.to_linear(ids)),
+        lblob = None if light is None else codecs.encode(codec, _linear(light))
+        return (int(key[0]), int(key[1]), codec, codecs.encode_u16(codec, _linear(ids)),
                 self.data(data), lblob)
 
     def data(self, data):
         """A row's data blob (None when there are no data values)."""
         return None if data is None or not data.any() else \
-            codecs.encode(self.codec, C.to_linear(data))
+            codecs.encode(self.codec, _linear(data))
+
+
+def _linear(a: np.ndarray):
+    """C.to_linear's bytes, as a view of the array's memory when it holds them
+    already (uint16, Fortran order, a little-endian machine): no copy to compress."""
+    if a.dtype == np.uint16 and a.flags.f_contiguous and codecs.LITTLE:
+        return memoryview(a.reshape(-1, order="F")).cast("B")
+    return C.to_linear(a)
 
 
 class _Reading:

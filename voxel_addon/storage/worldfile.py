@@ -557,7 +557,7 @@ def _linear(a: np.ndarray):
 
 
 class _Reading:
-    """BEGIN (deferred: a read transaction once it reads) … COMMIT under the file's
+    """BEGIN (deferred: a read transaction once it reads) … END under the file's
     lock, unless a transaction is open already."""
 
     def __init__(self, wf: WorldFile):
@@ -579,7 +579,7 @@ class _Reading:
         db = self.wf.db
         try:
             if self.began and db is not None and db.in_transaction:
-                db.execute("COMMIT")  # a read transaction: nothing to write
+                db.execute("END")  # a read transaction: nothing to commit
         finally:
             self.began = False
             self.wf._lock.release()

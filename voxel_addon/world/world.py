@@ -27,6 +27,7 @@ import threading
 import time
 import weakref
 from collections import OrderedDict
+from contextlib import nullcontext
 
 import numpy as np
 
@@ -298,7 +299,7 @@ class World(Saving):
             vers[key] = None
         # one read transaction for the batch (a snapshot made meanwhile: load()'s
         # eviction count sees it); the world's lock is never taken inside
-        with self.file.reading():
+        with self.file.reading() if read else nullcontext():
             for key in read:
                 try:
                     got = self.file.fetch(key)

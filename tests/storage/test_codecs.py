@@ -3,12 +3,14 @@ terrain as one RLE block (a memset when decoded), still one plain frame that any
 zstd reader reads; decode_u16 writes into a new array; reads in one transaction."""
 from __future__ import annotations
 
+import sqlite3
+
 import numpy as np
 import pytest
 import zstandard
 
 from voxel_addon.core import chunk
-from voxel_addon.storage import WorldFile, codecs
+from voxel_addon.storage import CorruptChunk, WorldFile, codecs
 from voxel_addon.world import World
 
 SIZE = chunk.VOLUME * 2
@@ -86,3 +88,27 @@ def test_reading_is_one_instant(world_path):
     finally:
         wf.close()
         other.close()
+
+
+def test_fetch_many_is_fetch_of_each(world_path):
+    with World.create(world_path, seed=1, generator="flat", loader=False) as w:
+        w.generate_area([(0, 0), (1, 0), (2, 0)])
+        w.set_block(17, 3, 40, "glass")
+    db = sqlite3.connect(world_path)
+    db.execute("UPDATE chunks SET blocks=? WHERE cx=2 AND cy=0", (b"junk",))
+    db.commit()
+    db.close()
+    wf = WorldFile(world_path, readonly=True)
+    try:
+        keys = [(0, 0), (1, 0), (2, 0), (5, 5)]
+        got = wf.fetch_many(keys)
+        assert list(got) == keys
+        for k in ((0, 0), (1, 0)):
+            want = wf.fetch(k)
+            assert all(np.array_equal(a, b) if a is not None else b is None
+                       for a, b in zip(got[k][:3], want[:3])) and got[k][3] == want[3]
+        assert got[(1, 0)][0][1, 3, 40] != got[(0, 0)][0][1, 3, 40]
+        assert isinstance(got[(2, 0)], CorruptChunk)
+        assert got[(5, 5)] == (None, None, None, 0)
+    finally:
+        wf.close()

@@ -340,6 +340,23 @@ class WorldFile:
         Light is None when missing or damaged; a damaged chunk raises CorruptChunk."""
         with self._lock:
             row = self.db.execute(self._fetch_sql, tuple(key)).fetchone()
+        return self._fetched(key, row)
+
+    def fetch_many(self, keys) -> dict:
+        """{key: fetch(key)} of `keys` read at one instant (one read transaction),
+        a damaged chunk's CorruptChunk in place of its tuple; decoded outside the
+        file's lock, so other threads' reads and writes wait only for the SQL."""
+        with self.reading():
+            rows = [(k, self.db.execute(self._fetch_sql, tuple(k)).fetchone()) for k in keys]
+        out = {}
+        for k, row in rows:
+            try:
+                out[k] = self._fetched(k, row)
+            except CorruptChunk as e:
+                out[k] = e
+        return out
+
+    def _fetched(self, key, row):
         v, codec, blob, dblob, lcodec, lblob = row
         if codec is None:
             return None, None, None, v

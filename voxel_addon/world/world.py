@@ -27,7 +27,6 @@ import threading
 import time
 import weakref
 from collections import OrderedDict
-from contextlib import nullcontext
 
 import numpy as np
 
@@ -297,20 +296,17 @@ class World(Saving):
                                    None if snap[1] is None else snap[1].copy(order="F"))
             c.light = snap[2]  # light arrays are replaced, never changed in place
             vers[key] = None
-        # one read transaction for the batch (a snapshot made meanwhile: load()'s
-        # eviction count sees it); the world's lock is never taken inside
-        with self.file.reading() if read else nullcontext():
-            for key in read:
-                try:
-                    got = self.file.fetch(key)
-                except CorruptChunk as e:
-                    bad.append((key, str(e)))
-                    continue
-                vers[key] = got[3]
-                if got[0] is None:
-                    to_make.append(key)
-                else:
-                    found[key] = got
+        # the batch read at one instant (a snapshot made meanwhile: load()'s eviction
+        # count sees it)
+        for key, got in (self.file.fetch_many(read) if read else {}).items():
+            if isinstance(got, CorruptChunk):
+                bad.append((key, str(got)))
+                continue
+            vers[key] = got[3]
+            if got[0] is None:
+                to_make.append(key)
+            else:
+                found[key] = got
         for key, msg in bad:
             self._report_corrupt(key, msg)
         for key in read:

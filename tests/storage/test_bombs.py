@@ -171,6 +171,35 @@ def test_block_ids_beyond_the_table_are_a_damaged_chunk(world_path):
         wf.close()
 
 
+@pytest.mark.parametrize("identity", [True, False])
+def test_the_first_id_past_the_table_is_a_damaged_chunk(world_path, identity):
+    """At the edge, in files numbered like the registry and not (the two paths)."""
+    with World.create(world_path, seed=1, generator="flat", loader=False) as w:
+        w.generate_area([(0, 0), (1, 0)])
+    db = sqlite3.connect(world_path)
+    n = db.execute("SELECT MAX(id) + 1 FROM block_types").fetchone()[0]
+    if not identity:  # two names swap ids: the file's ids are not the registry's
+        a, b = db.execute("SELECT name FROM block_types WHERE id IN (1, 2) ORDER BY id")
+        db.execute("UPDATE block_types SET name=? WHERE id=1", ("x",))
+        db.execute("UPDATE block_types SET name=? WHERE id=2", a)
+        db.execute("UPDATE block_types SET name=? WHERE id=1", b)
+    for cx, top in ((0, n - 1), (1, n)):
+        ids = np.zeros(chunk.VOLUME, "<u2")
+        ids[777] = top
+        db.execute("UPDATE chunks SET codec='zstd', blocks=? WHERE cx=? AND cy=0",
+                   (codecs.encode_u16("zstd", ids.tobytes()), cx))
+    db.commit()
+    db.close()
+    wf = WorldFile(world_path, readonly=True)
+    try:
+        assert wf._identity == identity
+        assert wf.read_chunk((0, 0))[0].max() == wf.registry_ids[n - 1]
+        with pytest.raises(CorruptChunk, match="missing from block_types"):
+            wf.read_chunk((1, 0))
+    finally:
+        wf.close()
+
+
 @pytest.mark.parametrize("params", ['{"layers": 5}', '{"layers": [["stone", "x"]]}',
                                     '{"layers": [[1]]}', "[1, 2", '"text"'])
 def test_damaged_generator_settings_are_one_line(world_path, params):

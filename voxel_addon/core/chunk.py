@@ -99,6 +99,12 @@ class Chunk:
             self._bhot = time.monotonic()
         return a
 
+    def blocks_copy(self) -> np.ndarray:
+        """A new array of the blocks (a save's snapshot) that leaves cold ones cold:
+        rebuilt from their layers, not rebuilt, kept and copied."""
+        a = self._blocks
+        return unpack_layers(*self._bpack) if a is None else a.copy(order="F")
+
     @blocks.setter
     def blocks(self, value) -> None:
         self._blocks, self._bpack, self._bhot = value, None, time.monotonic()

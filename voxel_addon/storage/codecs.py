@@ -2,8 +2,11 @@
 terrain it decodes ~3-4x faster than zlib at a similar size (bench: storage area)."""
 from __future__ import annotations
 
+import sys
 import threading
 import zlib
+
+import numpy as np
 
 from ..core.errors import VoxelError
 
@@ -36,6 +39,78 @@ def encode(codec: str, raw: bytes) -> bytes:
             raise VoxelError("zstd codec needs the 'zstandard' package")
         return _zstd_pair()[0].compress(raw)
     raise VoxelError(f"unknown codec {codec!r}")
+
+
+def encode_u16(codec: str, raw: bytes) -> bytes:
+    """encode() of uint16 values (a chunk's blocks in linear order) whose trailing
+    zeros (the air above the terrain, ~60 % of a chunk) end the zstd frame as a block
+    of their own: one byte repeated (an RLE block), which decodes as a memset instead
+    of tens of KB of 2-byte match copies: a chunk decodes in half the time. Still one
+    plain zstd frame declaring its size (SPEC's blob; any zstd reader reads it)."""
+    if codec != "zstd" or _zstd is None or not 0 < len(raw) <= 1 << 17 or len(raw) % SLAB:
+        return encode(codec, raw)
+    # where the zeros start, in slabs of 2 KiB (4 layers): OR of each slab's words
+    words = np.frombuffer(raw, np.uint64).reshape(-1, SLAB // 8)
+    used = np.flatnonzero(np.bitwise_or.reduce(words.T, axis=0))
+    top = 0 if used.size == 0 else (int(used[-1]) + 1) * SLAB
+    if top in (0, len(raw)):  # a frame's first block is never RLE: nothing to gain
+        return encode(codec, raw)
+    return _with_zeros(encode(codec, raw[:top]), len(raw)) or encode(codec, raw)
+
+
+SLAB = 2048
+_MAGIC = b"\x28\xb5\x2f\xfd"
+
+
+def _with_zeros(frame: bytes, total: int) -> bytes | None:
+    """The zstd frame `frame` (RFC 8878) followed by zero bytes up to `total` bytes
+    as one RLE block (at most 128 KiB), under a single-segment header declaring
+    `total`; None when the frame is not the plain kind our compressor writes (then
+    the caller compresses the whole)."""
+    fhd = frame[4]
+    if frame[:4] != _MAGIC or fhd & 0x07:  # checksum or dictionary: not ours
+        return None
+    single = fhd >> 5 & 1
+    pos = 5 + (0 if single else 1) + ((1 if single else 0), 2, 4, 8)[fhd >> 6]
+    start = pos
+    while pos + 3 <= len(frame):  # block headers: bit 0 last, bits 1-2 type, 3-23 size
+        h = int.from_bytes(frame[pos:pos + 3], "little")
+        end = pos + 3 + (1 if h >> 1 & 3 == 1 else h >> 3)
+        if h & 1:
+            break
+        pos = end
+    else:
+        return None
+    if end != len(frame):
+        return None
+    zeros = total - _zstd.frame_content_size(frame)  # -1 (undeclared): too many, None
+    if not 0 < zeros <= 1 << 17 or zeros > total:
+        return None
+    return b"".join((_MAGIC, b"\xa0", total.to_bytes(4, "little"),  # 4-byte size, single
+                     frame[start:pos], (h & ~1).to_bytes(3, "little"), frame[pos + 3:end],
+                     (1 | 1 << 1 | zeros << 3).to_bytes(3, "little"), b"\0"))
+
+
+def decode_u16(codec: str, blob, count: int) -> np.ndarray:
+    """decode() of `count` little-endian uint16 values into a new writable array (no
+    copy of the decoded bytes: zstd writes into the array)."""
+    if codec == "zstd" and _zstd is not None and LITTLE and \
+            isinstance(blob, (bytes, bytearray, memoryview)):
+        size = 2 * count
+        try:
+            declared = _zstd.frame_content_size(blob)
+            if declared == size:  # zstd stops at the size the frame declares
+                out = np.empty(count, np.uint16)
+                n = _zstd_pair()[1].stream_reader(blob).readinto(out)
+                if n != size:
+                    raise ValueError(f"decoded {n} bytes, expected {size}")
+                return out
+        except _zstd.ZstdError as e:
+            raise ValueError(str(e)) from None
+    return np.frombuffer(decode(codec, blob, 2 * count), "<u2").astype(np.uint16)
+
+
+LITTLE = sys.byteorder == "little"
 
 
 def decode(codec: str, blob: bytes, size: int) -> bytes:

@@ -55,7 +55,7 @@ CREATE TABLE IF NOT EXISTS edits(x INTEGER, y INTEGER, z INTEGER, block INTEGER 
 # delete). Kept by triggers, so every writer of `chunks` keeps it right.
 VERSION_TABLE = (
     """CREATE TABLE IF NOT EXISTS chunk_versions(cx INTEGER, cy INTEGER, v INTEGER NOT NULL,
-        PRIMARY KEY (cx, cy))""",
+        PRIMARY KEY (cx, cy)) WITHOUT ROWID""",  # the key is the table: no second b-tree
     "CREATE INDEX IF NOT EXISTS chunk_versions_v ON chunk_versions(v)",
 ) + tuple(
     f"""CREATE TRIGGER IF NOT EXISTS chunk_version_{what} AFTER {what.upper()} ON chunks BEGIN
@@ -79,6 +79,9 @@ def _open_error(path: Path, e: sqlite3.DatabaseError) -> VoxelError:
     if what is not None:
         return VoxelError(f"{what} while opening {path}: nothing was written")
     return VoxelError(f"{path} is not a readable world file ({e})")
+
+
+_MAX = np.maximum.reduce  # ndarray.max() without its Python wrapper (a read's 5 %)
 
 
 class CorruptChunk(VoxelError):
@@ -268,6 +271,15 @@ class WorldFile:
         other process writes until it ends), under the file's lock."""
         return _Transaction(self)
 
+    def reading(self):
+        """`with wf.reading():` a burst of reads (read_chunk, fetch, ...) as one read
+        transaction, at one instant, under the file's lock: SQLite otherwise takes
+        and drops its shared lock for every statement, half the SQL time of a chunk
+        read. Keep it short (this file's writers wait for the lock; other processes
+        write on, unseen until it ends); no writes inside. Nests, also inside a
+        transaction (then it adds nothing)."""
+        return _Reading(self)
+
     def locked(self):
         """The file's lock (re-entrant): hold it around reads and writes that must
         see no other thread's write in between."""
@@ -328,6 +340,23 @@ class WorldFile:
         Light is None when missing or damaged; a damaged chunk raises CorruptChunk."""
         with self._lock:
             row = self.db.execute(self._fetch_sql, tuple(key)).fetchone()
+        return self._fetched(key, row)
+
+    def fetch_many(self, keys) -> dict:
+        """{key: fetch(key)} of `keys` read at one instant (one read transaction),
+        a damaged chunk's CorruptChunk in place of its tuple; decoded outside the
+        file's lock, so other threads' reads and writes wait only for the SQL."""
+        with self.reading():
+            rows = [(k, self.db.execute(self._fetch_sql, tuple(k)).fetchone()) for k in keys]
+        out = {}
+        for k, row in rows:
+            try:
+                out[k] = self._fetched(k, row)
+            except CorruptChunk as e:
+                out[k] = e
+        return out
+
+    def _fetched(self, key, row):
         v, codec, blob, dblob, lcodec, lblob = row
         if codec is None:
             return None, None, None, v
@@ -335,19 +364,25 @@ class WorldFile:
         return blocks, data, self._decode_light(lcodec, lblob), v
 
     def _decode(self, key, codec, blob, dblob):
-        try:
-            blocks = C.from_linear(codecs.decode(codec, blob, C.VOLUME * 2)).copy(order="F")
+        try:  # decoded into new arrays: linear order is the (16, 16, 256) F order
+            blocks = codecs.decode_u16(codec, blob, C.VOLUME)
             data = None if dblob is None else \
-                C.from_linear(codecs.decode(codec, dblob, C.VOLUME * 2)).copy(order="F")
+                codecs.decode_u16(codec, dblob, C.VOLUME).reshape(C.SHAPE, order="F")
         except ValueError as e:
             raise CorruptChunk(f"chunk ({key[0]}, {key[1]}) in {self.path} is damaged ({e}); "
                                "it was left untouched") from None
-        if blocks.max() >= len(self._to_reg):  # checked always: tables are indexed by id
+        # checked always: tables are indexed by id (the lookup checks what it maps)
+        if self._identity:
+            ok = _MAX(blocks) < len(self._to_reg)
+        else:
+            try:
+                blocks, ok = self._to_reg[blocks], True
+            except IndexError:
+                ok = False
+        if not ok:
             raise CorruptChunk(f"chunk ({key[0]}, {key[1]}) in {self.path} has block ids "
                                "missing from block_types; it was left untouched")
-        if not self._identity:
-            blocks = self._to_reg[blocks]
-        return blocks, data
+        return blocks.reshape(C.SHAPE, order="F"), data
 
     def decode_row(self, row):
         """(blocks, data-or-None) in registry ids of a row from encode_chunk."""
@@ -358,7 +393,7 @@ class WorldFile:
         if blob is None:
             return None
         try:
-            return C.from_linear(codecs.decode(codec, blob, C.VOLUME * 2)).copy(order="F")
+            return codecs.decode_u16(codec, blob, C.VOLUME).reshape(C.SHAPE, order="F")
         except (ValueError, VoxelError):  # derived data: recomputed, never a failure
             return None
 
@@ -520,14 +555,52 @@ class Encoder:
     def row(self, key, blocks, data=None, light=None) -> tuple:
         codec = self.codec
         ids = blocks if self.to_file is None else self.to_file[blocks]
-        lblob = None if light is None else codecs.encode(codec, C.to_linear(light))
-        return (int(key[0]), int(key[1]), codec, codecs.encode(codec, C.to_linear(ids)),
+        lblob = None if light is None else codecs.encode(codec, _linear(light))
+        return (int(key[0]), int(key[1]), codec, codecs.encode_u16(codec, _linear(ids)),
                 self.data(data), lblob)
 
     def data(self, data):
         """A row's data blob (None when there are no data values)."""
         return None if data is None or not data.any() else \
-            codecs.encode(self.codec, C.to_linear(data))
+            codecs.encode(self.codec, _linear(data))
+
+
+def _linear(a: np.ndarray):
+    """C.to_linear's bytes, as a view of the array's memory when it holds them
+    already (uint16, Fortran order, a little-endian machine): no copy to compress."""
+    if a.dtype == np.uint16 and a.flags.f_contiguous and codecs.LITTLE:
+        return memoryview(a.reshape(-1, order="F")).cast("B")
+    return C.to_linear(a)
+
+
+class _Reading:
+    """BEGIN (deferred: a read transaction once it reads) … END under the file's
+    lock, unless a transaction is open already."""
+
+    def __init__(self, wf: WorldFile):
+        self.wf, self.began = wf, False
+
+    def __enter__(self):
+        wf = self.wf
+        wf._lock.acquire()
+        try:
+            if wf.db is not None and not wf.db.in_transaction:
+                wf.db.execute("BEGIN")
+                self.began = True
+        except BaseException:
+            wf._lock.release()
+            raise
+        return wf
+
+    def __exit__(self, exc_type, exc, tb):
+        db = self.wf.db
+        try:
+            if self.began and db is not None and db.in_transaction:
+                db.execute("END")  # a read transaction: nothing to commit
+        finally:
+            self.began = False
+            self.wf._lock.release()
+        return False
 
 
 class _Transaction:

@@ -100,7 +100,7 @@ class Saving:
             for k in self.chunks if keys is None else [k for k in keys if k in self.chunks]:
                 c = self.chunks[k]
                 if c.dirty:
-                    self._saving[k] = self._snapshot(k, c.blocks.copy(order="F"),
+                    self._saving[k] = self._snapshot(k, c.blocks_copy(),
                                                      None if c.data is None
                                                      else c.data.copy(order="F"), c.light)
                     c.dirty = False

@@ -291,27 +291,35 @@ class World(Saving):
         a snapshot: its own stays)."""
         found: dict = {}
         vers: dict = {}
-        to_make = []
-        for key in keys:
-            with self._lock:
-                snap = self._saving.get(key)
-            if snap is not None:
-                c = found[key] = Chunk(key, snap[0].copy(order="F"),
-                                       None if snap[1] is None else snap[1].copy(order="F"))
-                c.light = snap[2]  # light arrays are replaced, never changed in place
-                vers[key] = None
+        to_make, read, bad = [], [], []
+        with self._lock:
+            snaps = {key: self._saving.get(key) for key in keys}
+        for key, snap in snaps.items():
+            if snap is None:
+                read.append(key)
                 continue
-            try:
-                blocks, data, light, v = self.file.fetch(key)
-            except CorruptChunk as e:
-                self._report_corrupt(key, str(e))
+            c = found[key] = Chunk(key, snap[0].copy(order="F"),
+                                   None if snap[1] is None else snap[1].copy(order="F"))
+            c.light = snap[2]  # light arrays are replaced, never changed in place
+            vers[key] = None
+        # the batch read at one instant (a snapshot made meanwhile: load()'s eviction
+        # count sees it)
+        for key, got in (self.file.fetch_many(read) if read else {}).items():
+            if isinstance(got, CorruptChunk):
+                bad.append((key, str(got)))
                 continue
-            vers[key] = v
-            if blocks is None:
+            vers[key] = got[3]
+            if got[0] is None:
                 to_make.append(key)
             else:
-                c = found[key] = Chunk(key, blocks, data)
-                c.light = light
+                found[key] = got
+        for key, msg in bad:
+            self._report_corrupt(key, msg)
+        for key in read:
+            got = found.get(key)
+            if got is not None:
+                c = found[key] = Chunk(key, got[0], got[1])
+                c.light = got[2]
                 c.compact()
         if to_make:
             with self._gen_lock:

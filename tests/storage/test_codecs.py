@@ -1,0 +1,114 @@
+"""Chunk blobs (issue 29): block ids end their zstd frame with the air above the
+terrain as one RLE block (a memset when decoded), still one plain frame that any
+zstd reader reads; decode_u16 writes into a new array; reads in one transaction."""
+from __future__ import annotations
+
+import sqlite3
+
+import numpy as np
+import pytest
+import zstandard
+
+from voxel_addon.core import chunk
+from voxel_addon.storage import CorruptChunk, WorldFile, codecs
+from voxel_addon.world import World
+
+SIZE = chunk.VOLUME * 2
+
+
+def terrain(top: int, seed: int = 0) -> bytes:
+    """Linear-order ids: varied below value index `top`, zeros (air) from there."""
+    a = np.zeros(chunk.VOLUME, "<u2")
+    a[:top] = np.random.default_rng(seed).integers(1, 9, top) // 3 + 1
+    return a.tobytes()
+
+
+@pytest.mark.parametrize("top", [70 * 256, 70 * 256 + 5, 1023, 1024, 1, chunk.VOLUME - 1])
+def test_trailing_air_is_one_rle_block_of_a_plain_frame(top):
+    raw = terrain(top)
+    blob = codecs.encode_u16("zstd", raw)
+    # any zstd reader, told nothing: one frame declaring its size
+    assert zstandard.ZstdDecompressor().decompress(blob) == raw
+    assert zstandard.frame_content_size(blob) == SIZE
+    got = codecs.decode_u16("zstd", blob, chunk.VOLUME)
+    assert got.flags.writeable and got.dtype == np.uint16
+    assert np.array_equal(got, np.frombuffer(raw, "<u2"))
+    zeros = SIZE - -(-2 * top // codecs.SLAB) * codecs.SLAB  # whole 4-layer slabs
+    if zeros:  # the last block: RLE (type 1), last, of `zeros` bytes of 0
+        assert blob[-4:] == (1 | 1 << 1 | zeros << 3).to_bytes(3, "little") + b"\0"
+    else:
+        assert blob == codecs.encode("zstd", raw)
+    assert len(blob) <= len(codecs.encode("zstd", raw)) + 16
+
+
+@pytest.mark.parametrize("raw", [bytes(SIZE), np.full(chunk.VOLUME, 3, "<u2").tobytes()])
+def test_uniform_chunks_stay_plain(raw):
+    blob = codecs.encode_u16("zstd", raw)
+    assert blob == codecs.encode("zstd", raw)
+    assert codecs.decode_u16("zstd", blob, chunk.VOLUME).tobytes() == raw
+    assert codecs.encode_u16("zlib", raw) == codecs.encode("zlib", raw)
+
+
+def test_decode_u16_refuses_what_decode_refuses():
+    raw = terrain(9000)
+    for codec in codecs.CODECS:
+        assert codecs.decode_u16(codec, codecs.encode(codec, raw), chunk.VOLUME).tobytes() == raw
+        for bad in (raw[:-2], raw + b"\0\0"):
+            with pytest.raises(ValueError):
+                codecs.decode_u16(codec, codecs.encode_u16(codec, bad), chunk.VOLUME)
+    # a frame declaring the right size that holds less; one without a declared size
+    full = codecs.encode_u16("zstd", raw)
+    with pytest.raises(ValueError):
+        codecs.decode_u16("zstd", full[:-4], chunk.VOLUME)
+    undeclared = zstandard.ZstdCompressor(write_content_size=False).compress(raw)
+    assert codecs.decode_u16("zstd", undeclared, chunk.VOLUME).tobytes() == raw
+    with pytest.raises(ValueError, match="where a blob belongs"):
+        codecs.decode_u16("zstd", "text", chunk.VOLUME)
+
+
+def test_reading_is_one_instant(world_path):
+    with World.create(world_path, seed=1, generator="flat", loader=False) as w:
+        w.generate_area([(0, 0)])
+    wf, other = WorldFile(world_path, readonly=True), WorldFile(world_path)
+    try:
+        before = wf.read_chunk((0, 0))[0]
+        changed = before.copy(order="F")
+        changed[3, 4, 200] = 2
+        with wf.reading():
+            assert np.array_equal(wf.read_chunk((0, 0))[0], before)
+            other.write_chunks([((0, 0), changed, None)])
+            with wf.reading():  # nests
+                assert np.array_equal(wf.read_chunk((0, 0))[0], before)
+                assert wf.fetch((0, 0))[3] == wf.version((0, 0))
+            assert np.array_equal(wf.read_chunk((0, 0))[0], before)
+        assert np.array_equal(wf.read_chunk((0, 0))[0], changed)
+        with other.transaction(), other.reading():  # inside a write: adds nothing
+            assert np.array_equal(other.read_chunk((0, 0))[0], changed)
+        other.write_chunks([((0, 0), before, None)])  # the lock and file are free again
+    finally:
+        wf.close()
+        other.close()
+
+
+def test_fetch_many_is_fetch_of_each(world_path):
+    with World.create(world_path, seed=1, generator="flat", loader=False) as w:
+        w.generate_area([(0, 0), (1, 0), (2, 0)])
+        w.set_block(17, 3, 40, "glass")
+    db = sqlite3.connect(world_path)
+    db.execute("UPDATE chunks SET blocks=? WHERE cx=2 AND cy=0", (b"junk",))
+    db.commit()
+    db.close()
+    wf = WorldFile(world_path, readonly=True)
+    try:
+        keys = [(0, 0), (1, 0), (2, 0), (5, 5)]
+        got = wf.fetch_many(keys)
+        assert list(got) == keys
+        for k in ((0, 0), (1, 0)):
+            want = wf.fetch(k)
+            assert all(np.array_equal(a, b) if a is not None else b is None
+                       for a, b in zip(got[k][:3], want[:3])) and got[k][3] == want[3]
+        assert got[(1, 0)][0][1, 3, 40] != got[(0, 0)][0][1, 3, 40]
+        assert isinstance(got[(2, 0)], CorruptChunk)
+        assert got[(5, 5)] == (None, None, None, 0)
+    finally:
+        wf.close()

@@ -29,6 +29,8 @@ from ..core import chunk as C
 from ..core.blocks import REGISTRY
 from ..core.errors import VoxelError, cause
 from . import codecs
+from .rows import Encoder
+from .transactions import Reading, Transaction
 
 FORMAT_VERSION = 1
 APP_ID = 0x564F5857  # "VOXW": marks our files in the SQLite header
@@ -269,7 +271,7 @@ class WorldFile:
     def transaction(self):
         """`with wf.transaction() as db:` one write transaction (BEGIN IMMEDIATE: no
         other process writes until it ends), under the file's lock."""
-        return _Transaction(self)
+        return Transaction(self)
 
     def reading(self):
         """`with wf.reading():` a burst of reads (read_chunk, fetch, ...) as one read
@@ -278,7 +280,7 @@ class WorldFile:
         read. Keep it short (this file's writers wait for the lock; other processes
         write on, unseen until it ends); no writes inside. Nests, also inside a
         transaction (then it adds nothing)."""
-        return _Reading(self)
+        return Reading(self)
 
     def locked(self):
         """The file's lock (re-entrant): hold it around reads and writes that must
@@ -544,96 +546,3 @@ class WorldFile:
             if self.db is not None:
                 self.db.close()
                 self.db = None
-
-
-class Encoder:
-    """Chunk rows in one file's block numbering (WorldFile.encoder)."""
-
-    def __init__(self, codec: str, to_file=None):
-        self.codec, self.to_file = codec, to_file  # to_file None: ids are the registry's
-
-    def row(self, key, blocks, data=None, light=None) -> tuple:
-        codec = self.codec
-        ids = blocks if self.to_file is None else self.to_file[blocks]
-        lblob = None if light is None else codecs.encode(codec, _linear(light))
-        return (int(key[0]), int(key[1]), codec, codecs.encode_u16(codec, _linear(ids)),
-                self.data(data), lblob)
-
-    def data(self, data):
-        """A row's data blob (None when there are no data values)."""
-        return None if data is None or not data.any() else \
-            codecs.encode(self.codec, _linear(data))
-
-
-def _linear(a: np.ndarray):
-    """C.to_linear's bytes, as a view of the array's memory when it holds them
-    already (uint16, Fortran order, a little-endian machine): no copy to compress."""
-    if a.dtype == np.uint16 and a.flags.f_contiguous and codecs.LITTLE:
-        return memoryview(a.reshape(-1, order="F")).cast("B")
-    return C.to_linear(a)
-
-
-class _Reading:
-    """BEGIN (deferred: a read transaction once it reads) … END under the file's
-    lock, unless a transaction is open already."""
-
-    def __init__(self, wf: WorldFile):
-        self.wf, self.began = wf, False
-
-    def __enter__(self):
-        wf = self.wf
-        wf._lock.acquire()
-        try:
-            if wf.db is not None and not wf.db.in_transaction:
-                wf.db.execute("BEGIN")
-                self.began = True
-        except BaseException:
-            wf._lock.release()
-            raise
-        return wf
-
-    def __exit__(self, exc_type, exc, tb):
-        db = self.wf.db
-        try:
-            if self.began and db is not None and db.in_transaction:
-                db.execute("END")  # a read transaction: nothing to commit
-        finally:
-            self.began = False
-            self.wf._lock.release()
-        return False
-
-
-class _Transaction:
-    """BEGIN IMMEDIATE … COMMIT under the file's lock; ROLLBACK on any error."""
-
-    def __init__(self, wf: WorldFile):
-        self.wf = wf
-
-    def __enter__(self):
-        self.wf._writable()
-        self.wf._lock.acquire()
-        try:
-            self.wf.check_path()
-            self.wf.db.execute("BEGIN IMMEDIATE")
-        except BaseException:
-            self.wf._lock.release()
-            raise
-        return self.wf.db
-
-    def __exit__(self, exc_type, exc, tb):
-        db = self.wf.db
-        try:
-            if exc_type:
-                db.execute("ROLLBACK")
-            else:
-                try:
-                    db.execute("COMMIT")
-                except sqlite3.Error:
-                    # a COMMIT that failed (disk full, I/O error) can leave the
-                    # transaction open: end it, so a later save can try again
-                    if db.in_transaction:
-                        db.execute("ROLLBACK")
-                    raise
-        finally:
-            self.wf._lock.release()
-        return False

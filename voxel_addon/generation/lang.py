@@ -381,7 +381,3 @@ class Program:
             if p.kind == "3d":
                 return p
         return None
-
-    def units(self):
-        from .lower import lower  # the lowering needs the whole language first
-        return lower(self)

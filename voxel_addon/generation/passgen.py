@@ -14,7 +14,7 @@ from ..core import chunk as C
 from ..core.blocks import REGISTRY
 from . import noise
 from .base import Generator
-from .lower import prune
+from .lower import lower, prune
 
 BACKENDS = opencl.BACKENDS
 
@@ -33,7 +33,7 @@ class PassGenerator(Generator):
         opencl.pick(backend, "generation")  # an unknown or unusable one: refused now
         self.seed32 = noise.seed32(self.seed)
         self.perm = noise.perm_table(self.seed32)
-        self.units = self.program().units()
+        self.units = lower(self.program())
         self._runner = None
         self._surf = None
         self._surf_lock = threading.Lock()

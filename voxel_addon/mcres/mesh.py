@@ -19,10 +19,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..core.blocks import REGISTRY
 from . import tints
 from .pack import SOLID, CUTOUT, TRANSLUCENT
 
 LAYERS = (SOLID, CUTOUT, TRANSLUCENT)
+# project blocks that hold light out and make none: a model block stored as one of
+# them may pass light instead (light_blocks)
+DARK = REGISTRY.light_opaque & (REGISTRY.emission.max(axis=1) == 0)
 # project face index → voxel offset (core.blocks.FACES: -x +x -y +y -z +z)
 OFFSETS = np.array([(-1, 0, 0), (1, 0, 0), (0, -1, 0), (0, 1, 0), (0, 0, -1), (0, 0, 1)])
 
@@ -143,26 +147,30 @@ def build(res, palette: list, state: np.ndarray, opaque: np.ndarray, *, origin=(
                 np.array(out["voxel"], np.int32).reshape(-1, 3), sprites, drawn)
 
 
+def opens(res, key: str) -> bool:
+    """Whether the light passes a voxel of state KEY: its model is no whole opaque
+    cube (light_blocks; a state the stack does not draw keeps its project block)."""
+    from .states import parse_key
+    name, props = parse_key(key)
+    if res.blockstate(name) is None:
+        return False
+    sh = res.shape(name, props)
+    return bool(sh.quads) and not sh.full
+
+
 def light_blocks(res, palette: list, state: np.ndarray, blocks: np.ndarray) -> np.ndarray:
     """BLOCKS for the light solve: a voxel drawn from a model that is no whole opaque
     cube (a rail, door, fence, slab, torch…) passes light, as the game's: its
     project block (a whole opaque cube for today's look, rails as planks) would leave
     the floor under a rail and the sides next to a door dark. Voxels whose project
     block emits or already passes light keep it. BLOCKS itself when nothing changes."""
-    from ..core.blocks import REGISTRY
-    from .states import parse_key
     known = state > 0
     if not known.any():
         return blocks
-    opens = np.zeros(len(palette), bool)
+    op = np.zeros(len(palette), bool)
     for i in np.unique(state[known]).tolist():
-        name, props = parse_key(palette[i])
-        if res.blockstate(name) is None:
-            continue
-        sh = res.shape(name, props)
-        opens[i] = bool(sh.quads) and not sh.full
-    dark = REGISTRY.light_opaque & (REGISTRY.emission.max(axis=1) == 0)
-    where = opens[state] & dark[blocks]
+        op[i] = opens(res, palette[i])
+    where = op[state] & DARK[blocks]
     if not where.any():
         return blocks
     out = blocks.copy(order="K")

@@ -14,7 +14,9 @@ Light: the chunks around the stroke must have final light; those that do not (no
 streamed yet) are lit first in one batch (build.light_and_mesh). Then each voxel is
 relit with light.update on a window holding every voxel's relight box (a darkening
 edit clears and refills only the light that moved), which equals a full solve
-(tests). Meshes: only the render regions (64 layers) around the changed voxels are
+(tests). With the world's resource stack the window holds the blocks as the full
+solve sees them (world/models.Sight: a rail, door or slab passes light), and a
+change of state alone is relit too. Meshes: only the render regions (64 layers) around the changed voxels are
 meshed again and spliced in. The payloads are also queued on every Stream of the
 world, so a consumer that only drains sees them as well.
 

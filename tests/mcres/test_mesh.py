@@ -147,3 +147,37 @@ def test_positions_carry_the_origin(res):
     m = build(res, PALETTE, s, np.zeros(s.shape, bool), origin=(10, -20, 5))
     assert m.positions.min(axis=0).tolist() == [10, -20, 5]
     assert m.positions.max(axis=0).tolist() == [11, -19, 6]
+
+
+@pytest.mark.parametrize("key, inner", [
+    ("minecraft:oak_leaves[distance=1,persistent=true,waterlogged=false]", True),
+    ("minecraft:glass", False)])
+def test_a_blob_of_leaves_keeps_its_inner_faces_glass_does_not(res, key, inner):
+    """A 2x2x2 blob: leaves draw their faces against each other (the game's fancy
+    leaves: a tree shows leaves inside, not the floor through the holes), glass hides
+    the faces between glass (HalfTransparentBlock). Brute force: a face toward
+    another blob voxel is drawn iff INNER; every face toward open air is."""
+    s = np.zeros((4, 4, 4), np.int32)
+    s[1:3, 1:3, 1:3] = 1
+    m = build(res, ["", key], s, np.zeros(s.shape, bool))
+    want = 0
+    for v in np.argwhere(s == 1):
+        for d in OFFSETS:
+            want += inner or not s[tuple(v + d)]
+    assert m.quads == want == (48 if inner else 24)
+    nrm = m.normals.reshape(-1, 4, 3)[:, 0]
+    # the faces between the blob's voxels, seen from either side
+    between = sum(1 for v, n in zip(m.voxel, nrm) if s[tuple(v + np.rint(n).astype(int))])
+    assert between == (24 if inner else 0)
+
+
+def test_which_blocks_hide_faces_against_themselves():
+    from voxel_addon.mcres.mesh import hides_itself
+    yes = ["minecraft:glass", "minecraft:red_stained_glass", "minecraft:tinted_glass",
+           "minecraft:glass_pane", "minecraft:lime_stained_glass_pane", "minecraft:iron_bars",
+           "minecraft:ice", "minecraft:blue_ice", "minecraft:slime_block",
+           "minecraft:waxed_oxidized_copper_grate", "minecraft:powder_snow"]
+    no = ["minecraft:oak_leaves", "minecraft:azalea_leaves", "minecraft:stone",
+          "minecraft:dice", "mymod:crystal"]
+    assert [n for n in yes if not hides_itself(n)] == []
+    assert [n for n in no if hides_itself(n)] == []

@@ -6,8 +6,9 @@ voxel whose state the stack knows gets its shape's quads; a quad with a cullface
 dropped when the neighbour there is a whole opaque cube (a full shape, or an opaque
 voxel of the project's own), a model whose opaque quads cover that side whole (a
 stair's bottom hides the top of the block below) or the same see-through block in
-any state (glass beside glass, a pane's arm against the pane it joins: the game's
-HalfTransparentBlock and IronBarsBlock skip those faces).
+any state when the game's code says so (`hides_itself`: glass beside glass, a pane's
+arm against the pane it joins; HalfTransparentBlock and IronBarsBlock skip those
+faces, leaves draw theirs).
 A state whose model has no elements (the game draws chests, beds, signs and water
 by code) keeps today's look. Voxels inside (all six neighbours whole) are skipped before any shape is looked at,
 so a stone hill costs its surface only. Weighted variants are drawn by each voxel's
@@ -19,10 +20,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..core.blocks import REGISTRY
 from . import tints
 from .pack import SOLID, CUTOUT, TRANSLUCENT
 
 LAYERS = (SOLID, CUTOUT, TRANSLUCENT)
+# project blocks that hold light out and make none: a model block stored as one of
+# them may pass light instead (light_blocks)
+DARK = REGISTRY.light_opaque & (REGISTRY.emission.max(axis=1) == 0)
 # project face index → voxel offset (core.blocks.FACES: -x +x -y +y -z +z)
 OFFSETS = np.array([(-1, 0, 0), (1, 0, 0), (0, -1, 0), (0, 1, 0), (0, 0, -1), (0, 0, 1)])
 
@@ -52,6 +57,19 @@ class Mesh:
                     self.sprites, self.drawn)
 
 
+def hides_itself(name: str) -> bool:
+    """Whether the game drops a face of block NAME against the same block: glass
+    (stained, tinted), ice, slime, honey, copper grates (HalfTransparentBlock),
+    panes and iron bars (IronBarsBlock), powder snow and mangrove roots
+    (`skipRendering`). Leaves do not (fancy graphics draws their inner faces, so a
+    tree shows leaves inside, not the floor through the holes), nor does a block the
+    game's code does not name (a mod's own: the default draws them)."""
+    n = name.rpartition(":")[2]
+    return (n.endswith(("glass", "glass_pane", "copper_grate")) or n == "ice"
+            or n.endswith("_ice") or n in ("iron_bars", "slime_block", "honey_block",
+                                           "powder_snow", "mangrove_roots"))
+
+
 def to_minecraft(vx, vy, vz, y_min: int) -> tuple[int, int, int]:
     """Voxel → Minecraft block position (formats/README's mapping, inverted)."""
     return int(vx), int(vz) + y_min, -1 - int(vy)
@@ -71,10 +89,12 @@ def build(res, palette: list, state: np.ndarray, opaque: np.ndarray, *, origin=(
     shapes: dict = {}
     mixed = np.zeros(len(palette), bool)          # weighted or position-dependent
     block_of = np.full(len(palette), -1)          # per state: its block (name) number
+    selfish = np.zeros(len(palette), bool)        # per state: hides faces against itself
     names: dict = {}
     for i in np.unique(state[known]).tolist():
         name, props = parse_key(palette[i])
         block_of[i] = names.setdefault(name, len(names))
+        selfish[i] = hides_itself(name)
         bs = res.blockstate(name)
         if bs is None:
             continue
@@ -115,7 +135,7 @@ def build(res, palette: list, state: np.ndarray, opaque: np.ndarray, *, origin=(
                 ns = padstate[1 + x + dx, 1 + y + dy, 1 + z + dz]
                 if padrawn[1 + x + dx, 1 + y + dy, 1 + z + dz] and side_of[ns, q.cull ^ 1]:
                     continue      # the neighbour's model covers the face toward us
-                if sh.layer != SOLID and ns and block_of[ns] == block_of[s]:
+                if selfish[s] and ns and block_of[ns] == block_of[s]:
                     continue      # glass against glass, a pane's arm against the next pane
             if q.sprite not in sprite_ix:
                 sprite_ix[q.sprite] = len(sprites) if q.sprite is not None else -1
@@ -143,26 +163,30 @@ def build(res, palette: list, state: np.ndarray, opaque: np.ndarray, *, origin=(
                 np.array(out["voxel"], np.int32).reshape(-1, 3), sprites, drawn)
 
 
+def opens(res, key: str) -> bool:
+    """Whether the light passes a voxel of state KEY: its model is no whole opaque
+    cube (light_blocks; a state the stack does not draw keeps its project block)."""
+    from .states import parse_key
+    name, props = parse_key(key)
+    if res.blockstate(name) is None:
+        return False
+    sh = res.shape(name, props)
+    return bool(sh.quads) and not sh.full
+
+
 def light_blocks(res, palette: list, state: np.ndarray, blocks: np.ndarray) -> np.ndarray:
     """BLOCKS for the light solve: a voxel drawn from a model that is no whole opaque
     cube (a rail, door, fence, slab, torch…) passes light, as the game's: its
     project block (a whole opaque cube for today's look, rails as planks) would leave
     the floor under a rail and the sides next to a door dark. Voxels whose project
     block emits or already passes light keep it. BLOCKS itself when nothing changes."""
-    from ..core.blocks import REGISTRY
-    from .states import parse_key
     known = state > 0
     if not known.any():
         return blocks
-    opens = np.zeros(len(palette), bool)
+    op = np.zeros(len(palette), bool)
     for i in np.unique(state[known]).tolist():
-        name, props = parse_key(palette[i])
-        if res.blockstate(name) is None:
-            continue
-        sh = res.shape(name, props)
-        opens[i] = bool(sh.quads) and not sh.full
-    dark = REGISTRY.light_opaque & (REGISTRY.emission.max(axis=1) == 0)
-    where = opens[state] & dark[blocks]
+        op[i] = opens(res, palette[i])
+    where = op[state] & DARK[blocks]
     if not where.any():
         return blocks
     out = blocks.copy(order="K")

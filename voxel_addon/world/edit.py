@@ -14,7 +14,9 @@ Light: the chunks around the stroke must have final light; those that do not (no
 streamed yet) are lit first in one batch (build.light_and_mesh). Then each voxel is
 relit with light.update on a window holding every voxel's relight box (a darkening
 edit clears and refills only the light that moved), which equals a full solve
-(tests). Meshes: only the render regions (64 layers) around the changed voxels are
+(tests). With the world's resource stack the window holds the blocks as the full
+solve sees them (world/models.Sight: a rail, door or slab passes light), and a
+change of state alone is relit too. Meshes: only the render regions (64 layers) around the changed voxels are
 meshed again and spliced in. The payloads are also queued on every Stream of the
 world, so a consumer that only drains sees them as well.
 
@@ -170,11 +172,12 @@ def _gather(world, x0, y0, x1, y1, attr, z0=0, z1=C.HEIGHT):
     return out
 
 
-def _light_layers(world, items):
+def _light_layers(world, items, sight=None):
     """Layers [z0, z1) that light.update may read or write for this stroke (call with
     the lock held). Its box reaches R + 1 above the voxel and R + 1 below the lowest
     voxel whose daylight changes, which lies above the highest opaque voxel under the
-    column's lowest stroke voxel (daylight is 0 there before and after)."""
+    column's lowest stroke voxel (daylight is 0 there before and after), as the light
+    sees it (SIGHT: a world's resource stack, world/models.py)."""
     from ..light import incremental, model
     opaque = model.tables()[2]
     low: dict = {}
@@ -182,7 +185,11 @@ def _light_layers(world, items):
         low[(x, y)] = min(z, low.get((x, y), z))
     z0, z1 = C.HEIGHT, 0
     for (x, y), z in low.items():
-        col = world.chunks[C.key_of(x, y)].blocks[x & 15, y & 15, :z]
+        c = world.chunks[C.key_of(x, y)]
+        col = c.blocks[x & 15, y & 15, :z]
+        if sight is not None:
+            col = np.where(sight.opened(col, None if c.data is None
+                                        else c.data[x & 15, y & 15, :z]), 0, col)
         below = np.flatnonzero(opaque[col])
         z0 = min(z0, int(below[-1]) if below.size else 0)
     z1 = max(z for _, _, z, _, _ in items) + incremental.R + 2
@@ -218,6 +225,7 @@ def _apply(world, items, write=True):
         return [], Record((), (), ())
     near = _around({C.key_of(x, y) for x, y, _, _, _ in items}, 1)
     win = _window(items)
+    sight = mcmodels.sight(world)   # None without a resource stack
     fresh: dict = {}
     for _ in range(8):  # a chunk unloaded between lighting and locking: light again
         fresh.update({p.key: p for p in _ensure_lit(world, near)})
@@ -227,8 +235,10 @@ def _apply(world, items, write=True):
                    for k in near):
                 continue
             blocks = _gather(world, win.x0, win.y0, win.x1, win.y1, "blocks")
-            lit = _gather(world, win.x0, win.y0, win.x1, win.y1, "light",
-                          *_light_layers(world, items))
+            layers = _light_layers(world, items, sight)
+            lit = _gather(world, win.x0, win.y0, win.x1, win.y1, "light", *layers)
+            opened = None if sight is None else _opened(world, sight, blocks, win, items,
+                                                          layers[0])
             first, last, steps = _set_voxels(world, items)
             if not last:
                 return sorted(fresh.values()), Record((), (), ())
@@ -240,7 +250,9 @@ def _apply(world, items, write=True):
             for k, vox in per.items():  # the rows go to the file through commit/hold
                 world.blocks_changed(k, vox, edits=False, tick=t, relit=True)
             remeshed = _remesh(world, blocks, last, win)
-            relit = _relight(world, blocks, lit, steps, near, win)
+            if opened is not None:   # the light sees the blocks the full solve sees
+                blocks[opened] = 0
+            relit = _relight(world, blocks, lit, steps, near, win, sight)
             payloads = []
             for k in sorted(relit | remeshed):
                 c = world.chunks[k]
@@ -261,10 +273,26 @@ def _apply(world, items, write=True):
     return sorted(payloads + list(fresh.values())), rec
 
 
+def _opened(world, sight, blocks, win, items, z0):
+    """Window indices of the voxels the light passes although their project block
+    holds it out (a rail stored as planks), over the columns the strokes' relight
+    boxes read (their BLOCKS, the window, from layer Z0 up; call with the lock held,
+    before the stroke is written)."""
+    from ..light.incremental import R
+    xs, ys = [it[0] for it in items], [it[1] for it in items]
+    gx0, gy0 = max(min(xs) - R - 1, win.x0), max(min(ys) - R - 1, win.y0)
+    gx1, gy1 = min(max(xs) + R + 2, win.x1), min(max(ys) + R + 2, win.y1)
+    i, j = gx0 - win.x0, gy0 - win.y0
+    data = _gather(world, gx0, gy0, gx1, gy1, "data", z0)
+    got = np.nonzero(sight.opened(blocks[i:i + gx1 - gx0, j:j + gy1 - gy0, z0:],
+                                  data[:, :, z0:]))
+    return got[0] + i, got[1] + j, got[2] + z0
+
+
 def _set_voxels(world, items):
     """Write the stroke into the chunks; returns ({voxel: (id, data) before},
-    {voxel: (id, data) after}, [(x, y, z, new id, old id) of each block change in
-    order]) for the voxels that really changed."""
+    {voxel: (id, data) after}, [(x, y, z, id, data) of each change in order]) for
+    the voxels that really changed."""
     first: dict = {}
     last: dict = {}
     steps = []
@@ -277,8 +305,7 @@ def _set_voxels(world, items):
         first.setdefault((x, y, z), old)
         last[(x, y, z)] = (b, d)
         c.data = C.put(c.blocks, c.data, lx, ly, z, b, d)
-        if old[0] != b:
-            steps.append((x, y, z, b, old[0]))
+        steps.append((x, y, z, b, d))   # data too: a state the light sees through
     return first, last, steps
 
 
@@ -327,16 +354,25 @@ def _remesh(world, blocks, last, win) -> set:
     return out
 
 
-def _relight(world, blocks, lit, steps, near, win) -> set:
+def _relight(world, blocks, lit, steps, near, win, sight=None) -> set:
     """Relight voxel by voxel (each update starts from the exact light of the blocks
-    before it; `blocks` and `lit` are the window, changed in place), then keep what
-    changed inside the relit boxes on the chunks. Returns the keys relit."""
+    before it; `blocks` and `lit` are the window as the light sees it, changed in
+    place), then keep what changed inside the relit boxes on the chunks. Returns the
+    keys relit."""
     from .. import light
     x0, y0 = win.x0, win.y0
     lo = [win.x1 - x0, win.y1 - y0, C.HEIGHT]  # union of the relit boxes
     hi = [0, 0, 0]
-    for x, y, z, b, old in steps:
+    seen = [b for _, _, _, b, _ in steps]
+    if sight is not None and steps:   # a model block the light passes: air to it
+        ids = np.array(seen, np.uint16)
+        seen = np.where(sight.opened(ids, np.array([d for *_, d in steps], np.uint16)),
+                        0, ids).tolist()
+    for (x, y, z, _, _), b in zip(steps, seen):
         wx, wy = x - x0, y - y0
+        old = int(blocks[wx, wy, z])
+        if old == b:
+            continue     # the same block to the light (a colour, a state it sees alike)
         blocks[wx, wy, z] = b
         box = light.update(blocks, lit, wx, wy, z, old)
         lo = [min(v, sl.start) for v, sl in zip(lo, box)]

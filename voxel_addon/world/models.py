@@ -93,16 +93,65 @@ def build(world, blocks: np.ndarray, data, cx0: int, cy0: int) -> dict:
     return out
 
 
+class Sight:
+    """What the light solve sees through in a world with a resource stack: a model
+    block that is no whole cube (mcres.mesh.light_blocks). Per state a table filled as
+    states turn up, so a window costs a few array lookups (an edit's relight)."""
+
+    def __init__(self, st):
+        from ..mcres import mesh as M
+        self.st = st
+        n = len(st[1])
+        self.opens = np.zeros(n, bool)
+        self.known = np.zeros(n, bool)
+        self.known[0] = True
+        self.dark = M.DARK
+
+    def opened(self, blocks: np.ndarray, data) -> np.ndarray:
+        """Bool mask of BLOCKS (DATA: their small data, None for all 0) the light
+        passes although their project block holds it out."""
+        from ..mcres import mesh as M
+        from ..storage import minecraft as mcfile
+        res, palette, cstates, _, _, dflt = self.st
+        cand = self.dark[blocks]
+        if not cand.any():
+            return cand
+        state = mcfile.states(blocks[cand], None if data is None else data[cand], palette,
+                              cstates, REGISTRY.id("color"), dflt)
+        new = ~self.known[state]
+        if new.any():   # another thread may fill the same entry: the same value
+            for i in np.unique(state[new]).tolist():
+                self.opens[i] = M.opens(res, palette[i])
+                self.known[i] = True
+        cand[cand] = self.opens[state]
+        return cand
+
+
+_SIGHTS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def sight(world):
+    """The world's Sight, or None without a stack (or states): light sees BLOCKS."""
+    st = stack(world)
+    if st is None:
+        return None
+    with _LOCK:
+        got = _SIGHTS.get(world)
+        if got is None or got.st is not st:
+            got = _SIGHTS[world] = Sight(st)
+        return got
+
 
 def light_blocks(world, blocks: np.ndarray, data) -> np.ndarray:
     """BLOCKS as the light solve should see them with the world's resource stack
-    (mcres.mesh.light_blocks: model blocks that are no whole cube pass light); BLOCKS
-    itself without a stack."""
-    st = stack(world)
-    if st is None or (data is None and st[5] is None):   # no data, no defaults: no states
+    (Sight: model blocks that are no whole cube pass light); BLOCKS itself without a
+    stack or where nothing changes. The edit's incremental relight sees the same."""
+    s = sight(world)
+    if s is None or (data is None and s.st[5] is None):   # no data, no defaults: no states
         return blocks
-    from ..mcres import mesh as M
-    from ..storage import minecraft as mcfile
-    res, palette, cstates, _, _, dflt = st
-    state = mcfile.states(blocks, data, palette, cstates, REGISTRY.id("color"), dflt)
-    return M.light_blocks(res, palette, state, blocks)
+    where = s.opened(blocks, data)
+    if not where.any():
+        return blocks
+    out = blocks.copy(order="K")
+    out[where] = 0
+    return out

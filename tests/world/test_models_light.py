@@ -12,6 +12,7 @@ import pytest
 from voxel_addon.core.blocks import REGISTRY
 
 from ..mcres.builds import imported
+from .test_edit_oracles import snapshot
 
 CX0, CY0, CX1, CY1 = -1, -2, 2, 1      # the 3x3 around the build's chunk (0, -1)
 PLANKS, STONE, LAMP = (REGISTRY.id(n) for n in ("planks", "stone", "lamp_red"))
@@ -27,17 +28,6 @@ def worlds(tmp_path_factory):
     return imported(tmp_path_factory.mktemp("mclight"))[0]
 
 
-def blocks_and_data(w, cx0, cy0, cx1, cy1):
-    b = w.region_blocks(cx0, cy0, cx1, cy1)
-    d = np.zeros_like(b)
-    for cy in range(cy0, cy1):
-        for cx in range(cx0, cx1):
-            c = w.chunk_at(cx, cy)
-            if c.data is not None:
-                d[16 * (cx - cx0):16 * (cx - cx0 + 1), 16 * (cy - cy0):16 * (cy - cy0 + 1)] = c.data
-    return b, d
-
-
 def stale(E):
     """Garble the edit's scratch light window: the layers a stroke does not gather
     (edit._light_layers) must be ones its relight never reads."""
@@ -49,7 +39,7 @@ def stale(E):
 def check_full(w):
     """Every lit chunk of the 3x3 holds the full solve of what the light sees."""
     from voxel_addon import light
-    b, d = blocks_and_data(w, CX0 - 1, CY0 - 1, CX1 + 1, CY1 + 1)
+    b, d = snapshot(w, CX0 - 1, CY0 - 1, CX1 + 1, CY1 + 1)
     full = light.region_light(w.light_blocks(b, d), backend="numpy")
     for cy in range(CY0, CY1):
         for cx in range(CX0, CX1):

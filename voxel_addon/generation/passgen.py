@@ -124,7 +124,10 @@ class PassGenerator(Generator):
         kernel objects that surface() keeps for later calls (world.build.warm: the far
         ring's first tiles need not wait ~1.5-5 s for pocl); False when this generator
         has no far surface."""
-        return self._surface([(x, 0) for x in range(64)], "opencl") is not None
+        # a whole batch: pocl's work-group code for a small grid was not reused for a
+        # batch's (the first far batch after a 64-column warm-up still took ~1.1 s)
+        n = self.surface_batch["opencl"]
+        return self._surface(np.stack([np.arange(n), np.zeros(n, np.int64)], 1), "opencl") is not None
 
     def _surface(self, xy, backend):
         want = self.surface_wants()

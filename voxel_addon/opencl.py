@@ -206,6 +206,7 @@ def warm(job, name: str = "voxel-opencl-warm", later=None) -> bool:
             _warm["ended_at"] = time.monotonic()
         if later is not None:
             t0 = time.perf_counter()
+            _yield_cpu()
             try:
                 later()
             except Exception as e:  # noqa: BLE001 - likewise
@@ -221,6 +222,20 @@ def warm(job, name: str = "voxel-opencl-warm", later=None) -> bool:
                      later_error=None)
         t.start()
     return True
+
+
+def _yield_cpu() -> None:
+    """This thread at a lower priority (Linux: a thread's own nice value), so what
+    warm's LATER builds takes the CPU that the stream's threads leave (blender/README:
+    the first minute)."""
+    import os
+    import sys
+    if not sys.platform.startswith("linux"):  # elsewhere the id would name a process
+        return
+    try:
+        os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), 10)
+    except (AttributeError, OSError):  # not Linux, or not allowed: run as it is
+        pass
 
 
 def warming() -> bool:

@@ -203,6 +203,8 @@ def run(world: str, distance: int, far: int, rounds: int):
                         ms, cpu, calls = fr[-1].ms, fr[-1].cpu_ms, fr[-1].draw_calls
                         if fr[-1].reused or fr[-1].quality != q:
                             raise RuntimeError(f"not a {q} pipeline frame: {fr[-1]}")
+                        for k in ("python_ms", "submit_ms", "upload_ms"):  # where it goes
+                            times.setdefault(f"{q}_gpu_{f}_{k}", []).append(getattr(fr[-1], k))
                     elif side == "gpr":
                         ms, cpu, calls = yield from gpr.call(mgl_s(f), cam, 12.0, qsize)
                     else:
@@ -221,7 +223,7 @@ def run(world: str, distance: int, far: int, rounds: int):
         finally:
             mgl.stop()
     for k, v in times.items():
-        R[f"{k}_ms"] = v
+        R[k if k.endswith("_ms") else f"{k}_ms"] = v
     def ratio(a, b):  # the median of each round's ratio
         return statistics.median(x / y for x, y in zip(times[a], times[b]))
     for q in ("full", "draft"):

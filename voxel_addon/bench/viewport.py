@@ -197,6 +197,11 @@ def frames(ctx, world, d, far, rounds=30):
                        f"{R[f'{t}_calls']} draw calls; {what}")
                 yield (f"viewport_frame_{side}_{q}_far{f}_cpu_ms", st.median(R[f"{t}_cpu_ms"]),
                        "ms", "the same: process CPU (all threads, llvmpipe's included)")
+        for k, what in (("python", "our Python outside the GPU calls"),
+                        ("submit", "issuing the passes and the composite (Python + the "
+                                   "backend's CPU work)")):
+            yield (f"viewport_frame_gpu_{q}_{k}_ms", st.median(R[f"{q}_gpu_0_{k}_ms"]), "ms",
+                   f"the live redraw's {what}, far 0 (median)")
         for c, how in (("", "wall"), ("_cpu", "process CPU")):
             for side in ("gpu", "gpr"):
                 yield (f"viewport_frame_{side}_to_mgl_{q}{c}_ratio", R[f"{q}_{side}_to_mgl{c}"], "",

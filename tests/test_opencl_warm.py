@@ -62,3 +62,43 @@ def test_a_generators_warm_up_runs_its_own_kernels_and_equals_numpy(fresh):
     assert gen._runner is not None  # the runner the default backend uses next
     ref = make_generator("overworld", 7, None, "numpy").generate(keys)
     assert all(np.array_equal(a, b) for a, b in zip(got, ref))
+
+
+def test_the_later_part_runs_with_opencl_already_the_default(fresh):
+    """warm(job, later=...): LATER (the far surface's build) runs once JOB is done, and
+    does not hold the stream on NumPy meanwhile."""
+    gate, seen = threading.Event(), []
+    assert opencl.warm(lambda: None, later=lambda: seen.append(
+        (opencl.warming(), opencl.pick(None), gate.wait(30))))
+    for _ in range(3000):
+        if opencl.warm_state()["ended_at"] is not None:
+            break
+        threading.Event().wait(0.01)
+    assert not opencl.warming() and opencl.pick(None) == "opencl"
+    gate.set()
+    opencl._warm["thread"].join(30)
+    assert seen == [(False, "opencl", True)]
+    st = opencl.warm_state()
+    assert st["later_took"] > 0 and st["later_error"] is None and st["error"] is None
+
+
+def test_the_world_warm_up_prebuilds_the_far_surface(fresh, tmp_path):
+    """world.build.warm builds the far surface's OpenCL program after the stream's
+    kernels (issue 28: Show to horizon does not wait for pocl); far tiles then use
+    that runner, whose columns equal the NumPy twin's."""
+    import numpy as np
+    from voxel_addon.generation import make_generator
+    from voxel_addon.world import World, build
+    with World.create(tmp_path / "w.sqlite", seed=7) as w:
+        g = w.generator
+        assert build.warm(w)
+        opencl._warm["thread"].join(120)
+        st = opencl.warm_state()
+        assert st["error"] is None and st["later_error"] is None and st["later_took"] > 0
+        run = (g._surf or {}).get("opencl")
+        assert run is not None
+        xy = [(x * 37 - 500, 11 * x) for x in range(50)]
+        got = g.surface(xy)
+        assert g._surf["opencl"] is run  # the warm-up's kernel objects, not new ones
+    ref = make_generator("overworld", 7, None, "numpy").surface(xy)
+    assert all(np.array_equal(got[k], ref[k]) for k in ref)

@@ -176,12 +176,16 @@ def build(source: str, options: tuple[str, ...] = ()):
 
 
 # ---- warming up in the background ---------------------------------------------------
-_warm = {"thread": None, "took": None, "error": None, "ended_at": None}
+_warm = {"thread": None, "took": None, "error": None, "ended_at": None,
+         "later_took": None, "later_error": None}
 
 
-def warm(job, name: str = "voxel-opencl-warm") -> bool:
+def warm(job, name: str = "voxel-opencl-warm", later=None) -> bool:
     """Run JOB() (which asks for backend "opencl" explicitly) in a daemon thread; while
-    it runs, pick(None) answers NumPy. False (nothing started) without a device or
+    it runs, pick(None) answers NumPy. Then LATER() (if given) in the same thread, with
+    OpenCL already the default: builds nothing waits for yet (e.g. the far surface's
+    program), kept off the path to OpenCL taking over; its time and error in
+    `warm_state` ("later_took", "later_error"). False (nothing started) without a device or
     while a warm-up runs (callers say what needs one: world.build.warm, once per
     generator). A failing JOB is kept (`warm_state`) and
     OpenCL is used afterwards all the same: its own errors then surface where they
@@ -200,25 +204,50 @@ def warm(job, name: str = "voxel-opencl-warm") -> bool:
         finally:
             _warm["took"] = time.perf_counter() - t0
             _warm["ended_at"] = time.monotonic()
+        if later is not None:
+            t0 = time.perf_counter()
+            _yield_cpu()
+            try:
+                later()
+            except Exception as e:  # noqa: BLE001 - likewise
+                _warm["later_error"] = f"{type(e).__name__}: {e}"
+            finally:
+                _warm["later_took"] = time.perf_counter() - t0
 
     t = threading.Thread(target=run, daemon=True, name=name)
     with _ctx_lock:
         if warming():
             return False
-        _warm.update(thread=t, took=None, error=None, ended_at=None)
+        _warm.update(thread=t, took=None, error=None, ended_at=None, later_took=None,
+                     later_error=None)
         t.start()
     return True
 
 
+def _yield_cpu() -> None:
+    """This thread at a lower priority (Linux: a thread's own nice value), so what
+    warm's LATER builds takes the CPU that the stream's threads leave (blender/README:
+    the first minute)."""
+    import os
+    import sys
+    if not sys.platform.startswith("linux"):  # elsewhere the id would name a process
+        return
+    try:
+        os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), 10)
+    except (AttributeError, OSError):  # not Linux, or not allowed: run as it is
+        pass
+
+
 def warming() -> bool:
-    """Whether a warm-up (`warm`) is running now."""
+    """Whether a warm-up (`warm`) is running now (its LATER part does not count)."""
     t = _warm["thread"]
-    return t is not None and t.is_alive()
+    return t is not None and t.is_alive() and _warm["ended_at"] is None
 
 
 def warm_state() -> dict:
     """{"started", "running", "took" (seconds, None until done), "ended_at"
-    (time.monotonic() then), "error"}."""
+    (time.monotonic() then), "error", "later_took", "later_error" (warm's LATER)}."""
     t = _warm["thread"]
     return {"started": t is not None, "running": warming(), "took": _warm["took"],
-            "ended_at": _warm["ended_at"], "error": _warm["error"]}
+            "ended_at": _warm["ended_at"], "error": _warm["error"],
+            "later_took": _warm["later_took"], "later_error": _warm["later_error"]}

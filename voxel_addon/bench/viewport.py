@@ -73,6 +73,8 @@ def run(ctx):
             yield (f"viewport_redraw_{k}_cpu_ms", R[f"{k}_cpu_ms"], "ms",
                    f"process CPU per whole region redraw (all threads), {what}")
     yield from backends(ctx, world)
+    yield from frames(ctx, world, 8 if ctx.quick else 16, 64 if ctx.quick else 256,
+                      8 if ctx.quick else 30)
     yield from compare(ctx, world, 8 if ctx.quick else 16)
     for key in ("generated", "empty"):
         if f"show16_{key}_s" in R:
@@ -157,6 +159,61 @@ def backends(ctx, world):
                "whole region redraw with the view off (Blender's own drawing)")
         yield (f"viewport_show_d16_{tag}_s", R["show_s"], "s",
                "tick Show -> every chunk of distance 16 drawn (generated file)")
+
+
+def frames(ctx, world, d, far, rounds=30):
+    """The live view's frame on Blender's gpu module against the moderngl frame of the
+    same scene, and far FAR against far 0 (issue 28), in one Blender (the newest,
+    OpenGL; tools/frames_bench_job.py): the same payloads, far tiles, settings, camera
+    and size; ROUNDS interleaved rounds in a rotated order, the GPU finished in each
+    frame. Sides: gpu (the live view's redraw), gpr (its Renderer alone), mgl
+    (moderngl). Medians of wall and process CPU time, and ratios as the median of
+    each round's ratio (the machine's load moves both sides of a round alike).
+    Goals: gpu/moderngl <= 1.05, far/far 0 <= 1.3."""
+    import os
+    import shutil
+    copy = ctx.tmp / "frames.sqlite"
+    shutil.copy(world, copy)
+    out = ctx.tmp / "frames.json"
+    ctx.say(f"Blender GUI: gpu-module and moderngl frames, far {far} and 0, {rounds} rounds")
+    R = gui.run_job("frames", [out, copy, d, far, rounds], out, ctx.tmp / "frames.log",
+                    timeout=1800, simulate=False, gpu="opengl")
+    if not R.get("ok"):
+        raise RuntimeError(R.get("error"))
+    import statistics as st
+    what = (f"Blender {R['blender']} {R['backend']} ({R['renderer']}), distance {d} "
+            f"({R['chunks']} chunks, {R['tiles']} far tiles), region "
+            f"{'x'.join(map(str, R['region']))}, {rounds} rounds, load "
+            f"{os.getloadavg()[0]:.1f} after")
+    sides = (("gpu", "the live view's frame on Blender's gpu module (composite included)"),
+             ("gpr", "the live view's Renderer alone on the gpu module (Renderer.draw)"),
+             ("mgl", "moderngl (Renderer.draw), its own EGL context in the same process"))
+    for q in ("full", "draft"):
+        for side, name in sides:
+            for f in (0, far):
+                t = f"{q}_{side}_{f}"
+                yield (f"viewport_frame_{side}_{q}_far{f}_ms", st.median(R[f"{t}_ms"]), "ms",
+                       f"{q} frame, far {f}, {name}: median wall, GPU finished; "
+                       f"{R[f'{t}_calls']} draw calls; {what}")
+                yield (f"viewport_frame_{side}_{q}_far{f}_cpu_ms", st.median(R[f"{t}_cpu_ms"]),
+                       "ms", "the same: process CPU (all threads, llvmpipe's included)")
+        for k, what in (("python", "our Python outside the GPU calls"),
+                        ("submit", "issuing the passes and the composite (Python + the "
+                                   "backend's CPU work)")):
+            yield (f"viewport_frame_gpu_{q}_{k}_ms", st.median(R[f"{q}_gpu_0_{k}_ms"]), "ms",
+                   f"the live redraw's {what}, far 0 (median)")
+        for c, how in (("", "wall"), ("_cpu", "process CPU")):
+            for side in ("gpu", "gpr"):
+                yield (f"viewport_frame_{side}_to_mgl_{q}{c}_ratio", R[f"{q}_{side}_to_mgl{c}"], "",
+                       f"{side} / mgl, {q}, far 0, {how} (median of the rounds' ratios; goal "
+                       "<= 1.05)")
+                yield (f"viewport_frame_{side}_to_mgl_{q}_far{far}{c}_ratio",
+                       R[f"{q}_{side}_to_mgl_far{c}"], "", f"the same with far {far}")
+            for side in ("gpu", "gpr", "mgl"):
+                yield (f"viewport_frame_far{far}_to_far0_{side}_{q}{c}_ratio",
+                       R[f"{q}_far_to_0_{side}{c}"], "",
+                       f"far {far} / far 0, {side}, {q}, {how} (median of the rounds' ratios; "
+                       "goal <= 1.3)")
 
 
 MATERIAL_LIMIT_S = {8: 90.0, 16: 240.0}  # EEVEE's shader compilation on llvmpipe

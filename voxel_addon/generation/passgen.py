@@ -117,12 +117,25 @@ class PassGenerator(Generator):
         """Generator.surface from the 2D passes alone (lower.prune: no 3D pass, only
         the halos the wanted fields need), evaluated on 1-column domains, so the
         height and block are exactly those of the generated chunk's column."""
+        return self._surface(xy, None)
+
+    def warm_surface(self) -> bool:
+        """surface() once on OpenCL whatever the default, building the program and the
+        kernel objects that surface() keeps for later calls (world.build.warm: the far
+        ring's first tiles need not wait ~1.5-5 s for pocl); False when this generator
+        has no far surface."""
+        # a whole batch: pocl's work-group code for a small grid was not reused for a
+        # batch's (the first far batch after a 64-column warm-up still took ~1.1 s)
+        n = self.surface_batch["opencl"]
+        return self._surface(np.stack([np.arange(n), np.zeros(n, np.int64)], 1), "opencl") is not None
+
+    def _surface(self, xy, backend):
         want = self.surface_wants()
         if self.surface_fields[0] not in want:
             return None
         xy = np.asarray(xy, np.int64).reshape(-1, 2)
         with self._surf_lock:
-            be = self.backend_used
+            be = backend or self.backend_used
             if self._surf is None:
                 self._surf = {}
             run = self._surf.get(be)

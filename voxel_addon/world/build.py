@@ -41,9 +41,10 @@ def warm(world) -> bool:
     until done, generation and meshing run NumPy (opencl.warm). Once per generator
     (each has its own kernel objects: another world's would compile again); False
     when nothing was started (no device, warmed already, another warm-up running).
-    Cold, on 2 busy cores: ~7 s for the generator, ~1 s meshing; not the far
-    surface's program (~1.5 s more before OpenCL takes over; the far ring is off by
-    default and builds it on first use)."""
+    Cold, on 2 busy cores: ~7 s for the generator, ~1 s meshing. Then, with OpenCL
+    already the default (opencl.warm's `later`), the far surface's program (the
+    generator's 2D passes, its own kernel objects), so turning the far ring on does
+    not wait for its build; the stream never waits for it."""
     from .. import meshing, opencl
     g = world.generator
     if g in _warmed:
@@ -59,7 +60,7 @@ def warm(world) -> bool:
         with CL_LOCK:
             meshing.build_chunks(blocks[15:-15, 15:-15], (0, 0), backend="opencl")
 
-    started = opencl.warm(job)
+    started = opencl.warm(job, later=getattr(g, "warm_surface", None))
     if started:
         _warmed.add(g)
     return started

@@ -60,6 +60,7 @@ class Frame(NamedTuple):
     reused: bool        # drawn from the kept frame
     draw_calls: int     # geometry draws of the pipeline (0 when reused)
     submit_ms: float    # issuing the passes (Python + the backend's CPU work)
+    cpu_ms: float = 0.0  # the process's CPU time (all threads: llvmpipe's too)
 
 
 class Pane:
@@ -205,7 +206,7 @@ class LiveView:
 
     def _frame(self, context, scene, vv):
         import gpu
-        t0, c0 = time.perf_counter(), time.thread_time()
+        t0, c0, p0 = time.perf_counter(), time.thread_time(), time.process_time()
         region, rv3d, window = context.region, context.region_data, context.window
         if region is None or rv3d is None or window is None:
             return
@@ -288,7 +289,7 @@ class LiveView:
         S.update(drawn=drawn, far_drawn=len(pane.far_versions), ms=ms, python_ms=t_py * 1e3, quality=q, frames=S["frames"] + 1,
                  wanted_shown=S["wanted"], reused=S["reused"] + reused, draw_calls=calls)
         self.frames.append(Frame(ms, t_py * 1e3, q, drawn, t_sync * 1e3, reused, calls,
-                                 t_sub * 1e3))
+                                 t_sub * 1e3, (time.process_time() - p0) * 1e3))
         st.quality = q
         if drawn < S["wanted"] or (loading and not feed.far_loading):
             # as long again as the frame took: the worker gets at least half the time;

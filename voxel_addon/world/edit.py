@@ -18,10 +18,13 @@ edit clears and refills only the light that moved), which equals a full solve
 meshed again and spliced in. The payloads are also queued on every Stream of the
 world, so a consumer that only drains sees them as well.
 
-Writing: edit(..., write=True) commits the stroke in one transaction before it
-returns; write=False holds it in memory (shown, but the file unchanged) until
-`write(world)`, the next commit, a flush or close: a drag's parts, one transaction
-when it ends.
+Writing: edit(..., write=True) hands the stroke to the world's writer thread
+(World.commit_behind: one transaction, started as it returns), so the payloads never
+wait for SQLite; `world.settle()` waits for that write and raises its error (the
+Blender strokes, undo and redo and a rescue settle before they report the stroke
+saved; close writes it anyway). write=False holds it in memory (shown, but the file
+unchanged) until `write(world)`, the next commit, a flush or close: a drag's parts,
+one transaction when it ends.
 """
 from __future__ import annotations
 
@@ -255,7 +258,7 @@ def _apply(world, items, write=True):
     # light is dropped now and saved again with them later (marked changed)
     for s in list(world.streams):
         s.offer(payloads)
-    (world.commit if write else world.hold)(changed, rows, stale_light=relit - changed)
+    (world.commit_behind if write else world.hold)(changed, rows, stale_light=relit - changed)
     voxels = [v for v in last if first[v] != last[v]]
     rec = Record(tuple(voxels), tuple(first[v] for v in voxels), tuple(last[v] for v in voxels))
     return sorted(payloads + list(fresh.values())), rec

@@ -167,6 +167,8 @@ def _gather(world, x0, y0, x1, y1, attr, z0=0, z1=C.HEIGHT):
                 dst[...] = 0
             elif attr == "light":
                 c.light_into(dst, xs, ys, z0, z1)
+            elif attr == "blocks":
+                c.blocks_into(dst, xs, ys, z0, z1)
             else:
                 a = getattr(c, attr)
                 dst[...] = 0 if a is None else a[xs, ys, z0:z1]

@@ -149,13 +149,13 @@ def _gather(world, x0, y0, x1, y1, attr, z0=0, z1=C.HEIGHT, exact=False):
     The array is a view of this thread's scratch buffer for `attr`, valid until the
     next call: a fresh 1.3 MB array per edit costs page faults (~0.5 ms in a big
     process). Only layers [z0, z1) are filled; the others hold stale values.
-    `exact`: a Fortran-contiguous buffer of just this shape (the mesher's input),
-    kept per shape."""
+    `exact`: a Fortran-contiguous buffer of just this shape (the mesher's input; the
+    last one is kept: a single voxel's chunk, mostly)."""
     w, h = x1 - x0, y1 - y0
     if exact:
-        name = f"{attr}_{w}_{h}"
+        name = attr + "_exact"
         out = getattr(_scratch, name, None)
-        if out is None:
+        if out is None or out.shape[:2] != (w, h):
             out = C.empty(width=w, depth=h)
             setattr(_scratch, name, out)
     else:

@@ -82,3 +82,35 @@ def test_cold_blocks_keep_a_byte_per_voxel_when_ids_fit(monkeypatch):
     a = np.zeros((16, 16, 256), np.uint16, order="F")
     a[:, :, 10:20] = 7
     assert pack_layers(a)[-1].dtype == np.uint16
+
+
+def test_windows_of_cold_chunks_read_exactly_and_leave_them_cold(monkeypatch):
+    """blocks_into / light_into (an edit's window) equal the arrays' windows for any
+    columns and layers, cold or hot, and do not rebuild a cold chunk."""
+    from voxel_addon.core import chunk as C
+    monkeypatch.setattr(C, "HOT_S", -1.0)
+    rng = np.random.default_rng(3)
+    for t in range(60):
+        a = C.empty()
+        lo, hi = sorted(int(v) for v in rng.integers(0, 257, 2))
+        a[:, :, :lo] = 1
+        a[:, :, lo:hi] = rng.integers(0, 300 if t % 4 == 0 else 9, (16, 16, hi - lo))
+        c = Chunk((0, 0), a.copy(order="F"))
+        c.light = a.copy(order="F") + 3
+        c.compact()
+        assert c._blocks is None and c._light is None
+        x0, x1 = sorted(int(v) for v in rng.integers(0, 17, 2))
+        y0, y1 = sorted(int(v) for v in rng.integers(0, 17, 2))
+        z0, z1 = sorted(int(v) for v in rng.integers(0, 257, 2))
+        xs, ys = slice(x0, x1), slice(y0, y1)
+        out = np.full((x1 - x0, y1 - y0, z1 - z0), 77, np.uint16, order="F")
+        c.blocks_into(out, xs, ys, z0, z1)
+        assert np.array_equal(out, a[xs, ys, z0:z1])
+        c.light_into(out, xs, ys, z0, z1)
+        assert np.array_equal(out, a[xs, ys, z0:z1] + 3)
+        assert c._blocks is None and c._light is None  # still cold
+        c.blocks_into(out, xs, ys, z0, z1)             # and hot: the same
+        _ = c.blocks
+        out2 = np.zeros_like(out)
+        c.blocks_into(out2, xs, ys, z0, z1)
+        assert np.array_equal(out2, a[xs, ys, z0:z1])

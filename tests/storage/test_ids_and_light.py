@@ -75,6 +75,7 @@ def test_a_committed_edit_leaves_no_stale_light_beside_it(world_path):
         top = int(np.flatnonzero(w.chunk_at(0, 0).blocks[15, 8])[-1])
         old = w.chunk_at(1, 0).light
         edit(w, (15, 8, top + 1, LAMP))              # chunk (0, 0); lights (1, 0) too
+        w.settle()                                   # its write (the writer thread) done
         new = w.chunk_at(1, 0).light
         assert not np.array_equal(old, new)
         with World.open(world_path, loader=False, readonly=True) as r:

@@ -143,6 +143,7 @@ def test_a_held_stroke_is_written_in_one_transaction(world_path):
     lamp, glass = REGISTRY.id("lamp_red"), REGISTRY.id("glass")
     with World.create(world_path, seed=SEED, loader=False) as w:
         edit(w, (8, 8, top(w, 8, 8) + 1, "stone"))       # light the area first
+        w.settle()                                        # its write (the writer thread) done
         other = sqlite3.connect(world_path)
         version = lambda: other.execute("PRAGMA data_version").fetchone()[0]  # noqa: E731
         v0 = version()

@@ -14,9 +14,22 @@ import pytest
 from voxel_addon.core.blocks import REGISTRY
 from voxel_addon.core.errors import VoxelError
 from voxel_addon.world import World
-from voxel_addon.world.edit import edit, undo
+from voxel_addon.world import edit as E
 
 STONE, GLASS, LAMP = REGISTRY.id("stone"), REGISTRY.id("glass"), REGISTRY.id("lamp_red")
+
+
+def edit(world, changes, write=True):
+    """world.edit.edit, its write done (the writer thread): the other writer sees it."""
+    out = E.edit(world, changes, write)
+    world.settle()
+    return out
+
+
+def undo(world, rec):
+    out = E.undo(world, rec)
+    world.settle()
+    return out
 
 
 @pytest.fixture

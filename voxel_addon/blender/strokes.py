@@ -85,7 +85,9 @@ def saved(world, fn):
     from . import session
     from ..core.errors import VoxelError
     try:
-        return fn()
+        out = fn()
+        world.settle()  # a stroke is in the file before the operator returns
+        return out
     except Exception as e:
         if world.file.db is None or not world.file.gone():
             raise

@@ -105,6 +105,15 @@ class Chunk:
         a = self._blocks
         return unpack_layers(*self._bpack) if a is None else a.copy(order="F")
 
+    def blocks_into(self, out: np.ndarray, xs: slice, ys: slice, z0: int, z1: int) -> None:
+        """out[...] = blocks[xs, ys, z0:z1] leaving cold blocks cold (an edit's window
+        reads a few columns of its neighbours: rebuilding them costs more)."""
+        a = self._blocks
+        if a is not None:
+            out[...] = a[xs, ys, z0:z1]
+        else:
+            _layers_into(out, self._bpack, xs, ys, z0, z1)
+
     @blocks.setter
     def blocks(self, value) -> None:
         self._blocks, self._bpack, self._bhot = value, None, time.monotonic()
@@ -133,11 +142,7 @@ class Chunk:
         if a is not None or self._lpack is None:
             out[...] = 0 if a is None else a[xs, ys, z0:z1]
             return
-        _, lo, hi, bot, top, slab = self._lpack
-        a, b = min(max(lo, z0), z1), max(min(hi, z1), z0)
-        out[:, :, :a - z0] = bot
-        out[:, :, a - z0:b - z0] = slab[xs, ys, a - lo:b - lo]
-        out[:, :, b - z0:] = top
+        _layers_into(out, self._lpack, xs, ys, z0, z1)
 
     @light.setter
     def light(self, value) -> None:
@@ -208,6 +213,15 @@ def pack_layers(a: np.ndarray, narrow: bool = False) -> tuple:
     if narrow and a.dtype.itemsize > 1 and (hi <= lo or int(mx[lo:hi].max()) < 256):
         return a.shape, lo, hi, bot, top, a[:, :, lo:hi].astype(np.uint8, order="F")
     return a.shape, lo, hi, bot, top, a[:, :, lo:hi].copy(order="F")
+
+
+def _layers_into(out, pack, xs, ys, z0, z1) -> None:
+    """out[...] = unpack_layers(*pack)[xs, ys, z0:z1] without rebuilding the array."""
+    _, lo, hi, bot, top, slab = pack
+    a, b = min(max(lo, z0), z1), max(min(hi, z1), z0)
+    out[:, :, :a - z0] = bot
+    out[:, :, a - z0:b - z0] = slab[xs, ys, a - lo:b - lo]
+    out[:, :, b - z0:] = top
 
 
 def unpack_layers(shape, lo, hi, bot, top, slab) -> np.ndarray:

@@ -101,10 +101,11 @@ def seeds(f: np.ndarray, cost: np.ndarray, shift: int, offs, lo: int, hi: int) -
     return np.flatnonzero(out) + (lo + a0)
 
 
-def flood_lanes(f: np.ndarray, cost: np.ndarray, seeds: np.ndarray, sy: int, sz: int) -> None:
+def flood_lanes(f: np.ndarray, cost: np.ndarray, seeds: np.ndarray, sy: int, sz: int,
+                written: list | None = None) -> None:
     """`flood` for all four components at once on flat uint8 lanes (4 per voxel, R, G,
     B, D; lane i belongs to voxel i >> 2): fewer, larger NumPy steps for small boxes.
-    `seeds` are lane indices."""
+    `seeds` are lane indices; `written`, when given, gets the lanes each round wrote."""
     offs = 4 * np.array([-1, 1, -sy, sy, -sz, sz], np.int64)
     idx = np.asarray(seeds, np.int64)
     while idx.size:
@@ -122,6 +123,8 @@ def flood_lanes(f: np.ndarray, cost: np.ndarray, seeds: np.ndarray, sy: int, sz:
             break
         idx, v = _best(n, cand)
         f[idx] = v.astype(np.uint8)
+        if written is not None:
+            written.append(idx)
 
 
 def seeds_lanes(f: np.ndarray, cost: np.ndarray, offs, lo: int, hi: int) -> np.ndarray:

@@ -42,7 +42,9 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
     """Fix `light` (the exact `solve` of the array before the edit) in place after
     blocks[x, y, z] changed from block id `old` to its current value.
 
-    Returns the modified box as slices (sx, sy, sz) of the array."""
+    Returns a box holding every voxel whose light changed, as slices (sx, sy, sz)
+    of the array (outside it `light` is untouched): the written voxels' bounds,
+    usually far smaller than the relight box (callers copy it out)."""
     new = int(blocks[x, y, z])
     w, h, zs = blocks.shape
     if old == new:
@@ -87,26 +89,40 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
         # ... and p's neighbours, which may now shine into it (its cost may have dropped).
         vox = np.concatenate([vox, vox[-1] + np.array([-1, 1, -gy, gy, -gz, gz])])
         seeds = (4 * vox.astype(np.int64)[:, None] + np.arange(4)).ravel()
+        written = [4 * vox[:-6].astype(np.int64)]
     else:
         pz = np.arange(zc, z + 1) - sz.start + 2
         vox = pz * gz + py * gy + px
         # the changed lanes: every component of p, daylight of the column below it
         lanes = np.concatenate([4 * vox[:-1] + 3, 4 * vox[-1] + np.arange(4)])
-        seeds = _remove(f.reshape(-1), cost.reshape(-1), lanes, blocks,
-                        (sx.start, sy.start, sz.start), (gy, gz))
+        seeds, gone = _remove(f.reshape(-1), cost.reshape(-1), lanes, blocks,
+                              (sx.start, sy.start, sz.start), (gy, gz))
+        written = [gone]
         # ... and p's neighbours, which may now shine into it (its cost may have dropped)
         seeds = np.concatenate([seeds, (4 * (vox[-1] + np.array([-1, 1, -gy, gy, -gz, gz]))
                                         [:, None] + np.arange(4)).ravel()])
-    flood.flood_lanes(f.reshape(-1), cost.reshape(-1), seeds, gy, gz)
-    light[sx, sy, sz] = model.pack(f[inner]).T
-    return sx, sy, sz
+    flood.flood_lanes(f.reshape(-1), cost.reshape(-1), seeds, gy, gz, written)
+    # only the written voxels can differ: pack and store their bounds (padded grid
+    # coordinates: x, y from 1, z from 2, as `inner`)
+    v = np.concatenate(written) >> 2
+    zz, yy, xx = v // gz, v % gz // gy, v % gy
+    lo = [max(int(a.min()), o) for a, o in ((xx, 1), (yy, 1), (zz, 2))]
+    hi = [min(int(a.max()) + 1, o + n) for a, o, n in ((xx, 1, nx), (yy, 1, ny), (zz, 2, nz))]
+    if any(b <= a for a, b in zip(lo, hi)):
+        return (slice(x, x), slice(y, y), slice(z, z))
+    (x0, y0, z0), (x1, y1, z1) = lo, hi
+    bx = slice(sx.start + x0 - 1, sx.start + x1 - 1)
+    by = slice(sy.start + y0 - 1, sy.start + y1 - 1)
+    bz = slice(sz.start + z0 - 2, sz.start + z1 - 2)
+    light[bx, by, bz] = model.pack(f[z0:z1, y0:y1, x0:x1]).T
+    return bx, by, bz
 
 
 def _remove(f, cost, lanes, blocks, base, strides):
     """Clear light that may owe itself to `lanes` (flat lane indices of the padded
     box `f`, whose start values changed) and restore the start values of what was
-    cleared. Returns the seeds that refill it: the cleared lanes and their
-    neighbours. `base` = array coordinates of the box's first inside voxel."""
+    cleared. Returns the seeds that refill it (the cleared lanes and their
+    neighbours) and the cleared lanes. `base` = array coordinates of the box's first inside voxel."""
     gy, gz = strides
     offs = 4 * np.array([-1, 1, -gy, gy, -gz, gz], np.int64)
     idx = np.asarray(lanes, np.int64)
@@ -130,7 +146,7 @@ def _remove(f, cost, lanes, blocks, base, strides):
     gone = np.unique(np.concatenate(out))
     f[gone] = _starts(gone, blocks, base, gy, gz)
     near = (gone[:, None] + offs).ravel()
-    return np.concatenate([gone, near[f[near] > 1]])
+    return np.concatenate([gone, near[f[near] > 1]]), gone
 
 
 def _starts(lanes, blocks, base, gy, gz):

@@ -20,10 +20,13 @@ change of state alone is relit too. Meshes: only the render regions (64 layers) 
 meshed again and spliced in. The payloads are also queued on every Stream of the
 world, so a consumer that only drains sees them as well.
 
-Writing: edit(..., write=True) commits the stroke in one transaction before it
-returns; write=False holds it in memory (shown, but the file unchanged) until
-`write(world)`, the next commit, a flush or close: a drag's parts, one transaction
-when it ends.
+Writing: edit(..., write=True) hands the stroke to the world's writer thread
+(World.commit_behind: one transaction, started as it returns), so the payloads never
+wait for SQLite; `world.settle()` waits for that write and raises its error (the
+Blender strokes, undo and redo and a rescue settle before they report the stroke
+saved; close writes it anyway). write=False holds it in memory (shown, but the file
+unchanged) until `write(world)`, the next commit, a flush or close: a drag's parts,
+one transaction when it ends.
 """
 from __future__ import annotations
 
@@ -142,19 +145,28 @@ def _ensure_lit(world, keys) -> list[Payload]:
     raise VoxelError("could not light the chunks around the edit (they keep unloading)")
 
 
-def _gather(world, x0, y0, x1, y1, attr, z0=0, z1=C.HEIGHT):
+def _gather(world, x0, y0, x1, y1, attr, z0=0, z1=C.HEIGHT, exact=False):
     """Voxel columns [x0, x1) x [y0, y1) of active chunks' `attr` as one array
     (zeros where a chunk or its array is missing). Call with the world's lock held.
     The array is a view of this thread's scratch buffer for `attr`, valid until the
     next call: a fresh 1.3 MB array per edit costs page faults (~0.5 ms in a big
-    process). Only layers [z0, z1) are filled; the others hold stale values."""
+    process). Only layers [z0, z1) are filled; the others hold stale values.
+    `exact`: a Fortran-contiguous buffer of just this shape (the mesher's input; the
+    last one is kept: a single voxel's chunk, mostly)."""
     w, h = x1 - x0, y1 - y0
-    buf = getattr(_scratch, attr, None)
-    if buf is None or buf.shape[0] < w or buf.shape[1] < h:
-        n = max(w, h, 0 if buf is None else max(buf.shape[:2]))
-        buf = C.empty(width=n, depth=n)
-        setattr(_scratch, attr, buf)
-    out = buf[:w, :h]
+    if exact:
+        name = attr + "_exact"
+        out = getattr(_scratch, name, None)
+        if out is None or out.shape[:2] != (w, h):
+            out = C.empty(width=w, depth=h)
+            setattr(_scratch, name, out)
+    else:
+        buf = getattr(_scratch, attr, None)
+        if buf is None or buf.shape[0] < w or buf.shape[1] < h:
+            n = max(w, h, 0 if buf is None else max(buf.shape[:2]))
+            buf = C.empty(width=n, depth=n)
+            setattr(_scratch, attr, buf)
+        out = buf[:w, :h]
     for cx in range(x0 >> 4, ((x1 - 1) >> 4) + 1):
         for cy in range(y0 >> 4, ((y1 - 1) >> 4) + 1):
             c = world.chunks.get((cx, cy))
@@ -166,6 +178,8 @@ def _gather(world, x0, y0, x1, y1, attr, z0=0, z1=C.HEIGHT):
                 dst[...] = 0
             elif attr == "light":
                 c.light_into(dst, xs, ys, z0, z1)
+            elif attr == "blocks":
+                c.blocks_into(dst, xs, ys, z0, z1)
             else:
                 a = getattr(c, attr)
                 dst[...] = 0 if a is None else a[xs, ys, z0:z1]
@@ -197,9 +211,9 @@ def _light_layers(world, items, sight=None):
 
 
 class _Window(NamedTuple):
-    """The voxel columns [x0, x1) x [y0, y1) an edit reads: every voxel's relight box
-    with its rim, and the chunks it may remesh (`remesh`: a changed voxel's chunk and
-    its face neighbours') with their one-voxel mesh ring."""
+    """The voxel columns [x0, x1) x [y0, y1) the relight reads (every voxel's relight
+    box with its rim), and the chunks an edit may remesh (`remesh`: a changed voxel's
+    chunk and its face neighbours'; _remesh reads them with their mesh ring)."""
     x0: int
     y0: int
     x1: int
@@ -212,10 +226,7 @@ def _window(items) -> _Window:
     remesh = {C.key_of(x + i, y + j) for x, y, _, _, _ in items for i, j in
               ((0, 0), (-1, 0), (1, 0), (0, -1), (0, 1))}
     xs, ys = [it[0] for it in items], [it[1] for it in items]
-    return _Window(min(min(xs) - R - 1, min(k[0] for k in remesh) * S - 1),
-                   min(min(ys) - R - 1, min(k[1] for k in remesh) * S - 1),
-                   max(max(xs) + R + 2, max(k[0] for k in remesh) * S + S + 1),
-                   max(max(ys) + R + 2, max(k[1] for k in remesh) * S + S + 1), remesh)
+    return _Window(min(xs) - R - 1, min(ys) - R - 1, max(xs) + R + 2, max(ys) + R + 2, remesh)
 
 
 def _apply(world, items, write=True):
@@ -234,11 +245,12 @@ def _apply(world, items, write=True):
                                                or not world.chunks[k].has_light)
                    for k in near):
                 continue
-            blocks = _gather(world, win.x0, win.y0, win.x1, win.y1, "blocks")
-            layers = _light_layers(world, items, sight)
-            lit = _gather(world, win.x0, win.y0, win.x1, win.y1, "light", *layers)
-            opened = None if sight is None else _opened(world, sight, blocks, win, items,
-                                                          layers[0])
+            # light.update reads and writes only layers [z0, z1) of the light and
+            # blocks from z0 up (the daylight of a column comes from above)
+            z0, z1 = _light_layers(world, items, sight)
+            blocks = _gather(world, win.x0, win.y0, win.x1, win.y1, "blocks", z0)
+            lit = _gather(world, win.x0, win.y0, win.x1, win.y1, "light", z0, z1)
+            opened = None if sight is None else _opened(world, sight, blocks, win, items, z0)
             first, last, steps = _set_voxels(world, items)
             if not last:
                 return sorted(fresh.values()), Record((), (), ())
@@ -249,7 +261,7 @@ def _apply(world, items, write=True):
             t = world.tick()
             for k, vox in per.items():  # the rows go to the file through commit/hold
                 world.blocks_changed(k, vox, edits=False, tick=t, relit=True)
-            remeshed = _remesh(world, blocks, last, win)
+            remeshed = _remesh(world, last, win)
             if opened is not None:   # the light sees the blocks the full solve sees
                 blocks[opened] = 0
             relit = _relight(world, blocks, lit, steps, near, win, sight)
@@ -267,7 +279,7 @@ def _apply(world, items, write=True):
     # light is dropped now and saved again with them later (marked changed)
     for s in list(world.streams):
         s.offer(payloads)
-    (world.commit if write else world.hold)(changed, rows, stale_light=relit - changed)
+    (world.commit_behind if write else world.hold)(changed, rows, stale_light=relit - changed)
     voxels = [v for v in last if first[v] != last[v]]
     rec = Record(tuple(voxels), tuple(first[v] for v in voxels), tuple(last[v] for v in voxels))
     return sorted(payloads + list(fresh.values())), rec
@@ -309,22 +321,18 @@ def _set_voxels(world, items):
     return first, last, steps
 
 
-def _remesh(world, blocks, last, win) -> set:
+def _remesh(world, last, win) -> set:
     """Mesh the window's chunks again, only the render regions (64 layers) that hold
-    a changed voxel's faces; keep the meshes that differ. `blocks` is the window
-    from before the stroke. Returns the keys whose mesh changed."""
+    a changed voxel's faces; keep the meshes that differ (call after the stroke is
+    in the chunks). Returns the keys whose mesh changed."""
     from .. import meshing
-    x0, y0, remesh = win.x0, win.y0, win.remesh
+    remesh = win.remesh
     rx0, ry0 = min(k[0] for k in remesh), min(k[1] for k in remesh)
     rx1, ry1 = max(k[0] for k in remesh) + 1, max(k[1] for k in remesh) + 1
-    i, j = rx0 * S - 1 - x0, ry0 * S - 1 - y0
-    sub = np.array(blocks[i:i + (rx1 - rx0) * S + 2, j:j + (ry1 - ry0) * S + 2], order="F")
-    for (x, y, z), (b, _) in last.items():
-        if 0 <= x - x0 - i < sub.shape[0] and 0 <= y - y0 - j < sub.shape[1]:
-            sub[x - x0 - i, y - y0 - j, z] = b
+    gx, gy = rx0 * S - 1, ry0 * S - 1  # the chunks with their one-voxel ring
+    sub = _gather(world, gx, gy, rx1 * S + 1, ry1 * S + 1, "blocks", exact=True)
     data = None
     if (sub == tint.COLOR).any():  # coloured voxels: their colour is their data (after the stroke)
-        gx, gy = x0 + i, y0 + j
         data = np.array(_gather(world, gx, gy, gx + sub.shape[0], gy + sub.shape[1], "data"),
                         order="F")
     zs = [z for _, _, z in last]
@@ -335,7 +343,6 @@ def _remesh(world, blocks, last, win) -> set:
     regions = None if whole else (r0, r1)
     models = {}
     if mcmodels.stack(world) is not None:  # Minecraft model blocks: air for the mesher
-        gx, gy = x0 + i, y0 + j
         small = data if data is not None else np.array(
             _gather(world, gx, gy, gx + sub.shape[0], gy + sub.shape[1], "data"), order="F")
         models = mcmodels.build(world, sub, small, rx0, ry0)

@@ -76,6 +76,7 @@ def restore(world) -> tuple[int, list[Path]]:
             last[(x, y, z)] = (name, d)
     if last:
         edit.edit(world, [(x, y, z, name, d) for (x, y, z), (name, d) in last.items()], write=True)
+        world.settle()  # in the file before the rescue files go
     for p in found:
         p.unlink()
     return len(last), found

@@ -85,6 +85,38 @@ class Saving:
             for x, y, z, b, d in edits:
                 self._edits[(x, y, z)] = (b, d)
 
+    def commit_behind(self, keys, edits, stale_light=()) -> None:
+        """`commit` on the world's writer thread: held now, written right after, so
+        an edit's payloads do not wait for SQLite (issue 29). `settle()` waits for it
+        and raises what it raised; commit, flush and close write what it did not."""
+        if self.readonly:
+            return
+        self.hold(keys, edits, stale_light)
+        with self._lock:
+            f = self._behind
+            if f is not None and not f.done() and not f.running():
+                return  # queued, not started yet: it takes this hold too
+            if self._writer is None:
+                from concurrent.futures import ThreadPoolExecutor
+                self._writer = ThreadPoolExecutor(1, thread_name_prefix="voxel-writer")
+            self._behind = self._writer.submit(self.commit)
+
+    def settle(self) -> None:
+        """Wait for the writer thread's commit (commit_behind) and raise its error
+        (once); its edits then wait in memory for the next write (unsaved_edits)."""
+        f, self._behind = self._behind, None
+        if f is not None:
+            f.result()
+
+    def _stop_writer(self) -> None:
+        """Let the writer thread finish (an error is left for the flush that follows)."""
+        f, self._behind = self._behind, None
+        if f is not None:
+            f.exception()
+        if self._writer is not None:
+            self._writer.shutdown()
+            self._writer = None
+
     @property
     def held(self) -> bool:
         """Whether a stroke's changes wait for a commit."""

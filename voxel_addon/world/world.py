@@ -58,6 +58,8 @@ class World(Saving):
         self._edits: dict[tuple[int, int, int], tuple[int, int]] = {}  # unsaved user edits
         self._stale: set = set()  # chunks whose light in the file no longer holds
         self._held: set = set()   # chunks a stroke changed, written at its commit
+        self._behind = None       # the writer thread's commit in flight (commit_behind)
+        self._writer = None       # that thread (an executor), started by the first
         self.fver: dict = {}      # key -> stored version its active copy (or snapshot) was read at
         self._mine: dict = {}     # key -> {(x, y, z): (id, data)} own changes not known stored
         self.corrupt: dict[tuple[int, int], str] = {}  # key -> message, reported once
@@ -387,6 +389,7 @@ class World(Saving):
         if self._thread is not None:
             self._thread.join()
             self._thread = None
+        self._stop_writer()
 
     def discard(self) -> None:
         """Stop streams and the loader and close the file without saving (its file

@@ -37,7 +37,7 @@ class _Replay:
 
     def map(self, fn, items, *, shared=None, progress=None, window=None):
         for item in items:
-            k = repr(item if fn.__name__ == "make" else [x[0] for x in item])
+            k = repr(item if fn.__name__ == "make" else [x[0] for x in item[0]])
             if k not in self.got:
                 self.got[k] = fn(item, shared)
             yield item, self.got[k]

@@ -69,15 +69,19 @@ class _LocalPalette:
 
 def read(item, shared):
     """Worker: one (result, (bytes, tags) decoded, where) per (index, (region name,
-    cx, cz, kind, body)) of the task; result: ("ok", version, row without data, local
-    data or None, local states, block counts, dropped, key, local biome columns or
-    None, local biome names), ("unfinished", version, status),
-    ("damaged", message, before 1.13?) or ("hostile", message)."""
+    cx, cz, kind, body)) of the task's chunks; result: ("ok", version, row without data,
+    data, local states, block counts, dropped, key, local biome columns or None, local
+    biome names), ("unfinished", version, status), ("damaged", message, before 1.13?)
+    or ("hostile", message). `data`: None, or the data blob and the local -> world map
+    it was encoded with when the task's `known` (state key -> world value, what the
+    writer had settled when the task went out) covers every local state, else the
+    local data (the writer maps and encodes it)."""
     from ..formats import anvil, mcstate, minecraft, nbt
     from ..formats.budget import Budget, Exceeded
     from ..formats.region import MAX_NBT, RegionError, unpack
+    chunks, known = item
     out = []
-    for _, (name, cx, cz, kind, body) in item:
+    for _, (name, cx, cz, kind, body) in chunks:
         where = f"{name} chunk ({cx}, {cz})"
         b = Budget(MAX_NBT, anvil.CHUNK_TAGS)  # the per-chunk limits; the writer charges the rest
         try:
@@ -96,6 +100,11 @@ def read(item, shared):
         pal = _LocalPalette()
         blocks, data, dropped = minecraft.convert(ch, shared["y_min"], pal)
         row = shared["encoder"].row(minecraft.to_key(cx, cz), blocks)
+        if data is not None and all(k in known for k, _ in pal.local):
+            # the writer's zstd (the largest share of its time) done here: values once
+            # given never change, so this map is the one the writer makes in plan order
+            remap = np.array([0] + [known[k] for k, _ in pal.local], np.uint16)
+            data = (shared["encoder"].data(remap[data]), remap)
         cols = mcstate.columns(ch, blocks, shared["y_min"], pal.biome)
         out.append((("ok", ch.version, row, data, pal.local, pal.report.blocks, dropped,
                      minecraft.to_key(cx, cz), cols, list(pal.biomes)), b.spent(), where))
@@ -166,12 +175,18 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
         (-64 if version >= anvil.V_NO_LEVEL else 0) if version is not None else 0)
     shared = {"y_min": report.y_min, "encoder": f.encoder()}
     step = task_size(len(plan), pool.size, most=64)  # a chunk is quick here: bigger tasks
+    # the first window of tasks goes out before any result is settled (no `known` yet:
+    # the writer encodes their data blobs itself), so it is made of smaller tasks
+    first = 4 * pool.size * max(1, step // 4)
 
     def tasks():  # the bytes are copied as tasks go out, not all at once
-        for j in range(0, len(plan), step):
-            yield tuple((i, (reg.path.name, cx, cz, kind, bytes(body)))
-                        for i, reg, cx, cz in plan[j:j + step]
-                        for kind, body in [reg.raw(cx, cz)])
+        j = 0
+        while j < len(plan):
+            n = max(1, step // 4) if j < first else step
+            yield (tuple((i, (reg.path.name, cx, cz, kind, bytes(body)))
+                         for i, reg, cx, cz in plan[j:j + n]
+                         for kind, body in [reg.raw(cx, cz)]), dict(w.known))
+            j += n
 
     f.set_meta(JOB, json.dumps({"sig": sig, "done": start, "since": since}))
     w = _Writer(world, report, sig, progress, len(plan) + len(local), budget)
@@ -184,7 +199,7 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
     computed, pos = 0, 0
     every = knob("COMMIT", COMMIT)
     try:
-        for task, results in pool.map(read, tasks(), shared=shared):
+        for (task, _), results in pool.map(read, tasks(), shared=shared):
             computed += len(task)
             for (i, _), r in zip(task, results):
                 ready[i] = r
@@ -251,6 +266,7 @@ class _Writer:
         self.grown = False
         self.batch, self.biomes, self.meta = [], [], {}
         self.enc = world.file.encoder()
+        self.known: dict = {}  # state key -> its value in the world's data (workers encode with it)
 
     def settle(self, got) -> None:
         from ..core import colors
@@ -287,7 +303,14 @@ class _Writer:
                     self.grown = True
                 else:
                     remap[j] = st
-            blob = None if data is None else self.enc.data(remap[data])
+            for j, (skey, _) in enumerate(local, 1):
+                self.known.setdefault(skey, int(remap[j]))
+            if isinstance(data, tuple):  # encoded by the worker with what was known then
+                blob, theirs = data
+                if not np.array_equal(theirs, remap):
+                    raise RuntimeError(f"{key}: a worker mapped block states otherwise")
+            else:
+                blob = None if data is None else self.enc.data(remap[data])
             self.batch.append(row[:4] + (blob,) + row[5:])
             if cols is not None:
                 glob = np.array([self.states.biome(n) for n in bnames], np.uint8)

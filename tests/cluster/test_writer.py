@@ -105,3 +105,33 @@ def test_workers_decode_inside_the_budgets(tmp_path, monkeypatch):
     with World.create(tmp_path / "b.sqlite", seed=0, generator="empty", loader=False) as w:
         with pytest.raises(VoxelError, match="more than 50 NBT tags in this import"):
             imports.run(w, cluster.Serial(), save)
+
+
+def test_workers_encode_data_blobs_as_one_process(tmp_path, monkeypatch):
+    """Tasks that go out once the writer has settled some chunks carry the block
+    states' world values; workers encode those chunks' data blobs themselves (the
+    writer's largest cost), the writer those with a state not settled yet: all equal to
+    the one-process import, bit for bit, colours met in another order per chunk."""
+    from tests.cluster.test_cluster import chunks, meta, save_folder
+    save = save_folder(tmp_path / "save")
+    one, two = tmp_path / "one.sqlite", tmp_path / "two.sqlite"
+    with World.create(one, seed=0, generator="empty", loader=False) as w:
+        minecraft.import_world(w, save)
+    made = {"worker": 0, "writer": 0}
+    read = imports.read
+
+    def counted(item, shared):
+        out = read(item, shared)
+        for r, _, _ in out:
+            if r[0] == "ok" and r[3] is not None:
+                made["worker" if isinstance(r[3], tuple) else "writer"] += 1
+        return out
+    monkeypatch.setattr(imports, "read", counted)
+
+    class Two(cluster.Serial):
+        size = 2  # tasks of 3 chunks (the first 8 of one)
+    with World.create(two, seed=0, generator="empty", loader=False) as w:
+        imports.run(w, Two(), save)
+    assert made["worker"] > 30 and made["writer"] >= 1, made  # both ways taken
+    assert chunks(two) == chunks(one)
+    assert meta(two, "colors") == meta(one, "colors")

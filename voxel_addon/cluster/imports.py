@@ -47,12 +47,12 @@ class _LocalPalette:
         self.report = SimpleNamespace(blocks={})
 
     def of(self, name: str, props=None):
-        from ..core.blocks import REGISTRY
-        from ..formats import mapping
-        from ..formats.mcstate import state_key
         key = (name, tuple(sorted(props.items())) if props else ())
         got = self.ids.get(key)
-        if got is None:
+        if got is None:  # the imports here only: `of` runs ~66 times a chunk
+            from ..core.blocks import REGISTRY
+            from ..formats import mapping
+            from ..formats.mcstate import state_key
             block, rgb, how = mapping.lookup(name)
             bid, d = REGISTRY.id(block), 0
             if bid:

@@ -192,14 +192,16 @@ def commands(ctx):
     except ImportError:
         ctx.say("no bpy: cluster bake and animate rows not measured")
         return
-    h = 32 if q else 64
-    region = (-64, -h, 64, h)
-    tiles = len(range(-64, 64, 64)) * len(range(-h, h, 64))
+    # big enough that each worker's own start (bpy in its helper process, a GL context
+    # and the world's copy) is not the whole story
+    h = 32 if q else 128
+    region = (-64, -h, 64, h) if q else (-h, -h, h, h)
+    tiles = len(range(region[0], region[2], 64)) * len(range(region[1], region[3], 64))
     yield from _scaling("bake_tiles", tiles, "tiles", f"{tiles} tiles of 64x64 columns",
                         lambda tag, fl: _cli("bake", "--world", world, "--region", *region,
                                              "--per", "tile", "--out", ctx.tmp / f"t{tag}",
                                              *fl))
-    frames = 4 if q else 12
+    frames = 4 if q else 48
     blend = _blend(ctx, frames)
     if blend is None:
         return

@@ -105,3 +105,75 @@ def test_workers_decode_inside_the_budgets(tmp_path, monkeypatch):
     with World.create(tmp_path / "b.sqlite", seed=0, generator="empty", loader=False) as w:
         with pytest.raises(VoxelError, match="more than 50 NBT tags in this import"):
             imports.run(w, cluster.Serial(), save)
+
+
+def test_workers_encode_data_blobs_as_one_process(tmp_path, monkeypatch):
+    """Tasks that go out once the writer has settled some chunks carry the block
+    states' world values; workers encode those chunks' data blobs themselves (the
+    writer's largest cost), the writer those with a state not settled yet: all equal to
+    the one-process import, bit for bit, colours met in another order per chunk."""
+    from tests.cluster.test_cluster import chunks, meta, save_folder
+    save = save_folder(tmp_path / "save")
+    one, two = tmp_path / "one.sqlite", tmp_path / "two.sqlite"
+    with World.create(one, seed=0, generator="empty", loader=False) as w:
+        minecraft.import_world(w, save)
+    made = {"worker": 0, "writer": 0}
+    read = imports.read
+
+    def counted(item, shared):
+        out = read(item, shared)
+        for r, _, _ in out:
+            if r[0] == "ok" and r[3] is not None:
+                made["worker" if isinstance(r[3], tuple) else "writer"] += 1
+        return out
+    monkeypatch.setattr(imports, "read", counted)
+
+    class Two(cluster.Serial):
+        size = 2  # tasks of 3 chunks (the first 8 of one)
+    with World.create(two, seed=0, generator="empty", loader=False) as w:
+        imports.run(w, Two(), save)
+    assert made["worker"] > 30 and made["writer"] >= 1, made  # both ways taken
+    assert chunks(two) == chunks(one)
+    assert meta(two, "colors") == meta(one, "colors")
+
+
+def test_a_default_decided_while_tasks_are_out(tmp_path, monkeypatch):
+    """A block's default state decided by a chunk still in flight (the first window
+    goes out with nothing known) after later tasks were sent with that state's index:
+    the writer zeroes those voxels in the workers' blobs (colour voxels of the same
+    number stay), bit for bit as one process."""
+    from tests.cluster.test_cluster import chunks
+    logx, logy = "minecraft:oak_log[axis=x]", "minecraft:oak_log[axis=y]"
+    wool = ["minecraft:red_wool", "minecraft:blue_wool", "minecraft:lime_wool"]
+    rng = np.random.default_rng(5)
+    region = {}
+    for cx in range(16):
+        a = np.full((16, 16, 16), "minecraft:air", object)
+        a[0] = "minecraft:stone"
+        spots = rng.permutation(16 * 16)[:40]
+        a[1].reshape(-1)[spots[:5]] = logx
+        a[1].reshape(-1)[spots[5:8]] = wool   # colour indices: small numbers too
+        if cx == 0:
+            a[2].reshape(-1)[:50] = logy      # log seen, not decided: 55 voxels
+        if cx == 6:
+            a[3:5] = logx                     # 512 voxels: log's default is axis=x
+        region[(cx, 0)] = mc.chunk_nbt(cx, 0, {0: a})
+    save = tmp_path / "save"
+    mc.write_region(save / "region", region)
+    one, two = tmp_path / "one.sqlite", tmp_path / "two.sqlite"
+    with World.create(one, seed=0, generator="empty", loader=False) as w:
+        minecraft.import_world(w, save)
+    made = []
+    redefault = imports._Writer._redefault
+
+    def counted(self, *a):
+        made.append(a[0])
+        return redefault(self, *a)
+    monkeypatch.setattr(imports._Writer, "_redefault", counted)
+
+    class Two(cluster.Serial):
+        size = 2
+    with World.create(two, seed=0, generator="empty", loader=False) as w:
+        imports.run(w, Two(), save)
+    assert made, "no blob was encoded before its block's default was decided"
+    assert chunks(two) == chunks(one)

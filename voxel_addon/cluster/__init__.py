@@ -13,6 +13,20 @@ from ..core.errors import VoxelError
 
 CONNECT_TIMEOUT = 10  # seconds to reach a scheduler and to see its first worker
 
+# Dask settings of an embedded local cluster (`--workers`; the nanny hands them to its
+# worker). Workers forked from a forkserver (see session). The rest are diagnostics
+# for a dashboard that a local cluster does not show: event-loop ticks every 20 ms,
+# a worker's statistical profiler sampling the task thread every 10 ms, memory and
+# system monitors several times a second; together 80 ms of CPU a second with 2 idle
+# workers, 10 ms without (the memory limits are still watched, twice a second).
+LOCAL = {
+    "distributed.worker.multiprocessing-method": "forkserver",
+    "distributed.admin.tick.interval": "1s",
+    "distributed.worker.profile.enabled": False,
+    "distributed.worker.memory.monitor-interval": "500ms",
+    "distributed.admin.system-monitor.interval": "5s",
+}
+
 
 def knob(name: str, default: int) -> int:
     """A tuning value the environment may set (VOXEL_<NAME>): commit sizes, the
@@ -95,13 +109,22 @@ def session(args, say=_say):
     if workers is not None and not 1 <= workers <= 512:
         raise VoxelError(f"--workers must be between 1 and 512 (got {workers})")
     import logging
+    from contextlib import ExitStack
     cluster = client = None
+    stack = ExitStack()
     try:
         from distributed import Client
         if address:
             client = _connect(Client, address)
         else:
+            import dask
             from distributed import LocalCluster
+            # Workers forked from one fresh server process that imported Dask and NumPy
+            # once, not each spawned anew importing them again: the start and the close
+            # take ~0.6 s less for 2 workers, and each worker ~0.5 s less CPU. The
+            # server is clean (no threads, no open world file), unlike this process,
+            # and workers a nanny restarts later come from it too.
+            stack.enter_context(dask.config.set(LOCAL))
             try:
                 with _children_ignore_sigint():
                     cluster = LocalCluster(n_workers=workers, threads_per_worker=1,
@@ -122,6 +145,7 @@ def session(args, say=_say):
             client.close()
         if cluster is not None:
             cluster.close()
+        stack.close()
 
 
 @contextmanager

@@ -50,12 +50,12 @@ class _LocalPalette:
         self.report = SimpleNamespace(blocks={})
 
     def of(self, name: str, props=None):
-        from ..core.blocks import REGISTRY
-        from ..formats import mapping
-        from ..formats.mcstate import state_key
         key = (name, tuple(sorted(props.items())) if props else ())
         got = self.ids.get(key)
-        if got is None:
+        if got is None:  # the imports here only: `of` runs ~66 times a chunk
+            from ..core.blocks import REGISTRY
+            from ..formats import mapping
+            from ..formats.mcstate import state_key
             block, rgb, how = mapping.lookup(name)
             bid, d = REGISTRY.id(block), 0
             if bid:
@@ -77,15 +77,20 @@ class _LocalPalette:
 
 def read(item, shared):
     """Worker: one (result, (bytes, tags) decoded, where) per (index, (region name,
-    cx, cz, kind, body)) of the task; result: ("ok", version, row without data, local
-    data or None, local states, block counts, dropped, key, local biome columns or
-    None, local biome names), ("unfinished", version, status),
-    ("damaged", message, before 1.13?) or ("hostile", message)."""
+    cx, cz, kind, body)) of the task's chunks; result: ("ok", version, row without data,
+    data, local states, block counts, dropped, key, local biome columns or None, local
+    biome names), ("unfinished", version, status), ("damaged", message, before 1.13?)
+    or ("hostile", message). `data`: None, or the data blob and the local -> world map
+    it was encoded with when the task's `known` (state key -> world value, what the
+    writer had settled when the task went out; a value turns 0 once at most, when a
+    chunk still in flight decides its block's default: _Writer._redefault) covers
+    every local state, else the local data (the writer maps and encodes it)."""
     from ..formats import anvil, mcstate, minecraft, nbt
     from ..formats.budget import Budget, Exceeded
     from ..formats.region import MAX_NBT, RegionError, unpack
+    chunks, known = item
     out = []
-    for _, (name, cx, cz, kind, body) in item:
+    for _, (name, cx, cz, kind, body) in chunks:
         where = f"{name} chunk ({cx}, {cz})"
         b = Budget(MAX_NBT, anvil.CHUNK_TAGS)  # the per-chunk limits; the writer charges the rest
         try:
@@ -104,6 +109,11 @@ def read(item, shared):
         pal = _LocalPalette()
         blocks, data, dropped = minecraft.convert(ch, shared["y_min"], pal)
         row = shared["encoder"].row(minecraft.to_key(cx, cz), blocks)
+        if data is not None and all(e[0] in known for e in pal.local):
+            # the writer's zstd (the largest share of its time) done here: values once
+            # given never change, so this map is the one the writer makes in plan order
+            remap = np.array([0] + [known[e[0]] for e in pal.local], np.uint16)
+            data = (shared["encoder"].data(remap[data]), remap)
         cols = mcstate.columns(ch, blocks, shared["y_min"], pal.biome)
         out.append((("ok", ch.version, row, data, (pal.local, pal.voxels), pal.report.blocks, dropped,
                      minecraft.to_key(cx, cz), cols, list(pal.biomes)), b.spent(), where))
@@ -174,12 +184,18 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
         (-64 if version >= anvil.V_NO_LEVEL else 0) if version is not None else 0)
     shared = {"y_min": report.y_min, "encoder": f.encoder()}
     step = task_size(len(plan), pool.size, most=64)  # a chunk is quick here: bigger tasks
+    # the first window of tasks goes out before any result is settled (no `known` yet:
+    # the writer encodes their data blobs itself), so it is made of smaller tasks
+    first = 4 * pool.size * max(1, step // 4)
 
     def tasks():  # the bytes are copied as tasks go out, not all at once
-        for j in range(0, len(plan), step):
-            yield tuple((i, (reg.path.name, cx, cz, kind, bytes(body)))
-                        for i, reg, cx, cz in plan[j:j + step]
-                        for kind, body in [reg.raw(cx, cz)])
+        j = 0
+        while j < len(plan):
+            n = max(1, step // 4) if j < first else step
+            yield (tuple((i, (reg.path.name, cx, cz, kind, bytes(body)))
+                         for i, reg, cx, cz in plan[j:j + n]
+                         for kind, body in [reg.raw(cx, cz)]), dict(w.known))
+            j += n
 
     f.set_meta(JOB, json.dumps({"sig": sig, "done": start, "since": since}))
     w = _Writer(world, report, sig, progress, len(plan) + len(local), budget)
@@ -192,7 +208,7 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
     computed, pos = 0, 0
     every = knob("COMMIT", COMMIT)
     try:
-        for task, results in pool.map(read, tasks(), shared=shared):
+        for (task, _), results in pool.map(read, tasks(), shared=shared):
             computed += len(task)
             for (i, _), r in zip(task, results):
                 ready[i] = r
@@ -259,6 +275,8 @@ class _Writer:
         self.grown = False
         self.batch, self.biomes, self.meta = [], [], {}
         self.enc = world.file.encoder()
+        self.known: dict = {}  # state key -> its value in the world's data (workers encode with it)
+        self.redefaulted = 0   # worker blobs made again by _redefault
 
     def settle(self, got) -> None:
         from ..core import colors
@@ -301,11 +319,36 @@ class _Writer:
             if voxels is not None:   # each block's default state is stored as 0
                 dflt = self.states.settle(ids, remap, voxels[:len(remap)])
                 remap = np.where(remap == dflt[ids], 0, remap).astype(np.uint16)
-            blob = None if data is None else self.enc.data(remap[data])
+            for j, e in enumerate(local, 1):   # a value changes once at most: to 0, when
+                self.known[e[0]] = int(remap[j])   # its block's default is decided
+            if isinstance(data, tuple):  # encoded by the worker with what was known then
+                blob, theirs = data
+                if not np.array_equal(theirs, remap):
+                    blob = self._redefault(key, row, blob, theirs, remap, ids)
+            else:
+                blob = None if data is None else self.enc.data(remap[data])
             self.batch.append(row[:4] + (blob,) + row[5:])
             if cols is not None:
                 glob = np.array([self.states.biome(n) for n in bnames], np.uint8)
                 self.biomes.append((key, glob[cols]))
+
+    def _redefault(self, key, row, blob, theirs, remap, ids):
+        """A worker's data blob encoded before a chunk still in flight decided the
+        default state of some of its blocks: those states' voxels become 0 (colour
+        voxels keep their colour index, which may be the same number)."""
+        from ..core import chunk as C
+        from ..core.blocks import REGISTRY
+        from ..storage import codecs
+        color = REGISTRY.id("color")
+        changed = theirs != remap
+        if (remap[changed] != 0).any() or (ids[changed] == color).any():
+            raise RuntimeError(f"{key}: a worker mapped block states otherwise")
+        vals = codecs.decode_u16(row[2], blob, C.VOLUME)
+        blocks = codecs.decode_u16(row[2], row[3], C.VOLUME)   # the file's numbering
+        fcolor = color if self.enc.to_file is None else int(self.enc.to_file[color])
+        vals[np.isin(vals, theirs[changed]) & (blocks != fcolor)] = 0
+        self.redefaulted += 1
+        return self.enc.data(vals.reshape(C.SHAPE, order="F"))
 
     def commit(self, upto: int) -> None:
         from ..core import colors

@@ -199,7 +199,12 @@ def frames(ctx, world, d, far, rounds=30):
                        "ms", "the same: process CPU (all threads, llvmpipe's included)")
         for k, what in (("python", "our Python outside the GPU calls"),
                         ("submit", "issuing the passes and the composite (Python + the "
-                                   "backend's CPU work)")):
+                                   "backend's CPU work)"),
+                        ("composite_cpu", "composite alone, process CPU (GPU finished before "
+                                          "and after it)"),
+                        ("host_cpu", "Blender's own drawing of the region queued before the "
+                                     "redraw's handler, process CPU: finished before the "
+                                     "frame's timing starts, not part of the frame")):
             yield (f"viewport_frame_gpu_{q}_{k}_ms", st.median(R[f"{q}_gpu_0_{k}_ms"]), "ms",
                    f"the live redraw's {what}, far 0 (median)")
         for c, how in (("", "wall"), ("_cpu", "process CPU")):

@@ -166,7 +166,8 @@ def frames(ctx, world, d, far, rounds=30):
     same scene, and far FAR against far 0 (issue 28), in one Blender (the newest,
     OpenGL; tools/frames_bench_job.py): the same payloads, far tiles, settings, camera
     and size; ROUNDS interleaved rounds in a rotated order, the GPU finished in each
-    frame. Sides: gpu (the live view's redraw), gpr (its Renderer alone), mgl
+    frame (and before the live frame starts: Blender's own drawing of the region,
+    queued when the handler runs, is not the frame's). Sides: gpu (the live view's redraw), gpr (its Renderer alone), mgl
     (moderngl). Medians of wall and process CPU time, and ratios as the median of
     each round's ratio (the machine's load moves both sides of a round alike).
     Goals: gpu/moderngl <= 1.05, far/far 0 <= 1.3."""

@@ -10,7 +10,9 @@ on its own standalone EGL context in a thread of this process (GL contexts are p
 thread: Blender's stays current on the main thread) takes the same payloads, far
 tiles, palette, settings, camera and size. Each round, in a rotated order, with far 0
 and with far FAR: the live view's frame ("gpu": the pipeline every redraw, the
-composite into Blender's region, GPU finished: LIVE.finish), the live view's Renderer
+composite into Blender's region, GPU finished: LIVE.finish, which also finishes
+Blender's own drawing of the region queued before the handler runs, outside the
+frame's timing, and times the composite on its own), the live view's Renderer
 drawn alone ("gpr": Renderer.draw in the draw handler, GPU finished: the same work as
 the moderngl side) and the moderngl frame ("mgl": Renderer.draw, GPU finished); wall
 time and the process's CPU time (all threads, llvmpipe's included: it moves less with
@@ -203,7 +205,8 @@ def run(world: str, distance: int, far: int, rounds: int):
                         ms, cpu, calls = fr[-1].ms, fr[-1].cpu_ms, fr[-1].draw_calls
                         if fr[-1].reused or fr[-1].quality != q:
                             raise RuntimeError(f"not a {q} pipeline frame: {fr[-1]}")
-                        for k in ("python_ms", "submit_ms", "upload_ms"):  # where it goes
+                        for k in ("python_ms", "submit_ms", "upload_ms", "host_cpu_ms",
+                                  "composite_cpu_ms"):  # where it goes
                             times.setdefault(f"{q}_gpu_{f}_{k}", []).append(getattr(fr[-1], k))
                     elif side == "gpr":
                         ms, cpu, calls = yield from gpr.call(mgl_s(f), cam, 12.0, qsize)

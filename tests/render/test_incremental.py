@@ -329,6 +329,40 @@ def test_frame_tells_a_host_what_to_composite(gl, area):
     r.release()
 
 
+def test_a_host_folding_the_final_pass_gets_its_picture(gl, area):
+    """The Blender viewport's composite does the final pass itself at full quality
+    (submit(f, final=False); shaders/viewport.frag with FOLD, from `Frame.final`'s
+    inputs): into a plain target (no sRGB encoding) it writes what the final pass
+    writes, distance blur and tone curve included, and alpha 1 wherever it drew."""
+    from voxel_addon.blender.liveview import composite
+    from voxel_addon.render.device import State
+    b, L, meshes, lights = area
+    r = _renderer(gl, dof=True, distance=1)  # near blur: the fold must mix it in
+    r.set_area(b, L, -1, -1, ring=True, backend="numpy")
+    cam = CAMS[0]
+    f = r.prepare(cam, 12.0, SIZE)
+    r.submit(f)
+    ref = r.dev.read(f.color)[..., :3].astype(int)
+    f = r.prepare(cam, 12.0, SIZE)
+    r.submit(f, final=False)
+    assert composite.folds(f, SIZE) and not composite.folds(f, (SIZE[0] * 2, SIZE[1] * 2))
+    dev = r.dev
+    prog, tex = composite.program(dev, f, SIZE, keep=True)
+    assert "blurred" in tex  # the distance blur is part of what is folded
+    color, depth = dev.texture(SIZE, "rgba8"), dev.texture(SIZE, "r32f")
+    t = dev.target([color, depth])
+    with dev.begin(t, State(), clear=True):
+        dev.use(prog, tex, {"host_vp": np.eye(4), "sky": True})
+        dev.draw()
+    out = dev.read(color)
+    assert (out[..., 3] == 255).all()
+    d = np.abs(out[..., :3].astype(int) - ref)
+    assert d.max() <= 1, d.max()
+    assert ref.std() > 10  # a picture, not a flat colour
+    dev.release(t, color, depth)
+    r.release()
+
+
 def test_from_matrices_takes_blender_matrices():
     """Blender's region_3d.view_matrix / window_matrix are mathutils.Matrix (rows as
     rows): they go in as they are."""

@@ -166,7 +166,8 @@ def frames(ctx, world, d, far, rounds=30):
     same scene, and far FAR against far 0 (issue 28), in one Blender (the newest,
     OpenGL; tools/frames_bench_job.py): the same payloads, far tiles, settings, camera
     and size; ROUNDS interleaved rounds in a rotated order, the GPU finished in each
-    frame. Sides: gpu (the live view's redraw), gpr (its Renderer alone), mgl
+    frame (and before the live frame starts: Blender's own drawing of the region,
+    queued when the handler runs, is not the frame's). Sides: gpu (the live view's redraw), gpr (its Renderer alone), mgl
     (moderngl). Medians of wall and process CPU time, and ratios as the median of
     each round's ratio (the machine's load moves both sides of a round alike).
     Goals: gpu/moderngl <= 1.05, far/far 0 <= 1.3."""
@@ -199,7 +200,12 @@ def frames(ctx, world, d, far, rounds=30):
                        "ms", "the same: process CPU (all threads, llvmpipe's included)")
         for k, what in (("python", "our Python outside the GPU calls"),
                         ("submit", "issuing the passes and the composite (Python + the "
-                                   "backend's CPU work)")):
+                                   "backend's CPU work)"),
+                        ("composite_cpu", "composite alone, process CPU (GPU finished before "
+                                          "and after it)"),
+                        ("host_cpu", "Blender's own drawing of the region queued before the "
+                                     "redraw's handler, process CPU: finished before the "
+                                     "frame's timing starts, not part of the frame")):
             yield (f"viewport_frame_gpu_{q}_{k}_ms", st.median(R[f"{q}_gpu_0_{k}_ms"]), "ms",
                    f"the live redraw's {what}, far 0 (median)")
         for c, how in (("", "wall"), ("_cpu", "process CPU")):

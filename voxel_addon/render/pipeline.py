@@ -351,8 +351,10 @@ class Renderer:
         fr.far = far
         return fr
 
-    def submit(self, f: "Frame") -> None:
-        """Run the passes of a prepared frame."""
+    def submit(self, f: "Frame", final: bool = True) -> None:
+        """Run the passes of a prepared frame; without the final pass when its host
+        folds that in (`Frame.final`: the Blender viewport's composite), so `color`
+        stays unwritten."""
         G, stats = f.G, f.stats
         if f.cast is not None:  # shadows on: cleared even with no caster in view
             G.shadow.draw(f.cast, stats, shadow=True)  # blend casts none (§5.4.1)
@@ -362,7 +364,7 @@ class Renderer:
         G.transparency.geometry(f.view, stats)
         G.shade.run()
         G.transparency.shade(f.view, stats)
-        for p in G.post:  # SSAO and its blur, composite, distance blur, final
+        for p in G.post if final else G.post[:-1]:  # SSAO, composite, distance blur, final
             p.run()
 
     def release(self):
@@ -394,6 +396,11 @@ class Frame:
     @property
     def color(self):
         return self.targets.out
+
+    @property
+    def final(self):
+        """The final pass (shaders/final.frag): its input textures are `.tex`."""
+        return self.G.post[-1]
 
     @property
     def depth(self):

@@ -37,15 +37,36 @@ class Kept:
         self.look = None
 
 
-def composite(dev, f, host_vp: np.ndarray, sky: bool, kept: Kept | None = None) -> None:
-    """The prepared and submitted frame f into Blender's framebuffer; with `kept` into
-    those targets first and drawn from there."""
+def folds(f, size) -> bool:
+    """Whether the composite does the final pass itself (Renderer.submit(f, final=False)):
+    a frame at the region's SIZE (full quality), where no filtering comes between the
+    final pass and the region, so folding it in changes no pixel but saves a
+    full-region pass and the RGBA8 image's write and read (issue 28). A draft frame
+    is smaller: its final pass stays at its size, the composite filters its output."""
+    return size is not None and tuple(size) == tuple(f.color.size)
+
+
+def program(dev, f, size, keep: bool):
+    """viewport.frag for frame f (SIZE: the region's) and its textures: the final
+    pass's inputs where folds(f, size), else its output."""
     blend = f.blend_depth
+    fold = folds(f, size)
+    tex = dict(f.final.tex) if fold else {"color": f.color}
     prog = dev.program("fullscreen.vert", "viewport.frag",
-                       {"LAYERS": 1 if blend is not None else 0, "KEEP": int(kept is not None)})
-    tex = {"color": f.color, "g_depth": f.depth}
+                       {"LAYERS": 1 if blend is not None else 0, "KEEP": int(keep),
+                        "FOLD": int(fold), "DOF": "blurred" in tex})
+    tex["g_depth"] = f.depth
     if blend is not None:
         tex["prev_depth"] = blend
+    return prog, tex
+
+
+def composite(dev, f, host_vp: np.ndarray, sky: bool, kept: Kept | None = None,
+              size: tuple | None = None) -> None:
+    """The prepared and submitted frame f into Blender's framebuffer (SIZE: the
+    region's; f submitted without its final pass where folds(f, size)); with `kept`
+    into those targets first and drawn from there."""
+    prog, tex = program(dev, f, size, kept is not None)
     push = {"host_vp": np.asarray(host_vp, np.float64), "sky": bool(sky)}
     if kept is None:
         with dev.begin(None, INTO_HOST):

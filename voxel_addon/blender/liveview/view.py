@@ -61,6 +61,8 @@ class Frame(NamedTuple):
     draw_calls: int     # geometry draws of the pipeline (0 when reused)
     submit_ms: float    # issuing the passes (Python + the backend's CPU work)
     cpu_ms: float = 0.0  # the process's CPU time (all threads: llvmpipe's too)
+    host_cpu_ms: float = 0.0       # bench (finish): Blender's drawing queued before ours
+    composite_cpu_ms: float = 0.0  # bench (finish): the composite alone
 
 
 class Pane:
@@ -157,7 +159,8 @@ class LiveView:
         # depth in the depth buffer (draw with gpu.state.depth_test_set("LESS_EQUAL"))
         self.overlays: list = []
         self.reuse = True             # a still region redraws from its kept frame
-        self.finish = False           # bench: wait for the GPU so frame times are real
+        self.finish = False           # bench: wait for the GPU so frame times are real (and
+                                      # finish Blender's queued drawing before ours starts)
         self._timer_on = False
         self._tick_fn, self._tick_ui_fn = self._tick, self._tick_ui  # (one object each)
 
@@ -206,6 +209,11 @@ class LiveView:
 
     def _frame(self, context, scene, vv):
         import gpu
+        host_cpu = 0.0
+        if self.finish:  # bench: Blender's own drawing of the region, queued before ours
+            p = time.process_time()
+            host.device().finish()
+            host_cpu = time.process_time() - p
         t0, c0, p0 = time.perf_counter(), time.thread_time(), time.process_time()
         region, rv3d, window = context.region, context.region_data, context.window
         if region is None or rv3d is None or window is None:
@@ -257,7 +265,7 @@ class LiveView:
         look = (tuple(view), tuple(map(tuple, rv3d.window_matrix)), (vw, vh), astuple(s), hours,
                 vv.sky, pane.gen)
         k = pane.kept.get(key)
-        reused, calls, t_sub = False, 0, 0.0
+        reused, calls, t_sub, comp_cpu = False, 0, 0.0, 0.0
         if self.reuse and k is not None and k.look == look:
             t1 = time.perf_counter()
             composite.draw_kept(pane.dev, k)
@@ -271,10 +279,16 @@ class LiveView:
             f = pane.r.prepare(cam, hours, size)
             t_py += time.thread_time() - c1
             t2 = time.perf_counter()
-            pane.r.submit(f)
+            pane.r.submit(f, not composite.folds(f, (vw, vh)))
+            if self.finish:
+                pane.dev.finish()
+                pc = time.process_time()
             # kept only once the view rests: a frame while moving or loading is the last
             k = pane.kept_for(key, (vw, vh)) if self.reuse and not (moving or loading) else None
-            composite.composite(pane.dev, f, host_vp, vv.sky, k)
+            composite.composite(pane.dev, f, host_vp, vv.sky, k, (vw, vh))
+            if self.finish:
+                pane.dev.finish()
+                comp_cpu = time.process_time() - pc
             t_sub = time.perf_counter() - t2
             if k is not None:
                 k.look, k.quality = look, "draft" if draft else "full"
@@ -289,7 +303,8 @@ class LiveView:
         S.update(drawn=drawn, far_drawn=len(pane.far_versions), ms=ms, python_ms=t_py * 1e3, quality=q, frames=S["frames"] + 1,
                  wanted_shown=S["wanted"], reused=S["reused"] + reused, draw_calls=calls)
         self.frames.append(Frame(ms, t_py * 1e3, q, drawn, t_sync * 1e3, reused, calls,
-                                 t_sub * 1e3, (time.process_time() - p0) * 1e3))
+                                 t_sub * 1e3, (time.process_time() - p0) * 1e3,
+                                 host_cpu * 1e3, comp_cpu * 1e3))
         st.quality = q
         if drawn < S["wanted"] or (loading and not feed.far_loading):
             # as long again as the frame took: the worker gets at least half the time;

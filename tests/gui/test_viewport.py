@@ -133,7 +133,9 @@ def test_blender_objects_move_on_a_still_view_without_a_new_frame(run):
 
 def test_show_off_gives_back_blenders_image(run):
     a, b = _region(run["steps"]["off"]), _region(run["steps"]["off_again"])
-    assert (np.abs(a - b).max(-1) <= 2).mean() > 0.999
+    # 0.5 %: Blender's own cube edges (its overlay's smoothing) differ by a few pixels
+    # between two draws; a live view left drawing covers most of the region
+    assert (np.abs(a - b).max(-1) <= 2).mean() > 0.995
 
 
 def test_time_of_day_changes_the_sky(run):

@@ -204,15 +204,19 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
     if near:
         regs = {id(t[0]): t[0] for t in todo}.values()
         shared["files"] = {r.path.name: str(r.path.resolve()) for r in regs}
-    step = task_size(len(plan), pool.size, most=64)  # a chunk is quick here: bigger tasks
+    # a chunk is quick here (~2 ms): bigger tasks. Each task costs the writer's process
+    # ~4 ms of Dask's own work (submit, scheduler, gather, release): 128 chunks a task
+    # took 0.14 s less of it than 64 for 4096 chunks
+    step = task_size(len(plan), pool.size, most=128)
     # the first window of tasks goes out before any result is settled (no `known` yet:
     # the writer encodes their data blobs itself), so it is made of smaller tasks
-    first = 4 * pool.size * max(1, step // 4)
+    small = max(1, min(step, 64) // 4)
+    first = 4 * pool.size * small
 
     def tasks():  # the bytes are copied as tasks go out, not all at once
         j = 0
         while j < len(plan):
-            n = max(1, step // 4) if j < first else step
+            n = small if j < first else step
             part = plan[j:j + n]
             if near:
                 chunks = tuple((i, (reg.path.name, cx, cz, None, None)) for i, reg, cx, cz in part)

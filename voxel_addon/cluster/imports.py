@@ -43,8 +43,9 @@ class _LocalPalette:
     voxels in the chunk, for the writer's mcstate.States.settle); the same for biomes
     (`biomes`: names in the order met)."""
 
-    def __init__(self):
+    def __init__(self, met: dict):
         from types import SimpleNamespace
+        self.met = met  # (name, props) -> what `of` looks up: shared by a task's chunks
         self.ids: dict = {}
         self.local: list = []
         self.voxels = None
@@ -54,15 +55,14 @@ class _LocalPalette:
     def of(self, name: str, props=None):
         key = (name, tuple(sorted(props.items())) if props else ())
         got = self.ids.get(key)
-        if got is None:  # the imports here only: `of` runs ~66 times a chunk
-            from ..core.blocks import REGISTRY
-            from ..formats import mapping
-            from ..formats.mcstate import state_key
-            block, rgb, how = mapping.lookup(name)
-            bid, d = REGISTRY.id(block), 0
+        if got is None:
+            m = self.met.get(key)
+            if m is None:
+                m = self.met[key] = _meet(name, props)
+            skey, rgb, bid, block, how = m
+            d = 0
             if bid:
-                self.local.append((state_key(name, props),
-                                   None if rgb is None else tuple(int(v) for v in rgb), bid))
+                self.local.append((skey, rgb, bid))
                 d = len(self.local)
             got = self.ids[key] = (bid, d)
             self.report.blocks.setdefault(name, [block, how, 0])
@@ -75,6 +75,17 @@ class _LocalPalette:
 
     def biome(self, name) -> int:
         return self.biomes.setdefault(name, len(self.biomes))
+
+
+def _meet(name: str, props):
+    """A block state's (state key, rgb or None, block id, block, how): the same in
+    every chunk (the imports here only: `of` runs ~66 times a chunk)."""
+    from ..core.blocks import REGISTRY
+    from ..formats import mapping
+    from ..formats.mcstate import state_key
+    block, rgb, how = mapping.lookup(name)
+    return (state_key(name, props), None if rgb is None else tuple(int(v) for v in rgb),
+            REGISTRY.id(block), block, how)
 
 
 def packed(item, shared) -> bytes:
@@ -101,7 +112,7 @@ def read(item, shared):
     from ..formats.budget import Budget, Exceeded
     from ..formats.region import MAX_NBT, Region, RegionError, unpack
     chunks, known = item
-    out, regions = [], {}
+    out, regions, met = [], {}, {}
     for _, (name, cx, cz, kind, body) in chunks:
         where = f"{name} chunk ({cx}, {cz})"
         b = Budget(MAX_NBT, anvil.CHUNK_TAGS)  # the per-chunk limits; the writer charges the rest
@@ -121,7 +132,7 @@ def read(item, shared):
         if ch.status not in anvil.DONE:
             out.append((("unfinished", ch.version, ch.status), b.spent(), where))
             continue
-        pal = _LocalPalette()
+        pal = _LocalPalette(met)
         blocks, data, dropped = minecraft.convert(ch, shared["y_min"], pal)
         row = shared["encoder"].row(minecraft.to_key(cx, cz), blocks)
         if data is not None and all(e[0] in known for e in pal.local):

@@ -232,6 +232,18 @@ def test_import_killed_then_resumed(cluster, ref, tmp_path):
 
 
 # ---- through --workers --------------------------------------------------------
+def test_local_workers_import_equal_one_process(ref, tmp_path):
+    """--workers: the workers read the region files themselves (tasks carry the
+    chunks' places, not their bytes), results come back pickled once per task."""
+    w = tmp_path / "imp.sqlite"
+    r = cli("import", "--world", w, "--from", ref["save"], "--workers", 2)
+    assert r.returncode == 0, r.stderr
+    assert chunks(w) == chunks(ref["imp"])
+    assert meta(w, "colors") == meta(ref["imp"], "colors") and meta(w, "colors")
+    assert report(r.stdout) == ref["imp_report"]
+    assert computed(r.stderr, "read") == 50
+
+
 def test_local_workers_interrupted_then_resumed(ref, tmp_path):
     w = tmp_path / "gen.sqlite"
     shutil.copy(ref["base"], w)

@@ -132,14 +132,14 @@ def session(args, say=_say):
                                            silence_logs=logging.CRITICAL)
             except Exception as e:  # noqa: BLE001 - no workers to run on: say why, once
                 raise VoxelError(f"cannot start {workers} local Dask workers: {e}") from None
-            client = Client(cluster)
+            client = Client(cluster, direct_to_workers=True)
         _check_versions(client, address or "the local cluster")
         if address:
             info = client.scheduler_info()
             board = (client.dashboard_link if "dashboard" in info.get("services", {})
                      else "none (the scheduler runs without one)")
             say(f"cluster {address}: {len(info['workers'])} workers, dashboard {board}")
-        yield Pool(client)
+        yield Pool(client, local=not address)
     finally:
         if client is not None:
             client.close()
@@ -226,8 +226,9 @@ def task_size(n: int, workers: int, most: int = 32) -> int:
 class Pool:
     """Tasks on a Dask client; results come back to the caller (the one writer)."""
 
-    def __init__(self, client):
+    def __init__(self, client, local=False):
         self.client = client
+        self.local = local  # workers on this machine (--workers): they see its files
 
     @property
     def size(self) -> int:
@@ -261,7 +262,7 @@ class Pool:
                 if nxt is None:
                     return
                 i, item = nxt
-                f = c.submit(_call, fn, item, share, pure=False,
+                f = c.submit(_call, fn, _Item(item), share, pure=False,
                              key=f"{fn.__name__}-{id(of)}-{i}")
                 of[f] = item
                 ac.add(f)
@@ -285,6 +286,18 @@ class Pool:
                 share.release()
 
 
+class _Item:
+    """A task's item, opaque to Dask: submit walks a task's arguments (each tuple,
+    list and dict, looking for futures), thousands of nodes for an import's task."""
+    __slots__ = ("item",)
+
+    def __init__(self, item):
+        self.item = item
+
+    def __reduce__(self):
+        return _Item, (self.item,)
+
+
 _tuned = False
 
 
@@ -294,7 +307,7 @@ def _call(fn, item, shared):
     if not _tuned:
         _tuned = True
         _malloc()
-    return fn(item, shared)
+    return fn(item.item if isinstance(item, _Item) else item, shared)
 
 
 def _malloc() -> None:

@@ -26,6 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.errors import VoxelError
+from ..formats.budget import Exceeded
 from ..storage import minecraft as mcfile
 from . import knob, task_size
 
@@ -41,8 +43,9 @@ class _LocalPalette:
     voxels in the chunk, for the writer's mcstate.States.settle); the same for biomes
     (`biomes`: names in the order met)."""
 
-    def __init__(self):
+    def __init__(self, met: dict):
         from types import SimpleNamespace
+        self.met = met  # (name, props) -> what `of` looks up: shared by a task's chunks
         self.ids: dict = {}
         self.local: list = []
         self.voxels = None
@@ -52,15 +55,14 @@ class _LocalPalette:
     def of(self, name: str, props=None):
         key = (name, tuple(sorted(props.items())) if props else ())
         got = self.ids.get(key)
-        if got is None:  # the imports here only: `of` runs ~66 times a chunk
-            from ..core.blocks import REGISTRY
-            from ..formats import mapping
-            from ..formats.mcstate import state_key
-            block, rgb, how = mapping.lookup(name)
-            bid, d = REGISTRY.id(block), 0
+        if got is None:
+            m = self.met.get(key)
+            if m is None:
+                m = self.met[key] = _meet(name, props)
+            skey, rgb, bid, block, how = m
+            d = 0
             if bid:
-                self.local.append((state_key(name, props),
-                                   None if rgb is None else tuple(int(v) for v in rgb), bid))
+                self.local.append((skey, rgb, bid))
                 d = len(self.local)
             got = self.ids[key] = (bid, d)
             self.report.blocks.setdefault(name, [block, how, 0])
@@ -75,6 +77,25 @@ class _LocalPalette:
         return self.biomes.setdefault(name, len(self.biomes))
 
 
+def _meet(name: str, props):
+    """A block state's (state key, rgb or None, block id, block, how): the same in
+    every chunk (the imports here only: `of` runs ~66 times a chunk)."""
+    from ..core.blocks import REGISTRY
+    from ..formats import mapping
+    from ..formats.mcstate import state_key
+    block, rgb, how = mapping.lookup(name)
+    return (state_key(name, props), None if rgb is None else tuple(int(v) for v in rgb),
+            REGISTRY.id(block), block, how)
+
+
+def packed(item, shared) -> bytes:
+    """Worker: read()'s answer pickled as one object. Dask would pickle each chunk's
+    result apart and the writer's process unpickle each (its event loop's largest
+    cost); one pickle shares the block names and state keys of the task's chunks."""
+    import pickle
+    return pickle.dumps(read(item, shared), protocol=pickle.HIGHEST_PROTOCOL)
+
+
 def read(item, shared):
     """Worker: one (result, (bytes, tags) decoded, where) per (index, (region name,
     cx, cz, kind, body)) of the task's chunks; result: ("ok", version, row without data,
@@ -84,16 +105,21 @@ def read(item, shared):
     it was encoded with when the task's `known` (state key -> world value, what the
     writer had settled when the task went out; a value turns 0 once at most, when a
     chunk still in flight decides its block's default: _Writer._redefault) covers
-    every local state, else the local data (the writer maps and encodes it)."""
+    every local state, else the local data (the writer maps and encodes it). `kind`
+    None: the worker shares the writer's file system (a local cluster) and reads the
+    chunk's bytes itself from shared["files"][name], the region's path."""
     from ..formats import anvil, mcstate, minecraft, nbt
     from ..formats.budget import Budget, Exceeded
-    from ..formats.region import MAX_NBT, RegionError, unpack
+    from ..formats.region import MAX_NBT, Region, RegionError, unpack
     chunks, known = item
-    out = []
+    out, regions, met = [], {}, {}
     for _, (name, cx, cz, kind, body) in chunks:
         where = f"{name} chunk ({cx}, {cz})"
         b = Budget(MAX_NBT, anvil.CHUNK_TAGS)  # the per-chunk limits; the writer charges the rest
         try:
+            if kind is None:
+                reg = regions.get(name) or regions.setdefault(name, Region(shared["files"][name]))
+                kind, body = reg.raw(cx, cz)
             ch = anvil.read(unpack(name, cx, cz, kind, body, b), b)
         except Exceeded as e:  # nbt.Hostile too: refuses the import, as in one process
             out.append((("hostile", f"{where}: {e}; import refused"), b.spent(), where))
@@ -106,7 +132,7 @@ def read(item, shared):
         if ch.status not in anvil.DONE:
             out.append((("unfinished", ch.version, ch.status), b.spent(), where))
             continue
-        pal = _LocalPalette()
+        pal = _LocalPalette(met)
         blocks, data, dropped = minecraft.convert(ch, shared["y_min"], pal)
         row = shared["encoder"].row(minecraft.to_key(cx, cz), blocks)
         if data is not None and all(e[0] in known for e in pal.local):
@@ -132,8 +158,8 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
         report=None, resources=None) -> int:
     """Like formats.minecraft.import_world, `report` (a minecraft.Report) filled as it
     goes; returns how many chunks the workers read."""
+    import pickle
     import time
-    from ..core.errors import VoxelError
     from ..formats import anvil, minecraft
     from ..formats.budget import Budget
     from ..formats.region import External, RegionError
@@ -183,18 +209,32 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
     report.y_min = y_min if y_min is not None else (
         (-64 if version >= anvil.V_NO_LEVEL else 0) if version is not None else 0)
     shared = {"y_min": report.y_min, "encoder": f.encoder()}
-    step = task_size(len(plan), pool.size, most=64)  # a chunk is quick here: bigger tasks
+    # a local cluster's workers read the region files themselves: the chunks' bytes
+    # then pass through neither this process (read once here, to plan) nor the scheduler
+    near = getattr(pool, "local", False)
+    if near:
+        regs = {id(t[0]): t[0] for t in todo}.values()
+        shared["files"] = {r.path.name: str(r.path.resolve()) for r in regs}
+    # a chunk is quick here (~2 ms): bigger tasks. Each task costs the writer's process
+    # ~4 ms of Dask's own work (submit, scheduler, gather, release): 128 chunks a task
+    # took 0.14 s less of it than 64 for 4096 chunks
+    step = task_size(len(plan), pool.size, most=128)
     # the first window of tasks goes out before any result is settled (no `known` yet:
     # the writer encodes their data blobs itself), so it is made of smaller tasks
-    first = 4 * pool.size * max(1, step // 4)
+    small = max(1, min(step, 64) // 4)
+    first = 4 * pool.size * small
 
     def tasks():  # the bytes are copied as tasks go out, not all at once
         j = 0
         while j < len(plan):
-            n = max(1, step // 4) if j < first else step
-            yield (tuple((i, (reg.path.name, cx, cz, kind, bytes(body)))
-                         for i, reg, cx, cz in plan[j:j + n]
-                         for kind, body in [reg.raw(cx, cz)]), dict(w.known))
+            n = small if j < first else step
+            part = plan[j:j + n]
+            if near:
+                chunks = tuple((i, (reg.path.name, cx, cz, None, None)) for i, reg, cx, cz in part)
+            else:
+                chunks = tuple((i, (reg.path.name, cx, cz, kind, bytes(body)))
+                               for i, reg, cx, cz in part for kind, body in [reg.raw(cx, cz)])
+            yield chunks, dict(w.known)
             j += n
 
     f.set_meta(JOB, json.dumps({"sig": sig, "done": start, "since": since}))
@@ -208,7 +248,8 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
     computed, pos = 0, 0
     every = knob("COMMIT", COMMIT)
     try:
-        for (task, _), results in pool.map(read, tasks(), shared=shared):
+        for (task, _), results in pool.map(packed, tasks(), shared=shared):
+            results = pickle.loads(results)
             computed += len(task)
             for (i, _), r in zip(task, results):
                 ready[i] = r
@@ -246,9 +287,7 @@ def _job(raw, sig):
 def _first_version(todo, budget):
     """DataVersion of the first readable chunk (what the one-process import uses);
     what it decodes is charged to the import's budget (a hostile file is refused)."""
-    from ..core.errors import VoxelError
     from ..formats import anvil, nbt
-    from ..formats.budget import Exceeded
     from ..formats.region import RegionError
     for reg, cx, cz in todo:
         try:
@@ -279,9 +318,6 @@ class _Writer:
         self.redefaulted = 0   # worker blobs made again by _redefault
 
     def settle(self, got) -> None:
-        from ..core import colors
-        from ..core.errors import VoxelError
-        from ..formats.budget import Exceeded
         r, (nbytes, tags), where = got
         rep = self.report
         self.done += 1
@@ -291,6 +327,9 @@ class _Writer:
         except Exceeded as e:
             raise VoxelError(f"{where}: {e}; import refused") from None
         what = r[0]
+        if what == "ok":
+            self._ok(r)
+            return
         if what == "external":
             rep.external += 1
         elif what == "hostile":
@@ -300,37 +339,47 @@ class _Writer:
             self.old += r[2]
         elif what == "unfinished":
             rep.unfinished[r[2]] += 1
-        else:
-            _, _, row, data, local, counts, dropped, key, cols, bnames = r
-            for name, (b, how, n) in counts.items():
-                rep.blocks.setdefault(name, [b, how, 0])[2] += n
-            rep.dropped += dropped
-            local, voxels = local
-            remap = np.zeros(len(local) + 1, np.uint16)   # as formats.minecraft._Palettes
-            ids = np.zeros(len(local) + 1, np.uint16)
-            for j, (skey, rgb, bid) in enumerate(local, 1):
-                st = self.states.of_key(skey)
-                ids[j] = bid
-                if rgb is not None:
-                    self.palette, remap[j] = self.states.color(st, self.palette, rgb)
-                    self.grown = True
-                else:
-                    remap[j] = st
-            if voxels is not None:   # each block's default state is stored as 0
-                dflt = self.states.settle(ids, remap, voxels[:len(remap)])
-                remap = np.where(remap == dflt[ids], 0, remap).astype(np.uint16)
-            for j, e in enumerate(local, 1):   # a value changes once at most: to 0, when
-                self.known[e[0]] = int(remap[j])   # its block's default is decided
-            if isinstance(data, tuple):  # encoded by the worker with what was known then
-                blob, theirs = data
-                if not np.array_equal(theirs, remap):
-                    blob = self._redefault(key, row, blob, theirs, remap, ids)
+
+    def _ok(self, r) -> None:
+        """A chunk read: its states, colours and biomes settled (per chunk for each
+        of 4096+ chunks: Python lists here, NumPy once per chunk)."""
+        _, _, row, data, (local, voxels), counts, dropped, key, cols, bnames = r
+        rep = self.report
+        blocks = rep.blocks
+        for name, (b, how, n) in counts.items():
+            got = blocks.get(name)
+            if got is None:
+                got = blocks[name] = [b, how, 0]
+            got[2] += n
+        rep.dropped += dropped
+        states, of_key = self.states, self.states.of_key
+        vals, ids = [0], [0]   # as formats.minecraft._Palettes
+        for skey, rgb, bid in local:
+            st = of_key(skey)
+            ids.append(bid)
+            if rgb is not None:
+                self.palette, v = states.color(st, self.palette, rgb)
+                vals.append(v)
+                self.grown = True
             else:
-                blob = None if data is None else self.enc.data(remap[data])
-            self.batch.append(row[:4] + (blob,) + row[5:])
-            if cols is not None:
-                glob = np.array([self.states.biome(n) for n in bnames], np.uint8)
-                self.biomes.append((key, glob[cols]))
+                vals.append(st)
+        remap = np.array(vals, np.uint16)
+        ids = np.array(ids, np.uint16)
+        if voxels is not None:   # each block's default state is stored as 0
+            dflt = states.settle(ids, remap, voxels[:len(remap)])
+            remap = np.where(remap == dflt[ids], 0, remap).astype(np.uint16)
+        # a value changes once at most: to 0, when its block's default is decided
+        self.known.update(zip([e[0] for e in local], remap[1:].tolist()))
+        if isinstance(data, tuple):  # encoded by the worker with what was known then
+            blob, theirs = data
+            if len(theirs) != len(remap) or (theirs != remap).any():
+                blob = self._redefault(key, row, blob, theirs, remap, ids)
+        else:
+            blob = None if data is None else self.enc.data(remap[data])
+        self.batch.append(row[:4] + (blob,) + row[5:])
+        if cols is not None:
+            glob = np.array([states.biome(n) for n in bnames], np.uint8)
+            self.biomes.append((key, glob[cols]))
 
     def _redefault(self, key, row, blob, theirs, remap, ids):
         """A worker's data blob encoded before a chunk still in flight decided the

@@ -11,7 +11,6 @@ times with the GPU finished, LIVE.finish), the fastest of N each.
 """
 from __future__ import annotations
 
-import importlib.util
 import sys
 import time
 from pathlib import Path
@@ -19,10 +18,8 @@ from pathlib import Path
 import bpy
 
 ROOT = Path(__file__).resolve().parents[1]
-_spec = importlib.util.spec_from_file_location("viewport_bench_job",
-                                               ROOT / "tools" / "viewport_bench_job.py")
-V = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(V)  # (its start() runs only as __main__)
+sys.path.insert(0, str(ROOT / "tools"))
+import viewport_bench_job as V  # noqa: E402  (its start() runs only as __main__)
 R: dict = {}
 N = 5
 

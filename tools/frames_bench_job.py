@@ -22,7 +22,6 @@ Both drivers are the same llvmpipe (Blender's library path), in one process.
 """
 from __future__ import annotations
 
-import importlib.util
 import statistics
 import sys
 import threading
@@ -32,10 +31,8 @@ from pathlib import Path
 import bpy
 
 ROOT = Path(__file__).resolve().parents[1]
-_spec = importlib.util.spec_from_file_location("viewport_bench_job",
-                                               ROOT / "tools" / "viewport_bench_job.py")
-V = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(V)  # (its start() runs only as __main__)
+sys.path.insert(0, str(ROOT / "tools"))
+import viewport_bench_job as V  # noqa: E402  (its start() runs only as __main__)
 R: dict = {}
 
 

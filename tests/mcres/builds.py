@@ -35,12 +35,11 @@ TORCH = (6, 11)
 LEAVES = [(x, y, z) for x in (5, 6) for y in (1, 2) for z in (12, 13)]
 
 
-def save_with_build(root):
-    """Chunk (0, 0): a stone floor at y 0, grass at its north-west, a stair, glass,
-    a poppy, a block the pack does not know, a fence and a glass pane row, slabs
-    (bottom, top, double), a closed and an open door, rails rising onto a block, a
-    torch and leaves; desert biome where x < 4. Nothing at the chunk's edges (the
-    floor stands alone there)."""
+def build_blocks() -> np.ndarray:
+    """The build's section (y, z, x) of state keys: a stone floor at y 0, grass at
+    its north-west, a stair, glass, a poppy, a block the pack does not know, a fence
+    and a glass pane row, slabs (bottom, top, double), a closed and an open door,
+    rails rising onto a block, a torch and leaves."""
     a = np.full((16, 16, 16), AIR, object)
     a[0] = "minecraft:stone"
     a[0, 0:2, 0:2] = "minecraft:grass_block[snowy=false]"
@@ -64,6 +63,13 @@ def save_with_build(root):
     a[1, TORCH[1], TORCH[0]] = "minecraft:torch"
     for x, y, z in LEAVES:
         a[y, z, x] = "minecraft:oak_leaves[distance=1,persistent=true,waterlogged=false]"
+    return a
+
+
+def save_with_build(root):
+    """Chunk (0, 0): the build's section (`build_blocks`) at y 0; desert biome where
+    x < 4. Nothing at the chunk's edges (the floor stands alone there)."""
+    a = build_blocks()
     cells = np.zeros((4, 4, 4), int)
     cells[:, :, 0] = 1
     mc.write_region(root / "save" / "region", {(0, 0): mc.chunk_nbt(0, 0, {0: a}, biomes={
@@ -82,3 +88,23 @@ def imported(root):
         out[name] = root / f"{name}.sqlite"
         assert main(["import", "--world", str(out[name]), "--from", str(save), *extra]) == 0
     return out, jar
+
+
+TERRAIN = ["", "minecraft:stone", "minecraft:grass_block[snowy=false]",
+           "minecraft:oak_leaves[distance=1,persistent=true,waterlogged=false]"]
+
+
+def terrain(n: int = 64, depth: int = 256, seed: int = 0) -> np.ndarray:
+    """A hilly N×N terrain in the voxel frame ((n + 2, n + 2, depth) indices into
+    TERRAIN, a one-voxel ring around it): stone under grass, hills ±8 around z 128
+    (y 64 with y_min −64), leaf blobs (3×3×2) standing on it here and there."""
+    rng = np.random.default_rng(seed)
+    x, y = np.meshgrid(np.arange(n + 2), np.arange(n + 2), indexing="ij")
+    h = (128 + 5 * np.sin(x / 9.0) + 3 * np.cos(y / 11.0)).astype(int)
+    z = np.arange(depth)[None, None, :]
+    s = np.where(z < h[..., None], 1, 0)
+    s[z[0, 0, :][None, None, :] == h[..., None] - 1] = 2
+    for cx, cy in rng.integers(1, n - 2, (n * n // 64, 2)).tolist():
+        top = int(h[cx:cx + 3, cy:cy + 3].max())
+        s[cx:cx + 3, cy:cy + 3, top + 2:top + 4] = 3
+    return s.astype(np.int32)

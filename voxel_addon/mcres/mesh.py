@@ -70,6 +70,11 @@ def hides_itself(name: str) -> bool:
                                            "powder_snow", "mangrove_roots"))
 
 
+def _present(state: np.ndarray, n: int) -> np.ndarray:
+    """The states other than 0 found in STATE (indices below N), ascending."""
+    return np.flatnonzero(np.bincount(state.reshape(-1), minlength=n)[1:]) + 1
+
+
 def to_minecraft(vx, vy, vz, y_min: int) -> tuple[int, int, int]:
     """Voxel → Minecraft block position (formats/README's mapping, inverted)."""
     return int(vx), int(vz) + y_min, -1 - int(vy)
@@ -83,7 +88,6 @@ def build(res, palette: list, state: np.ndarray, opaque: np.ndarray, *, origin=(
     positions and the variants' random). BIOMES (W, H) indices into BIOME_NAMES."""
     from .states import parse_key
     W, H, D = state.shape
-    known = state > 0
     full_of = np.zeros(len(palette), bool)        # per state: a whole opaque cube
     side_of = np.zeros((len(palette), 6), bool)   # per state and side: covered whole
     shapes: dict = {}
@@ -91,7 +95,7 @@ def build(res, palette: list, state: np.ndarray, opaque: np.ndarray, *, origin=(
     block_of = np.full(len(palette), -1)          # per state: its block (name) number
     selfish = np.zeros(len(palette), bool)        # per state: hides faces against itself
     names: dict = {}
-    for i in np.unique(state[known]).tolist():
+    for i in _present(state, len(palette)).tolist():
         name, props = parse_key(palette[i])
         block_of[i] = names.setdefault(name, len(names))
         selfish[i] = hides_itself(name)
@@ -106,8 +110,10 @@ def build(res, palette: list, state: np.ndarray, opaque: np.ndarray, *, origin=(
         side_of[i] = sh.faces
         opts = bs.variants if bs.variants is not None else bs.parts
         mixed[i] = any(len(o) > 1 for _, o in opts)
-    drawn = known & np.isin(state, list(shapes) or [-1])
-    hides = (opaque & ~drawn) | (drawn & full_of[state])
+    draws = np.zeros(len(palette), bool)
+    draws[list(shapes)] = True
+    drawn = draws[state]
+    hides = (opaque & ~drawn) | full_of[state]
     # a voxel with every neighbour hiding it draws nothing
     pad = np.pad(hides, 1)
     inner = np.ones_like(drawn)
@@ -116,51 +122,127 @@ def build(res, palette: list, state: np.ndarray, opaque: np.ndarray, *, origin=(
     todo = np.argwhere(drawn & ~(inner & hides))
     padstate = np.pad(state, 1)
     padrawn = np.pad(drawn, 1)
-    sprites, sprite_ix = [], {}
-    out = {k: [] for k in ("pos", "uv", "nrm", "sprite", "tint", "layer", "shade", "voxel")}
-    ox, oy, oz = origin
-    for v in todo:
-        x, y, z = (int(c) for c in v)
-        s = int(state[x, y, z])
+    st = state[tuple(todo.T)]
+    # each distinct shape's quads once, as rows of arrays (most voxels share few shapes)
+    rows = _Rows()
+    sid = np.zeros(len(todo), np.int64)
+    for s in np.unique(st).tolist():
+        at = np.flatnonzero(st == s)
         name, props, sh = shapes[s]
-        if mixed[s]:
-            sh = res.shape(name, props, to_minecraft(ox + x, oy + y, oz + z, y_min))
-        biome = biome_names[int(biomes[x, y])] if biomes is not None else biome_names[0]
-        colour = None
-        for q in sh.quads:
-            if q.cull >= 0:
-                dx, dy, dz = OFFSETS[q.cull]
-                if pad[1 + x + dx, 1 + y + dy, 1 + z + dz]:
-                    continue
-                ns = padstate[1 + x + dx, 1 + y + dy, 1 + z + dz]
-                if padrawn[1 + x + dx, 1 + y + dy, 1 + z + dz] and side_of[ns, q.cull ^ 1]:
-                    continue      # the neighbour's model covers the face toward us
-                if selfish[s] and ns and block_of[ns] == block_of[s]:
-                    continue      # glass against glass, a pane's arm against the next pane
-            if q.sprite not in sprite_ix:
-                sprite_ix[q.sprite] = len(sprites) if q.sprite is not None else -1
-                if q.sprite is not None:
-                    sprites.append(q.sprite)
-            if q.tint >= 0 and colour is None:
-                colour = tints.colour(res, name, props, biome) or (255, 255, 255)
-            out["pos"].append(q.pos + (x, y, z))
-            out["uv"].append(q.uv)
-            n = np.cross(q.pos[1] - q.pos[0], q.pos[2] - q.pos[0])
-            n = n / (np.linalg.norm(n) or 1.0)
-            out["nrm"].append(np.repeat(n[None], 4, 0))
-            out["sprite"].append(sprite_ix[q.sprite])
-            out["tint"].append(colour if q.tint >= 0 else (255, 255, 255))
-            out["layer"].append(LAYERS.index(q.layer))
-            out["shade"].append(q.shade)
-            out["voxel"].append((x, y, z))
-    n = len(out["sprite"])
-    cat = (lambda k, shape, dt: np.concatenate(out[k]).astype(dt) if n
-           else np.zeros(shape, dt))
-    return Mesh(cat("pos", (0, 3), np.float32) + np.asarray(origin, np.float32),
-                cat("uv", (0, 2), np.float32), cat("nrm", (0, 3), np.float32),
-                np.array(out["sprite"], np.int32), np.array(out["tint"], np.uint8).reshape(-1, 3),
-                np.array(out["layer"], np.uint8), np.array(out["shade"], bool),
-                np.array(out["voxel"], np.int32).reshape(-1, 3), sprites, drawn)
+        if not mixed[s]:
+            sid[at] = rows.add(sh)
+            continue
+        v = todo[at] + np.asarray(origin, np.int64)
+        mc = np.stack([v[:, 0], v[:, 2] + y_min, -1 - v[:, 1]], axis=1)   # to_minecraft
+        pick = res.blockstate(name).picks(props, mc)
+        if pick is None:      # multipart: drawn voxel by voxel
+            for k, p in zip(at.tolist(), mc.tolist()):
+                sid[k] = rows.add(res.shape(name, props, tuple(p)))
+            continue
+        # one shape per drawn option, asked for at a voxel that draws it
+        u, rep, inv = np.unique(pick, return_index=True, return_inverse=True)
+        ks = [rows.add(res.shape(name, props, tuple(mc[r].tolist()))) for r in rep.tolist()]
+        sid[at] = np.array(ks, np.int64)[inv.reshape(-1)]
+    # per voxel and side: whether a quad culled there is dropped
+    nb = todo[:, None, :] + 1 + OFFSETS[None]
+    at = (nb[..., 0], nb[..., 1], nb[..., 2])
+    ns = padstate[at]
+    hid = pad[at] | (padrawn[at] & side_of[ns, np.arange(6) ^ 1])   # the neighbour's model
+    hid |= (selfish[st][:, None] & (ns != 0)                         # covers the face; glass
+            & (block_of[ns] == block_of[st][:, None]))             # against glass
+    # every voxel's candidate quads, voxel by voxel in its shape's order, as before
+    R = rows.arrays()
+    cnt = R["count"][sid]
+    vi = np.repeat(np.arange(len(todo)), cnt)
+    first = np.cumsum(cnt) - cnt
+    qr = np.repeat(R["start"][sid] - first, cnt) + np.arange(len(vi))
+    cull = R["cull"][qr]
+    keep = (cull < 0) | ~hid[vi, np.maximum(cull, 0)]
+    vi, qr = vi[keep], qr[keep]
+    # sprites numbered in the order the quads first use them
+    sg = R["sprite"][qr]
+    used = sg[sg >= 0]
+    u, firsts = np.unique(used, return_index=True)
+    u = u[np.argsort(firsts)]
+    remap = np.full(len(rows.sprites) + 1, -1, np.int32)
+    remap[u] = np.arange(len(u))
+    sprites = [rows.sprites[i] for i in u.tolist()]
+    # tints: one colour per (state, biome) among the tinted quads
+    tint = np.full((len(qr), 3), 255, np.uint8)
+    tinted = np.flatnonzero(R["tint"][qr])
+    if len(tinted):
+        vox = todo[vi[tinted]]
+        bix = biomes[vox[:, 0], vox[:, 1]].astype(np.int64) if biomes is not None \
+            else np.zeros(len(vox), np.int64)
+        key = st[vi[tinted]].astype(np.int64) * (int(bix.max()) + 1) + bix
+        uk, inv = np.unique(key, return_inverse=True)
+        cols = np.empty((len(uk), 3), np.uint8)
+        for j, kk in enumerate(uk.tolist()):
+            s, b = divmod(kk, int(bix.max()) + 1)
+            name, props, _ = shapes[s]
+            cols[j] = tints.colour(res, name, props, biome_names[b]) or (255, 255, 255)
+        tint[tinted] = cols[inv.reshape(-1)]
+    voxel = todo[vi].astype(np.int32).reshape(-1, 3)
+    pos = (R["pos"][qr] + voxel.astype(np.float32)[:, None, :]).reshape(-1, 3)
+    return Mesh(pos + np.asarray(origin, np.float32), R["uv"][qr].reshape(-1, 2),
+                np.repeat(R["nrm"][qr], 4, axis=0).reshape(-1, 3), remap[sg],
+                tint, R["layer"][qr], R["shade"][qr], voxel, sprites, drawn)
+
+
+def _normal(p) -> np.ndarray:
+    n = np.cross(p[1] - p[0], p[2] - p[0])
+    return n / (np.linalg.norm(n) or 1.0)
+
+
+def _arrays(sh) -> dict:
+    """A shape's quads as arrays, made once per shape (`Resources` caches shapes)."""
+    if sh.arrays is None:
+        qs = sh.quads
+        sh.arrays = {
+            "pos": np.array([q.pos for q in qs], np.float32).reshape(-1, 4, 3),
+            "nrm": np.array([_normal(q.pos) for q in qs], np.float32).reshape(-1, 3),
+            "uv": np.array([q.uv for q in qs], np.float32).reshape(-1, 4, 2),
+            "sprite": [q.sprite for q in qs],
+            "cull": np.array([q.cull for q in qs], np.int64),
+            "tint": np.array([q.tint >= 0 for q in qs], bool),
+            "layer": np.array([LAYERS.index(q.layer) for q in qs], np.uint8),
+            "shade": np.array([q.shade for q in qs], bool)}
+    return sh.arrays
+
+
+class _Rows:
+    """The quads of the distinct shapes of one `build` as rows of arrays, each shape
+    (by identity) added once."""
+
+    def __init__(self):
+        self.ix: dict = {}
+        self.sprites: list = []
+        self.start, self.count = [], []
+        self.shapes: list = []    # held: ids stay unique
+
+    def add(self, sh) -> int:
+        k = self.ix.get(id(sh))
+        if k is None:
+            k = self.ix[id(sh)] = len(self.start)
+            self.start.append(sum(self.count))
+            self.count.append(len(sh.quads))
+            self.shapes.append(sh)
+        return k
+
+    def arrays(self) -> dict:
+        parts = [_arrays(sh) for sh in self.shapes]
+        ids: dict = {}
+        sprite = [-1 if t is None else ids.setdefault(t, len(ids))
+                  for p in parts for t in p["sprite"]]
+        self.sprites = list(ids)
+        out = {"start": np.array(self.start, np.int64), "count": np.array(self.count, np.int64),
+               "sprite": np.array(sprite, np.int64)}
+        for k, shape, dt in (("pos", (0, 4, 3), np.float32), ("nrm", (0, 3), np.float32),
+                             ("uv", (0, 4, 2), np.float32), ("cull", (0,), np.int64),
+                             ("tint", (0,), bool), ("layer", (0,), np.uint8),
+                             ("shade", (0,), bool)):
+            out[k] = np.concatenate([p[k] for p in parts]) if parts else np.zeros(shape, dt)
+        return out
 
 
 def opens(res, key: str) -> bool:
@@ -184,7 +266,7 @@ def light_blocks(res, palette: list, state: np.ndarray, blocks: np.ndarray) -> n
     if not known.any():
         return blocks
     op = np.zeros(len(palette), bool)
-    for i in np.unique(state[known]).tolist():
+    for i in _present(state, len(palette)).tolist():
         op[i] = opens(res, palette[i])
     where = op[state] & DARK[blocks]
     if not where.any():

@@ -44,6 +44,7 @@ class Shape:
     layer: str = SOLID    # the most see-through layer of its quads
     faces: tuple = (False,) * 6   # per side (core.blocks.FACES): opaque quads cover it
                                   # whole (a stair's bottom and back): what it hides there
+    arrays: dict | None = field(default=None, repr=False, compare=False)   # mcres.mesh's
 
 
 def _layer(rgba: np.ndarray) -> str:

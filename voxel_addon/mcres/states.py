@@ -144,16 +144,51 @@ class BlockState:
         else:
             raise VoxelError(f"{what}: neither variants nor multipart")
 
+    def _hit(self, props: dict):
+        hit = None
+        for key, opts in self.variants:
+            if all(props.get(k) == v for k, v in key.items()):
+                hit = opts
+        return hit
+
     def choose(self, props: dict, pos=(0, 0, 0)) -> list[dict]:
         """The variants drawn for a block with PROPS at POS (Minecraft's frame)."""
         props = {k: _text(v) for k, v in props.items()}
         rnd = JavaRandom(position_seed(*pos))
         if self.variants is not None:
-            hit = None
-            for key, opts in self.variants:
-                if all(props.get(k) == v for k, v in key.items()):
-                    hit = opts
+            hit = self._hit(props)
             return [] if hit is None else [pick(hit, rnd)]
         seed = rnd.next_long()
         return [pick(opts, JavaRandom(seed)) for when, opts in self.parts
                 if matches(when, props, f"blockstate {self.name}")]
+
+    def picks(self, props: dict, pos):
+        """`choose` for many positions POS (N, 3) (Minecraft's frame) at once: per
+        position the index of the drawn option in the matching variant's weighted
+        list (the same draw as `pick`); None for a multipart blockstate."""
+        import numpy as np
+        n = len(pos)
+        if self.variants is None:
+            return None
+        hit = self._hit({k: _text(v) for k, v in props.items()})
+        if hit is None or len(hit) == 1:
+            return np.zeros(n, np.int64)
+        total = sum(o["weight"] for o in hit)
+        if total <= 0:
+            return np.zeros(n, np.int64)
+        r = np.asarray(pos, np.int64).reshape(-1, 3)
+        with np.errstate(over="ignore"):
+            # Mth.getSeed, then java.util.Random's two `next(32)` of nextLong: its low
+            # 32 bits are the second one's (uint64 arithmetic wraps as Java's long)
+            v = (r[:, 0] * 3129871).astype(np.int32).astype(np.int64) ^ (r[:, 2] * 116129781) \
+                ^ r[:, 1]
+            u = v.astype(np.uint64)
+            u = u * u * np.uint64(42317861) + u * np.uint64(11)
+            seed = (u.view(np.int64) >> 16).view(np.uint64)
+            s = (seed ^ np.uint64(0x5DEECE66D)) & np.uint64(MASK48)
+            for _ in range(2):
+                s = (s * np.uint64(0x5DEECE66D) + np.uint64(0xB)) & np.uint64(MASK48)
+        low = (s >> np.uint64(16)).astype(np.uint32).view(np.int32).astype(np.int64)
+        a = np.abs(low)
+        i = np.where(a >= 1 << 31, -1, a % total)   # |MIN_VALUE| stays negative in Java
+        return np.searchsorted(np.cumsum([o["weight"] for o in hit]), i, side="right")

@@ -1,6 +1,7 @@
 """The batched `mcres.mesh.build` equals the first per-quad one (tests/mcres/mesh_ref)
 quad for quad, in the same order, on random volumes of every state the test pack
-names (variant keys, multipart `when` combinations, weighted stone), unknown blocks,
+names (variant keys, multipart `when` combinations, weighted stone and multipart parts),
+unknown blocks,
 code-drawn chests, the project's opaque voxels, biomes and a box origin."""
 from __future__ import annotations
 
@@ -12,7 +13,8 @@ import pytest
 
 from voxel_addon.mcres import Resources, Stack
 from voxel_addon.mcres.mesh import build
-from voxel_addon.mcres.states import parse_props, state_key
+from voxel_addon.mcres.states import (BlockState, JavaRandom, draws, parse_props, pick,
+                                      state_key)
 
 from . import mesh_ref
 from . import packfiles as pf
@@ -32,7 +34,7 @@ def _when_props(when, out: dict):
 def pack_states() -> list[str]:
     """Every state the test pack's blockstates name."""
     keys = []
-    for path, data in sorted(pf.files().items()):
+    for path, data in sorted(files().items()):
         if "/blockstates/" not in path:
             continue
         name = "minecraft:" + path.rpartition("/")[2][:-5]
@@ -49,9 +51,21 @@ def pack_states() -> list[str]:
     return sorted(set(keys))
 
 
+# weighted parts of a multipart (drawn voxel by voxel) beside the test pack's own
+MOSSY = {"multipart": [
+    {"apply": [{"model": "block/stone", "weight": 2}, {"model": "block/stone_mirrored"}]},
+    {"when": {"lit": "true"}, "apply": [{"model": "block/poppy"},
+                                         {"model": "block/poppy", "y": 90, "weight": 5}]}]}
+
+
+def files() -> dict:
+    return {**pf.files(), pf.MC + "blockstates/mossy.json": json.dumps(MOSSY).encode()}
+
+
 @pytest.fixture(scope="module")
 def res(tmp_path_factory):
-    r = Resources(Stack.open([pf.write(tmp_path_factory.mktemp("p") / "c.jar", jar=True)]))
+    r = Resources(Stack.open([pf.write(tmp_path_factory.mktemp("p") / "c.jar", files(),
+                                       jar=True)]))
     yield r
     r.close()
 
@@ -89,3 +103,32 @@ def test_batched_build_equals_the_per_quad_one(res, seed):
     same(build(res, palette, st, opaque), mesh_ref.build(res, palette, st, opaque))
     z = np.zeros(shape, np.int32)
     same(build(res, palette, z, opaque), mesh_ref.build(res, palette, z, opaque))
+
+
+def test_weighted_variants_drawn_at_once_as_one_by_one():
+    """BlockState.picks (NumPy) draws what `choose` draws, near and far from 0."""
+    bs = BlockState("t", {"variants": {"": [
+        {"model": "a", "weight": 3}, {"model": "b"}, {"model": "c", "y": 90},
+        {"model": "d", "weight": 7}], "a=1": {"model": "x"}}})
+    rng = np.random.default_rng(7)
+    pos = np.concatenate([rng.integers(-30_000_000, 30_000_000, (3000, 3)),
+                          rng.integers(-300, 300, (3000, 3))])
+    got = bs.picks({}, pos)
+    opts = bs.variants[0][1]
+    want = [opts.index(bs.choose({}, tuple(p))[0]) for p in pos.tolist()]
+    assert np.array_equal(got, want) and len(set(want)) == 4
+    assert not bs.picks({"a": 1}, pos).any()      # one option: no draw
+
+
+def test_the_draw_where_java_keeps_abs_negative():
+    """A seed whose nextLong has MIN_VALUE as its low int: |MIN_VALUE| stays negative
+    in Java, so `pick` takes the first option; `draws` must too (and agree elsewhere)."""
+    a, c, m = 0x5DEECE66D, 0xB, (1 << 48) - 1
+    s2 = 0x80000000 << 16                         # the second next(32): MIN_VALUE
+    s0 = (s2 - (a + 1) * c) * pow(a * a, -1, 1 << 48) & m
+    seeds = [s0 ^ 0x5DEECE66D, 12345, -987654321, (1 << 62) + 7]
+    seeds = [x - (1 << 64) if x >= 1 << 63 else x for x in seeds]
+    opts = [{"weight": 2}, {"weight": 1}, {"weight": 4}]   # 2**31 % 7: the second
+    want = [opts.index(pick(opts, JavaRandom(x))) for x in seeds]
+    assert JavaRandom(seeds[0]).next_long() & 0xFFFFFFFF == 0x80000000
+    assert draws(np.array(seeds, np.int64), [2, 1, 4]).tolist() == want

@@ -46,8 +46,9 @@ def pick(options: list, rnd: JavaRandom):
     if len(options) == 1:
         return options[0]
     total = sum(o["weight"] for o in options)
-    i = abs(_s32(rnd.next_long())) % total if total > 0 else 0
-    i = i if i < 1 << 31 else -1        # |MIN_VALUE| stays negative in Java: the first
+    a = abs(_s32(rnd.next_long()))
+    # |MIN_VALUE| stays negative in Java, and so does its remainder: the first option
+    i = (a % total if a < 1 << 31 else -1) if total > 0 else 0
     for o in options:
         i -= o["weight"]
         if i < 0:
@@ -173,22 +174,27 @@ class BlockState:
         hit = self._hit({k: _text(v) for k, v in props.items()})
         if hit is None or len(hit) == 1:
             return np.zeros(n, np.int64)
-        total = sum(o["weight"] for o in hit)
-        if total <= 0:
-            return np.zeros(n, np.int64)
         r = np.asarray(pos, np.int64).reshape(-1, 3)
-        with np.errstate(over="ignore"):
-            # Mth.getSeed, then java.util.Random's two `next(32)` of nextLong: its low
-            # 32 bits are the second one's (uint64 arithmetic wraps as Java's long)
+        with np.errstate(over="ignore"):    # uint64 arithmetic wraps as Java's long
+            # Mth.getSeed
             v = (r[:, 0] * 3129871).astype(np.int32).astype(np.int64) ^ (r[:, 2] * 116129781) \
                 ^ r[:, 1]
             u = v.astype(np.uint64)
             u = u * u * np.uint64(42317861) + u * np.uint64(11)
-            seed = (u.view(np.int64) >> 16).view(np.uint64)
-            s = (seed ^ np.uint64(0x5DEECE66D)) & np.uint64(MASK48)
-            for _ in range(2):
-                s = (s * np.uint64(0x5DEECE66D) + np.uint64(0xB)) & np.uint64(MASK48)
-        low = (s >> np.uint64(16)).astype(np.uint32).view(np.int32).astype(np.int64)
-        a = np.abs(low)
-        i = np.where(a >= 1 << 31, -1, a % total)   # |MIN_VALUE| stays negative in Java
-        return np.searchsorted(np.cumsum([o["weight"] for o in hit]), i, side="right")
+        return draws(u.view(np.int64) >> 16, [o["weight"] for o in hit])
+
+
+def draws(seeds, weights):
+    """`pick` over options of WEIGHTS with `JavaRandom(seed)` for each of SEEDS (int64):
+    the indices drawn. nextLong's low 32 bits are its second `next(32)`."""
+    import numpy as np
+    total = sum(weights)
+    with np.errstate(over="ignore"):
+        s = (np.asarray(seeds, np.int64).view(np.uint64) ^ np.uint64(0x5DEECE66D)) \
+            & np.uint64(MASK48)
+        for _ in range(2):
+            s = (s * np.uint64(0x5DEECE66D) + np.uint64(0xB)) & np.uint64(MASK48)
+    low = (s >> np.uint64(16)).astype(np.uint32).view(np.int32).astype(np.int64)
+    a = np.abs(low)
+    i = np.where(a >= 1 << 31, -1, a % total)   # |MIN_VALUE| stays negative in Java
+    return np.searchsorted(np.cumsum(weights), i, side="right")

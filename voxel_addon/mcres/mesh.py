@@ -81,11 +81,14 @@ def to_minecraft(vx, vy, vz, y_min: int) -> tuple[int, int, int]:
 
 
 def build(res, palette: list, state: np.ndarray, opaque: np.ndarray, *, origin=(0, 0, 0),
-          y_min: int = -64, biomes=None, biome_names=("minecraft:plains",)) -> Mesh:
+          y_min: int = -64, biomes=None, biome_names=("minecraft:plains",),
+          cols=None) -> Mesh:
     """STATE (W, H, D) indices into PALETTE (`minecraft:name[k=v,…]`, entry 0 unused);
     OPAQUE (W, H, D) bool: voxels of the project's own that hide a face; voxels
     outside the box hide nothing. ORIGIN: the box's [0, 0, 0] in world voxels (for
-    positions and the variants' random). BIOMES (W, H) indices into BIOME_NAMES."""
+    positions and the variants' random). BIOMES (W, H) indices into BIOME_NAMES.
+    COLS (x0, y0, x1, y1): only voxels in those columns get quads (the others only
+    hide faces: a chunk's ring), the quads all-columns would give there, in order."""
     from .states import parse_key
     W, H, D = state.shape
     full_of = np.zeros(len(palette), bool)        # per state: a whole opaque cube
@@ -119,7 +122,12 @@ def build(res, palette: list, state: np.ndarray, opaque: np.ndarray, *, origin=(
     inner = np.ones_like(drawn)
     for dx, dy, dz in OFFSETS:
         inner &= pad[1 + dx:1 + dx + W, 1 + dy:1 + dy + H, 1 + dz:1 + dz + D]
-    todo = np.argwhere(drawn & ~(inner & hides))
+    shown = drawn & ~(inner & hides)
+    if cols is None:
+        todo = np.argwhere(shown)
+    else:
+        x0, y0, x1, y1 = cols
+        todo = np.argwhere(shown[x0:x1, y0:y1]) + np.array([x0, y0, 0])
     padstate = np.pad(state, 1)
     padrawn = np.pad(drawn, 1)
     st = state[tuple(todo.T)]

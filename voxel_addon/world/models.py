@@ -69,7 +69,7 @@ def build(world, blocks: np.ndarray, data, cx0: int, cy0: int) -> dict:
     biomes = mcfile.region(world.file, x0, y0, x0 + W, y0 + H, len(names))
     opaque = (REGISTRY.shape[blocks] == 1) & (REGISTRY.render[blocks] == 1)
     m = M.build(res, palette, state, opaque, origin=(x0, y0, 0), y_min=y_min,
-                biomes=biomes, biome_names=names)
+                biomes=biomes, biome_names=names, cols=(1, 1, W - 1, H - 1))
     blocks[m.drawn] = 0
     out = {}
     if not m.quads:

@@ -50,6 +50,18 @@ def test_payloads_carry_model_quads(worlds):
     assert set(m.images) == set(m.mesh.sprites)
 
 
+def test_a_chunk_meshes_all_its_columns(worlds):
+    """The build's stone floor spans its chunk: each of the chunk's 16×16 columns has
+    model quads, in a batch around it and in a batch of it alone (where its edge
+    columns are the batch's; the ring around a batch only hides faces)."""
+    from voxel_addon.world import World, build
+    with World.open(worlds["with"], readonly=True, loader=False) as w:
+        for batch in ((-1, -2, 2, 1), (0, -1, 1, 0)):
+            p = {p.key: p for p in build.light_and_mesh(w, *batch)}[KEY]
+            v = (p.mesh.models.mesh.voxel[:, :2] - 1) % 16
+            assert len({(int(a), int(b)) for a, b in v}) == 256
+
+
 def test_an_edit_meshes_the_models_again(worlds, tmp_path):
     from voxel_addon.world import World, build
     from voxel_addon.world.edit import edit

@@ -49,17 +49,28 @@ class TooMany(Hostile):
 
 
 _KEEPS: dict = {}   # id(keep) -> (keep, its bytes-keyed copy); holding keep pins the id
+_TEXT: dict = {}    # raw -> str of short names and strings met before (block names repeat)
+_TEXT_MAX = 1 << 14
+
+
+def _text(raw: bytes) -> str:
+    s = raw.decode("utf-8", "replace")
+    if len(raw) <= 64:   # names and block states, not arbitrary text
+        if len(_TEXT) >= _TEXT_MAX:
+            _TEXT.clear()
+        _TEXT[raw] = s
+    return s
 
 
 def _bytes_keys(keep):
-    """`keep` with names as bytes (compared before decoding), sub-keeps likewise."""
+    """`keep` with names as bytes (compared before decoding) -> (sub-keep likewise, name)."""
     if keep is None:
         return None
     got = _KEEPS.get(id(keep))
     if got is None:
         if len(_KEEPS) > 256:
             _KEEPS.clear()
-        got = _KEEPS[id(keep)] = (keep, {k.encode(): _bytes_keys(v) for k, v in keep.items()})
+        got = _KEEPS[id(keep)] = (keep, {k.encode(): (_bytes_keys(v), k) for k, v in keep.items()})
     return got[1]
 
 
@@ -85,6 +96,7 @@ def read(buf, keep=None, limit: int = MAX_TAGS):
         raise NbtError("a string runs past the NBT at byte 1")
     kb = _bytes_keys(keep)
     SIZE, ASIZE, UNPACK, DT, frombuffer = _SIZE, _ASIZE, _UNPACK, _DT, np.frombuffer
+    text, known = _text, _TEXT.get
     root = {}
     left = limit
     # the open container: out (dict, list, or None while skipping), its keep, its list
@@ -110,13 +122,13 @@ def read(buf, keep=None, limit: int = MAX_TAGS):
                 raise NbtError(f"a string runs past the NBT at byte {s - 2}")
             name = sub = None
             if out is not None:
+                key = b[s:pos]
                 if k is None:
-                    name = b[s:pos].decode("utf-8", "replace")
+                    name = known(key) or text(key)
                 else:
-                    key = b[s:pos]
-                    if key in k:
-                        sub = k[key]
-                        name = key.decode("utf-8", "replace")
+                    got = k.get(key)
+                    if got is not None:
+                        sub, name = got
                     # else: skipped, name stays None
         else:                          # a list: its next item
             if cnt == 0:
@@ -129,19 +141,23 @@ def read(buf, keep=None, limit: int = MAX_TAGS):
             raise TooMany(f"more than {limit:,} NBT tags")
         build = name is not None
         # the value of tag t at pos
-        if t in SIZE:
-            e = pos + SIZE[t]
-            if e > n:
-                raise NbtError(f"NBT ends early at byte {pos} (wants {SIZE[t]} more)")
-            v = UNPACK[t](b, pos)[0] if build else None
-            pos = e
-        elif t == STRING:
+        if t == STRING:
             if pos + 2 > n:
                 raise NbtError(f"NBT ends early at byte {pos}")
             e = pos + 2 + (b[pos] << 8 | b[pos + 1])
             if e > n:
                 raise NbtError(f"a string runs past the NBT at byte {pos}")
-            v = b[pos + 2:e].decode("utf-8", "replace") if build else None
+            if build:
+                r = b[pos + 2:e]
+                v = known(r) or text(r)
+            else:
+                v = None
+            pos = e
+        elif t in SIZE:
+            e = pos + SIZE[t]
+            if e > n:
+                raise NbtError(f"NBT ends early at byte {pos} (wants {SIZE[t]} more)")
+            v = UNPACK[t](b, pos)[0] if build else None
             pos = e
         elif t in ASIZE:
             c = _length(b, pos, n, ASIZE[t])

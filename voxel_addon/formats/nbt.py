@@ -70,8 +70,32 @@ def _bytes_keys(keep):
     if got is None:
         if len(_KEEPS) > 256:
             _KEEPS.clear()
+            _LISTS.clear()   # its keys hold ids of the keeps
         got = _KEEPS[id(keep)] = (keep, {k.encode(): (_bytes_keys(v), k) for k, v in keep.items()})
     return got[1]
+
+
+# Lists met before (a chunk's block and biome palettes repeat across sections and
+# chunks): (their first bytes, items, item tag, id of their keep) -> [(their bytes,
+# value, tags)]. A list whose bytes match one of these is not parsed again: its tags
+# are charged all the same, and only lists of strings or of compounds of strings (and
+# compounds of strings: block properties) are kept, two levels deep, so the nesting
+# limit cannot be passed on a replay (used only below depth _SHALLOW).
+_LISTS: dict = {}
+_LISTS_MAX, _PER_KEY, _PREFIX, _SHALLOW = 1024, 16, 24, 64
+_RAW_MAX = 2048   # bytes of one remembered list: at most ~32 MiB (and its values) in all
+
+
+def _plain(v) -> bool:
+    return all(type(x) is str or (type(x) is dict and all(
+        type(y) is str or (type(y) is dict and all(type(z) is str for z in y.values()))
+        for y in x.values())) for x in v)
+
+
+def _copy(v) -> list:
+    """A list of _plain values, fresh down to its dicts (callers may change them)."""
+    return [x if type(x) is str else
+            {a: (dict(y) if type(y) is dict else y) for a, y in x.items()} for x in v]
 
 
 def _length(b, pos, n, size):
@@ -83,6 +107,17 @@ def _length(b, pos, n, size):
     if pos + 4 + k * size > n:   # before anything is allocated
         raise NbtError(f"NBT ends early at byte {pos + 4} (wants {k * size} more)")
     return k
+
+
+def _remember(rec, raw: bytes, tags: int) -> None:
+    _, _, _, mk, v = rec
+    if len(raw) > _RAW_MAX or not _plain(v):   # palettes are small; memory stays bounded
+        return
+    if len(_LISTS) >= _LISTS_MAX:
+        _LISTS.clear()
+    got = _LISTS.setdefault(mk, [])
+    if len(got) < _PER_KEY:
+        got.append((raw, _copy(v), tags))
 
 
 def read(buf, keep=None, limit: int = MAX_TAGS):
@@ -97,6 +132,7 @@ def read(buf, keep=None, limit: int = MAX_TAGS):
     kb = _bytes_keys(keep)
     SIZE, ASIZE, UNPACK, DT, frombuffer = _SIZE, _ASIZE, _UNPACK, _DT, np.frombuffer
     text, known = _text, _TEXT.get
+    lists, rec = _LISTS.get, None   # rec: the list being remembered (_remember)
     root = {}
     left = limit
     # the open container: out (dict, list, or None while skipping), its keep, its list
@@ -132,6 +168,9 @@ def read(buf, keep=None, limit: int = MAX_TAGS):
                     # else: skipped, name stays None
         else:                          # a list: its next item
             if cnt == 0:
+                if rec is not None and len(stack) == rec[0]:   # the list to remember
+                    _remember(rec, b[rec[1]:pos], rec[2] - left)
+                    rec = None
                 out, k, item, cnt = stack.pop()   # a list is never the root
                 continue
             cnt -= 1
@@ -181,6 +220,17 @@ def read(buf, keep=None, limit: int = MAX_TAGS):
                 c = _length(b, pos + 1, n, 1)
                 pos += 5
                 v = [] if build else None
+                if c and build and len(stack) < _SHALLOW:
+                    mk = (b[pos:pos + _PREFIX], c, it, id(sub))
+                    for raw, val, tags in lists(mk, ()):
+                        if tags <= left and b.startswith(raw, pos):
+                            v = _copy(val)
+                            pos += len(raw)
+                            left -= tags
+                            c = 0   # read: assigned below as an empty list would be
+                            break
+                    else:   # the innermost list open is the one remembered
+                        rec = (len(stack) + 1, pos, left, mk, v)
                 if c:
                     if build:
                         if name is True:
@@ -192,6 +242,7 @@ def read(buf, keep=None, limit: int = MAX_TAGS):
                     stack.append((out, k, item, cnt))
                     out, k, item, cnt = v, sub, it, c
                     continue
+                # else: v is [] or a remembered list, assigned below
         elif t == COMPOUND:
             if len(stack) >= MAX_DEPTH - 1:
                 raise Hostile("NBT nested deeper than 512 levels")

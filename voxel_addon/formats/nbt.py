@@ -12,7 +12,8 @@ entries and skips the rest without building them (a chunk's entities, heightmaps
 light and block properties cost most of a full parse). Lists of
 numbers and the array tags come back as NumPy arrays (big-endian dtypes), other
 lists as Python lists, strings as str (modified UTF-8 read as UTF-8, errors
-replaced).
+replaced). Chunk palettes repeat across sections and chunks: a short list met before
+with the same bytes is replayed (a fresh copy, the same tags charged: _LISTS).
 """
 from __future__ import annotations
 

@@ -76,3 +76,16 @@ def test_budget_same_on_replay():
     with pytest.raises(nbt.TooMany):
         nbt.read(DOCS[0], anvil.KEEP, tags - 1)
     assert nbt.read(DOCS[0], anvil.KEEP, tags)[1] == tags
+
+
+def test_memory_stays_bounded():
+    """A flood of distinct lists (a hostile file) keeps at most _HELD_MAX bytes."""
+    nbt._LISTS.clear()
+    nbt._HELD[0] = 0
+    for i in range(600):   # 600 lists of ~2,000 bytes: past the bound
+        items = [f"{i:06d}-{j:011d}" for j in range(100)]
+        doc = b"\x0a" + _s("") + b"\x09" + _s("l") + b"\x08" + struct.pack(">i", len(items)) \
+            + b"".join(_s(x) for x in items) + b"\x00"
+        assert nbt.parse(doc)["l"] == items
+    held = sum(len(raw) for got in nbt._LISTS.values() for raw, _, _ in got)
+    assert 0 < held <= nbt._HELD_MAX

@@ -72,6 +72,7 @@ def _bytes_keys(keep):
         if len(_KEEPS) > 256:
             _KEEPS.clear()
             _LISTS.clear()   # its keys hold ids of the keeps
+            _HELD[0] = 0
         got = _KEEPS[id(keep)] = (keep, {k.encode(): (_bytes_keys(v), k) for k, v in keep.items()})
     return got[1]
 
@@ -84,7 +85,9 @@ def _bytes_keys(keep):
 # limit cannot be passed on a replay (used only below depth _SHALLOW).
 _LISTS: dict = {}
 _LISTS_MAX, _PER_KEY, _PREFIX, _SHALLOW = 1024, 16, 24, 64
-_RAW_MAX = 2048   # bytes of one remembered list: at most ~32 MiB (and its values) in all
+_RAW_MAX = 2048   # bytes of one remembered list (a real palette: tens to hundreds)
+# bytes remembered in all: the values of a hostile list may take ~30x its bytes
+_HELD, _HELD_MAX = [0], 1 << 20
 
 
 def _plain(v) -> bool:
@@ -114,11 +117,13 @@ def _remember(rec, raw: bytes, tags: int) -> None:
     _, _, _, mk, v = rec
     if len(raw) > _RAW_MAX or not _plain(v):   # palettes are small; memory stays bounded
         return
-    if len(_LISTS) >= _LISTS_MAX:
+    if len(_LISTS) >= _LISTS_MAX or _HELD[0] + len(raw) > _HELD_MAX:
         _LISTS.clear()
+        _HELD[0] = 0
     got = _LISTS.setdefault(mk, [])
     if len(got) < _PER_KEY:
         got.append((raw, _copy(v), tags))
+        _HELD[0] += len(raw)
 
 
 def read(buf, keep=None, limit: int = MAX_TAGS):

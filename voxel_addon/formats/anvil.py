@@ -77,48 +77,96 @@ def read(payload: bytes, budget=None) -> Chunk:
     raw = level.get("sections" if version >= V_NO_LEVEL else "Sections", [])
     if not isinstance(raw, list):
         raise ChunkError("sections is not a list")
+    # checked in order; the packed indices of 1.16+ sections are unpacked together
+    # afterwards (one NumPy pass per bit width), so the first fault stays the one reported
+    found, fault = [], None
+    try:
+        for s in raw:
+            got = _section(s, version)
+            if got is not None:
+                found.append(got)
+    except ChunkError as e:
+        fault = e
+    _unpack_all(found)
     sections = []
-    for s in raw:
-        if not isinstance(s, dict) or not isinstance(s.get("Y"), int):
-            raise ChunkError("a section without Y")
-        if version >= V_NO_LEVEL:
-            states = s.get("block_states")
-            if states is None:
-                continue
-            if not isinstance(states, dict):
-                raise ChunkError("block_states is not a compound")
-            palette, data = states.get("palette"), states.get("data")
-        else:
-            palette, data = s.get("Palette"), s.get("BlockStates")
-            if palette is None:
-                continue
-        if not isinstance(palette, list) or not palette:
-            raise ChunkError(f"section {s['Y']}: empty or damaged palette")
-        names, props = [], []
-        for p in palette:
-            name = p.get("Name") if isinstance(p, dict) else None
-            if not isinstance(name, str):
-                raise ChunkError(f"section {s['Y']}: a palette entry without Name")
-            names.append(name)
-            pr = p.get("Properties")
-            props.append({k: v for k, v in pr.items() if isinstance(v, str)}
-                         if isinstance(pr, dict) else None)
-        idx = None
-        if data is not None:
-            if not isinstance(data, np.ndarray) or data.dtype != np.dtype(">i8"):
-                raise ChunkError(f"section {s['Y']}: block data is not a long array")
-            idx = unpack(data, len(names), spanning=version < V_PACKED)
-            if int(idx.max()) >= len(names):
-                raise ChunkError(f"section {s['Y']}: index {int(idx.max())} outside its "
-                                 f"palette of {len(names)}")
-        elif len(names) > 1:
-            raise ChunkError(f"section {s['Y']}: {len(names)} palette entries and no data")
-        sections.append(Section(int(s["Y"]), names, idx,
-                                props if any(props) else None, _biomes(s.get("biomes"))))
+    for y, names, idx, props, bio in found:
+        if idx is not None and int(idx.max()) >= len(names):
+            raise ChunkError(f"section {y}: index {int(idx.max())} outside its "
+                             f"palette of {len(names)}")
+        sections.append(Section(y, names, idx, props, bio))
+    if fault is not None:
+        raise fault
     old = level.get("Biomes") if version < V_NO_LEVEL else None
     if old is not None and not (isinstance(old, np.ndarray) and old.size in (256, 1024)):
         old = None        # damaged biomes only lose their tints
     return Chunk(version, status, sections, None if old is None else old.astype(np.int32))
+
+
+def _section(s, version):
+    """[y, names, indices (or the packed longs, for _unpack_all), props, biomes] of one
+    raw section, None when it holds no blocks; ChunkError when damaged."""
+    if not isinstance(s, dict) or not isinstance(s.get("Y"), int):
+        raise ChunkError("a section without Y")
+    if version >= V_NO_LEVEL:
+        states = s.get("block_states")
+        if states is None:
+            return None
+        if not isinstance(states, dict):
+            raise ChunkError("block_states is not a compound")
+        palette, data = states.get("palette"), states.get("data")
+    else:
+        palette, data = s.get("Palette"), s.get("BlockStates")
+        if palette is None:
+            return None
+    if not isinstance(palette, list) or not palette:
+        raise ChunkError(f"section {s['Y']}: empty or damaged palette")
+    names, props = [], []
+    for p in palette:
+        name = p.get("Name") if isinstance(p, dict) else None
+        if not isinstance(name, str):
+            raise ChunkError(f"section {s['Y']}: a palette entry without Name")
+        names.append(name)
+        pr = p.get("Properties")
+        props.append({k: v for k, v in pr.items() if isinstance(v, str)}
+                     if isinstance(pr, dict) else None)
+    idx = None
+    if data is not None:
+        if not isinstance(data, np.ndarray) or data.dtype != np.dtype(">i8"):
+            raise ChunkError(f"section {s['Y']}: block data is not a long array")
+        if version < V_PACKED:
+            idx = unpack(data, len(names), spanning=True)
+        else:
+            bits = bits_for(len(names))
+            _need(len(data), bits)
+            idx = data            # unpacked by _unpack_all
+    elif len(names) > 1:
+        raise ChunkError(f"section {s['Y']}: {len(names)} palette entries and no data")
+    return [int(s["Y"]), names, idx, props if any(props) else None, _biomes(s.get("biomes"))]
+
+
+def _need(n: int, bits: int) -> None:
+    per = 64 // bits
+    need = -(-4096 // per)
+    if n != need:
+        raise ChunkError(f"{n} longs of block data, expected {need} "
+                         f"({bits} bits per block)")
+
+
+def _unpack_all(found) -> None:
+    """Replace the packed longs of `found` sections by their 4096 indices, the
+    sections of one bit width in one pass."""
+    groups: dict = {}
+    for f in found:
+        if f[2] is not None and f[2].dtype != np.uint16:
+            groups.setdefault(bits_for(len(f[1])), []).append(f)
+    for bits, fs in groups.items():
+        per = 64 // bits
+        words = np.concatenate([f[2] for f in fs], dtype=np.int64).view(np.uint64)
+        shifts = np.arange(per, dtype=np.uint64) * np.uint64(bits)
+        out = (words[:, None] >> shifts[None, :]) & np.uint64((1 << bits) - 1)
+        out = out.reshape(len(fs), -1)[:, :4096].astype(np.uint16)
+        for f, row in zip(fs, out):
+            f[2] = row
 
 
 def _biomes(b):
@@ -166,11 +214,8 @@ def unpack(longs: np.ndarray, palette_size: int, spanning: bool = False) -> np.n
         b = np.unpackbits(words.view(np.uint8), bitorder="little")  # native little-endian
         w = b[:4096 * bits].reshape(4096, bits).astype(np.uint16)
         return (w << np.arange(bits, dtype=np.uint16)).sum(1, dtype=np.uint16)
+    _need(len(words), bits)
     per = 64 // bits
-    need = -(-4096 // per)
-    if len(words) != need:
-        raise ChunkError(f"{len(words)} longs of block data, expected {need} "
-                         f"({bits} bits per block)")
     shifts = (np.arange(per, dtype=np.uint64) * np.uint64(bits))
     out = (words[:, None] >> shifts[None, :]) & np.uint64((1 << bits) - 1)
     return out.reshape(-1)[:4096].astype(np.uint16)

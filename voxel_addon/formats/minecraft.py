@@ -232,13 +232,14 @@ def convert(ch: anvil.Chunk, y_min: int, pal: _Palettes):
                     data = C.empty()
                 data[:, :, lo:hi] = vals[0]
             continue
-        # [y][z][x] -> [x][15 - z][y]
-        sec = s.indices.reshape(16, 16, 16).transpose(2, 1, 0)[:, ::-1, lo - z0:hi - z0]
-        blocks[:, :, lo:hi] = ids[sec]
+        # [y][z][x] -> [x][15 - z][y]: blocks is x-fastest, so its .T is [y][15 - z][x]
+        # in C order and take writes it in place (no strided gather, no temporary)
+        sec = s.indices.reshape(16, 16, 16)[lo - z0:hi - z0, ::-1, :]
+        ids.take(sec, out=blocks.T[lo:hi], mode="clip")   # indices checked by anvil
         if vals.any():
             if data is None:
                 data = C.empty()
-            data[:, :, lo:hi] = vals[sec]
+            vals.take(sec, out=data.T[lo:hi], mode="clip")
         if hi - lo < 16:
             outside = np.ones(16, bool)
             outside[lo - z0:hi - z0] = False

@@ -12,7 +12,8 @@ entries and skips the rest without building them (a chunk's entities, heightmaps
 light and block properties cost most of a full parse). Lists of
 numbers and the array tags come back as NumPy arrays (big-endian dtypes), other
 lists as Python lists, strings as str (modified UTF-8 read as UTF-8, errors
-replaced).
+replaced). Chunk palettes repeat across sections and chunks: a short list met before
+with the same bytes is replayed (a fresh copy, the same tags charged: _LISTS).
 """
 from __future__ import annotations
 
@@ -49,18 +50,56 @@ class TooMany(Hostile):
 
 
 _KEEPS: dict = {}   # id(keep) -> (keep, its bytes-keyed copy); holding keep pins the id
+_TEXT: dict = {}    # raw -> str of short names and strings met before (block names repeat)
+_TEXT_MAX = 1 << 14
+
+
+def _text(raw: bytes) -> str:
+    s = raw.decode("utf-8", "replace")
+    if len(raw) <= 64:   # names and block states, not arbitrary text
+        if len(_TEXT) >= _TEXT_MAX:
+            _TEXT.clear()
+        _TEXT[raw] = s
+    return s
 
 
 def _bytes_keys(keep):
-    """`keep` with names as bytes (compared before decoding), sub-keeps likewise."""
+    """`keep` with names as bytes (compared before decoding) -> (sub-keep likewise, name)."""
     if keep is None:
         return None
     got = _KEEPS.get(id(keep))
     if got is None:
         if len(_KEEPS) > 256:
             _KEEPS.clear()
-        got = _KEEPS[id(keep)] = (keep, {k.encode(): _bytes_keys(v) for k, v in keep.items()})
+            _LISTS.clear()   # its keys hold ids of the keeps
+            _HELD[0] = 0
+        got = _KEEPS[id(keep)] = (keep, {k.encode(): (_bytes_keys(v), k) for k, v in keep.items()})
     return got[1]
+
+
+# Lists met before (a chunk's block and biome palettes repeat across sections and
+# chunks): (their first bytes, items, item tag, id of their keep) -> [(their bytes,
+# value, tags)]. A list whose bytes match one of these is not parsed again: its tags
+# are charged all the same, and only lists of strings or of compounds of strings (and
+# compounds of strings: block properties) are kept, two levels deep, so the nesting
+# limit cannot be passed on a replay (used only below depth _SHALLOW).
+_LISTS: dict = {}
+_LISTS_MAX, _PER_KEY, _PREFIX, _SHALLOW = 1024, 16, 24, 64
+_RAW_MAX = 2048   # bytes of one remembered list (a real palette: tens to hundreds)
+# bytes remembered in all: the values of a hostile list may take ~30x its bytes
+_HELD, _HELD_MAX = [0], 1 << 20
+
+
+def _plain(v) -> bool:
+    return all(type(x) is str or (type(x) is dict and all(
+        type(y) is str or (type(y) is dict and all(type(z) is str for z in y.values()))
+        for y in x.values())) for x in v)
+
+
+def _copy(v) -> list:
+    """A list of _plain values, fresh down to its dicts (callers may change them)."""
+    return [x if type(x) is str else
+            {a: (dict(y) if type(y) is dict else y) for a, y in x.items()} for x in v]
 
 
 def _length(b, pos, n, size):
@@ -74,6 +113,19 @@ def _length(b, pos, n, size):
     return k
 
 
+def _remember(rec, raw: bytes, tags: int) -> None:
+    _, _, _, mk, v = rec
+    if len(raw) > _RAW_MAX or not _plain(v):   # palettes are small; memory stays bounded
+        return
+    if len(_LISTS) >= _LISTS_MAX or _HELD[0] + len(raw) > _HELD_MAX:
+        _LISTS.clear()
+        _HELD[0] = 0
+    got = _LISTS.setdefault(mk, [])
+    if len(got) < _PER_KEY:
+        got.append((raw, _copy(v), tags))
+        _HELD[0] += len(raw)
+
+
 def read(buf, keep=None, limit: int = MAX_TAGS):
     """(root compound, tags read) of an NBT document; see the module docstring."""
     b = buf if isinstance(buf, bytes) else bytes(buf)
@@ -85,6 +137,8 @@ def read(buf, keep=None, limit: int = MAX_TAGS):
         raise NbtError("a string runs past the NBT at byte 1")
     kb = _bytes_keys(keep)
     SIZE, ASIZE, UNPACK, DT, frombuffer = _SIZE, _ASIZE, _UNPACK, _DT, np.frombuffer
+    text, known = _text, _TEXT.get
+    lists, rec = _LISTS.get, None   # rec: the list being remembered (_remember)
     root = {}
     left = limit
     # the open container: out (dict, list, or None while skipping), its keep, its list
@@ -110,16 +164,19 @@ def read(buf, keep=None, limit: int = MAX_TAGS):
                 raise NbtError(f"a string runs past the NBT at byte {s - 2}")
             name = sub = None
             if out is not None:
+                key = b[s:pos]
                 if k is None:
-                    name = b[s:pos].decode("utf-8", "replace")
+                    name = known(key) or text(key)
                 else:
-                    key = b[s:pos]
-                    if key in k:
-                        sub = k[key]
-                        name = key.decode("utf-8", "replace")
+                    got = k.get(key)
+                    if got is not None:
+                        sub, name = got
                     # else: skipped, name stays None
         else:                          # a list: its next item
             if cnt == 0:
+                if rec is not None and len(stack) == rec[0]:   # the list to remember
+                    _remember(rec, b[rec[1]:pos], rec[2] - left)
+                    rec = None
                 out, k, item, cnt = stack.pop()   # a list is never the root
                 continue
             cnt -= 1
@@ -129,19 +186,23 @@ def read(buf, keep=None, limit: int = MAX_TAGS):
             raise TooMany(f"more than {limit:,} NBT tags")
         build = name is not None
         # the value of tag t at pos
-        if t in SIZE:
-            e = pos + SIZE[t]
-            if e > n:
-                raise NbtError(f"NBT ends early at byte {pos} (wants {SIZE[t]} more)")
-            v = UNPACK[t](b, pos)[0] if build else None
-            pos = e
-        elif t == STRING:
+        if t == STRING:
             if pos + 2 > n:
                 raise NbtError(f"NBT ends early at byte {pos}")
             e = pos + 2 + (b[pos] << 8 | b[pos + 1])
             if e > n:
                 raise NbtError(f"a string runs past the NBT at byte {pos}")
-            v = b[pos + 2:e].decode("utf-8", "replace") if build else None
+            if build:
+                r = b[pos + 2:e]
+                v = known(r) or text(r)
+            else:
+                v = None
+            pos = e
+        elif t in SIZE:
+            e = pos + SIZE[t]
+            if e > n:
+                raise NbtError(f"NBT ends early at byte {pos} (wants {SIZE[t]} more)")
+            v = UNPACK[t](b, pos)[0] if build else None
             pos = e
         elif t in ASIZE:
             c = _length(b, pos, n, ASIZE[t])
@@ -165,6 +226,17 @@ def read(buf, keep=None, limit: int = MAX_TAGS):
                 c = _length(b, pos + 1, n, 1)
                 pos += 5
                 v = [] if build else None
+                if c and build and len(stack) < _SHALLOW:
+                    mk = (b[pos:pos + _PREFIX], c, it, id(sub))
+                    for raw, val, tags in lists(mk, ()):
+                        if tags <= left and b.startswith(raw, pos):
+                            v = _copy(val)
+                            pos += len(raw)
+                            left -= tags
+                            c = 0   # read: assigned below as an empty list would be
+                            break
+                    else:   # the innermost list open is the one remembered
+                        rec = (len(stack) + 1, pos, left, mk, v)
                 if c:
                     if build:
                         if name is True:
@@ -176,6 +248,7 @@ def read(buf, keep=None, limit: int = MAX_TAGS):
                     stack.append((out, k, item, cnt))
                     out, k, item, cnt = v, sub, it, c
                     continue
+                # else: v is [] or a remembered list, assigned below
         elif t == COMPOUND:
             if len(stack) >= MAX_DEPTH - 1:
                 raise Hostile("NBT nested deeper than 512 levels")

@@ -255,13 +255,13 @@ def task_bench(args) -> int:
 # Wheels bundled into the extension (Blender ships numpy; Debian's Blenders do not ship
 # zstandard, so it comes along): pyopencl (on Linux with its pocl CPU device; Windows
 # and macOS have no pocl wheel: there pyopencl's loader finds the vendor's driver, else
-# the NumPy path runs), moderngl and zstandard, with their dependencies. Per Blender
+# the NumPy path runs), moderngl, zstandard and lz4 (Minecraft's LZ4 chunks), with their dependencies. Per Blender
 # platform, for the Pythons of the Blenders that run there: 3.11 (official 4.3-5.0),
 # 3.13 (official 5.1+, Debian trixie's 4.3), 3.14 on Linux (Debian sid's 5.2) and
 # whatever Python an installed real Blender has. No macos-x64: Intel Macs run Blender
 # up to 4.5 LTS, but moderngl 5.13 has no x86_64 macOS wheel.
 WHEELS = ["pyopencl==2026.1.4", "pytools", "platformdirs", "typing_extensions", "siphash24",
-          "moderngl==5.13.0", "glcontext==3.1.0", "zstandard==0.25.0"]
+          "moderngl==5.13.0", "glcontext==3.1.0", "zstandard==0.25.0", "lz4==4.4.5"]
 MAC_ARM = [f"macosx_{v}_0_arm64" for v in range(11, 16)] + \
     [f"macosx_10_{v}_universal2" for v in range(9, 16)] + [f"macosx_{v}_0_universal2" for v in range(11, 16)]
 WHEEL_PLATFORMS = {  # Blender platform -> (pip platform tags, Pythons, its own extra wheels)

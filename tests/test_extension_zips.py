@@ -18,7 +18,7 @@ import build
 from tools import blender_app
 
 ROOT = Path(__file__).resolve().parent.parent
-WANT = ["pyopencl", "moderngl", "zstandard"]  # what the add-on imports
+WANT = ["pyopencl", "moderngl", "zstandard", "lz4"]  # what the add-on imports
 EXTRA = {"linux-x64": ["pocl-binary-distribution"]}  # the CPU OpenCL device, Linux only
 
 

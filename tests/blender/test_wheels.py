@@ -21,14 +21,15 @@ CHECK = """
 import json, os, sys
 site = sys.argv[1]
 sys.path.insert(0, site)
-import numpy, pyopencl, moderngl, zstandard
+import numpy, pyopencl, moderngl, zstandard, lz4.block
 from voxel_addon import opencl
 ctx = moderngl.create_standalone_context(backend="egl")
 data = zstandard.ZstdCompressor().compress(b"voxel" * 100)
 print(json.dumps({"files": [os.path.realpath(m.__file__) for m in (pyopencl, moderngl, zstandard)],
                   "numpy": numpy.__version__, "gl": ctx.version_code,
                   "cl": opencl.describe() if opencl.available() else opencl.why_not(),
-                  "zstd": zstandard.ZstdDecompressor().decompress(data) == b"voxel" * 100}))
+                  "zstd": zstandard.ZstdDecompressor().decompress(data) == b"voxel" * 100,
+                  "lz4": lz4.block.decompress(lz4.block.compress(b"voxel" * 100)) == b"voxel" * 100}))
 """
 
 
@@ -69,7 +70,7 @@ def test_wheels_of_this_python_install_and_work_with_its_numpy(bpy, zip_path):
         assert got["numpy"] == numpy.__version__, got
         from voxel_addon import opencl  # pocl from the wheel, or the switch says why not
         want = "switched off" if opencl.switched_off() else "Portable Computing Language"
-        assert want in got["cl"] and got["gl"] >= 410 and got["zstd"], got
+        assert want in got["cl"] and got["gl"] >= 410 and got["zstd"] and got["lz4"], got
     finally:
         addon_utils.disable(MOD)
         bpy.ops.extensions.package_uninstall(repo_index=repos.index("user_default"),

@@ -329,3 +329,20 @@ def test_region_files_are_read_a_chunk_at_a_time(tmp_path):
         assert reg.stored == 2 * 4096
         assert [len(anvil.read(reg.payload(cx, cz)).sections) for cx, cz in reg.chunks()] == [1, 1]
     assert peak_of(go) < 8 * MIB
+
+
+def test_the_pure_python_lz4_decoder_equals_the_package():
+    """Without the `lz4` package (a Blender without the wheel) the pure-Python block
+    decoder runs: the package is its oracle, on blocks of runs, noise and text."""
+    from lz4 import block
+    rng = np.random.default_rng(4)
+    for n in (0, 1, 15, 16, 300, 70_000):
+        for raw in (bytes(n), rng.integers(0, 256, n, np.uint8).tobytes(),
+                    (b"minecraft:stone " * (n // 16 + 1))[:n],
+                    rng.integers(0, 3, n, np.uint8).tobytes()):
+            src = block.compress(raw, store_size=False)
+            assert lz4._decode(src, len(raw)) == raw
+            assert lz4.decode_block(src, len(raw)) == raw
+            if raw:
+                with pytest.raises(ValueError):
+                    lz4._decode(src, len(raw) - 1)

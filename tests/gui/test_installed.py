@@ -11,7 +11,7 @@ from pathlib import Path
 def test_zip_carries_wheels_for_python_311_313_and_314(ext_zip_wheels):
     names = [Path(n).name for n in zipfile.ZipFile(ext_zip_wheels).namelist()
              if n.endswith(".whl")]
-    for mod in ("pyopencl", "moderngl", "glcontext", "zstandard", "siphash24"):
+    for mod in ("pyopencl", "moderngl", "glcontext", "zstandard", "lz4", "siphash24"):
         for tag in ("cp311", "cp313", "cp314"):
             assert any(n.startswith(mod + "-") and f"-{tag}-" in n for n in names), (mod, tag)
     assert any(n.startswith("pocl_binary_distribution-") for n in names)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import hashlib
 import sys
+import uuid
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -253,6 +254,10 @@ class Pool:
         window = window or 4 * self.size
         todo = iter(enumerate(items))
         of = {}  # future -> item
+        # keys unique across processes: id() repeats from one run of a command to the
+        # next, and a scheduler that still knows a key cancels or answers the new task
+        # as the old one ("already forgotten", or another command's result)
+        tag = uuid.uuid4().hex
         ac = as_completed(loop=c.loop)
         done = 0
 
@@ -263,7 +268,7 @@ class Pool:
                     return
                 i, item = nxt
                 f = c.submit(_call, fn, _Item(item), share, pure=False,
-                             key=f"{fn.__name__}-{id(of)}-{i}")
+                             key=f"{fn.__name__}-{tag}-{i}")
                 of[f] = item
                 ac.add(f)
 

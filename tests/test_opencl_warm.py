@@ -102,3 +102,45 @@ def test_the_world_warm_up_prebuilds_the_far_surface(fresh, tmp_path):
         assert g._surf["opencl"] is run  # the warm-up's kernel objects, not new ones
     ref = make_generator("overworld", 7, None, "numpy").surface(xy)
     assert all(np.array_equal(got[k], ref[k]) for k in ref)
+
+
+def test_a_kernel_family_is_used_as_soon_as_the_warm_up_says_it_is_ready(fresh):
+    """opencl.ready(what) from the job: pick(None, what) answers OpenCL while the job
+    builds the rest; every other caller waits for the end (issue 28: the stream
+    generates with OpenCL while meshing's kernels build)."""
+    gate, went = threading.Event(), threading.Event()
+
+    def job():
+        opencl.ready("generation")
+        went.set()
+        gate.wait(30)
+    assert opencl.warm(job) and went.wait(30)
+    assert opencl.pick(None, "generation") == "opencl" and not opencl.warming("generation")
+    assert opencl.pick(None, "meshing") == opencl.pick(None) == "numpy"
+    assert opencl.warming("meshing") and opencl.warming()
+    gate.set()
+    opencl._warm["thread"].join(30)
+    assert opencl.pick(None, "meshing") == "opencl"
+    assert set(opencl.warm_state()["ready"]) == {"generation"}
+
+
+def test_the_far_prebuild_waits_for_the_streams_of_the_world(fresh, tmp_path, monkeypatch):
+    """world.build.warm's later part (the far surface's build) starts only once every
+    stream of the world has all its chunks: pocl runs one in-order queue, and the far
+    batch and its build queued before the stream's kernels held the view back ~2 s."""
+    from voxel_addon.world import Stream, World, build
+    with World.create(tmp_path / "w.sqlite", seed=7) as w:
+        seen = []
+        monkeypatch.setattr(w.generator, "warm_surface",
+                            lambda: seen.append([s.idle for s in w.streams]) or True)
+        with Stream(w, 3) as s:
+            s.set_view(8.0, 8.0)
+            assert build.warm(w)
+            assert s.wait_ready(120)
+            opencl._warm["thread"].join(120)
+        st = opencl.warm_state()
+        assert st["error"] is None and st["later_error"] is None, st
+        assert seen == [[True]], seen
+        # the stream generated with OpenCL once the generator's kernels were ready,
+        # before the warm-up had built meshing's
+        assert st["ready"]["generation"] < st["ended_at"]

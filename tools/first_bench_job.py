@@ -23,8 +23,10 @@ R: dict = {}
 
 
 def run(world: str, distance: int):
+    import os
     import voxel_addon
     from voxel_addon import opencl
+    from voxel_addon.core import trace
     from voxel_addon.blender.liveview import LIVE
     if not hasattr(bpy.types.Scene, "voxel_view"):
         voxel_addon.register()
@@ -34,11 +36,12 @@ def run(world: str, distance: int):
     vv.distance, vv.hours, vv.quality = distance, 12.0, "auto"
     V.look(-44.0)
     yield 0.5
-    t0 = time.perf_counter()
+    t0, m0, c0 = time.perf_counter(), time.monotonic(), time.process_time()
     vv.show = True
     first = None
     while True:
-        V.area().tag_redraw()
+        if os.environ.get("VOXEL_BENCH_TAG", "0") == "1":
+            V.area().tag_redraw()
         s = LIVE.stats
         if first is None and s["drawn"] > 0:
             first = time.perf_counter() - t0
@@ -51,10 +54,15 @@ def run(world: str, distance: int):
             raise RuntimeError(f"no whole view after 600 s: {s}")
         yield 0.02
     R["first_s"], R["whole_s"], R["chunks"] = first, time.perf_counter() - t0, s["wanted"]
+    R["whole_cpu_s"] = time.process_time() - c0  # every thread's (llvmpipe's too)
+    R["load"] = os.getloadavg()[0]
     R["frames"] = [[round(f.ms), f.drawn, f.quality] for f in LIVE.frames]  # (diagnosis)
     while opencl.warming():
         yield 0.1
     R["warm"] = opencl.warm_state()
+    if R["warm"]["ended_at"] is not None:
+        R["warm_ended_s"] = R["warm"]["ended_at"] - m0
+    R["trace"] = trace.since(m0)  # VOXEL_TRACE=1: where the seconds went
     R["blender"] = bpy.app.version_string
     import gpu
     R["backend"] = gpu.platform.backend_type_get()

@@ -130,11 +130,12 @@ def usable() -> list[str]:
 
 def pick(backend: str | None = None, what: str = "") -> str:
     """The one backend choice of generation, light and meshing: None means OpenCL when
-    a device is present, else NumPy; a name is checked (VoxelError for an unknown one,
+    a device is present and WHAT's kernels are not still warming up (`warming`), else
+    NumPy; a name is checked (VoxelError for an unknown one,
     or for "opencl" without a device). `what` names the caller in the message."""
     from .core.errors import VoxelError
     if backend is None:
-        return "opencl" if available() and not warming() else "numpy"
+        return "opencl" if available() and not warming(what) else "numpy"
     if backend not in BACKENDS:
         raise VoxelError(f"unknown {what + ' ' if what else ''}backend {backend!r} "
                          f"(known: {', '.join(BACKENDS)})")
@@ -161,8 +162,9 @@ def why_not() -> str:
 def program(name: str, options: tuple[str, ...] = ()):
     """Build gpu/<name> (with #includes resolved) once per process and options."""
     import pyopencl as cl
+    from .core import trace
     ctx, _, _ = context()
-    with _lock:
+    with _lock, trace.span("cl.program", name=name):
         return cl.Program(ctx, resources.kernel(name)).build(options=list(options))
 
 
@@ -170,14 +172,15 @@ def program(name: str, options: tuple[str, ...] = ()):
 def build(source: str, options: tuple[str, ...] = ()):
     """Build generated source (e.g. a compiled generator program) once per process."""
     import pyopencl as cl
+    from .core import trace
     ctx, _, _ = context()
-    with _lock:
+    with _lock, trace.span("cl.build", chars=len(source)):
         return cl.Program(ctx, source).build(options=list(options))
 
 
 # ---- warming up in the background ---------------------------------------------------
 _warm = {"thread": None, "took": None, "error": None, "ended_at": None,
-         "later_took": None, "later_error": None}
+         "later_took": None, "later_error": None, "ready": {}}
 
 
 def warm(job, name: str = "voxel-opencl-warm", later=None) -> bool:
@@ -196,9 +199,11 @@ def warm(job, name: str = "voxel-opencl-warm", later=None) -> bool:
         return False
 
     def run():
+        from .core import trace
         t0 = time.perf_counter()
         try:
-            job()
+            with trace.span("warm.job"):
+                job()
         except Exception as e:  # noqa: BLE001 - reported by warm_state, not fatal
             _warm["error"] = f"{type(e).__name__}: {e}"
         finally:
@@ -208,7 +213,8 @@ def warm(job, name: str = "voxel-opencl-warm", later=None) -> bool:
             t0 = time.perf_counter()
             _yield_cpu()
             try:
-                later()
+                with trace.span("warm.later"):
+                    later()
             except Exception as e:  # noqa: BLE001 - likewise
                 _warm["later_error"] = f"{type(e).__name__}: {e}"
             finally:
@@ -219,7 +225,7 @@ def warm(job, name: str = "voxel-opencl-warm", later=None) -> bool:
         if warming():
             return False
         _warm.update(thread=t, took=None, error=None, ended_at=None, later_took=None,
-                     later_error=None)
+                     later_error=None, ready={})
         t.start()
     return True
 
@@ -238,16 +244,28 @@ def _yield_cpu() -> None:
         pass
 
 
-def warming() -> bool:
-    """Whether a warm-up (`warm`) is running now (its LATER part does not count)."""
+def ready(what: str) -> None:
+    """From a warm-up's JOB: WHAT's kernels are built (e.g. "generation"), so
+    pick(None, WHAT) answers OpenCL while the job builds the rest: each kernel family
+    is used as soon as it exists (issue 28)."""
+    import time
+    _warm["ready"] = {**(_warm["ready"] or {}), what: time.monotonic()}
+
+
+def warming(what: str = "") -> bool:
+    """Whether a warm-up (`warm`) is running now (its LATER part does not count); with
+    WHAT, whether WHAT still waits for it (`ready` not called for WHAT yet)."""
     t = _warm["thread"]
-    return t is not None and t.is_alive() and _warm["ended_at"] is None
+    return t is not None and t.is_alive() and _warm["ended_at"] is None and \
+        not (what and what in _warm["ready"])
 
 
 def warm_state() -> dict:
     """{"started", "running", "took" (seconds, None until done), "ended_at"
-    (time.monotonic() then), "error", "later_took", "later_error" (warm's LATER)}."""
+    (time.monotonic() then), "error", "later_took", "later_error" (warm's LATER),
+    "ready" ({what: time.monotonic()} of `ready` calls)}."""
     t = _warm["thread"]
     return {"started": t is not None, "running": warming(), "took": _warm["took"],
             "ended_at": _warm["ended_at"], "error": _warm["error"],
-            "later_took": _warm["later_took"], "later_error": _warm["later_error"]}
+            "later_took": _warm["later_took"], "later_error": _warm["later_error"],
+            "ready": dict(_warm["ready"] or {})}

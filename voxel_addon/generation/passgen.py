@@ -45,7 +45,7 @@ class PassGenerator(Generator):
     # made before a warm-up (opencl.warm) runs NumPy until the kernels are built.
     @property
     def backend_used(self) -> str:
-        return opencl.pick(self._asked)
+        return opencl.pick(self._asked, "generation")
 
     @property
     def backend(self) -> str:

@@ -32,40 +32,59 @@ def backends() -> tuple[str, str]:
     Meshing: OpenCL where present (~10x NumPy) and not warming up (opencl.warm), else
     NumPy."""
     from .. import opencl
-    return "numpy", opencl.pick(None)
+    return "numpy", opencl.pick(None, "meshing")
 
 
 def warm(world) -> bool:
     """Build and run once, in a background thread, the OpenCL kernels that streaming
-    WORLD wants (its generator's chunks, meshing), on a 3x3 of chunks at the origin;
-    until done, generation and meshing run NumPy (opencl.warm). Once per generator
+    WORLD wants (its generator's chunks, then meshing: the order the stream needs
+    them), on a 3x3 of chunks at the origin; generation runs NumPy until its kernels
+    are built (opencl.ready), meshing until the end (opencl.warm). Once per generator
     (each has its own kernel objects: another world's would compile again); False
     when nothing was started (no device, warmed already, another warm-up running).
-    Cold, on 2 busy cores: ~7 s for the generator, ~1 s meshing. Then, with OpenCL
-    already the default (opencl.warm's `later`), the far surface's program (the
-    generator's 2D passes, its own kernel objects), so turning the far ring on does
-    not wait for its build; the stream never waits for it."""
+    Cold, on 2 quiet cores: ~3.3 s for the generator, ~0.6 s meshing. Then, with
+    OpenCL already the default (opencl.warm's `later`) and once the world's streams
+    have made all they want (one pocl queue: the stream's kernels would wait behind
+    it), the far surface's program (the generator's 2D passes, its own kernel
+    objects), so turning the far ring on does not wait for its build."""
     from .. import meshing, opencl
     g = world.generator
     if g in _warmed:
         return False
 
     def job():
+        from ..core import trace
         keys = keys_of(-1, -1, 2, 2)
-        if hasattr(g, "warm_opencl"):  # the world's own generator (its kernel objects)
-            arrays = g.warm_opencl(keys)
-        else:
-            arrays = g.generate(keys)
+        with trace.span("warm.generate"):
+            if hasattr(g, "warm_opencl"):  # the world's own generator (its kernel objects)
+                arrays = g.warm_opencl(keys)
+            else:
+                arrays = g.generate(keys)
+        # the stream generates with OpenCL from now on, while meshing's kernels build
+        opencl.ready("generation")
         blocks = C.paste(zip(keys, arrays), -1, -1, 2, 2)
-        with CL_LOCK:
+        with CL_LOCK, trace.span("warm.mesh"):
             meshing.build_chunks(blocks[15:-15, 15:-15], (0, 0), backend="opencl")
 
-    started = opencl.warm(job, later=getattr(g, "warm_surface", None))
+    surface = getattr(g, "warm_surface", None)
+
+    def later():
+        import time
+        # pocl runs one in-order queue: the far surface's 16384-column batch and its
+        # work-group build queued in front of the stream's kernels held the whole view
+        # back by 1.5-2 s (issue 28's timeline): wait until the streams have all they want
+        end = time.monotonic() + LATER_WAIT_S
+        while time.monotonic() < end and any(not s.idle for s in list(world.streams)):
+            time.sleep(0.1)
+        surface()
+
+    started = opencl.warm(job, later=later if surface is not None else None)
     if started:
         _warmed.add(g)
     return started
 
 
+LATER_WAIT_S = 60.0  # the far prebuild waits at most this long for busy streams
 _warmed: weakref.WeakSet = weakref.WeakSet()  # generators warm-up has run for
 
 
@@ -106,24 +125,28 @@ def light_and_mesh(world, cx0: int, cy0: int, cx1: int, cy1: int, *, backends_=N
     """Final light + mesh of chunks [cx0, cx1) x [cy0, cy1), stored on the chunks;
     returns their payloads (chunks that are missing or raced by an edit left out)."""
     from .. import light, meshing
+    from ..core import trace
     lb, mb = backends_ or backends()
     ring = keys_of(cx0 - 1, cy0 - 1, cx1 + 1, cy1 + 1)
     if load:
-        world.load(ring)
+        with trace.span("batch.load", n=len(ring)):
+            world.load(ring)
     blocks, ticks, data = snapshot(world, cx0 - 1, cy0 - 1, cx1 + 1, cy1 + 1, data=True)
     with world.locked():  # light stored in the file (loaded with the blocks) is final
         need = any(c is not None and c.light is None
                    for c in map(world.chunks.get, keys_of(cx0, cy0, cx1, cy1)))
     # one solve for the whole rectangle: its ring is the only overhead
     # model blocks that are no whole cube pass light (with the world's resource stack)
-    lit = _run(lb, light.region_light, mcmodels.light_blocks(world, blocks, data),
-               tile=max(cx1 - cx0, cy1 - cy0)) if need else None
+    with trace.span("batch.light", backend=lb, need=need):
+        lit = _run(lb, light.region_light, mcmodels.light_blocks(world, blocks, data),
+                   tile=max(cx1 - cx0, cy1 - cy0)) if need else None
     inner = blocks[15:-15, 15:-15]
     # Minecraft model blocks (with the world's resource stack): air for the mesher
     models = mcmodels.build(world, inner, None if data is None else data[15:-15, 15:-15],
                             cx0, cy0)
-    meshes = _run(mb, meshing.build_chunks, inner, (cx0, cy0),
-                  data=None if data is None else data[15:-15, 15:-15])
+    with trace.span("batch.mesh", backend=mb):
+        meshes = _run(mb, meshing.build_chunks, inner, (cx0, cy0),
+                      data=None if data is None else data[15:-15, 15:-15])
     for k, m in models.items():
         if k in meshes:
             meshes[k].models = m

@@ -185,6 +185,12 @@ class Stream:
             # the GIL from the editing thread (edit latency x2 at distance 32)
 
     @property
+    def idle(self) -> bool:
+        """Whether every chunk in range has a payload (nothing left to make)."""
+        w, r, _ = self.counts
+        return self._view is not None and r >= w
+
+    @property
     def queued(self) -> int:
         """Payloads waiting for the consumer's drain (no lock: a deque's length)."""
         return len(self._ready)
@@ -286,10 +292,11 @@ class Stream:
             far = u > 0
             u[far] *= 1.5 - 0.5 * (vx[far] * d[0] + vy[far] * d[1]) / u[far]  # behind: x2
         i = int(np.argmin(u))
-        if u[i] >= FIRST and self.backends is None and opencl.warming():
+        if u[i] >= FIRST and self.backends is None and opencl.warming("generation"):
             # the OpenCL kernels still build: NumPy made the first picture (the chunks
-            # next to the view); more NumPy now would take the CPU from the build and
-            # leave big NumPy batches in flight when it ends: the whole view came later
+            # next to the view); more NumPy now takes the CPU from the build (one NumPy
+            # worker during the warm-up: the build took 2x longer, the whole view came
+            # later; niced to 19 it made few chunks and held the GIL from the others)
             return None
         t = max(1, self.tile // (4 if u[i] < FIRST else 2)) if u[i] < NEAR else self.tile
         r = self.distance
@@ -297,6 +304,11 @@ class Stream:
         return [pending[j] for j in np.flatnonzero((tx == tx[i]) & (ty == ty[i])).tolist()]
 
     def _do(self, keys, backends) -> None:
+        from ..core import trace
+        with trace.span("batch", n=len(keys), at=min(keys)):
+            self._do1(keys, backends)
+
+    def _do1(self, keys, backends) -> None:
         world = self.world
         done = [p for p in (build.payload(world, k) for k in keys) if p is not None]
         rest = {k for k in keys} - {p.key for p in done}

@@ -35,6 +35,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ...core import trace
 from ...core.errors import VoxelError
 from .. import firstview
 from . import composite, host
@@ -238,11 +239,15 @@ class LiveView:
         if key == self.lead:
             at = tuple(rv3d.view_location)[:2] if cam.ortho else (cam.x, cam.y)
         feed.set_far(vv.far)
+        had = len(feed.chunks)
         loading = feed.update(at, cam.forward, BUDGET_S)
+        # a frame that takes in new chunks is a draft too: the last streamed ones show
+        # without a full frame's wait (~0.5 s on llvmpipe); the full one follows
+        busy = moving or loading or len(feed.chunks) > had
         self.stats.update(wanted=feed.wanted, far_wanted=feed.far_wanted)
         # draft while moving and while chunks stream in: a full frame holds the GIL for
         # seconds on software GL and starves the stream's worker thread
-        draft = vv.quality == "draft" or (vv.quality == "auto" and (moving or loading))
+        draft = vv.quality == "draft" or (vv.quality == "auto" and busy)
         s = settings_of(vv, draft)
         if cam.ortho:
             # distance fog needs an eye; an orthographic view's is arbitrary (it moves with
@@ -284,7 +289,7 @@ class LiveView:
                 pane.dev.finish()
                 pc = time.process_time()
             # kept only once the view rests: a frame while moving or loading is the last
-            k = pane.kept_for(key, (vw, vh)) if self.reuse and not (moving or loading) else None
+            k = pane.kept_for(key, (vw, vh)) if self.reuse and not busy else None
             composite.composite(pane.dev, f, host_vp, vv.sky, k, (vw, vh))
             if self.finish:
                 pane.dev.finish()
@@ -302,6 +307,7 @@ class LiveView:
             self._panel_redraw()  # the sidebar shows progress and quality
         S.update(drawn=drawn, far_drawn=len(pane.far_versions), ms=ms, python_ms=t_py * 1e3, quality=q, frames=S["frames"] + 1,
                  wanted_shown=S["wanted"], reused=S["reused"] + reused, draw_calls=calls)
+        trace.mark("frame", ms=round(ms), drawn=drawn, q=q, upload_ms=round(t_sync * 1e3))
         self.frames.append(Frame(ms, t_py * 1e3, q, drawn, t_sync * 1e3, reused, calls,
                                  t_sub * 1e3, (time.process_time() - p0) * 1e3,
                                  host_cpu * 1e3, comp_cpu * 1e3))

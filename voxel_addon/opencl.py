@@ -14,7 +14,8 @@ kernel with LLVM, and again per work-group size at its first launch), which a
 fresh install would spend before its first picture. `warm(job)` runs JOB (builds and
 runs the kernels a caller will want) in a background thread; until it ends the
 default backend (`pick(None)`) is NumPy, so the first results come from the NumPy
-twins (bit-identical by design) while the kernels build, then OpenCL takes over.
+twins (bit-identical by design) while the kernels build, then OpenCL takes over;
+a job that builds several kernel families hands each over once built (`ready`).
 """
 from __future__ import annotations
 
@@ -131,8 +132,8 @@ def usable() -> list[str]:
 def pick(backend: str | None = None, what: str = "") -> str:
     """The one backend choice of generation, light and meshing: None means OpenCL when
     a device is present and WHAT's kernels are not still warming up (`warming`), else
-    NumPy; a name is checked (VoxelError for an unknown one,
-    or for "opencl" without a device). `what` names the caller in the message."""
+    NumPy; a name is checked (VoxelError for an unknown one, or for "opencl" without
+    a device). `what` names the caller in the message."""
     from .core.errors import VoxelError
     if backend is None:
         return "opencl" if available() and not warming(what) else "numpy"

@@ -51,6 +51,9 @@ def test_new_world_show_brings_the_view_to_the_surface_and_terrain_fills_it(gui,
     assert first["warm"]["started"] and first["ready_before_opencl"], (first, whole)
     assert first["backends"] == ["numpy", "numpy"], first  # made while the kernels built
     assert first["s"] < FIRST_S and whole["s"] < WHOLE_S, (first, whole)
+    # the frame taking in the last chunks is a draft (a full one on llvmpipe took ~0.5 s
+    # more before the whole view showed); the full frame follows (_wait_full below)
+    assert whole["quality"] == "draft", whole
     assert any((cache / "pocl").iterdir()), "the kernels were built elsewhere: not cold"
     changed, texture = _terrain_fills(res, "first", part=True)
     assert changed > 0.02 and texture > 6, (changed, texture)

@@ -63,7 +63,10 @@ def _first_terrain(gui, live, ocl, timeout=120.0):
             yield from gui.screenshot("first")
         if first is not None and s["drawn"] >= s["wanted"] > 0:
             gui.result["whole"] = {"s": time.monotonic() - t0, "warm": ocl.warm_state(),
-                                   "stats": dict(s)}
+                                   "stats": dict(s),
+                                   # the frame that first drew them all (full follows)
+                                   "quality": next((f.quality for f in live.frames
+                                                    if f.drawn >= s["wanted"]), None)}
             return
         yield 0.05
     raise RuntimeError(f"no whole view after {timeout:.0f} s: {dict(live.stats)}")

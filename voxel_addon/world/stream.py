@@ -305,10 +305,10 @@ class Stream:
 
     def _do(self, keys, backends) -> None:
         from ..core import trace
-        with trace.span("batch", n=len(keys), at=min(keys)):
-            self._do1(keys, backends)
+        with trace.span("batch", n=len(keys), at=min(keys)):  # (VOXEL_TRACE)
+            self._make(keys, backends)
 
-    def _do1(self, keys, backends) -> None:
+    def _make(self, keys, backends) -> None:
         world = self.world
         done = [p for p in (build.payload(world, k) for k in keys) if p is not None]
         rest = {k for k in keys} - {p.key for p in done}

@@ -51,7 +51,19 @@ def world(path: str, *, create_seed: int | None = None, generator: str | None = 
     _worlds[key] = w
     _restore(w, key)
     _start_polling()
+    _warm(w)
     return w
+
+
+def _warm(w) -> None:
+    """A fresh install's first kernel builds take ~4 s (issue 28): start them when a
+    world opens (New, Open, a panel that needs it), so they are done by the time the
+    user ticks Show; NumPy generates meanwhile. Not in background Blender (a script or
+    a render wants no extra threads)."""
+    import bpy
+    if not bpy.app.background:
+        from ..world.build import warm
+        warm(w, opened=True)
 
 
 def _start_polling() -> None:

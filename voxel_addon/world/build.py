@@ -35,7 +35,7 @@ def backends() -> tuple[str, str]:
     return "numpy", opencl.pick(None, "meshing")
 
 
-def warm(world) -> bool:
+def warm(world, opened: bool = False) -> bool:
     """Build and run once, in a background thread, the OpenCL kernels that streaming
     WORLD wants (its generator's chunks, then meshing: the order the stream needs
     them), on a 3x3 of chunks at the origin; generation runs NumPy until its kernels
@@ -46,7 +46,10 @@ def warm(world) -> bool:
     OpenCL already the default (opencl.warm's `later`) and once the world's streams
     have made all they want (one pocl queue: the stream's kernels would wait behind
     it), the far surface's program (the generator's 2D passes, its own kernel
-    objects), so turning the far ring on does not wait for its build."""
+    objects), so turning the far ring on does not wait for its build.
+    OPENED: called when a world is opened, before anything shows it (Blender's New and
+    Open): the kernels build while the user reaches for Show, and the far prebuild
+    waits until a stream of the world exists and has all it wants."""
     from .. import meshing, opencl
     g = world.generator
     if g in _warmed:
@@ -74,7 +77,8 @@ def warm(world) -> bool:
         # work-group build queued in front of the stream's kernels held the whole view
         # back by 1.5-2 s (issue 28's timeline): wait until the streams have all they want
         end = time.monotonic() + LATER_WAIT_S
-        while time.monotonic() < end and any(not s.idle for s in list(world.streams)):
+        while time.monotonic() < end and (
+                any(not s.idle for s in list(world.streams)) or opened and not world.streams):
             time.sleep(0.1)
         surface()
 

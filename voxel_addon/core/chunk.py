@@ -12,6 +12,11 @@ import numpy as np
 
 from .errors import VoxelError
 
+try:  # in the venv and every extension zip; without it packed layers stay arrays
+    from lz4 import block as _lz4
+except ImportError:  # pragma: no cover
+    _lz4 = None
+
 SIZE = 16
 HEIGHT = 256
 HOT_S = 2.0  # seconds unused before compact() packs a chunk's blocks
@@ -71,8 +76,9 @@ def check_z(z: int) -> None:
 class Chunk:
     """Block ids plus lazily allocated small data and large data (thesis §4.1).
 
-    `data` stays None while all zero so an ordinary chunk costs 2 B per voxel.
-    `large` maps a small-data index to any Python object (e.g. a chest's contents).
+    `data` stays None while all zero. `large` maps a small-data index to any Python
+    object (e.g. a chest's contents). Blocks and light are kept packed (Packed: ~0.1
+    B per voxel) until read, and packed again by compact() (issue 29).
     """
 
     __slots__ = ("key", "_blocks", "_bpack", "_bhot", "data", "large", "_light", "_lpack",
@@ -80,7 +86,14 @@ class Chunk:
 
     def __init__(self, key, blocks=None, data=None):
         self.key = tuple(key)
-        self.blocks = empty() if blocks is None else blocks
+        if blocks is None:
+            self._blocks, self._bpack, self._bhot = None, Packed.uniform(SHAPE, np.uint16), 0.0
+        elif getattr(blocks, "shape", None) == SHAPE and blocks.dtype in (np.uint16, np.uint8):
+            # born packed (a generated or loaded chunk is read once by its light and
+            # mesh, through blocks_into): 128 KB less for each until something reads it
+            self._blocks, self._bpack, self._bhot = None, pack(blocks, narrow=True), 0.0
+        else:
+            self.blocks = blocks
         self.data = data
         self.large: dict[int, object] = {}
         self._light = self._lpack = None  # final light (see .light), filled by the world layer
@@ -90,12 +103,12 @@ class Chunk:
 
     @property
     def blocks(self) -> np.ndarray:
-        """Block ids (16, 16, 256). Like the light, compact() keeps them as their
-        non-uniform layers (air above the terrain: ~30 % stays) once they were not
-        read or set for HOT_S seconds; a read rebuilds the array and keeps it hot."""
+        """Block ids (16, 16, 256). Kept packed until read; a read rebuilds the array
+        and keeps it hot (callers may write into it) until compact() finds it unread
+        for HOT_S seconds."""
         a = self._blocks
         if a is None:
-            a = self._blocks = unpack_layers(*self._bpack)  # (_bpack stays, as _lpack)
+            a = self._blocks = self._bpack.unpack()  # (_bpack stays, as _lpack)
             self._bhot = time.monotonic()
         return a
 
@@ -103,16 +116,16 @@ class Chunk:
         """A new array of the blocks (a save's snapshot) that leaves cold ones cold:
         rebuilt from their layers, not rebuilt, kept and copied."""
         a = self._blocks
-        return unpack_layers(*self._bpack) if a is None else a.copy(order="F")
+        return self._bpack.unpack() if a is None else a.copy(order="F")
 
     def blocks_into(self, out: np.ndarray, xs: slice, ys: slice, z0: int, z1: int) -> None:
-        """out[...] = blocks[xs, ys, z0:z1] leaving cold blocks cold (an edit's window
-        reads a few columns of its neighbours: rebuilding them costs more)."""
+        """out[...] = blocks[xs, ys, z0:z1] leaving cold blocks cold (an edit's window,
+        a batch's snapshot: rebuilding and keeping them costs more)."""
         a = self._blocks
         if a is not None:
             out[...] = a[xs, ys, z0:z1]
         else:
-            _layers_into(out, self._bpack, xs, ys, z0, z1)
+            self._bpack.into(out, xs, ys, z0, z1)
 
     @blocks.setter
     def blocks(self, value) -> None:
@@ -122,12 +135,12 @@ class Chunk:
     def light(self) -> np.ndarray | None:
         """Final light (16, 16, 256) or None. Kept as a full array ("hot": set or
         read since the last compact(); callers may write into one they just set,
-        under the world's lock) or, after compact(), as its non-uniform layers only;
-        a read then rebuilds the array (same values) and keeps it hot."""
+        under the world's lock) or, after compact(), packed; a read then rebuilds
+        the array (same values) and keeps it hot."""
         a = self._light
         if a is None and self._lpack is not None:
             # _lpack stays: a compact() racing this read then still finds the light
-            a = self._light = unpack_layers(*self._lpack)
+            a = self._light = self._lpack.unpack()
         return a
 
     @property
@@ -142,24 +155,21 @@ class Chunk:
         if a is not None or self._lpack is None:
             out[...] = 0 if a is None else a[xs, ys, z0:z1]
             return
-        _layers_into(out, self._lpack, xs, ys, z0, z1)
+        self._lpack.into(out, xs, ys, z0, z1)
 
     @light.setter
     def light(self, value) -> None:
         self._light, self._lpack = value, None
 
     def compact(self) -> None:
-        """Keep the light as its non-uniform layers (open sky above and unlit rock
-        below are uniform: ~70 of 256 layers stay), and the blocks so when they are
-        cold (a streamed view holds ~1,200 chunks at distance 16: 150 MB of blocks
-        as arrays). Call with the world's lock held."""
+        """Pack the light, and the blocks when cold (not read or set for HOT_S
+        seconds). Call with the world's lock held."""
         a = self._light
         if a is not None:
-            self._lpack, self._light = pack_layers(a), None
+            self._lpack, self._light = pack(a), None
         b = self._blocks
-        if b is not None and b.shape == (SIZE, SIZE, HEIGHT) \
-                and time.monotonic() - self._bhot > HOT_S:
-            self._bpack, self._blocks = pack_layers(b, narrow=True), None
+        if b is not None and b.shape == SHAPE and time.monotonic() - self._bhot > HOT_S:
+            self._bpack, self._blocks = pack(b, narrow=True), None
 
     @property
     def origin(self) -> tuple[int, int]:
@@ -176,8 +186,7 @@ class Chunk:
 
     def nbytes(self) -> int:
         n = 0
-        for a in (self._blocks, self._bpack and self._bpack[-1], self.data, self._light,
-                  self._lpack and self._lpack[-1]):
+        for a in (self._blocks, self._bpack, self.data, self._light, self._lpack):
             if a is not None:
                 n += a.nbytes
         return n
@@ -230,3 +239,52 @@ def unpack_layers(shape, lo, hi, bot, top, slab) -> np.ndarray:
     out[:, :, lo:hi] = slab
     out[:, :, hi:] = top
     return out
+
+
+
+
+
+class Packed:
+    """A chunk array as kept in memory (issue 29): LZ4-compressed (generated
+    terrain's blocks and light: ~3 KB of 128 KB each; compressing takes ~20 us,
+    decoding ~15 us straight into the new array's buffer). Without the lz4 package
+    the array itself is kept."""
+
+    __slots__ = ("shape", "dtype", "body")
+
+    @classmethod
+    def uniform(cls, shape, dtype, value=0) -> "Packed":
+        return pack(np.full(shape, value, dtype, order="F"))
+
+    @property
+    def nbytes(self) -> int:
+        return len(self.body) if isinstance(self.body, bytes) else self.body.nbytes
+
+    def unpack(self) -> np.ndarray:
+        """A new (writable, Fortran-ordered) array of the packed values."""
+        b = self.body
+        if not isinstance(b, bytes):
+            return b.copy(order="F")
+        w, h, z = self.shape
+        raw = _lz4.decompress(b, uncompressed_size=w * h * z * self.dtype.itemsize,
+                              return_bytearray=True)
+        return np.frombuffer(raw, self.dtype).reshape(self.shape, order="F")
+
+    def into(self, out, xs: slice, ys: slice, z0: int, z1: int) -> None:
+        """out[...] = unpack()[xs, ys, z0:z1]."""
+        b = self.body
+        out[...] = (self.unpack() if isinstance(b, bytes) else b)[xs, ys, z0:z1]
+
+
+def pack(a: np.ndarray, narrow: bool = False) -> Packed:
+    """A (w, h, z) array -> Packed (its values, shape and dtype exactly). `narrow`
+    is pack_layers' and has no effect: LZ4 takes the high bytes of small block
+    ids to nearly nothing."""
+    p = Packed()
+    p.shape, p.dtype = a.shape, a.dtype
+    if _lz4 is None or not a.size:
+        p.body = np.array(a, order="F")
+    else:
+        f = a.reshape(-1, order="F") if a.flags.f_contiguous else a.ravel(order="F")
+        p.body = _lz4.compress(f, store_size=False)
+    return p

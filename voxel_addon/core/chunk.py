@@ -6,6 +6,7 @@ same rule: (W, H, 256) arrays, x fastest, and kernels index x + W*(y + H*z).
 """
 from __future__ import annotations
 
+import threading
 import time
 
 import numpy as np
@@ -118,10 +119,12 @@ class Chunk:
         a = self._blocks
         return self._bpack.unpack() if a is None else a.copy(order="F")
 
-    def blocks_into(self, out: np.ndarray, xs: slice, ys: slice, z0: int, z1: int) -> None:
-        """out[...] = blocks[xs, ys, z0:z1] leaving cold blocks cold (an edit's window,
-        a batch's snapshot: rebuilding and keeping them costs more)."""
-        a = self._blocks
+    def blocks_into(self, out: np.ndarray, xs: slice, ys: slice, z0: int, z1: int,
+                    keep: bool = False) -> None:
+        """out[...] = blocks[xs, ys, z0:z1] leaving cold blocks cold (a batch's
+        snapshot reads each chunk once), or with `keep` rebuilt and kept hot as a
+        read of .blocks (an edit reads its neighbours' windows several times)."""
+        a = self.blocks if keep else self._blocks
         if a is not None:
             out[...] = a[xs, ys, z0:z1]
         else:
@@ -148,10 +151,11 @@ class Chunk:
         """Whether final light is known (without rebuilding a compacted one)."""
         return self._light is not None or self._lpack is not None
 
-    def light_into(self, out: np.ndarray, xs: slice, ys: slice, z0: int, z1: int) -> None:
-        """out[...] = light[xs, ys, z0:z1] without rebuilding a compacted light (a
-        whole chunk for a few of its layers costs more than the copy)."""
-        a = self._light
+    def light_into(self, out: np.ndarray, xs: slice, ys: slice, z0: int, z1: int,
+                   keep: bool = False) -> None:
+        """out[...] = light[xs, ys, z0:z1] without rebuilding a compacted light, or
+        with `keep` rebuilt and kept (as a read of .light) until the next compact()."""
+        a = self.light if keep else self._light
         if a is not None or self._lpack is None:
             out[...] = 0 if a is None else a[xs, ys, z0:z1]
             return
@@ -244,13 +248,17 @@ def unpack_layers(shape, lo, hi, bot, top, slab) -> np.ndarray:
 
 
 
+
 class Packed:
-    """A chunk array as kept in memory (issue 29): LZ4-compressed (generated
-    terrain's blocks and light: ~3 KB of 128 KB each; compressing takes ~20 us,
-    decoding ~15 us straight into the new array's buffer). Without the lz4 package
+    """A chunk array as kept in memory (issue 29): LZ4-compressed in sections of
+    SECTION layers (generated terrain's blocks and light: ~3 KB of 128 KB each).
+    Sections keep every decode a small allocation (a fresh 128 KB buffer costs page
+    faults: ~80 us in a big process) and let a window (an edit's: a few columns
+    over some layers) decode only the sections it reads. Without the lz4 package
     the array itself is kept."""
 
     __slots__ = ("shape", "dtype", "body")
+    SECTION = 32
 
     @classmethod
     def uniform(cls, shape, dtype, value=0) -> "Packed":
@@ -258,22 +266,69 @@ class Packed:
 
     @property
     def nbytes(self) -> int:
-        return len(self.body) if isinstance(self.body, bytes) else self.body.nbytes
+        b = self.body
+        return b.nbytes if isinstance(b, np.ndarray) else \
+            sum(len(x) if isinstance(x, bytes) else x.nbytes for x in b)
 
     def unpack(self) -> np.ndarray:
         """A new (writable, Fortran-ordered) array of the packed values."""
-        b = self.body
-        if not isinstance(b, bytes):
-            return b.copy(order="F")
-        w, h, z = self.shape
-        raw = _lz4.decompress(b, uncompressed_size=w * h * z * self.dtype.itemsize,
-                              return_bytearray=True)
-        return np.frombuffer(raw, self.dtype).reshape(self.shape, order="F")
+        if isinstance(self.body, np.ndarray):
+            return self.body.copy(order="F")
+        out = np.empty(self.shape, self.dtype, order="F")
+        self.into(out, _ALL, _ALL, 0, self.shape[2])
+        return out
 
     def into(self, out, xs: slice, ys: slice, z0: int, z1: int) -> None:
-        """out[...] = unpack()[xs, ys, z0:z1]."""
+        """out[...] = unpack()[xs, ys, z0:z1], decoding only the sections it reads."""
         b = self.body
-        out[...] = (self.unpack() if isinstance(b, bytes) else b)[xs, ys, z0:z1]
+        if isinstance(b, np.ndarray):
+            out[...] = b[xs, ys, z0:z1]
+            return
+        S = self.SECTION
+        # part of the columns: an edit's windows, which read the same sections of
+        # a 3x3 of chunks several times (light, then the mesher's ring): remembered
+        memo = xs != _ALL or ys != _ALL
+        i, last = z0 // S, -(-z1 // S)
+        while i < last:  # runs of packed sections (one decode), of one value (a fill)
+            v, j = b[i], i + 1
+            if isinstance(v, bytes):
+                while j < last and isinstance(b[j], bytes):
+                    j += 1
+                v = self._run(i, j, memo)
+            else:
+                while j < last and not isinstance(b[j], bytes) and b[j] == v:
+                    j += 1
+            za, ze = max(z0, i * S), min(z1, j * S)
+            out[:, :, za - z0:ze - z0] = v if v.ndim == 0 else v[xs, ys, za - i * S:ze - i * S]
+            i = j
+
+    def _run(self, i: int, j: int, memo: bool) -> np.ndarray:
+        """Packed sections [i, j) decoded, as a (w, h, layers) array (read-only)."""
+        if memo:
+            d = getattr(_memo, "d", None)
+            if d is None:
+                d = _memo.d = {}
+            got = d.pop((self, i, j), None)
+            if got is not None:
+                d[(self, i, j)] = got  # the most recent last
+                return got
+        w, h, z = self.shape
+        S, k = self.SECTION, w * h * self.dtype.itemsize
+        n = min(z, j * S) - i * S
+        raws = [_lz4.decompress(self.body[t], uncompressed_size=k * min(S, z - t * S))
+                for t in range(i, j)]
+        got = np.frombuffer(raws[0] if j == i + 1 else b"".join(raws),
+                            self.dtype).reshape((w, h, n), order="F")
+        if memo:
+            if len(d) >= MEMO:
+                del d[next(iter(d))]  # the least recently used
+            d[(self, i, j)] = got
+        return got
+
+
+_ALL = slice(None)
+MEMO = 32  # decoded runs of sections a thread remembers for windows
+_memo = threading.local()
 
 
 def pack(a: np.ndarray, narrow: bool = False) -> Packed:
@@ -284,7 +339,30 @@ def pack(a: np.ndarray, narrow: bool = False) -> Packed:
     p.shape, p.dtype = a.shape, a.dtype
     if _lz4 is None or not a.size:
         p.body = np.array(a, order="F")
-    else:
-        f = a.reshape(-1, order="F") if a.flags.f_contiguous else a.ravel(order="F")
-        p.body = _lz4.compress(f, store_size=False)
+        return p
+    f = a if a.flags.f_contiguous else np.asfortranarray(a)
+    S, body = Packed.SECTION, []
+    for z in range(0, a.shape[2], S):
+        sec = f[:, :, z:z + S].reshape(-1, order="F")
+        c = _lz4.compress(sec, store_size=False)
+        # LZ4 is deterministic: the same bytes as the section filled with its first
+        # value means it holds that value only (kept as the value: no decode)
+        if len(c) < 128 and c == _uniform(sec[0], sec.size):
+            c = sec[0]
+        body.append(c)
+    p.body = tuple(body)
     return p
+
+
+def _uniform(v, n: int) -> bytes:
+    """LZ4 of n copies of v (remembered: a few values recur: air, daylight, dark)."""
+    k = (v.dtype.str, int(v), n)
+    c = _UNIFORM.get(k)
+    if c is None:
+        c = _lz4.compress(np.full(n, v, v.dtype), store_size=False)
+        if len(_UNIFORM) < 4096:
+            _UNIFORM[k] = c
+    return c
+
+
+_UNIFORM: dict = {}

@@ -115,6 +115,21 @@ def test_pack_round_trips_exactly(kinds):
             assert np.array_equal(out, a0[x0:x1, y0:y1, z0:z1])
 
 
+def test_layers_of_one_value_each_read_back():
+    """Sections that each hold one value (as daylight over dark rock does), side by
+    side with others, and windows across them."""
+    a = C.empty()
+    for z in range(256):
+        a[:, :, z] = z // 32 + 1 if z < 200 else 0xF000  # sections 0-5: one value each
+    a[3, 4, 100] = 9
+    p = pack(a)
+    assert np.array_equal(p.unpack(), a)
+    for z0, z1 in ((0, 256), (10, 70), (31, 33), (60, 130), (190, 256)):
+        out = np.zeros((2, 16, z1 - z0), np.uint16, order="F")
+        p.into(out, slice(2, 4), slice(None), z0, z1)
+        assert np.array_equal(out, a[2:4, :, z0:z1])
+
+
 def test_pack_without_lz4_keeps_the_array(monkeypatch):
     monkeypatch.setattr(C, "_lz4", None)
     a = _volume(np.random.default_rng(5), 17)

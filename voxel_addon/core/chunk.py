@@ -78,8 +78,9 @@ class Chunk:
     """Block ids plus lazily allocated small data and large data (thesis §4.1).
 
     `data` stays None while all zero. `large` maps a small-data index to any Python
-    object (e.g. a chest's contents). Blocks and light are kept packed (Packed: ~0.1
-    B per voxel) until read, and packed again by compact() (issue 29).
+    object (e.g. a chest's contents). Blocks and light are kept packed (Packed: ~3 KB
+    each for generated terrain, of 128 KB) until read, and packed again by compact()
+    (issue 29).
     """
 
     __slots__ = ("key", "_blocks", "_bpack", "_bhot", "data", "large", "_light", "_lpack",
@@ -92,7 +93,7 @@ class Chunk:
         elif getattr(blocks, "shape", None) == SHAPE and blocks.dtype in (np.uint16, np.uint8):
             # born packed (a generated or loaded chunk is read once by its light and
             # mesh, through blocks_into): 128 KB less for each until something reads it
-            self._blocks, self._bpack, self._bhot = None, pack(blocks, narrow=True), 0.0
+            self._blocks, self._bpack, self._bhot = None, pack(blocks), 0.0
         else:
             self.blocks = blocks
         self.data = data
@@ -173,7 +174,7 @@ class Chunk:
             self._lpack, self._light = pack(a), None
         b = self._blocks
         if b is not None and b.shape == SHAPE and time.monotonic() - self._bhot > HOT_S:
-            self._bpack, self._blocks = pack(b, narrow=True), None
+            self._bpack, self._blocks = pack(b), None
 
     @property
     def origin(self) -> tuple[int, int]:
@@ -208,33 +209,21 @@ def put(blocks, data, lx: int, ly: int, z: int, block: int, value: int):
     return data
 
 
-def pack_layers(a: np.ndarray, narrow: bool = False) -> tuple:
+def pack_layers(a: np.ndarray) -> tuple:
     """(16, 16, 256) array -> (shape, lo, hi, bottom value, top value, a[:, :, lo:hi]):
-    the layers below lo all hold the bottom value, those from hi up the top value.
-    `narrow`: the kept layers as uint8 when every value fits (block ids: the registry
-    has fewer than 256, so a cold chunk's blocks take half the memory); unpack_layers
-    gives the array back in the dtype of the bottom and top values, a's."""
+    the layers below lo all hold the bottom value, those from hi up the top value
+    (the viewport keeps payload light so: unpacking it costs a copy; chunks keep
+    theirs as Packed)."""
     f = a.reshape(-1, a.shape[2], order="F") if a.flags.f_contiguous \
         else np.asfortranarray(a).reshape(-1, a.shape[2], order="F")
-    mn, mx = f.min(0), f.max(0)
+    mn = f.min(0)
     bot, top = mn[0], mn[-1]
-    same = mn == mx
+    same = mn == f.max(0)
     odd = np.flatnonzero(~same | (mn != top))
     hi = int(odd[-1]) + 1 if odd.size else 0
     odd = np.flatnonzero(~same[:hi] | (mn[:hi] != bot))
     lo = int(odd[0]) if odd.size else hi
-    if narrow and a.dtype.itemsize > 1 and (hi <= lo or int(mx[lo:hi].max()) < 256):
-        return a.shape, lo, hi, bot, top, a[:, :, lo:hi].astype(np.uint8, order="F")
     return a.shape, lo, hi, bot, top, a[:, :, lo:hi].copy(order="F")
-
-
-def _layers_into(out, pack, xs, ys, z0, z1) -> None:
-    """out[...] = unpack_layers(*pack)[xs, ys, z0:z1] without rebuilding the array."""
-    _, lo, hi, bot, top, slab = pack
-    a, b = min(max(lo, z0), z1), max(min(hi, z1), z0)
-    out[:, :, :a - z0] = bot
-    out[:, :, a - z0:b - z0] = slab[xs, ys, a - lo:b - lo]
-    out[:, :, b - z0:] = top
 
 
 def unpack_layers(shape, lo, hi, bot, top, slab) -> np.ndarray:
@@ -243,10 +232,6 @@ def unpack_layers(shape, lo, hi, bot, top, slab) -> np.ndarray:
     out[:, :, lo:hi] = slab
     out[:, :, hi:] = top
     return out
-
-
-
-
 
 
 class Packed:
@@ -331,10 +316,9 @@ MEMO = 32  # decoded runs of sections a thread remembers for windows
 _memo = threading.local()
 
 
-def pack(a: np.ndarray, narrow: bool = False) -> Packed:
-    """A (w, h, z) array -> Packed (its values, shape and dtype exactly). `narrow`
-    is pack_layers' and has no effect: LZ4 takes the high bytes of small block
-    ids to nearly nothing."""
+def pack(a: np.ndarray) -> Packed:
+    """A (w, h, z) array -> Packed (its values, shape and dtype exactly; block ids
+    need no narrowing: LZ4 takes their zero high bytes to nearly nothing)."""
     p = Packed()
     p.shape, p.dtype = a.shape, a.dtype
     if _lz4 is None or not a.size:

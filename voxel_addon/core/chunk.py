@@ -340,7 +340,7 @@ def pack(a: np.ndarray) -> Packed:
 
 def _uniform(v, n: int) -> bytes:
     """LZ4 of n copies of v (remembered: a few values recur: air, daylight, dark)."""
-    k = (v.dtype.str, int(v), n)
+    k = (v.dtype.str, v.tobytes(), n)
     c = _UNIFORM.get(k)
     if c is None:
         c = _lz4.compress(np.full(n, v, v.dtype), store_size=False)

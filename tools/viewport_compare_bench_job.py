@@ -170,11 +170,22 @@ def frames_until_gpu():
         yield 0.01
 
 
+class _Sized:
+    """A core.chunk.Packed, counted like a view of it (accounted() counts the base:
+    the Packed, whose nbytes are its compressed bytes)."""
+
+    def __init__(self, packed):
+        self.base = packed
+
+
 def _arrays(x):
-    """NumPy arrays reachable from a light value (an array, or packed layers)."""
+    """NumPy arrays reachable from a light value (an array, packed layers, or a
+    chunk's Packed)."""
     import numpy as np
     if isinstance(x, np.ndarray):
         yield x
+    elif hasattr(x, "body"):
+        yield _Sized(x)
     elif isinstance(x, tuple):
         for v in x:
             if isinstance(v, np.ndarray):

@@ -1,7 +1,10 @@
-"""Chunk light kept compact (only its non-uniform layers) reads back exactly."""
+"""Chunk blocks and light kept packed (Packed: LZ4) and the viewport's light packs
+(pack_layers: only the non-uniform layers) read back exactly."""
 import numpy as np
+import pytest
 
-from voxel_addon.core.chunk import Chunk, pack_layers, unpack_layers
+from voxel_addon.core import chunk as C
+from voxel_addon.core.chunk import Chunk, pack, pack_layers, unpack_layers
 
 
 def test_pack_layers_round_trip_and_compact_chunk():
@@ -21,7 +24,8 @@ def test_pack_layers_round_trip_and_compact_chunk():
         c = Chunk((0, 0))
         c.light = a
         c.compact()
-        assert c.nbytes() == c.blocks.nbytes + p[-1].nbytes
+        assert c._light is None and c._blocks is None
+        assert c.nbytes() == c._bpack.nbytes + c._lpack.nbytes < a.nbytes
         got = c.light
         assert np.array_equal(got, a) and got is c.light  # a read keeps it hot
         got[0, 0, 0] = 9  # written after a read: kept until the next compact
@@ -38,50 +42,120 @@ def test_typical_light_keeps_a_slab():
 
 
 def test_cold_blocks_are_kept_packed(monkeypatch):
-    """compact() packs blocks unused for HOT_S; reads give them back exactly and a
-    write after a read survives the next compact."""
-    from voxel_addon.core import chunk as C
+    """A chunk is born packed; a read gives the blocks back exactly and keeps them
+    hot until compact() finds them unread for HOT_S; a write after a read survives
+    the next compact."""
     rng = np.random.default_rng(1)
     a = C.empty()
     a[:, :, :60] = 1
     a[:, :, 60:70] = rng.integers(0, 9, (16, 16, 10))
-    c = Chunk((0, 0), a.copy(order="F"))
+    src = a.copy(order="F")
+    c = Chunk((0, 0), src)
+    assert c._blocks is None and c.nbytes() == c._bpack.nbytes < a.nbytes // 10
+    src[0, 0, 0] = 5  # the chunk keeps its own copy
+    got = c.blocks
+    assert np.array_equal(got, a) and got.flags.f_contiguous and got.flags.writeable
+    assert got.dtype == np.uint16 and c.blocks is got
     c.compact()
-    assert c._blocks is not None  # just set: hot, stays an array
+    assert c._blocks is got  # just read: hot, stays an array
     monkeypatch.setattr(C, "HOT_S", -1.0)
     c.compact()
-    assert c._blocks is None and c.nbytes() == c._bpack[-1].nbytes < a.nbytes // 10
-    assert np.array_equal(c.blocks, a) and c.blocks.flags.f_contiguous
+    assert c._blocks is None
     c.set(3, 4, 200, 7)
     c.compact()
-    assert c.get(3, 4, 200) == 7 and c.blocks[3, 4, 200] == 7
+    assert c._blocks is None and c.get(3, 4, 200) == 7
     a[3, 4, 200] = 7
     assert np.array_equal(c.blocks, a)
 
 
-def test_cold_blocks_keep_a_byte_per_voxel_when_ids_fit(monkeypatch):
-    """Block ids below 256 are packed as bytes (half the memory of a cold chunk) and
-    read back as the same uint16 ids; a chunk holding a larger id keeps two bytes."""
-    from voxel_addon.core import chunk as C
-    monkeypatch.setattr(C, "HOT_S", -1.0)
-    rng = np.random.default_rng(2)
-    for big in (0, 300, 65535):
-        a = C.empty()
-        a[:, :, :50] = 255
-        a[:, :, 50:80] = rng.integers(0, 256, (16, 16, 30))
-        if big:
-            a[5, 6, 70] = big
-        c = Chunk((0, 0), a.copy(order="F"))
-        c.compact()
-        slab = c._bpack[-1]
-        assert slab.dtype == (np.uint16 if big else np.uint8)
-        assert c.nbytes() == slab.nbytes == 16 * 16 * 30 * slab.itemsize
-        got = c.blocks
-        assert got.dtype == np.uint16 and got.flags.f_contiguous and np.array_equal(got, a)
-    # light is never narrowed (its packs are uploaded as they are)
-    a = np.zeros((16, 16, 256), np.uint16, order="F")
-    a[:, :, 10:20] = 7
-    assert pack_layers(a)[-1].dtype == np.uint16
+def _volume(rng, kinds: int, dtype=np.uint16, shape=C.SHAPE):
+    """Terrain-like: uniform below and above, `kinds` distinct values (all present)
+    in the layers between, from the whole range of the dtype."""
+    top = int(np.iinfo(dtype).max)
+    vals = rng.choice(top + 1, size=kinds, replace=False).astype(dtype)
+    lo, hi = sorted(int(v) for v in rng.integers(0, shape[2] + 1, 2))
+    if (hi - lo) * shape[0] * shape[1] < kinds:
+        lo, hi = 0, shape[2]
+    a = np.empty(shape, dtype, order="F")
+    a[:, :, :lo] = vals[0]
+    a[:, :, hi:] = vals[-1]
+    mid = a[:, :, lo:hi].reshape(-1, order="F")
+    idx = rng.integers(0, kinds, mid.size)
+    idx[:kinds] = np.arange(kinds)
+    a[:, :, lo:hi] = vals[idx].reshape((shape[0], shape[1], hi - lo), order="F")
+    return a
+
+
+@pytest.mark.parametrize("kinds", [1, 2, 16, 17, 256, 257, 4096])
+def test_pack_round_trips_exactly(kinds):
+    """Any values (block ids, light's four nibbles), dtypes, C- or Fortran-ordered,
+    any shape: unpack() gives a new writable Fortran array equal to the packed one
+    and into() any window of it."""
+    rng = np.random.default_rng(kinds)
+    for t in range(6):
+        dtype = np.uint8 if t == 5 and kinds <= 256 else np.uint16
+        shape = (18, 18, 256) if t == 4 else C.SHAPE
+        a = _volume(rng, kinds, dtype, shape)
+        if t == 3:
+            a = np.ascontiguousarray(a)
+        p = pack(a)
+        a0 = a.copy()
+        a[...] = 0  # the pack is a copy
+        b = p.unpack()
+        assert b.dtype == a0.dtype and b.shape == a0.shape and np.array_equal(b, a0)
+        assert b.flags.f_contiguous and b.flags.writeable
+        b[0, 0, 0] ^= 1  # a new array each time
+        assert np.array_equal(p.unpack(), a0)
+        for _ in range(4):
+            x0, x1 = sorted(int(v) for v in rng.integers(0, shape[0] + 1, 2))
+            y0, y1 = sorted(int(v) for v in rng.integers(0, shape[1] + 1, 2))
+            z0, z1 = sorted(int(v) for v in rng.integers(0, shape[2] + 1, 2))
+            out = np.full((x1 - x0, y1 - y0, z1 - z0), 77, a0.dtype, order="F")
+            p.into(out, slice(x0, x1), slice(y0, y1), z0, z1)
+            assert np.array_equal(out, a0[x0:x1, y0:y1, z0:z1])
+
+
+def test_layers_of_one_value_each_read_back():
+    """Sections that each hold one value (as daylight over dark rock does), side by
+    side with others, and windows across them."""
+    a = C.empty()
+    for z in range(256):
+        a[:, :, z] = z // 32 + 1 if z < 200 else 0xF000  # sections 0-5: one value each
+    a[3, 4, 100] = 9
+    p = pack(a)
+    assert np.array_equal(p.unpack(), a)
+    for z0, z1 in ((0, 256), (10, 70), (31, 33), (60, 130), (190, 256)):
+        out = np.zeros((2, 16, z1 - z0), np.uint16, order="F")
+        p.into(out, slice(2, 4), slice(None), z0, z1)
+        assert np.array_equal(out, a[2:4, :, z0:z1])
+
+
+def test_pack_without_lz4_keeps_the_array(monkeypatch):
+    monkeypatch.setattr(C, "_lz4", None)
+    a = _volume(np.random.default_rng(5), 17)
+    a0 = a.copy()
+    p = pack(a)
+    a[...] = 0  # a copy of the array
+    assert p.nbytes == a.nbytes and np.array_equal(p.unpack(), a0)
+    assert p.unpack() is not p.unpack()  # a new array each time: writes stay local
+    a = a0
+    c = Chunk((0, 0), a)
+    assert np.array_equal(c.blocks, a)
+
+
+def test_typical_chunk_packs_small():
+    """Generated terrain's blocks and light: a few KB each (issue 29: <= 1 B/voxel in
+    all, meshes included)."""
+    from voxel_addon.generation import make_generator
+    from voxel_addon.light import region_light
+    keys = [(x, y) for y in range(-1, 2) for x in range(-1, 2)]
+    g = make_generator("overworld", 2019, None, "numpy")
+    region = C.paste(zip(keys, g.generate(keys)), -1, -1, 2, 2)
+    lit = np.asfortranarray(region_light(region, tile=1, backend="numpy"))
+    blocks = np.asfortranarray(region[16:32, 16:32])
+    for a in (blocks, lit):
+        p = pack(a)
+        assert p.nbytes < 0.15 * C.VOLUME and np.array_equal(p.unpack(), a)
 
 
 def test_windows_of_cold_chunks_read_exactly_and_leave_them_cold(monkeypatch):

@@ -6,11 +6,17 @@ same rule: (W, H, 256) arrays, x fastest, and kernels index x + W*(y + H*z).
 """
 from __future__ import annotations
 
+import threading
 import time
 
 import numpy as np
 
 from .errors import VoxelError
+
+try:  # in the venv and every extension zip; without it packed layers stay arrays
+    from lz4 import block as _lz4
+except ImportError:  # pragma: no cover
+    _lz4 = None
 
 SIZE = 16
 HEIGHT = 256
@@ -71,8 +77,10 @@ def check_z(z: int) -> None:
 class Chunk:
     """Block ids plus lazily allocated small data and large data (thesis §4.1).
 
-    `data` stays None while all zero so an ordinary chunk costs 2 B per voxel.
-    `large` maps a small-data index to any Python object (e.g. a chest's contents).
+    `data` stays None while all zero. `large` maps a small-data index to any Python
+    object (e.g. a chest's contents). Blocks and light are kept packed (Packed: ~3 KB
+    each for generated terrain, of 128 KB) until read, and packed again by compact()
+    (issue 29).
     """
 
     __slots__ = ("key", "_blocks", "_bpack", "_bhot", "data", "large", "_light", "_lpack",
@@ -80,7 +88,14 @@ class Chunk:
 
     def __init__(self, key, blocks=None, data=None):
         self.key = tuple(key)
-        self.blocks = empty() if blocks is None else blocks
+        if blocks is None:
+            self._blocks, self._bpack, self._bhot = None, Packed.uniform(SHAPE, np.uint16), 0.0
+        elif getattr(blocks, "shape", None) == SHAPE and blocks.dtype in (np.uint16, np.uint8):
+            # born packed (a generated or loaded chunk is read once by its light and
+            # mesh, through blocks_into): 128 KB less for each until something reads it
+            self._blocks, self._bpack, self._bhot = None, pack(blocks), 0.0
+        else:
+            self.blocks = blocks
         self.data = data
         self.large: dict[int, object] = {}
         self._light = self._lpack = None  # final light (see .light), filled by the world layer
@@ -90,12 +105,12 @@ class Chunk:
 
     @property
     def blocks(self) -> np.ndarray:
-        """Block ids (16, 16, 256). Like the light, compact() keeps them as their
-        non-uniform layers (air above the terrain: ~30 % stays) once they were not
-        read or set for HOT_S seconds; a read rebuilds the array and keeps it hot."""
+        """Block ids (16, 16, 256). Kept packed until read; a read rebuilds the array
+        and keeps it hot (callers may write into it) until compact() finds it unread
+        for HOT_S seconds."""
         a = self._blocks
         if a is None:
-            a = self._blocks = unpack_layers(*self._bpack)  # (_bpack stays, as _lpack)
+            a = self._blocks = self._bpack.unpack()  # (_bpack stays, as _lpack)
             self._bhot = time.monotonic()
         return a
 
@@ -103,16 +118,18 @@ class Chunk:
         """A new array of the blocks (a save's snapshot) that leaves cold ones cold:
         rebuilt from their layers, not rebuilt, kept and copied."""
         a = self._blocks
-        return unpack_layers(*self._bpack) if a is None else a.copy(order="F")
+        return self._bpack.unpack() if a is None else a.copy(order="F")
 
-    def blocks_into(self, out: np.ndarray, xs: slice, ys: slice, z0: int, z1: int) -> None:
-        """out[...] = blocks[xs, ys, z0:z1] leaving cold blocks cold (an edit's window
-        reads a few columns of its neighbours: rebuilding them costs more)."""
-        a = self._blocks
+    def blocks_into(self, out: np.ndarray, xs: slice, ys: slice, z0: int, z1: int,
+                    keep: bool = False) -> None:
+        """out[...] = blocks[xs, ys, z0:z1] leaving cold blocks cold (a batch's
+        snapshot reads each chunk once), or with `keep` rebuilt and kept hot as a
+        read of .blocks (an edit reads its neighbours' windows several times)."""
+        a = self.blocks if keep else self._blocks
         if a is not None:
             out[...] = a[xs, ys, z0:z1]
         else:
-            _layers_into(out, self._bpack, xs, ys, z0, z1)
+            self._bpack.into(out, xs, ys, z0, z1)
 
     @blocks.setter
     def blocks(self, value) -> None:
@@ -122,12 +139,12 @@ class Chunk:
     def light(self) -> np.ndarray | None:
         """Final light (16, 16, 256) or None. Kept as a full array ("hot": set or
         read since the last compact(); callers may write into one they just set,
-        under the world's lock) or, after compact(), as its non-uniform layers only;
-        a read then rebuilds the array (same values) and keeps it hot."""
+        under the world's lock) or, after compact(), packed; a read then rebuilds
+        the array (same values) and keeps it hot."""
         a = self._light
         if a is None and self._lpack is not None:
             # _lpack stays: a compact() racing this read then still finds the light
-            a = self._light = unpack_layers(*self._lpack)
+            a = self._light = self._lpack.unpack()
         return a
 
     @property
@@ -135,31 +152,29 @@ class Chunk:
         """Whether final light is known (without rebuilding a compacted one)."""
         return self._light is not None or self._lpack is not None
 
-    def light_into(self, out: np.ndarray, xs: slice, ys: slice, z0: int, z1: int) -> None:
-        """out[...] = light[xs, ys, z0:z1] without rebuilding a compacted light (a
-        whole chunk for a few of its layers costs more than the copy)."""
-        a = self._light
+    def light_into(self, out: np.ndarray, xs: slice, ys: slice, z0: int, z1: int,
+                   keep: bool = False) -> None:
+        """out[...] = light[xs, ys, z0:z1] without rebuilding a compacted light, or
+        with `keep` rebuilt and kept (as a read of .light) until the next compact()."""
+        a = self.light if keep else self._light
         if a is not None or self._lpack is None:
             out[...] = 0 if a is None else a[xs, ys, z0:z1]
             return
-        _layers_into(out, self._lpack, xs, ys, z0, z1)
+        self._lpack.into(out, xs, ys, z0, z1)
 
     @light.setter
     def light(self, value) -> None:
         self._light, self._lpack = value, None
 
     def compact(self) -> None:
-        """Keep the light as its non-uniform layers (open sky above and unlit rock
-        below are uniform: ~70 of 256 layers stay), and the blocks so when they are
-        cold (a streamed view holds ~1,200 chunks at distance 16: 150 MB of blocks
-        as arrays). Call with the world's lock held."""
+        """Pack the light, and the blocks when cold (not read or set for HOT_S
+        seconds). Call with the world's lock held."""
         a = self._light
         if a is not None:
-            self._lpack, self._light = pack_layers(a), None
+            self._lpack, self._light = pack(a), None
         b = self._blocks
-        if b is not None and b.shape == (SIZE, SIZE, HEIGHT) \
-                and time.monotonic() - self._bhot > HOT_S:
-            self._bpack, self._blocks = pack_layers(b, narrow=True), None
+        if b is not None and b.shape == SHAPE and time.monotonic() - self._bhot > HOT_S:
+            self._bpack, self._blocks = pack(b), None
 
     @property
     def origin(self) -> tuple[int, int]:
@@ -176,8 +191,7 @@ class Chunk:
 
     def nbytes(self) -> int:
         n = 0
-        for a in (self._blocks, self._bpack and self._bpack[-1], self.data, self._light,
-                  self._lpack and self._lpack[-1]):
+        for a in (self._blocks, self._bpack, self.data, self._light, self._lpack):
             if a is not None:
                 n += a.nbytes
         return n
@@ -195,33 +209,21 @@ def put(blocks, data, lx: int, ly: int, z: int, block: int, value: int):
     return data
 
 
-def pack_layers(a: np.ndarray, narrow: bool = False) -> tuple:
+def pack_layers(a: np.ndarray) -> tuple:
     """(16, 16, 256) array -> (shape, lo, hi, bottom value, top value, a[:, :, lo:hi]):
-    the layers below lo all hold the bottom value, those from hi up the top value.
-    `narrow`: the kept layers as uint8 when every value fits (block ids: the registry
-    has fewer than 256, so a cold chunk's blocks take half the memory); unpack_layers
-    gives the array back in the dtype of the bottom and top values, a's."""
+    the layers below lo all hold the bottom value, those from hi up the top value
+    (the viewport keeps payload light so: unpacking it costs a copy; chunks keep
+    theirs as Packed)."""
     f = a.reshape(-1, a.shape[2], order="F") if a.flags.f_contiguous \
         else np.asfortranarray(a).reshape(-1, a.shape[2], order="F")
-    mn, mx = f.min(0), f.max(0)
+    mn = f.min(0)
     bot, top = mn[0], mn[-1]
-    same = mn == mx
+    same = mn == f.max(0)
     odd = np.flatnonzero(~same | (mn != top))
     hi = int(odd[-1]) + 1 if odd.size else 0
     odd = np.flatnonzero(~same[:hi] | (mn[:hi] != bot))
     lo = int(odd[0]) if odd.size else hi
-    if narrow and a.dtype.itemsize > 1 and (hi <= lo or int(mx[lo:hi].max()) < 256):
-        return a.shape, lo, hi, bot, top, a[:, :, lo:hi].astype(np.uint8, order="F")
     return a.shape, lo, hi, bot, top, a[:, :, lo:hi].copy(order="F")
-
-
-def _layers_into(out, pack, xs, ys, z0, z1) -> None:
-    """out[...] = unpack_layers(*pack)[xs, ys, z0:z1] without rebuilding the array."""
-    _, lo, hi, bot, top, slab = pack
-    a, b = min(max(lo, z0), z1), max(min(hi, z1), z0)
-    out[:, :, :a - z0] = bot
-    out[:, :, a - z0:b - z0] = slab[xs, ys, a - lo:b - lo]
-    out[:, :, b - z0:] = top
 
 
 def unpack_layers(shape, lo, hi, bot, top, slab) -> np.ndarray:
@@ -230,3 +232,121 @@ def unpack_layers(shape, lo, hi, bot, top, slab) -> np.ndarray:
     out[:, :, lo:hi] = slab
     out[:, :, hi:] = top
     return out
+
+
+class Packed:
+    """A chunk array as kept in memory (issue 29): LZ4-compressed in sections of
+    SECTION layers (generated terrain's blocks and light: ~3 KB of 128 KB each).
+    Sections keep every decode a small allocation (a fresh 128 KB buffer costs page
+    faults: ~80 us in a big process) and let a window (an edit's: a few columns
+    over some layers) decode only the sections it reads. Without the lz4 package
+    the array itself is kept."""
+
+    __slots__ = ("shape", "dtype", "body")
+    SECTION = 32
+
+    @classmethod
+    def uniform(cls, shape, dtype, value=0) -> "Packed":
+        return pack(np.full(shape, value, dtype, order="F"))
+
+    @property
+    def nbytes(self) -> int:
+        b = self.body
+        return b.nbytes if isinstance(b, np.ndarray) else \
+            sum(len(x) if isinstance(x, bytes) else x.nbytes for x in b)
+
+    def unpack(self) -> np.ndarray:
+        """A new (writable, Fortran-ordered) array of the packed values."""
+        if isinstance(self.body, np.ndarray):
+            return self.body.copy(order="F")
+        out = np.empty(self.shape, self.dtype, order="F")
+        self.into(out, _ALL, _ALL, 0, self.shape[2])
+        return out
+
+    def into(self, out, xs: slice, ys: slice, z0: int, z1: int) -> None:
+        """out[...] = unpack()[xs, ys, z0:z1], decoding only the sections it reads."""
+        b = self.body
+        if isinstance(b, np.ndarray):
+            out[...] = b[xs, ys, z0:z1]
+            return
+        S = self.SECTION
+        # part of the columns: an edit's windows, which read the same sections of
+        # a 3x3 of chunks several times (light, then the mesher's ring): remembered
+        memo = xs != _ALL or ys != _ALL
+        i, last = z0 // S, -(-z1 // S)
+        while i < last:  # runs of packed sections (one decode), of one value (a fill)
+            v, j = b[i], i + 1
+            if isinstance(v, bytes):
+                while j < last and isinstance(b[j], bytes):
+                    j += 1
+                v = self._run(i, j, memo)
+            else:
+                while j < last and not isinstance(b[j], bytes) and b[j] == v:
+                    j += 1
+            za, ze = max(z0, i * S), min(z1, j * S)
+            out[:, :, za - z0:ze - z0] = v if v.ndim == 0 else v[xs, ys, za - i * S:ze - i * S]
+            i = j
+
+    def _run(self, i: int, j: int, memo: bool) -> np.ndarray:
+        """Packed sections [i, j) decoded, as a (w, h, layers) array (read-only)."""
+        if memo:
+            d = getattr(_memo, "d", None)
+            if d is None:
+                d = _memo.d = {}
+            got = d.pop((self, i, j), None)
+            if got is not None:
+                d[(self, i, j)] = got  # the most recent last
+                return got
+        w, h, z = self.shape
+        S, k = self.SECTION, w * h * self.dtype.itemsize
+        n = min(z, j * S) - i * S
+        raws = [_lz4.decompress(self.body[t], uncompressed_size=k * min(S, z - t * S))
+                for t in range(i, j)]
+        got = np.frombuffer(raws[0] if j == i + 1 else b"".join(raws),
+                            self.dtype).reshape((w, h, n), order="F")
+        if memo:
+            if len(d) >= MEMO:
+                del d[next(iter(d))]  # the least recently used
+            d[(self, i, j)] = got
+        return got
+
+
+_ALL = slice(None)
+MEMO = 32  # decoded runs of sections a thread remembers for windows
+_memo = threading.local()
+
+
+def pack(a: np.ndarray) -> Packed:
+    """A (w, h, z) array -> Packed (its values, shape and dtype exactly; block ids
+    need no narrowing: LZ4 takes their zero high bytes to nearly nothing)."""
+    p = Packed()
+    p.shape, p.dtype = a.shape, a.dtype
+    if _lz4 is None or not a.size:
+        p.body = np.array(a, order="F")
+        return p
+    f = a if a.flags.f_contiguous else np.asfortranarray(a)
+    S, body = Packed.SECTION, []
+    for z in range(0, a.shape[2], S):
+        sec = f[:, :, z:z + S].reshape(-1, order="F")
+        c = _lz4.compress(sec, store_size=False)
+        # LZ4 is deterministic: the same bytes as the section filled with its first
+        # value means it holds that value only (kept as the value: no decode)
+        if len(c) < 128 and c == _uniform(sec[0], sec.size):
+            c = sec[0]
+        body.append(c)
+    p.body = tuple(body)
+    return p
+
+
+def _uniform(v, n: int) -> bytes:
+    """LZ4 of n copies of v (remembered: a few values recur: air, daylight, dark)."""
+    k = (v.dtype.str, v.tobytes(), n)
+    c = _UNIFORM.get(k)
+    if c is None:
+        c = _lz4.compress(np.full(n, v, v.dtype), store_size=False)
+        if len(_UNIFORM) < 4096:
+            _UNIFORM[k] = c
+    return c
+
+
+_UNIFORM: dict = {}

@@ -92,6 +92,9 @@ LATER_WAIT_S = 60.0  # the far prebuild waits at most this long for busy streams
 _warmed: weakref.WeakSet = weakref.WeakSet()  # generators warm-up has run for
 
 
+_ALL = slice(None)
+
+
 def keys_of(cx0: int, cy0: int, cx1: int, cy1: int) -> list[tuple[int, int]]:
     return [(x, y) for y in range(cy0, cy1) for x in range(cx0, cx1)]
 
@@ -109,7 +112,8 @@ def snapshot(world, cx0: int, cy0: int, cx1: int, cy1: int, data: bool = False):
             c = world.chunks.get(k)
             if c is not None:
                 x, y = (k[0] - cx0) * C.SIZE, (k[1] - cy0) * C.SIZE
-                out[x:x + C.SIZE, y:y + C.SIZE] = c.blocks
+                # a cold chunk decodes into the window and stays packed (issue 29)
+                c.blocks_into(out[x:x + C.SIZE, y:y + C.SIZE], _ALL, _ALL, 0, C.HEIGHT)
                 if data and c.data is not None:
                     if small is None:
                         small = np.zeros_like(out)
@@ -137,7 +141,7 @@ def light_and_mesh(world, cx0: int, cy0: int, cx1: int, cy1: int, *, backends_=N
             world.load(ring)
     blocks, ticks, data = snapshot(world, cx0 - 1, cy0 - 1, cx1 + 1, cy1 + 1, data=True)
     with world.locked():  # light stored in the file (loaded with the blocks) is final
-        need = any(c is not None and c.light is None
+        need = any(c is not None and not c.has_light
                    for c in map(world.chunks.get, keys_of(cx0, cy0, cx1, cy1)))
     # one solve for the whole rectangle: its ring is the only overhead
     # model blocks that are no whole cube pass light (with the world's resource stack)
@@ -173,11 +177,11 @@ def store(world, cx0, cy0, cx1, cy1, lit, meshes, ticks) -> list[Payload]:
                    for i in (-1, 0, 1) for j in (-1, 0, 1)):
                 continue
             if lit is not None:
-                if c.light is None and not world.readonly:
+                if not c.has_light and not world.readonly:
                     c.dirty = True
                 x, y = (k[0] - cx0) * s, (k[1] - cy0) * s
                 c.light = np.asfortranarray(lit[x:x + s, y:y + s])
-            elif c.light is None:
+            elif not c.has_light:
                 continue
             c.mesh = meshes[k]
             v = world.pver[k] = world.tick()

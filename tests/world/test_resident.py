@@ -1,0 +1,46 @@
+"""Chunks kept packed in memory (issue 29): the world's reads and edits see exactly
+the blocks and light they would see in arrays, and leave untouched chunks packed."""
+import numpy as np
+
+from voxel_addon.core import chunk as C
+from voxel_addon.core.blocks import REGISTRY
+from voxel_addon.world import World, build
+from voxel_addon.world.edit import edit
+
+
+def _cold(w):
+    with w.locked():
+        for c in w.chunks.values():
+            c.compact()
+    return all(c._blocks is None and c._light is None for c in w.chunks.values())
+
+
+def test_edit_on_cold_chunks_changes_exactly_one_voxel(tmp_path, monkeypatch):
+    monkeypatch.setattr(C, "HOT_S", -1.0)  # compact() packs whatever was read
+    with World.create(tmp_path / "w.sqlite", seed=7, backend="numpy") as w:
+        build.light_and_mesh(w, -1, -1, 2, 2, backends_=("numpy", "numpy"))
+        assert _cold(w)
+        keys = sorted(w.chunks)
+        blocks = {k: w.chunks[k].blocks_copy() for k in keys}
+        assert _cold(w)  # (a copy leaves them packed)
+        # a batch's snapshot decodes into its window and leaves the chunks packed
+        got, _ = build.snapshot(w, -2, -2, 3, 3)
+        assert np.array_equal(got, C.paste(blocks.items(), -2, -2, 3, 3))
+        assert all(w.chunks[k]._blocks is None for k in keys)
+        # one voxel on top of the terrain, in a chunk whose neighbours are all cold
+        x, y = 5, 7
+        z = int(np.flatnonzero(blocks[(0, 0)][x, y])[-1]) + 1
+        stone = REGISTRY.id("stone")
+        payloads, _ = edit(w, (x, y, z, stone))
+        assert payloads
+        assert _cold(w)
+        after = {k: w.chunks[k].blocks_copy() for k in keys}
+        assert sum(int((after[k] != blocks[k]).sum()) for k in keys) == 1
+        assert after[(0, 0)][x, y, z] == stone and w.chunks[(0, 0)].get(x, y, z) == stone
+        # its light is the light of the new blocks (a full solve of the 3x3 around)
+        from voxel_addon.light import region_light
+        region = C.paste(after.items(), -2, -2, 3, 3)
+        want = region_light(region, tile=3, backend="numpy")
+        for k in [(i, j) for j in (-1, 0, 1) for i in (-1, 0, 1)]:
+            i, j = (k[0] + 1) * C.SIZE, (k[1] + 1) * C.SIZE
+            assert np.array_equal(w.chunks[k].light, want[i:i + C.SIZE, j:j + C.SIZE]), k

@@ -18,7 +18,7 @@ import numpy as np
 
 from .. import opencl, resources
 from ..core import chunk as C
-from .lower import Unit, lazy_blocks, nodes
+from .lower import Unit, lattice_dims, lazy_blocks, levels, nodes
 
 # No fast-math, no mad: IEEE results identical to NumPy's (see gpu/noise.h).
 OPTIONS = ("-cl-fp32-correctly-rounded-divide-sqrt",)
@@ -60,6 +60,9 @@ class _Gen:
                 for n, e in u.outs.items():
                     self.fields[n] = (e.t, u.halo)
                     self.defs[n] = e
+            elif u.kind in ("g3", "gc"):
+                for n in u.outs:
+                    self.fields[n] = ("f", None)
 
     def expr(self, e, a, unit):
         op, k = e.op, e.k
@@ -112,6 +115,8 @@ class _Gen:
             return self.read(name, dx, dy, a, reach)
         if op == "prev":
             return f"vx_prev(prev, c, z + ({k}), lid)"
+        if op in ("gread", "cread"):
+            return f"f_{k[0]}[{gindex(e.op, k, a)}]"
         raise ValueError(f"unknown op {op}")
 
     def read(self, name, dx, dy, a=(), reach=0):
@@ -181,7 +186,7 @@ class _Gen:
     def reads(self, u: Unit):
         names = [u.top] if u.top is not None else []
         for e in nodes(u.roots()):
-            if e.op == "read" and e.k[0] not in names:
+            if e.op in ("read", "gread", "cread") and e.k[0] not in names:
                 names.append(e.k[0])
         return names
 
@@ -199,6 +204,9 @@ class _Gen:
         args = ["__global const int* org", "__constant const int* perm", "uint seed", "int n"]
         if u.kind == "2d":
             args += [f"__global {CT[e.t]}* o_{n}" for n, e in u.outs.items()]
+        elif u.kind in ("g3", "gc"):
+            args += ["__global const int* layers"]
+            args += [f"__global {CT[e.t]}* o_{n}" for n, e in u.outs.items()]
         else:
             args += ["__global const int* layers", "__global ushort* blocks",
                      "__global const ushort* prev"]
@@ -212,6 +220,17 @@ class _Gen:
                     f"    int g = vx_imin(gid, n * {w * w} - 1);",
                     f"    int c = g / {w * w}, r = g - c * {w * w};",
                     f"    int lx = r % {w} - {u.halo}, ly = r / {w} - {u.halo};"]
+        elif u.kind in ("g3", "gc"):  # a work-group per (chunk, lattice level): layers
+            (cx, cy, cz), (ni, nj, nk) = u.cell, lattice_dims(u.cell)
+            out += ["    int grp = get_group_id(0), lid = get_local_id(0);",
+                    "    int ck = layers[grp], c = ck >> 8, k = ck & 255, z = k * " f"{cz};"]
+            if u.kind == "g3":  # lattice points (i, j) of the level, [c][i][j][k]
+                out += [f"    int p = vx_imin(lid, {ni * nj - 1}), i = p / {nj}, j = p - i * {nj};",
+                        f"    int lx = i * {cx}, ly = j * {cy};",
+                        f"    int gid = ((c * {ni} + i) * {nj} + j) * {nk} + k;"]
+            else:  # the level at each column, [c][k][y][x]
+                out += [f"    int lx = lid & {C.SIZE - 1}, ly = lid >> 4;",
+                        f"    int gid = (c * {nk} + k) * {LAYER} + lid;"]
         else:
             out += ["    int grp = get_group_id(0), lid = get_local_id(0);",
                     "    int cz = layers[grp], c = cz >> 8, z = cz & 255;",
@@ -224,7 +243,7 @@ class _Gen:
         out += self.salts(roots)
         done = {}
         out += self.body(roots, u, done)
-        if u.kind == "2d":
+        if u.kind in ("2d", "g3", "gc"):
             out += [f"    o_{n}[gid] = {done[e.id]};" for n, e in u.outs.items()]
         else:
             top = "255" if u.top is None else self.read(u.top, 0, 0)
@@ -232,10 +251,25 @@ class _Gen:
         return "\n".join(out + ["}", ""])
 
 
+def gindex(op, k, a):
+    """Index of a coarse value (execute.Runner._gread) in its unit's buffer; a: x, y, z
+    (scalars). gread: sample at lattice corner (i, j) of (x, y)'s cell at level z,
+    buffer [chunk][i][j][level]; cread: level z / cz + k of column (x, y), buffer
+    [chunk][level][y][x] (rows of x contiguous for the 8-lane load)."""
+    (cx, cy, cz), m = k[1], C.SIZE - 1  # origins are multiples of 16: x & 15 in the chunk
+    ni, nj, nk = lattice_dims(k[1])
+    if op == "gread":
+        i, j = k[2], k[3]
+        return (f"((c * {ni} + ((({a[0]}) & {m}) / {cx} + {i})) * {nj}"
+                f" + ((({a[1]}) & {m}) / {cy} + {j})) * {nk} + ({a[2]}) / {cz}")
+    return (f"((c * {nk} + (({a[2]}) / {cz} + {k[2]})) * {C.SIZE} + (({a[1]}) & {m}))"
+            f" * {C.SIZE} + (({a[0]}) & {m})")
+
+
 # ops the 8-lane 3D kernels implement; a unit using others stays scalar
 _VEC_OPS = set(_BIN) | {"const", "x", "y", "z", "neg", "not", "min", "max", "abs", "floor",
                         "sqrt", "int", "float", "fdiv", "fmod", "select", "perlin2",
-                        "perlin3", "rand2", "rand3", "irand2", "read", "prev"}
+                        "perlin3", "rand2", "rand3", "irand2", "read", "prev", "cread"}
 VLANES = 8
 VECTOR = True  # False: every unit scalar (for comparisons)
 VLOCAL = LAYER // VLANES  # a 3D work-group: one z layer, one row of 8 voxels per item
@@ -303,6 +337,9 @@ class _GenV(_Gen):
             return f"(-{v})" if e.t == "b" else v
         if op == "prev":
             return f"vx_prev8(prev, c, zs + ({k}), row)"
+        if op == "cread":  # the row's 8 columns are consecutive: one load
+            (cz, nk), lv = (k[1][2], lattice_dims(k[1])[2]), k[2]
+            return f"vload8(0, f_{k[0]} + ((c * {nk} + (zs / {cz} + {lv})) * {C.SIZE} + ly) * {C.SIZE} + lx0)"
         raise ValueError(f"no 8-lane form of {op}")
 
     def span(self, e):
@@ -324,7 +361,7 @@ class _GenV(_Gen):
         if op == "read":
             d = self.defs.get(e.k[0])
             return None if e.k[1] is None or d is None else self.span(d)
-        if op == "prev":
+        if op in ("prev", "gread", "cread"):
             return None
         s = [self.span(x) for x in a]
         if any(x is None for x in s):
@@ -436,13 +473,28 @@ class Runner:
             b = self._bufs[key] = cl.Buffer(self.ctx, cl.mem_flags.READ_WRITE, max(nbytes, 4))
         return b
 
-    def _layers(self, u, fields, n):
-        """(chunk, z) pairs to compute for a 3D unit: z up to the chunk's highest top."""
+    def _zmax(self, u, fields, n, tops=None):
+        """Each chunk's highest z a unit computes (its top's maximum), (n,)."""
         if u.top is None:
-            zmax = np.full(n, C.HEIGHT - 1)
-        else:
+            return np.full(n, C.HEIGHT - 1)
+        if tops is None or u.top not in tops:
             top = self._read_field(u.top, fields, n)
             zmax = np.clip(top.reshape(n, -1).max(axis=1), -1, C.HEIGHT - 1)
+            if tops is None:
+                return zmax
+            tops[u.top] = zmax
+        return tops[u.top]
+
+    def _levels(self, u, fields, n, tops):
+        """(chunk, level) pairs of a lattice unit: the levels below each chunk's top."""
+        k = np.array([levels(u.cell, t) for t in self._zmax(u, fields, n, tops)], np.int64)
+        cs = np.repeat(np.arange(n), k)
+        ks = np.concatenate([np.arange(m) for m in k]) if n else cs
+        return (cs * 256 + ks).astype(np.int32)
+
+    def _layers(self, u, fields, n, tops=None):
+        """(chunk, z) pairs to compute for a 3D unit: z up to the chunk's highest top."""
+        zmax = self._zmax(u, fields, n, tops)
         cs = np.repeat(np.arange(n), zmax + 1)
         zs = np.concatenate([np.arange(m + 1) for m in zmax]) if n else cs
         return (cs * 256 + zs).astype(np.int32)
@@ -477,11 +529,24 @@ class Runner:
         cl.enqueue_copy(q, borg, org)
         bperm = self._perm_buf(seed32, perm)
         fields, blocks, prev = {}, None, None
+        tops: dict = {}  # top field -> its values, read back once per batch
         nb = 0  # which of the two block buffers is next
         for i, u in enumerate(self.units):
             k = self.kernels[i]
             args = [borg, bperm, np.uint32(seed32), np.int32(n)]
-            if u.kind == "2d":
+            if u.kind in ("g3", "gc"):
+                ni, nj, nk = lattice_dims(u.cell)
+                lay = self._levels(u, fields, n, tops)
+                pts, local = (LAYER, LAYER) if u.kind == "gc" else (ni * nj, _pad(ni * nj, 8))
+                size = len(lay) * local
+                blay = self._buf(f"layers{i}", lay.nbytes)
+                if len(lay):
+                    cl.enqueue_copy(q, blay, lay)
+                args.append(blay)
+                for name in u.outs:
+                    fields[name] = (self._buf(f"f_{name}", 4 * n * nk * pts), None)
+                    args.append(fields[name][0])
+            elif u.kind == "2d":
                 w = self.size + 2 * u.halo
                 size = _pad(n * w * w, LOCAL2D)
                 for name in u.outs:
@@ -489,7 +554,7 @@ class Runner:
                     args.append(fields[name][0])
                 local = LOCAL2D
             else:
-                lay = self._layers(u, fields, n)
+                lay = self._layers(u, fields, n, tops)
                 prev = blocks
                 blocks = self._buf(f"blocks{nb}", 2 * n * C.VOLUME)
                 nb ^= 1

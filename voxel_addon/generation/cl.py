@@ -224,10 +224,10 @@ class _Gen:
             (cx, cy, cz), (ni, nj, nk) = u.cell, lattice_dims(u.cell)
             out += ["    int grp = get_group_id(0), lid = get_local_id(0);",
                     "    int ck = layers[grp], c = ck >> 8, k = ck & 255, z = k * " f"{cz};"]
-            if u.kind == "g3":  # lattice points (i, j) of the level, [c][i][j][k]
+            if u.kind == "g3":  # lattice points p = (i, j) of the level, [c][k][p]
                 out += [f"    int p = vx_imin(lid, {ni * nj - 1}), i = p / {nj}, j = p - i * {nj};",
                         f"    int lx = i * {cx}, ly = j * {cy};",
-                        f"    int gid = ((c * {ni} + i) * {nj} + j) * {nk} + k;"]
+                        f"    int gid = (c * {nk} + k) * {g3_row(u.cell)} + lid;"]
             else:  # the level at each column, [c][k][y][x]
                 out += [f"    int lx = lid & {C.SIZE - 1}, ly = lid >> 4;",
                         f"    int gid = (c * {nk} + k) * {LAYER} + lid;"]
@@ -251,17 +251,23 @@ class _Gen:
         return "\n".join(out + ["}", ""])
 
 
+def g3_row(cell) -> int:
+    """A g3 buffer's entries per (chunk, level): the level's points padded to 8 lanes."""
+    ni, nj, _ = lattice_dims(cell)
+    return _pad(ni * nj, VLANES)
+
+
 def gindex(op, k, a):
     """Index of a coarse value (execute.Runner._gread) in its unit's buffer; a: x, y, z
     (scalars). gread: sample at lattice corner (i, j) of (x, y)'s cell at level z,
-    buffer [chunk][i][j][level]; cread: level z / cz + k of column (x, y), buffer
-    [chunk][level][y][x] (rows of x contiguous for the 8-lane load)."""
+    buffer [chunk][level][i * nj + j, padded: g3_row]; cread: level z / cz + k of
+    column (x, y), buffer [chunk][level][y][x] (rows of x contiguous: one 8-lane load)."""
     (cx, cy, cz), m = k[1], C.SIZE - 1  # origins are multiples of 16: x & 15 in the chunk
-    ni, nj, nk = lattice_dims(k[1])
+    _, nj, nk = lattice_dims(k[1])
     if op == "gread":
         i, j = k[2], k[3]
-        return (f"((c * {ni} + ((({a[0]}) & {m}) / {cx} + {i})) * {nj}"
-                f" + ((({a[1]}) & {m}) / {cy} + {j})) * {nk} + ({a[2]}) / {cz}")
+        return (f"(c * {nk} + ({a[2]}) / {cz}) * {g3_row(k[1])}"
+                f" + ((({a[0]}) & {m}) / {cx} + {i}) * {nj} + ((({a[1]}) & {m}) / {cy} + {j})")
     return (f"((c * {nk} + (({a[2]}) / {cz} + {k[2]})) * {C.SIZE} + (({a[1]}) & {m}))"
             f" * {C.SIZE} + (({a[0]}) & {m})")
 
@@ -285,7 +291,7 @@ def _constant(e):
 
 
 def vectorizable(u: Unit) -> bool:
-    return (VECTOR and u.kind == "3d"
+    return (VECTOR and u.kind in ("3d", "g3")
             and all(e.op in _VEC_OPS and e.t != "f3" for e in nodes(u.roots())))
 
 
@@ -295,6 +301,7 @@ class _GenV(_Gen):
     none. Bools are 0/-1 lanes; numbers as in the scalar code, op for op."""
     vec = True
     ct = {"f": "vf8", "i": "vi8", "b": "vi8"}
+    free = False  # True for g3 kernels (lanes are any 8 lattice points)
 
     def expr(self, e, a, unit):
         op, k = e.op, e.k
@@ -354,6 +361,8 @@ class _GenV(_Gen):
 
     def _span(self, e):
         op, a = e.op, e.a
+        if self.free:  # lanes are lattice points: no row structure to rely on
+            return None
         if op == "const" or op in ("y", "z"):
             return (0.0, 0)
         if op == "x":
@@ -399,7 +408,32 @@ class _GenV(_Gen):
             return f"VX_GATHER8({self.ct[t]}, {base}, {idx})"
         return f"vload8(0, {base} + (ly + {hf} + ({dy})) * {wf} + (lx0 + {hf} + ({dx})))"
 
+    def kernel_g3(self, i, u: Unit):
+        """A g3 unit (lattice samples) 8 points per work-item: the scalar one ran
+        perlin3 unvectorized (pocl), ~3x slower per point than the 3D kernels."""
+        (cx, cy, cz), (ni, nj, nk) = u.cell, lattice_dims(u.cell)
+        roots = u.roots()
+        args = ["__global const int* org", "__constant const int* perm", "uint seed", "int n",
+                "__global const int* layers"]
+        args += [f"__global float* o_{n}" for n in u.outs]
+        args += [f"__global const {CT[self.fields[n][0]]}* f_{n}" for n in self.reads(u)]
+        out = [f"__kernel void unit{i}({', '.join(args)}) {{",
+               "    int grp = get_group_id(0), lid = get_local_id(0);",
+               "    int ck = layers[grp], c = ck >> 8, k = ck & 255;",
+               f"    vi8 p = vx_imin8(lid * {VLANES} + VX_LANES, (vi8)({ni * nj - 1}));",
+               f"    vi8 i = p / {nj}, j = p - i * {nj};",
+               f"    vi8 x = org[c] + i * {cx}, y = org[n + c] + j * {cy}, z = (vi8)(k * {cz});"]
+        out += self.salts(roots)
+        done = {}
+        out += self.body(roots, u, done)
+        row = g3_row(u.cell)
+        out += [f"    vstore8({done[e.id]}, 0, o_{n} + (c * {nk} + k) * {row} + lid * {VLANES});"
+                for n, e in u.outs.items()]
+        return "\n".join(out + ["}", ""])
+
     def kernel(self, i, u: Unit):
+        if u.kind == "g3":
+            return self.kernel_g3(i, u)
         roots = u.roots()
         args = ["__global const int* org", "__constant const int* perm", "uint seed", "int n",
                 "__global const int* layers", "__global ushort* blocks",
@@ -431,9 +465,11 @@ ROW_SPAN = 0.9  # perlin3's x over a row spans less than this (cells): perlin3_8
 
 
 def source(units, size=C.SIZE) -> str:
-    g, gv = _Gen(units, size), _GenV(units)
+    g, gv, free = _Gen(units, size), _GenV(units), _GenV(units)
+    free.free = True
     return resources.kernel("gen.cl") + "\n".join(
-        (gv if vectorizable(u) else g).kernel(i, u) for i, u in enumerate(units))
+        ((free if u.kind == "g3" else gv) if vectorizable(u) else g).kernel(i, u)
+        for i, u in enumerate(units))
 
 
 class Runner:
@@ -537,7 +573,8 @@ class Runner:
             if u.kind in ("g3", "gc"):
                 ni, nj, nk = lattice_dims(u.cell)
                 lay = self._levels(u, fields, n, tops)
-                pts, local = (LAYER, LAYER) if u.kind == "gc" else (ni * nj, _pad(ni * nj, 8))
+                pts = LAYER if u.kind == "gc" else g3_row(u.cell)
+                local = pts if u.kind == "gc" or not self._vec[i] else pts // VLANES
                 size = len(lay) * local
                 blay = self._buf(f"layers{i}", lay.nbytes)
                 if len(lay):

@@ -147,7 +147,7 @@ def lattice(index, roots, top=None):
     that is two loads and a lerp instead of the function. Like the 3D unit, the
     lattice units stop at the levels the pass's `top` needs.
     Returns (units in order, new roots)."""
-    units: list = []
+    units: dict = {}  # cell -> [g3 unit, gc unit]: one kernel each for all its functions
     got: dict = {}
 
     def fn(e, a):
@@ -159,14 +159,16 @@ def lattice(index, roots, top=None):
             name = got[key] = f"_{index}_g{len(got)}"
             x, y, z = _xyz()
             col = _interp_xy(e.k, x, y, lambda i, j: E("gread", (x, y, z), "f", (name, e.k, i, j)))
-            units.append(Unit("g3", {name: a[0]}, top=top, cell=e.k))
-            units.append(Unit("gc", {name + "c": col}, top=top, cell=e.k))
+            g3, gc = units.setdefault(e.k, [Unit("g3", {}, top=top, cell=e.k),
+                                            Unit("gc", {}, top=top, cell=e.k)])
+            g3.outs[name] = a[0]
+            gc.outs[name + "c"] = col
         name = got[key] + "c"
         x, y, z = _xyz()
         lv = [E("cread", (x, y, z), "f", (name, e.k, k)) for k in (0, 1)]
         return _lerp(_frac(z, e.k[2]), lv[0], lv[1])
     new = _rebuild(roots, fn)
-    return units, new
+    return [u for pair in units.values() for u in pair], new
 
 
 # Rough cost of a node when evaluated per voxel; hoisting pays above HOIST_COST.

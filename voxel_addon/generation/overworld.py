@@ -24,13 +24,14 @@ KEEP = 3           # trees remembered per column
 # far terrain: share of a column's area under crowns per unit of treeRate (measured
 # on generated chunks: tests/far/test_consistency.py checks it stays close)
 TREE_COVER = 0.45
-CELL = (4, 4, 8)   # version 2's cave lattice (x, y, z voxels per cell): see README
+CELL = (4, 4, 4)   # version 2's cave lattice (x, y, z voxels per cell): see README
 
 
 class OverworldGenerator(PassGenerator):
     name = "overworld"
-    # 1: the cave noise per voxel; 2: sampled on a CELL lattice and interpolated (issue
-    # 29: generation ~x? faster; the height map, surface and far terrain are unchanged)
+    # 1: the cave noise per voxel; 2: sampled on a CELL lattice and interpolated, and the
+    # mountain and dune Voronoi only where those biomes are (issue 29; the height map, so
+    # surface() and far terrain, is version 1's: generation/README.md)
     version = 2
     versions = (1, 2)
     defaults = {
@@ -79,11 +80,15 @@ class OverworldGenerator(PassGenerator):
             rough = octaves(perlin2, (x / 24, y / 24), n=2) * 10.0
             z_mountains = maximum0(peaks * peaks * 150.0 + fold * fold * 26.0 + rough - 6.0) \
                 * mountainess * float(P["mountains"])
+            if self.version >= 2:  # Voronoi only where it counts (lazy: cl.py's `if`s)
+                z_mountains = select(mountainess > 0.0, z_mountains, 0.0)
             # dunes: max of two Voronoi diagrams of the same size (fig. 4.11)
             d1 = voronoi2(x / 34, y / 34).f1
             d2 = voronoi2((x + 17) / 34, (y - 9) / 34).f1
             dune = max_(d1, d2)
             z_desert = (dune * dune * 12.0 + perlin2(x / 90, y / 90) * 4.0 + 2.0) * desertness * land
+            if self.version >= 2:
+                z_desert = select(desertness * land > 0.0, z_desert, 0.0)
             # rivers: |Perlin| near zero; bed below sea level, banks lowered towards it
             wx = perlin2(x / 160, y / 160) * 70.0
             wy = perlin2((x + 5000) / 160, y / 160) * 70.0

@@ -18,7 +18,7 @@ import numpy as np
 
 from .. import opencl, resources
 from ..core import chunk as C
-from .lower import Unit, lattice_dims, lazy_blocks, levels, nodes
+from .lower import Unit, expand, lattice_dims, lazy_blocks, levels, nodes
 
 # No fast-math, no mad: IEEE results identical to NumPy's (see gpu/noise.h).
 OPTIONS = ("-cl-fp32-correctly-rounded-divide-sqrt",)
@@ -200,7 +200,10 @@ class _Gen:
         return [f"    uint s{k} = vx_inst(seed, {k}u);" for k in sorted(s)]
 
     def kernel(self, i, u: Unit):
-        roots = u.roots()
+        roots, outs = u.roots(), u.outs
+        if u.kind == "2d" and any(e.op == "coarse" for e in nodes(roots)):
+            roots = expand(roots)   # a column output: its 8 corner samples in place
+            outs = dict(zip(u.outs, roots))
         args = ["__global const int* org", "__constant const int* perm", "uint seed", "int n"]
         if u.kind == "2d":
             args += [f"__global {CT[e.t]}* o_{n}" for n, e in u.outs.items()]
@@ -244,7 +247,7 @@ class _Gen:
         done = {}
         out += self.body(roots, u, done)
         if u.kind in ("2d", "g3", "gc"):
-            out += [f"    o_{n}[gid] = {done[e.id]};" for n, e in u.outs.items()]
+            out += [f"    o_{n}[gid] = {done[e.id]};" for n, e in outs.items()]
         else:
             top = "255" if u.top is None else self.read(u.top, 0, 0)
             out += [f"    blocks[gid] = (ushort)(z <= {top} ? {done[u.blk.id]} : 0);"]

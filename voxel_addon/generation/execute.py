@@ -268,6 +268,8 @@ class Runner:
             return self._prev(k)
         if op in ("gread", "cread"):
             return self._gread(e, a)
+        if op == "coarse":
+            return self._coarse(e, a)
         f = _OPS.get(op)
         if f is not None:
             return f(*a)
@@ -329,6 +331,32 @@ class Runner:
         if sc is None:  # the whole chunk: a slice of levels along z
             return arr[..., z[0, 0, 0] // cz + k]
         return arr[sc.down(d["c"]), x & m, y & m, z // cz + k]
+
+    def _coarse(self, e, a):
+        """A coarse node outside the lattice units (a column output): the function at
+        the 8 corners evaluated once on stacked coordinates, then interpolated with
+        lower.expand's operations in its order (so the same bits as the lattice)."""
+        (cx, cy, cz), body = e.k[0], e.k[1].e
+        x, y, z = np.broadcast_arrays(*[np.asarray(v, I) for v in a])
+        org = [v - v % I(c) for v, c in ((x, cx), (y, cy), (z, cz))]
+        order = [(i, j, k) for k in (0, 1) for j in (0, 1) for i in (0, 1)]
+        X = np.stack([org[0] + I(i * cx) for i, j, k in order])
+        Y = np.stack([org[1] + I(j * cy) for i, j, k in order])
+        Z = np.stack([org[2] + I(k * cz) for i, j, k in order])
+        saved = self.dom, self._lazy, self._owner
+        self.dom = dict(kind="g3", shape=X.shape, x=X, y=Y, z=Z)
+        try:
+            v = np.broadcast_to(self._eval([body])[body.id], X.shape)
+        finally:
+            self.dom, self._lazy, self._owner = saved
+        s = dict(zip(order, v))
+        t = [(q % I(c)).astype(F) * F(1.0 / c) for q, c in ((x, cx), (y, cy), (z, cz))]
+
+        def lerp(f, p, q):
+            return p + f * (q - p)
+        lv = [lerp(t[1], lerp(t[0], s[0, 0, k], s[1, 0, k]), lerp(t[0], s[0, 1, k], s[1, 1, k]))
+              for k in (0, 1)]
+        return lerp(t[2], lv[0], lv[1])
 
     def _prev(self, dz):
         z = self.dom["z"][0, 0, 0]

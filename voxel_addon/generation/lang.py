@@ -284,7 +284,20 @@ def coarse(p, fn, cell):
     cx, cy, cz = (int(c) for c in cell)
     if p.kind != "3d" or not all(c in (1, 2, 4, 8, 16) for c in (cx, cy, cz)):
         raise ValueError("coarse() is for 3D passes, cells of 1, 2, 4, 8 or 16 voxels")
-    return E("coarse", (tofloat(fn(p.x, p.y, p.z)),), "f", (cx, cy, cz))
+    return E("coarse", (p.x, p.y, p.z), "f", ((cx, cy, cz), Body(tofloat(fn(p.x, p.y, p.z)))))
+
+
+class Body:
+    """A coarse function's expression in its node's payload, not among its arguments
+    (those are the voxel's x, y, z): it is evaluated at lattice points, never at the
+    voxel, and a column output's z := at must not reach into it."""
+    __slots__ = ("e",)
+
+    def __init__(self, e):
+        self.e = e
+
+    def __repr__(self):  # lower.cse keys nodes by their payload's repr
+        return f"body{self.e.id}"
 
 
 # ---- passes and programs --------------------------------------------------------

@@ -118,22 +118,22 @@ def _xyz():
 
 
 def expand(roots):
-    """coarse nodes written out: the samples at the 8 corners computed in place (the
-    reference form; column outputs use it: 8 samples per column are cheap there)."""
+    """coarse nodes written out: the samples at the 8 corners computed in place, the
+    reference form: cl.py compiles column outputs (2D units) so; execute.py evaluates
+    the 8 corners of such a node stacked, in one go (Runner._coarse), op for op this."""
     def fn(e, a):
         if e.op != "coarse":
             return None
-        body = a[0]
+        (cx, cy, cz), body = e.k[0], e.k[1].e
         _check_body(body)
-        x, y, z = _xyz()
-        cx, cy, cz = e.k
+        x, y, z = a   # the voxel (a column output: z is its `at`)
         org = [v - (v % c) for v, c in ((x, cx), (y, cy), (z, cz))]
 
         def level(k):
             def corner(i, j):
                 at = {"x": org[0] + i * cx, "y": org[1] + j * cy, "z": org[2] + k * cz}
                 return _rebuild([body], lambda n, _: at.get(n.op))[0]
-            return _interp_xy(e.k, x, y, corner)
+            return _interp_xy(e.k[0], x, y, corner)
         return _lerp(_frac(z, cz), level(0), level(1))
     return _rebuild(roots, fn)
 
@@ -153,26 +153,27 @@ def lattice(index, roots, top=None):
     def fn(e, a):
         if e.op != "coarse":
             return None
-        _check_body(a[0])
-        key = (a[0].id, e.k)
+        cell, body = e.k[0], e.k[1].e
+        _check_body(body)
+        key = (body.id, cell)
         if key not in got:
             name = got[key] = f"_{index}_g{len(got)}"
             x, y, z = _xyz()
-            col = _interp_xy(e.k, x, y, lambda i, j: E("gread", (x, y, z), "f", (name, e.k, i, j)))
-            g3, gc = units.setdefault(e.k, [Unit("g3", {}, top=top, cell=e.k),
-                                            Unit("gc", {}, top=top, cell=e.k)])
-            g3.outs[name] = a[0]
+            col = _interp_xy(cell, x, y, lambda i, j: E("gread", (x, y, z), "f", (name, cell, i, j)))
+            g3, gc = units.setdefault(cell, [Unit("g3", {}, top=top, cell=cell),
+                                             Unit("gc", {}, top=top, cell=cell)])
+            g3.outs[name] = body
             gc.outs[name + "c"] = col
         name = got[key] + "c"
-        x, y, z = _xyz()
-        lv = [E("cread", (x, y, z), "f", (name, e.k, k)) for k in (0, 1)]
-        return _lerp(_frac(z, e.k[2]), lv[0], lv[1])
+        x, y, z = a
+        lv = [E("cread", (x, y, z), "f", (name, cell, k)) for k in (0, 1)]
+        return _lerp(_frac(z, cell[2]), lv[0], lv[1])
     new = _rebuild(roots, fn)
     return [u for pair in units.values() for u in pair], new
 
 
 # Rough cost of a node when evaluated per voxel; hoisting pays above HOIST_COST.
-_COST = {"perlin2": 20, "perlin3": 30, "voronoi2": 60, "voronoi3": 150, "rand2": 6,
+_COST = {"coarse": 240, "perlin2": 20, "perlin3": 30, "voronoi2": 60, "voronoi3": 150, "rand2": 6,
          "rand3": 7, "irand2": 6, "div": 2, "sqrt": 2, "const": 0, "x": 0, "y": 0}
 HOIST_COST = 3
 
@@ -231,7 +232,7 @@ def lower(prog: Program) -> list[Unit]:
             units.append(Unit("2d", fields))
         units.append(Unit("3d", {}, 0, blk, top))
         for name, v in p.outs.items():
-            units.append(Unit("2d", {name: cse(_subst_z(expand([v]), p.at[name]))[0]}))
+            units.append(Unit("2d", {name: cse(_subst_z([v], p.at[name]))[0]}))
     return halos(units)
 
 

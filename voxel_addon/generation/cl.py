@@ -294,8 +294,16 @@ def _constant(e):
 
 
 def vectorizable(u: Unit) -> bool:
-    return (VECTOR and u.kind in ("3d", "g3")
-            and all(e.op in _VEC_OPS and e.t != "f3" for e in nodes(u.roots())))
+    """8-lane code: 3D units, lattice samples and 2D units with coarse nodes (those
+    written out by expand: its ops must all have 8-lane forms)."""
+    if not VECTOR or u.kind not in ("3d", "g3", "2d"):
+        return False
+    roots = u.roots()
+    if u.kind == "2d":
+        if not any(e.op == "coarse" for e in nodes(roots)):
+            return False
+        roots = expand(roots)
+    return all(e.op in _VEC_OPS and e.t != "f3" for e in nodes(roots))
 
 
 class _GenV(_Gen):
@@ -402,14 +410,40 @@ class _GenV(_Gen):
 
     def read(self, name, dx, dy, a=(), reach=0):
         t, hf = self.fields[name]
-        wf = C.SIZE + 2 * hf
+        wf = self.size + 2 * hf
         base = f"f_{name} + c * {wf * wf}"
+        gather = dx is None or self.free  # lanes at any columns (free: a 2D unit's items)
         if dx is None:  # a different neighbour per lane
             dx = f"vx_imin8(vx_imax8({a[0]}, (vi8){-reach}), (vi8){reach})"
             dy = f"vx_imin8(vx_imax8({a[1]}, (vi8){-reach}), (vi8){reach})"
+        if gather:
             idx = f"((ly + {hf} + ({dy})) * {wf} + (lx + {hf} + ({dx})))"
             return f"VX_GATHER8({self.ct[t]}, {base}, {idx})"
         return f"vload8(0, {base} + (ly + {hf} + ({dy})) * {wf} + (lx0 + {hf} + ({dx})))"
+
+    def kernel_2d(self, i, u: Unit, roots, outs):
+        """A 2D unit holding a coarse node (a column output: 8 corner samples of the
+        function per column) as 8-lane code, 8 consecutive items of a chunk's domain
+        per work-item: its lazy `if`s then skip the samples where no lane needs them
+        (pocl's work-group vectorizer evaluated both sides of the scalar kernel's)."""
+        h = u.halo
+        w = self.size + 2 * h
+        t, q = w * w, _pad(w * w, VLANES) // VLANES
+        args = ["__global const int* org", "__constant const int* perm", "uint seed", "int n"]
+        args += [f"__global {CT[e.t]}* o_{n}" for n, e in u.outs.items()]
+        args += [f"__global const {CT[self.fields[n][0]]}* f_{n}" for n in self.reads(u)]
+        out = [f"__kernel void unit{i}({', '.join(args)}) {{",
+               "    int gid = get_global_id(0);",
+               f"    int g = vx_imin(gid, n * {q} - 1), c = g / {q};",
+               f"    vi8 r = vx_imin8((g - c * {q}) * {VLANES} + VX_LANES, (vi8)({t - 1}));",
+               f"    vi8 lx = r % {w} - {h}, ly = r / {w} - {h};",
+               "    vi8 x = org[c] + lx, y = org[n + c] + ly;"]
+        out += self.salts(roots)
+        done = {}
+        out += self.body(roots, u, done)
+        for n, e in outs.items():
+            out += [f"    o_{n}[c * {t} + r.s{k}] = {done[e.id]}.s{k};" for k in range(VLANES)]
+        return "\n".join(out + ["}", ""])
 
     def kernel_g3(self, i, u: Unit):
         """A g3 unit (lattice samples) 8 points per work-item: the scalar one ran
@@ -437,6 +471,9 @@ class _GenV(_Gen):
     def kernel(self, i, u: Unit):
         if u.kind == "g3":
             return self.kernel_g3(i, u)
+        if u.kind == "2d":
+            roots = expand(u.roots())
+            return self.kernel_2d(i, u, roots, dict(zip(u.outs, roots)))
         roots = u.roots()
         args = ["__global const int* org", "__constant const int* perm", "uint seed", "int n",
                 "__global const int* layers", "__global ushort* blocks",
@@ -468,10 +505,10 @@ ROW_SPAN = 0.9  # perlin3's x over a row spans less than this (cells): perlin3_8
 
 
 def source(units, size=C.SIZE) -> str:
-    g, gv, free = _Gen(units, size), _GenV(units), _GenV(units)
-    free.free = True
+    g, gv, free = _Gen(units, size), _GenV(units), _GenV(units, size)
+    free.free = True  # lanes that are not a row of 8 voxels: g3 and 2D units
     return resources.kernel("gen.cl") + "\n".join(
-        ((free if u.kind == "g3" else gv) if vectorizable(u) else g).kernel(i, u)
+        ((gv if u.kind == "3d" else free) if vectorizable(u) else g).kernel(i, u)
         for i, u in enumerate(units))
 
 
@@ -592,6 +629,8 @@ class Runner:
                 for name in u.outs:
                     fields[name] = (self._buf(f"f_{name}", 4 * size), u.halo)
                     args.append(fields[name][0])
+                if self._vec[i]:  # _GenV.kernel_2d: 8 items per work-item
+                    size = _pad(n * (_pad(w * w, VLANES) // VLANES), LOCAL2D)
                 local = LOCAL2D
             else:
                 lay = self._layers(u, fields, n, tops)

@@ -16,11 +16,13 @@ def _keys(seed, n):
     return [tuple(int(v) for v in rng.integers(-4000, 4000, 2)) for _ in range(n)]
 
 
-@pytest.mark.parametrize("seed", [0, 7, -3, 2**40 + 5])
-def test_backends_identical(cl_device, seed):
+@pytest.mark.parametrize("seed,version", [(0, None), (7, None), (-3, None), (2**40 + 5, None),
+                                          (7, 1), (-3, 1)])
+def test_backends_identical(cl_device, seed, version):
+    """The newest version (None) and version 1, which old worlds keep using."""
     keys = _keys(seed, 10) + [(0, 0), (-1, -1), (100000, -70000)]
-    a = make_generator("overworld", seed, None, "numpy").generate(keys)
-    b = make_generator("overworld", seed, None, "opencl").generate(keys)
+    a = make_generator("overworld", seed, None, "numpy", version).generate(keys)
+    b = make_generator("overworld", seed, None, "opencl", version).generate(keys)
     for k, x, y in zip(keys, a, b):
         assert x.shape == (16, 16, 256) and x.dtype == np.uint16 and x.flags.f_contiguous
         assert np.array_equal(x, y), f"seed {seed} chunk {k}: {(x != y).sum()} voxels differ"

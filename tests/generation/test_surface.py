@@ -32,9 +32,10 @@ def test_prune_keeps_only_what_the_fields_need():
         lower.prune(g.units, ["nothing"])
 
 
-@pytest.mark.parametrize("backend", ["numpy", "opencl"])
-def test_surface_is_the_generated_column(backend, cl_device):
-    gen = make_generator("overworld", SEED, None, backend)
+@pytest.mark.parametrize("backend,version", [("numpy", None), ("opencl", None), ("numpy", 1)])
+def test_surface_is_the_generated_column(backend, version, cl_device):
+    """Far terrain meets the chunks of each version (old worlds keep version 1)."""
+    gen = make_generator("overworld", SEED, None, backend, version)
     keys = [(cx, cy) for cx in range(-9, -6) for cy in range(2, 5)]   # ocean, beach, land
     col, x0, y0 = _columns(gen, keys)
     rng = np.random.default_rng(3)

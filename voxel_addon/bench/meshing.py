@@ -41,8 +41,8 @@ def _wide(n):
     sc = scenes.SCENES["landscape"]
     cx0, cy0 = sc.chunks[:2]
     keys = [(cx, cy) for cy in range(cy0 - 1, cy0 + n + 1) for cx in range(cx0 - 1, cx0 + n + 1)]
-    full = chunk.paste(zip(keys, make_generator(scenes.GENERATOR, sc.seed).generate(keys)),
-                       cx0 - 1, cy0 - 1, cx0 + n + 1, cy0 + n + 1)
+    gen = make_generator(scenes.GENERATOR, sc.seed, version=scenes.VERSION)
+    full = chunk.paste(zip(keys, gen.generate(keys)), cx0 - 1, cy0 - 1, cx0 + n + 1, cy0 + n + 1)
     return np.asfortranarray(full[15:-15, 15:-15])
 
 

@@ -22,7 +22,7 @@ def add_parser(sub):
 
 
 def run(args):
-    from ..generation import make_generator, topview
+    from ..generation import for_file, topview
     from ..storage import WorldFile
     if not args.world.is_file():
         raise VoxelError(f"world file {args.world} does not exist")
@@ -50,7 +50,7 @@ def run(args):
             sl = np.s_[sx:sx + 16, sy:sy + 16]
             top[sl], z[sl], gz[sl] = topview.summary(blocks)
             known[sl] = 1
-        gen = make_generator(wf.generator, wf.seed, wf.generator_params, args.backend)
+        gen = for_file(wf, args.backend)
         sea = int(gen.params.get("sea_level", 62))
         panels = [topview.shade(top, z, gz, sea, known)]
         if hasattr(gen, "columns"):

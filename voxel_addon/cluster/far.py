@@ -101,7 +101,8 @@ def run(world, pool, x, y, far, near=0, backend=None, progress=None) -> tuple[in
                 store.put_columns(list(made.items()))
                 made.clear()
 
-    shared = {"generator": (gen.name, gen.seed, gen.params, backend)}
+    from .generate import spec
+    shared = {"generator": spec(gen, backend)}
     buf, done, t = [], 0, time.monotonic()
     every = knob("COMMIT", COMMIT)
 

@@ -12,17 +12,23 @@ from . import knob, task_size
 COMMIT = 64   # rows per transaction (or what arrived within COMMIT_S)
 COMMIT_S = 1.0
 
-_gens: dict = {}  # per worker process: (name, seed, params, backend) -> generator
+_gens: dict = {}  # per worker process: (name, seed, params, backend, version) -> generator
+
+
+def spec(gen, backend) -> tuple:
+    """What a worker needs to make the world's generator again: its version included
+    (the world's own, read by generation.for_file, not the newest)."""
+    return (gen.name, gen.seed, gen.params, backend, gen.version)
 
 
 def generator(spec):
     """The worker's generator for spec (made once per process)."""
     import json
-    key = (spec[0], spec[1], json.dumps(spec[2], sort_keys=True), spec[3])
+    key = (spec[0], spec[1], json.dumps(spec[2], sort_keys=True), spec[3], spec[4])
     g = _gens.get(key)
     if g is None:
         from ..generation import make_generator
-        g = _gens[key] = make_generator(spec[0], spec[1], spec[2], spec[3])
+        g = _gens[key] = make_generator(*spec)
     return g
 
 
@@ -42,7 +48,7 @@ def run(world, pool, keys, backend=None, progress=None) -> tuple[int, int]:
     todo = [k for k in keys if k not in have]
     step = task_size(len(todo), pool.size)
     tasks = [tuple(todo[i:i + step]) for i in range(0, len(todo), step)]
-    shared = {"generator": (gen.name, gen.seed, gen.params, backend), "encoder": f.encoder()}
+    shared = {"generator": spec(gen, backend), "encoder": f.encoder()}
     buf, made, computed, t = [], 0, 0, time.monotonic()
     every = knob("COMMIT", COMMIT)
 

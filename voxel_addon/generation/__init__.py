@@ -22,8 +22,24 @@ def generator_class(name: str):
     return getattr(importlib.import_module(f".{module}", __name__), cls)
 
 
-def make_generator(name: str, seed: int, params: dict | None = None, backend: str | None = None):
-    return generator_class(name)(seed, params, backend)
+def make_generator(name: str, seed: int, params: dict | None = None, backend: str | None = None,
+                   version: int | None = None):
+    """A generator; version None: the newest (what a new world gets)."""
+    return generator_class(name)(seed, params, backend, version)
+
+
+def for_file(wf, backend: str | None = None):
+    """The generator of an open world file (storage.WorldFile): its name, seed and
+    params at the version it was created with, so a world keeps generating the same
+    terrain whatever the newest version is. The one place that reads that version:
+    World.open, the CLI and the cluster workers (the World's generator) go through it.
+    A file without one predates versions: version 1, what it was made with."""
+    raw = wf.meta.get("generator_version")
+    try:
+        version = 1 if raw in (None, "") else int(raw)
+    except (TypeError, ValueError):
+        raise VoxelError(f"{wf.path}: its generator version {raw!r} is not a number") from None
+    return make_generator(wf.generator, wf.seed, wf.generator_params, backend, version)
 
 
 def default_backend() -> str:

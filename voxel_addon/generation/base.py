@@ -3,19 +3,33 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..core.errors import VoxelError
+
 
 class Generator:
     """Turns chunk keys into block arrays, deterministically from (seed, params).
 
     Subclasses set `name` and `version`, accept `params` overrides (stored as JSON in
     the world file so a world always regenerates the same) and implement `generate`.
+    A change that alters what a stored world would generate is a new version: the
+    class's `version` (what new worlds get) goes up, the old one stays in `versions`
+    and the instance's `version` picks (a world file names its own: for_file).
     """
 
     name = "?"
-    version = 1
+    version = 1       # the newest: new worlds are made with it
+    versions = (1,)   # every version this code still makes
     defaults: dict = {}
 
-    def __init__(self, seed: int, params: dict | None = None, backend: str | None = None):
+    def __init__(self, seed: int, params: dict | None = None, backend: str | None = None,
+                 version: int | None = None):
+        v = type(self).version if version is None else int(version)
+        if v not in self.versions:
+            newer = v > max(self.versions)
+            raise VoxelError(f"generator {self.name!r} version {v} is unknown to this add-on "
+                             f"(it knows {', '.join(map(str, self.versions))})"
+                             + ("; the world was made by a newer add-on: update it" if newer else ""))
+        self.version = v
         self.seed = int(seed)
         self.params = {**self.defaults, **(params or {})}
         self.backend = backend or "numpy"

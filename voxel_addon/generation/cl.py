@@ -18,7 +18,7 @@ import numpy as np
 
 from .. import opencl, resources
 from ..core import chunk as C
-from .lower import Unit, lazy_blocks, nodes
+from .lower import Unit, expand, lattice_dims, lazy_blocks, levels, nodes
 
 # No fast-math, no mad: IEEE results identical to NumPy's (see gpu/noise.h).
 OPTIONS = ("-cl-fp32-correctly-rounded-divide-sqrt",)
@@ -60,6 +60,9 @@ class _Gen:
                 for n, e in u.outs.items():
                     self.fields[n] = (e.t, u.halo)
                     self.defs[n] = e
+            elif u.kind in ("g3", "gc"):
+                for n in u.outs:
+                    self.fields[n] = ("f", None)
 
     def expr(self, e, a, unit):
         op, k = e.op, e.k
@@ -112,6 +115,8 @@ class _Gen:
             return self.read(name, dx, dy, a, reach)
         if op == "prev":
             return f"vx_prev(prev, c, z + ({k}), lid)"
+        if op in ("gread", "cread"):
+            return f"f_{k[0]}[{gindex(e.op, k, a)}]"
         raise ValueError(f"unknown op {op}")
 
     def read(self, name, dx, dy, a=(), reach=0):
@@ -181,7 +186,7 @@ class _Gen:
     def reads(self, u: Unit):
         names = [u.top] if u.top is not None else []
         for e in nodes(u.roots()):
-            if e.op == "read" and e.k[0] not in names:
+            if e.op in ("read", "gread", "cread") and e.k[0] not in names:
                 names.append(e.k[0])
         return names
 
@@ -195,9 +200,15 @@ class _Gen:
         return [f"    uint s{k} = vx_inst(seed, {k}u);" for k in sorted(s)]
 
     def kernel(self, i, u: Unit):
-        roots = u.roots()
+        roots, outs = u.roots(), u.outs
+        if u.kind == "2d" and any(e.op == "coarse" for e in nodes(roots)):
+            roots = expand(roots)   # a column output: its 8 corner samples in place
+            outs = dict(zip(u.outs, roots))
         args = ["__global const int* org", "__constant const int* perm", "uint seed", "int n"]
         if u.kind == "2d":
+            args += [f"__global {CT[e.t]}* o_{n}" for n, e in u.outs.items()]
+        elif u.kind in ("g3", "gc"):
+            args += ["__global const int* layers"]
             args += [f"__global {CT[e.t]}* o_{n}" for n, e in u.outs.items()]
         else:
             args += ["__global const int* layers", "__global ushort* blocks",
@@ -212,6 +223,17 @@ class _Gen:
                     f"    int g = vx_imin(gid, n * {w * w} - 1);",
                     f"    int c = g / {w * w}, r = g - c * {w * w};",
                     f"    int lx = r % {w} - {u.halo}, ly = r / {w} - {u.halo};"]
+        elif u.kind in ("g3", "gc"):  # a work-group per (chunk, lattice level): layers
+            (cx, cy, cz), (ni, nj, nk) = u.cell, lattice_dims(u.cell)
+            out += ["    int grp = get_group_id(0), lid = get_local_id(0);",
+                    "    int ck = layers[grp], c = ck >> 8, k = ck & 255, z = k * " f"{cz};"]
+            if u.kind == "g3":  # lattice points p = (i, j) of the level, [c][k][p]
+                out += [f"    int p = vx_imin(lid, {ni * nj - 1}), i = p / {nj}, j = p - i * {nj};",
+                        f"    int lx = i * {cx}, ly = j * {cy};",
+                        f"    int gid = (c * {nk} + k) * {g3_row(u.cell)} + lid;"]
+            else:  # the level at each column, [c][k][y][x]
+                out += [f"    int lx = lid & {C.SIZE - 1}, ly = lid >> 4;",
+                        f"    int gid = (c * {nk} + k) * {LAYER} + lid;"]
         else:
             out += ["    int grp = get_group_id(0), lid = get_local_id(0);",
                     "    int cz = layers[grp], c = cz >> 8, z = cz & 255;",
@@ -224,18 +246,39 @@ class _Gen:
         out += self.salts(roots)
         done = {}
         out += self.body(roots, u, done)
-        if u.kind == "2d":
-            out += [f"    o_{n}[gid] = {done[e.id]};" for n, e in u.outs.items()]
+        if u.kind in ("2d", "g3", "gc"):
+            out += [f"    o_{n}[gid] = {done[e.id]};" for n, e in outs.items()]
         else:
             top = "255" if u.top is None else self.read(u.top, 0, 0)
             out += [f"    blocks[gid] = (ushort)(z <= {top} ? {done[u.blk.id]} : 0);"]
         return "\n".join(out + ["}", ""])
 
 
+def g3_row(cell) -> int:
+    """A g3 buffer's entries per (chunk, level): the level's points padded to 8 lanes."""
+    ni, nj, _ = lattice_dims(cell)
+    return _pad(ni * nj, VLANES)
+
+
+def gindex(op, k, a):
+    """Index of a coarse value (execute.Runner._gread) in its unit's buffer; a: x, y, z
+    (scalars). gread: sample at lattice corner (i, j) of (x, y)'s cell at level z,
+    buffer [chunk][level][i * nj + j, padded: g3_row]; cread: level z / cz + k of
+    column (x, y), buffer [chunk][level][y][x] (rows of x contiguous: one 8-lane load)."""
+    (cx, cy, cz), m = k[1], C.SIZE - 1  # origins are multiples of 16: x & 15 in the chunk
+    _, nj, nk = lattice_dims(k[1])
+    if op == "gread":
+        i, j = k[2], k[3]
+        return (f"(c * {nk} + ({a[2]}) / {cz}) * {g3_row(k[1])}"
+                f" + ((({a[0]}) & {m}) / {cx} + {i}) * {nj} + ((({a[1]}) & {m}) / {cy} + {j})")
+    return (f"((c * {nk} + (({a[2]}) / {cz} + {k[2]})) * {C.SIZE} + (({a[1]}) & {m}))"
+            f" * {C.SIZE} + (({a[0]}) & {m})")
+
+
 # ops the 8-lane 3D kernels implement; a unit using others stays scalar
 _VEC_OPS = set(_BIN) | {"const", "x", "y", "z", "neg", "not", "min", "max", "abs", "floor",
                         "sqrt", "int", "float", "fdiv", "fmod", "select", "perlin2",
-                        "perlin3", "rand2", "rand3", "irand2", "read", "prev"}
+                        "perlin3", "rand2", "rand3", "irand2", "read", "prev", "cread"}
 VLANES = 8
 VECTOR = True  # False: every unit scalar (for comparisons)
 VLOCAL = LAYER // VLANES  # a 3D work-group: one z layer, one row of 8 voxels per item
@@ -251,8 +294,16 @@ def _constant(e):
 
 
 def vectorizable(u: Unit) -> bool:
-    return (VECTOR and u.kind == "3d"
-            and all(e.op in _VEC_OPS and e.t != "f3" for e in nodes(u.roots())))
+    """8-lane code: 3D units, lattice samples and 2D units with coarse nodes (those
+    written out by expand: its ops must all have 8-lane forms)."""
+    if not VECTOR or u.kind not in ("3d", "g3", "2d"):
+        return False
+    roots = u.roots()
+    if u.kind == "2d":
+        if not any(e.op == "coarse" for e in nodes(roots)):
+            return False
+        roots = expand(roots)
+    return all(e.op in _VEC_OPS and e.t != "f3" for e in nodes(roots))
 
 
 class _GenV(_Gen):
@@ -261,6 +312,7 @@ class _GenV(_Gen):
     none. Bools are 0/-1 lanes; numbers as in the scalar code, op for op."""
     vec = True
     ct = {"f": "vf8", "i": "vi8", "b": "vi8"}
+    free = False  # True for g3 kernels (lanes are any 8 lattice points)
 
     def expr(self, e, a, unit):
         op, k = e.op, e.k
@@ -303,6 +355,9 @@ class _GenV(_Gen):
             return f"(-{v})" if e.t == "b" else v
         if op == "prev":
             return f"vx_prev8(prev, c, zs + ({k}), row)"
+        if op == "cread":  # the row's 8 columns are consecutive: one load
+            (cz, nk), lv = (k[1][2], lattice_dims(k[1])[2]), k[2]
+            return f"vload8(0, f_{k[0]} + ((c * {nk} + (zs / {cz} + {lv})) * {C.SIZE} + ly) * {C.SIZE} + lx0)"
         raise ValueError(f"no 8-lane form of {op}")
 
     def span(self, e):
@@ -317,6 +372,8 @@ class _GenV(_Gen):
 
     def _span(self, e):
         op, a = e.op, e.a
+        if self.free:  # lanes are lattice points: no row structure to rely on
+            return None
         if op == "const" or op in ("y", "z"):
             return (0.0, 0)
         if op == "x":
@@ -324,7 +381,7 @@ class _GenV(_Gen):
         if op == "read":
             d = self.defs.get(e.k[0])
             return None if e.k[1] is None or d is None else self.span(d)
-        if op == "prev":
+        if op in ("prev", "gread", "cread"):
             return None
         s = [self.span(x) for x in a]
         if any(x is None for x in s):
@@ -353,16 +410,70 @@ class _GenV(_Gen):
 
     def read(self, name, dx, dy, a=(), reach=0):
         t, hf = self.fields[name]
-        wf = C.SIZE + 2 * hf
+        wf = self.size + 2 * hf
         base = f"f_{name} + c * {wf * wf}"
+        gather = dx is None or self.free  # lanes at any columns (free: a 2D unit's items)
         if dx is None:  # a different neighbour per lane
             dx = f"vx_imin8(vx_imax8({a[0]}, (vi8){-reach}), (vi8){reach})"
             dy = f"vx_imin8(vx_imax8({a[1]}, (vi8){-reach}), (vi8){reach})"
+        if gather:
             idx = f"((ly + {hf} + ({dy})) * {wf} + (lx + {hf} + ({dx})))"
             return f"VX_GATHER8({self.ct[t]}, {base}, {idx})"
         return f"vload8(0, {base} + (ly + {hf} + ({dy})) * {wf} + (lx0 + {hf} + ({dx})))"
 
+    def kernel_2d(self, i, u: Unit, roots, outs):
+        """A 2D unit holding a coarse node (a column output: 8 corner samples of the
+        function per column) as 8-lane code, 8 consecutive items of a chunk's domain
+        per work-item: its lazy `if`s then skip the samples where no lane needs them
+        (pocl's work-group vectorizer evaluated both sides of the scalar kernel's)."""
+        h = u.halo
+        w = self.size + 2 * h
+        t, q = w * w, _pad(w * w, VLANES) // VLANES
+        args = ["__global const int* org", "__constant const int* perm", "uint seed", "int n"]
+        args += [f"__global {CT[e.t]}* o_{n}" for n, e in u.outs.items()]
+        args += [f"__global const {CT[self.fields[n][0]]}* f_{n}" for n in self.reads(u)]
+        out = [f"__kernel void unit{i}({', '.join(args)}) {{",
+               "    int gid = get_global_id(0);",
+               f"    int g = vx_imin(gid, n * {q} - 1), c = g / {q};",
+               f"    vi8 r = vx_imin8((g - c * {q}) * {VLANES} + VX_LANES, (vi8)({t - 1}));",
+               f"    vi8 lx = r % {w} - {h}, ly = r / {w} - {h};",
+               "    vi8 x = org[c] + lx, y = org[n + c] + ly;"]
+        out += self.salts(roots)
+        done = {}
+        out += self.body(roots, u, done)
+        for n, e in outs.items():
+            out += [f"    o_{n}[c * {t} + r.s{k}] = {done[e.id]}.s{k};" for k in range(VLANES)]
+        return "\n".join(out + ["}", ""])
+
+    def kernel_g3(self, i, u: Unit):
+        """A g3 unit (lattice samples) 8 points per work-item: the scalar one ran
+        perlin3 unvectorized (pocl), ~3x slower per point than the 3D kernels."""
+        (cx, cy, cz), (ni, nj, nk) = u.cell, lattice_dims(u.cell)
+        roots = u.roots()
+        args = ["__global const int* org", "__constant const int* perm", "uint seed", "int n",
+                "__global const int* layers"]
+        args += [f"__global float* o_{n}" for n in u.outs]
+        args += [f"__global const {CT[self.fields[n][0]]}* f_{n}" for n in self.reads(u)]
+        out = [f"__kernel void unit{i}({', '.join(args)}) {{",
+               "    int grp = get_group_id(0), lid = get_local_id(0);",
+               "    int ck = layers[grp], c = ck >> 8, k = ck & 255;",
+               f"    vi8 p = vx_imin8(lid * {VLANES} + VX_LANES, (vi8)({ni * nj - 1}));",
+               f"    vi8 i = p / {nj}, j = p - i * {nj};",
+               f"    vi8 x = org[c] + i * {cx}, y = org[n + c] + j * {cy}, z = (vi8)(k * {cz});"]
+        out += self.salts(roots)
+        done = {}
+        out += self.body(roots, u, done)
+        row = g3_row(u.cell)
+        out += [f"    vstore8({done[e.id]}, 0, o_{n} + (c * {nk} + k) * {row} + lid * {VLANES});"
+                for n, e in u.outs.items()]
+        return "\n".join(out + ["}", ""])
+
     def kernel(self, i, u: Unit):
+        if u.kind == "g3":
+            return self.kernel_g3(i, u)
+        if u.kind == "2d":
+            roots = expand(u.roots())
+            return self.kernel_2d(i, u, roots, dict(zip(u.outs, roots)))
         roots = u.roots()
         args = ["__global const int* org", "__constant const int* perm", "uint seed", "int n",
                 "__global const int* layers", "__global ushort* blocks",
@@ -394,9 +505,11 @@ ROW_SPAN = 0.9  # perlin3's x over a row spans less than this (cells): perlin3_8
 
 
 def source(units, size=C.SIZE) -> str:
-    g, gv = _Gen(units, size), _GenV(units)
+    g, gv, free = _Gen(units, size), _GenV(units), _GenV(units, size)
+    free.free = True  # lanes that are not a row of 8 voxels: g3 and 2D units
     return resources.kernel("gen.cl") + "\n".join(
-        (gv if vectorizable(u) else g).kernel(i, u) for i, u in enumerate(units))
+        ((gv if u.kind == "3d" else free) if vectorizable(u) else g).kernel(i, u)
+        for i, u in enumerate(units))
 
 
 class Runner:
@@ -436,13 +549,28 @@ class Runner:
             b = self._bufs[key] = cl.Buffer(self.ctx, cl.mem_flags.READ_WRITE, max(nbytes, 4))
         return b
 
-    def _layers(self, u, fields, n):
-        """(chunk, z) pairs to compute for a 3D unit: z up to the chunk's highest top."""
+    def _zmax(self, u, fields, n, tops=None):
+        """Each chunk's highest z a unit computes (its top's maximum), (n,)."""
         if u.top is None:
-            zmax = np.full(n, C.HEIGHT - 1)
-        else:
+            return np.full(n, C.HEIGHT - 1)
+        if tops is None or u.top not in tops:
             top = self._read_field(u.top, fields, n)
             zmax = np.clip(top.reshape(n, -1).max(axis=1), -1, C.HEIGHT - 1)
+            if tops is None:
+                return zmax
+            tops[u.top] = zmax
+        return tops[u.top]
+
+    def _levels(self, u, fields, n, tops):
+        """(chunk, level) pairs of a lattice unit: the levels below each chunk's top."""
+        k = np.array([levels(u.cell, t) for t in self._zmax(u, fields, n, tops)], np.int64)
+        cs = np.repeat(np.arange(n), k)
+        ks = np.concatenate([np.arange(m) for m in k]) if n else cs
+        return (cs * 256 + ks).astype(np.int32)
+
+    def _layers(self, u, fields, n, tops=None):
+        """(chunk, z) pairs to compute for a 3D unit: z up to the chunk's highest top."""
+        zmax = self._zmax(u, fields, n, tops)
         cs = np.repeat(np.arange(n), zmax + 1)
         zs = np.concatenate([np.arange(m + 1) for m in zmax]) if n else cs
         return (cs * 256 + zs).astype(np.int32)
@@ -477,19 +605,35 @@ class Runner:
         cl.enqueue_copy(q, borg, org)
         bperm = self._perm_buf(seed32, perm)
         fields, blocks, prev = {}, None, None
+        tops: dict = {}  # top field -> its values, read back once per batch
         nb = 0  # which of the two block buffers is next
         for i, u in enumerate(self.units):
             k = self.kernels[i]
             args = [borg, bperm, np.uint32(seed32), np.int32(n)]
-            if u.kind == "2d":
+            if u.kind in ("g3", "gc"):
+                ni, nj, nk = lattice_dims(u.cell)
+                lay = self._levels(u, fields, n, tops)
+                pts = LAYER if u.kind == "gc" else g3_row(u.cell)
+                local = pts if u.kind == "gc" or not self._vec[i] else pts // VLANES
+                size = len(lay) * local
+                blay = self._buf(f"layers{i}", lay.nbytes)
+                if len(lay):
+                    cl.enqueue_copy(q, blay, lay)
+                args.append(blay)
+                for name in u.outs:
+                    fields[name] = (self._buf(f"f_{name}", 4 * n * nk * pts), None)
+                    args.append(fields[name][0])
+            elif u.kind == "2d":
                 w = self.size + 2 * u.halo
                 size = _pad(n * w * w, LOCAL2D)
                 for name in u.outs:
                     fields[name] = (self._buf(f"f_{name}", 4 * size), u.halo)
                     args.append(fields[name][0])
+                if self._vec[i]:  # _GenV.kernel_2d: 8 items per work-item
+                    size = _pad(n * (_pad(w * w, VLANES) // VLANES), LOCAL2D)
                 local = LOCAL2D
             else:
-                lay = self._layers(u, fields, n)
+                lay = self._layers(u, fields, n, tops)
                 prev = blocks
                 blocks = self._buf(f"blocks{nb}", 2 * n * C.VOLUME)
                 nb ^= 1

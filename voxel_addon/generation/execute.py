@@ -10,7 +10,7 @@ import numpy as np
 
 from ..core import chunk as C
 from . import noise as N
-from .lower import Unit, lazy_blocks, nodes
+from .lower import Unit, lattice_dims, lazy_blocks, levels, nodes
 
 F, I = np.float32, np.int32
 DT = {"f": F, "i": I, "b": bool}
@@ -93,6 +93,8 @@ class Runner:
             for u in self.units:
                 if u.kind == "2d":
                     self._unit2d(u)
+                elif u.kind in ("g3", "gc"):
+                    self._unitg3(u)
                 else:
                     blocks = self._unit3d(u, blocks)
         if blocks is None:
@@ -118,6 +120,7 @@ class Runner:
         self.oy = org[:, 1].astype(I)
         self.n = len(org)
         self.fields: dict[str, tuple[np.ndarray, int]] = {}
+        self.grids: dict[str, np.ndarray] = {}  # g3 units: (n, ni, nj, nk) samples
 
     def field(self, name):
         """A 2D field over the domain itself, (n, size, size) [c, x, y]."""
@@ -137,6 +140,25 @@ class Runner:
         for name, e in u.outs.items():
             a = np.broadcast_to(vals[e.id], (n, w, w)).astype(DT[e.t])
             self.fields[name] = (a, h)
+
+    def _unitg3(self, u: Unit):
+        """Coarse functions (lower.lattice): "g3" samples them at the lattice points of
+        each chunk, (n, ni, nj, nk); "gc" interpolates those per column at each
+        lattice level, (n, 16, 16, nk)."""
+        n, (cx, cy, cz) = self.n, u.cell
+        ni, nj, nk = lattice_dims(u.cell)
+        if u.top is not None:  # the levels the 3D unit's voxels need (its zn: _unit3d)
+            nk = max(levels(u.cell, np.clip(self.field(u.top).max(), -1, C.HEIGHT - 1)), 1)
+        if u.kind == "gc":
+            ni, nj, cx, cy = C.SIZE, C.SIZE, 1, 1
+        li, lj = np.arange(ni, dtype=I) * I(cx), np.arange(nj, dtype=I) * I(cy)
+        self.dom = dict(kind="g3", shape=(n, ni, nj, nk), c=np.arange(n)[:, None, None, None],
+                        x=self.ox[:, None, None, None] + li[None, :, None, None],
+                        y=self.oy[:, None, None, None] + lj[None, None, :, None],
+                        z=I(cz) * np.arange(nk, dtype=I)[None, None, None, :])
+        vals = self._eval(list(u.outs.values()))
+        for name, e in u.outs.items():
+            self.grids[name] = np.ascontiguousarray(np.broadcast_to(vals[e.id], (n, ni, nj, nk)), F)
 
     def _unit3d(self, u: Unit, prev):
         n, s = self.n, C.SIZE
@@ -186,6 +208,8 @@ class Runner:
         n = self.n
         if d["kind"] == "2d":
             return (n, d["w"], d["w"])
+        if d["kind"] == "g3":
+            return d["shape"]
         return (n, d["w"], d["w"], d["z"].shape[-1])
 
     def _node(self, e, sc):
@@ -198,8 +222,8 @@ class Runner:
         if sc.mask is not None and (e.op in ("x", "y", "z", "prev", "lx", "ly", "c")
                                     or (e.op == "read" and e.k[1] is not None)):
             sc.v[e.id] = sc.down(self._op(e, a))  # computed on the chunk, then gathered
-        elif sc.mask is not None and e.op == "read":
-            sc.v[e.id] = self._read(e, a, sc)
+        elif sc.mask is not None and e.op in ("read", "gread", "cread"):
+            sc.v[e.id] = (self._read if e.op == "read" else self._gread)(e, a, sc)
         else:
             sc.v[e.id] = self._op(e, a)
 
@@ -242,6 +266,10 @@ class Runner:
             return self._read(e, a)
         if op == "prev":
             return self._prev(k)
+        if op in ("gread", "cread"):
+            return self._gread(e, a)
+        if op == "coarse":
+            return self._coarse(e, a)
         f = _OPS.get(op)
         if f is not None:
             return f(*a)
@@ -286,6 +314,49 @@ class Runner:
         ix = d["lx"] + I(hf) + np.clip(a[0], -reach, reach)
         iy = d["ly"] + I(hf) + np.clip(a[1], -reach, reach)
         return arr[d["c"], ix, iy]
+
+    def _gread(self, e, a, sc=None):
+        """gread: the sample at lattice corner (i, j) of (x, y)'s cell, level z;
+        cread: level z's cell level + k of column (x, y) (lower.lattice)."""
+        d = self.dom
+        x, y, z = a
+        m = I(C.SIZE - 1)  # the voxel within its chunk (origins are multiples of 16)
+        if e.op == "gread":
+            name, (cx, cy, cz), i, j = e.k
+            arr = self.grids[name]
+            c = d["c"] if sc is None else sc.down(d["c"])
+            return arr[c, (x & m) // cx + i, (y & m) // cy + j, z // cz]
+        name, (cx, cy, cz), k = e.k
+        arr = self.grids[name]
+        if sc is None:  # the whole chunk: a slice of levels along z
+            return arr[..., z[0, 0, 0] // cz + k]
+        return arr[sc.down(d["c"]), x & m, y & m, z // cz + k]
+
+    def _coarse(self, e, a):
+        """A coarse node outside the lattice units (a column output): the function at
+        the 8 corners evaluated once on stacked coordinates, then interpolated with
+        lower.expand's operations in its order (so the same bits as the lattice)."""
+        (cx, cy, cz), body = e.k[0], e.k[1].e
+        x, y, z = np.broadcast_arrays(*[np.asarray(v, I) for v in a])
+        org = [v - v % I(c) for v, c in ((x, cx), (y, cy), (z, cz))]
+        order = [(i, j, k) for k in (0, 1) for j in (0, 1) for i in (0, 1)]
+        X = np.stack([org[0] + I(i * cx) for i, j, k in order])
+        Y = np.stack([org[1] + I(j * cy) for i, j, k in order])
+        Z = np.stack([org[2] + I(k * cz) for i, j, k in order])
+        saved = self.dom, self._lazy, self._owner
+        self.dom = dict(kind="g3", shape=X.shape, x=X, y=Y, z=Z)
+        try:
+            v = np.broadcast_to(self._eval([body])[body.id], X.shape)
+        finally:
+            self.dom, self._lazy, self._owner = saved
+        s = dict(zip(order, v))
+        t = [(q % I(c)).astype(F) * F(1.0 / c) for q, c in ((x, cx), (y, cy), (z, cz))]
+
+        def lerp(f, p, q):
+            return p + f * (q - p)
+        lv = [lerp(t[1], lerp(t[0], s[0, 0, k], s[1, 0, k]), lerp(t[0], s[0, 1, k], s[1, 1, k]))
+              for k in (0, 1)]
+        return lerp(t[2], lv[0], lv[1])
 
     def _prev(self, dz):
         z = self.dom["z"][0, 0, 0]

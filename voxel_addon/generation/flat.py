@@ -15,8 +15,8 @@ class FlatGenerator(Generator):
     # Bottom-up (block name, thickness) pairs.
     defaults = {"layers": [["stone", 60], ["dirt", 3], ["grass", 1]]}
 
-    def __init__(self, seed, params=None, backend=None):
-        super().__init__(seed, params, backend)
+    def __init__(self, seed, params=None, backend=None, version=None):
+        super().__init__(seed, params, backend, version)
         column = np.zeros(chunk.HEIGHT, np.uint16)
         z = 0
         for name, thickness in self.params["layers"]:

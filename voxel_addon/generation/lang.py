@@ -276,6 +276,30 @@ def irand2(ix, iy, n, salt=None):
     return E("irand2", (const(ix), const(iy)), "i", (_salt(salt), int(n)))
 
 
+def coarse(p, fn, cell):
+    """fn(x, y, z) (a float function of the voxel's coordinates alone: no reads, no
+    prev) sampled on a lattice of cells (cx, cy, cz) voxels and trilinearly
+    interpolated in between, as Minecraft samples its density: a 3D pass evaluates
+    fn once per lattice point of the chunk instead of once per voxel (lower.py)."""
+    cx, cy, cz = (int(c) for c in cell)
+    if p.kind != "3d" or not all(c in (1, 2, 4, 8, 16) for c in (cx, cy, cz)):
+        raise ValueError("coarse() is for 3D passes, cells of 1, 2, 4, 8 or 16 voxels")
+    return E("coarse", (p.x, p.y, p.z), "f", ((cx, cy, cz), Body(tofloat(fn(p.x, p.y, p.z)))))
+
+
+class Body:
+    """A coarse function's expression in its node's payload, not among its arguments
+    (those are the voxel's x, y, z): it is evaluated at lattice points, never at the
+    voxel, and a column output's z := at must not reach into it."""
+    __slots__ = ("e",)
+
+    def __init__(self, e):
+        self.e = e
+
+    def __repr__(self):  # lower.cse keys nodes by their payload's repr
+        return f"body{self.e.id}"
+
+
 # ---- passes and programs --------------------------------------------------------
 class Pass:
     def __init__(self, prog: "Program", index: int, kind: str):

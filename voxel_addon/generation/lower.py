@@ -5,7 +5,8 @@ to the fields asked for, lazily computed costly operands). execute.py (NumPy) an
 cl.py (OpenCL C) run the units."""
 from __future__ import annotations
 
-from .lang import E, Program, const
+from ..core import chunk as C
+from .lang import E, Program, const, tofloat
 
 class Unit:
     """One kernel: a 2D domain (chunk + halo columns) or the 3D chunk volume.
@@ -13,8 +14,9 @@ class Unit:
     A 3D unit's `top` is the name of a 2D field (z above it is air, not computed)
     or None (all 256 layers)."""
 
-    def __init__(self, kind, outs, halo=0, blk=None, top=None):
+    def __init__(self, kind, outs, halo=0, blk=None, top=None, cell=None):
         self.kind, self.outs, self.halo, self.blk, self.top = kind, outs, halo, blk, top
+        self.cell = cell  # "g3" and "gc" units: the lattice's cell (cx, cy, cz), see lattice()
 
     def roots(self):
         r = list(self.outs.values())
@@ -76,8 +78,102 @@ def cse(roots):
     return _rebuild(roots, fn)
 
 
+# ---- coarse (lang.coarse): a lattice of samples, interpolated -------------------
+def lattice_dims(cell):
+    """Lattice points per chunk along x, y, z: both chunk faces and z = 256 included."""
+    cx, cy, cz = cell
+    return C.SIZE // cx + 1, C.SIZE // cy + 1, C.HEIGHT // cz + 1
+
+
+def levels(cell, top):
+    """The lattice levels a voxel at z <= top interpolates between: 0..levels - 1
+    (top: a column's or chunk's highest computed voxel, -1 for none)."""
+    return min(int(top) // cell[2] + 2, lattice_dims(cell)[2]) if top >= 0 else 0
+
+
+def _frac(v, c):
+    """The position of coordinate v in its cell of c voxels, 0..1 (exact: c is 2**k)."""
+    return tofloat(v % c) * (1.0 / c)
+
+
+def _lerp(t, a, b):
+    return a + t * (b - a)
+
+
+def _interp_xy(cell, x, y, corner):
+    """Bilinear in x then y between corner(di, dj) samples: the first stage of the one
+    order of operations every form of a coarse node shares (exact weights)."""
+    fx, fy = _frac(x, cell[0]), _frac(y, cell[1])
+    return _lerp(fy, _lerp(fx, corner(0, 0), corner(1, 0)), _lerp(fx, corner(0, 1), corner(1, 1)))
+
+
+def _check_body(body):
+    for n in nodes([body]):
+        if n.op in ("read", "prev", "coarse", "gread", "cread"):
+            raise ValueError(f"coarse(): the sampled function may use x, y, z only, not {n.op}")
+
+
+def _xyz():
+    return E("x", (), "i"), E("y", (), "i"), E("z", (), "i")
+
+
+def expand(roots):
+    """coarse nodes written out: the samples at the 8 corners computed in place, the
+    reference form: cl.py compiles column outputs (2D units) so; execute.py evaluates
+    the 8 corners of such a node stacked, in one go (Runner._coarse), op for op this."""
+    def fn(e, a):
+        if e.op != "coarse":
+            return None
+        (cx, cy, cz), body = e.k[0], e.k[1].e
+        _check_body(body)
+        x, y, z = a   # the voxel (a column output: z is its `at`)
+        org = [v - (v % c) for v, c in ((x, cx), (y, cy), (z, cz))]
+
+        def level(k):
+            def corner(i, j):
+                at = {"x": org[0] + i * cx, "y": org[1] + j * cy, "z": org[2] + k * cz}
+                return _rebuild([body], lambda n, _: at.get(n.op))[0]
+            return _interp_xy(e.k[0], x, y, corner)
+        return _lerp(_frac(z, cz), level(0), level(1))
+    return _rebuild(roots, fn)
+
+
+def lattice(index, roots, top=None):
+    """coarse nodes of a 3D pass in three stages, the same values as expand() (the
+    same samples, the same operations): a "g3" unit samples the function at every
+    lattice point of the chunk; a "gc" unit interpolates those in x and y for every
+    column at every lattice level (`gread`: a sample at a lattice corner); the voxel
+    interpolates its column's two levels in z (`cread`: a column's level). Per voxel
+    that is two loads and a lerp instead of the function. Like the 3D unit, the
+    lattice units stop at the levels the pass's `top` needs.
+    Returns (units in order, new roots)."""
+    units: dict = {}  # cell -> [g3 unit, gc unit]: one kernel each for all its functions
+    got: dict = {}
+
+    def fn(e, a):
+        if e.op != "coarse":
+            return None
+        cell, body = e.k[0], e.k[1].e
+        _check_body(body)
+        key = (body.id, cell)
+        if key not in got:
+            name = got[key] = f"_{index}_g{len(got)}"
+            x, y, z = _xyz()
+            col = _interp_xy(cell, x, y, lambda i, j: E("gread", (x, y, z), "f", (name, cell, i, j)))
+            g3, gc = units.setdefault(cell, [Unit("g3", {}, top=top, cell=cell),
+                                             Unit("gc", {}, top=top, cell=cell)])
+            g3.outs[name] = body
+            gc.outs[name + "c"] = col
+        name = got[key] + "c"
+        x, y, z = a
+        lv = [E("cread", (x, y, z), "f", (name, cell, k)) for k in (0, 1)]
+        return _lerp(_frac(z, cell[2]), lv[0], lv[1])
+    new = _rebuild(roots, fn)
+    return [u for pair in units.values() for u in pair], new
+
+
 # Rough cost of a node when evaluated per voxel; hoisting pays above HOIST_COST.
-_COST = {"perlin2": 20, "perlin3": 30, "voronoi2": 60, "voronoi3": 150, "rand2": 6,
+_COST = {"coarse": 240, "perlin2": 20, "perlin3": 30, "voronoi2": 60, "voronoi3": 150, "rand2": 6,
          "rand3": 7, "irand2": 6, "div": 2, "sqrt": 2, "const": 0, "x": 0, "y": 0}
 HOIST_COST = 3
 
@@ -90,7 +186,7 @@ def _hoist(index, roots):
     order = nodes(roots)
     dep, cost = {}, {}
     for e in order:
-        dep[e.id] = e.op in ("z", "prev") or any(dep[a.id] for a in e.a)
+        dep[e.id] = e.op in ("z", "prev", "cread") or any(dep[a.id] for a in e.a)
         if not dep[e.id]:
             cost[e.id] = _COST.get(e.op, 1) + sum(cost[a.id] for a in e.a)
     # frontier: invariant nodes used by a z-dependent node (or roots themselves)
@@ -128,6 +224,9 @@ def lower(prog: Program) -> list[Unit]:
             else:
                 top = f"_{p.index}_top"
                 units.append(Unit("2d", {top: cse([p.top_e])[0]}))
+        grids, roots = lattice(p.index, cse(roots), top)
+        units += [Unit(g.kind, dict(zip(g.outs, cse(list(g.outs.values())))), top=top,
+                       cell=g.cell) for g in grids]
         fields, (blk,) = _hoist(p.index, cse(roots))
         if fields:
             units.append(Unit("2d", fields))

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.blocks import REGISTRY
-from .lang import (Program, absolute, clamp, clamp01, ifloor, irand2, max_, min_, octaves,
+from .lang import (Program, absolute, clamp, clamp01, coarse, ifloor, irand2, max_, min_, octaves,
                    perlin2, perlin3, rand2, rand3, select, smoothstep, voronoi2)
 from .passgen import PassGenerator
 
@@ -24,11 +24,16 @@ KEEP = 3           # trees remembered per column
 # far terrain: share of a column's area under crowns per unit of treeRate (measured
 # on generated chunks: tests/far/test_consistency.py checks it stays close)
 TREE_COVER = 0.45
+CELL = (4, 4, 4)   # version 2's cave lattice (x, y, z voxels per cell): see README
 
 
 class OverworldGenerator(PassGenerator):
     name = "overworld"
-    version = 1
+    # 1: the cave noise per voxel; 2: sampled on a CELL lattice and interpolated, and the
+    # mountain and dune Voronoi only where those biomes are (issue 29; the height map, so
+    # surface() and far terrain, is version 1's: generation/README.md)
+    version = 2
+    versions = (1, 2)
     defaults = {
         "sea_level": 62,
         "snow_line": 150,     # snow above this (plus noise)
@@ -75,11 +80,15 @@ class OverworldGenerator(PassGenerator):
             rough = octaves(perlin2, (x / 24, y / 24), n=2) * 10.0
             z_mountains = maximum0(peaks * peaks * 150.0 + fold * fold * 26.0 + rough - 6.0) \
                 * mountainess * float(P["mountains"])
+            if self.version >= 2:  # Voronoi only where it counts (lazy: cl.py's `if`s)
+                z_mountains = select(mountainess > 0.0, z_mountains, 0.0)
             # dunes: max of two Voronoi diagrams of the same size (fig. 4.11)
             d1 = voronoi2(x / 34, y / 34).f1
             d2 = voronoi2((x + 17) / 34, (y - 9) / 34).f1
             dune = max_(d1, d2)
             z_desert = (dune * dune * 12.0 + perlin2(x / 90, y / 90) * 4.0 + 2.0) * desertness * land
+            if self.version >= 2:
+                z_desert = select(desertness * land > 0.0, z_desert, 0.0)
             # rivers: |Perlin| near zero; bed below sea level, banks lowered towards it
             wx = perlin2(x / 160, y / 160) * 70.0
             wy = perlin2((x + 5000) / 160, y / 160) * 70.0
@@ -126,8 +135,15 @@ class OverworldGenerator(PassGenerator):
             # cheap tests first: the OpenCL backend then skips the noise on the right
             # of & wherever the left is false (see cl.py), e.g. cavern outside regions
             cave = (z > 4) & ((depth > 7) | (p.read("open") == 1))
-            cave = cave & (perlin3(x / 140, y / 140, z / 90) > 0.18 - 0.1 * float(P["caves"]))
-            cave = cave & (octaves(perlin3, (x / 42, y / 42, z / 26), n=2) > 0.26)
+            if self.version >= 2:  # the cave density on a coarse lattice, interpolated
+                big = coarse(p, lambda x, y, z: perlin3(x / 140, y / 140, z / 90), CELL)
+                small = coarse(p, lambda x, y, z: octaves(perlin3, (x / 42, y / 42, z / 26), n=2),
+                               CELL)
+            else:  # version 1: per voxel
+                big = perlin3(x / 140, y / 140, z / 90)
+                small = octaves(perlin3, (x / 42, y / 42, z / 26), n=2)
+            cave = cave & (big > 0.18 - 0.1 * float(P["caves"]))
+            cave = cave & (small > 0.26)
             if float(P["caves"]) <= 0:
                 cave = cave & (z < 0)
             # ore: clumps in a 3-voxel grid, hashed (cheaper than a third 3D noise)

@@ -27,9 +27,9 @@ class PassGenerator(Generator):
     surface_fields = ("groundZ", "top")
     surface_batch = {"opencl": 16384, "numpy": 2048}  # columns per evaluation
 
-    def __init__(self, seed, params=None, backend=None):
+    def __init__(self, seed, params=None, backend=None, version=None):
         self._asked = backend
-        super().__init__(seed, params, backend)
+        super().__init__(seed, params, backend, version)
         opencl.pick(backend, "generation")  # an unknown or unusable one: refused now
         self.seed32 = noise.seed32(self.seed)
         self.perm = noise.perm_table(self.seed32)

@@ -89,11 +89,11 @@ class World(Saving):
 
     @classmethod
     def open(cls, path, *, backend=None, readonly: bool = False, **kw) -> "World":
-        from ..generation import make_generator
+        from ..generation import for_file
         from ..storage import WorldFile
         wf = WorldFile(path, readonly=readonly)
         try:
-            gen = make_generator(wf.generator, wf.seed, wf.generator_params, backend)
+            gen = for_file(wf, backend)
         except (ValueError, TypeError, KeyError, IndexError, AttributeError) as e:
             wf.close()  # a hostile or damaged meta row: one line, not a traceback
             raise VoxelError(f"{path}: its generator settings are damaged "

@@ -10,7 +10,7 @@ import pytest
 from voxel_addon import meshing
 from voxel_addon.core.blocks import REGISTRY
 from voxel_addon.meshing import aggregate, scenes
-from voxel_addon.meshing.patch import greedy_rows
+from voxel_addon.meshing.slices import greedy_rows
 
 from .helpers import random_window
 

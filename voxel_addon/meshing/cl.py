@@ -89,12 +89,14 @@ def rects(P, tile, nxy, method, z0, z1, split):
     nreg = len(Q.regions(z0, z1, split))
     ni = 2 * (TW + TH) + 2 * ZK
     i32 = np.int32
+    ctx = opencl.context()[0]
+    host = np.asfortranarray(P, np.uint16).ravel(order="K")
     with _lock:
-        bp = _buf("P", P.nbytes)
+        # the kernels read the caller's array in place (a CPU device: no copy; the
+        # blocking reads below end every use of it before this returns)
+        bp = cl.Buffer(ctx, cl.mem_flags.READ_ONLY | cl.mem_flags.USE_HOST_PTR, hostbuf=host)
         lay, busy, count = _buf("lay", nt * 256), _buf("busy", nt * 32), _buf("count", 4)
         flags = _flags()
-        cl.enqueue_copy(queue, bp, np.asfortranarray(P, np.uint16).ravel(order="K"),
-                        is_blocking=False)
         _kernel("mesh_greedy.cl", "layers")(
             queue, (nt * 256,), (16,), bp, flags, i32(PW), i32(PH), i32(nx), i32(TW), i32(TH),
             i32(nt), lay)

@@ -48,4 +48,4 @@ def quads(blocks, *, border="context", method="greedy", backend="numpy", z0=0, z
               z0=z0, z1=z1, split=split)
     if data is not None:
         r = tint.split(r, area(data, border), (P.shape[0] - 2, P.shape[1] - 2), 1)
-    return to_quads(r)[np.argsort(sort_key(r))]
+    return to_quads(r)[np.argsort(sort_key(r), kind="stable")]  # unique keys: same order

@@ -134,7 +134,9 @@ def build_chunks(blocks, origin=(0, 0), *, method="greedy", backend="numpy",
     r = tint.split(r, data, (16, 16), nx)
     region = r["z"] // region_h
     ps = PASS_OF[r["block"]]
-    order = np.argsort(sort_key(r, (region, 8), (ps, 2), xy_bits=5))
+    # keys are unique, so any sort gives this order; the stable one (radix/timsort) is
+    # ~3x faster than quicksort on the kernels' output, which comes in long sorted runs
+    order = np.argsort(sort_key(r, (region, 8), (ps, 2), xy_bits=5), kind="stable")
     r = {c: v[order] for c, v in r.items()}
     t, region, ps = r["t"], region[order], ps[order]
     q = to_quads(r)

@@ -74,8 +74,21 @@ def _flags():
     return _bufs["flags"]
 
 
-def rects(P, tile, nxy, method, z0, z1, split):
-    """Rect columns like faces.rects, or None when the window does not fit the kernel."""
+def _vtab(vtab):
+    """Device copy of the vertex tables (vertex.vtab), one per distinct table."""
+    import pyopencl as cl
+    key = ("vt", vtab.tobytes())
+    if key not in _bufs:
+        ctx, _, _ = opencl.context()
+        _bufs[key] = cl.Buffer(ctx, cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR,
+                               hostbuf=vtab)
+    return _bufs[key]
+
+
+def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
+    """Rect columns like faces.rects, or None when the window does not fit the kernel.
+    With `vtab` (vertex.vtab(): its tables, blocks) also "verts": (n, 4) uint32, each
+    rect's packed viewport vertices (z region-local by `split`), made by the kernel."""
     TW, TH = tile
     if TW > UMAX or max(TW, TH) >= 1 << 16:
         return None
@@ -97,19 +110,20 @@ def rects(P, tile, nxy, method, z0, z1, split):
         bp = cl.Buffer(ctx, cl.mem_flags.READ_ONLY | cl.mem_flags.USE_HOST_PTR, hostbuf=host)
         lay, busy, count = _buf("lay", nt * 256), _buf("busy", nt * 32), _buf("count", 4)
         flags = _flags()
+        vt, nb = (_vtab(vtab[0]), vtab[1]) if vtab is not None else (flags, 0)
         _kernel("mesh_greedy.cl", "layers")(
             queue, (nt * 256,), (16,), bp, flags, i32(PW), i32(PH), i32(nx), i32(TW), i32(TH),
             i32(nt), lay)
         _kernel("mesh_greedy.cl", "band")(queue, (nt,), (1,), lay, i32(z0), i32(z1), i32(nt), busy)
         cap = _bufs.get("cap", START_CAP)
         while True:
-            out = _buf("out", cap * 16)
-            cap = out.size // 16
+            out = _buf("out", cap * 32)
+            cap = out.size // 32
             cl.enqueue_fill_buffer(queue, count, np.uint32(0), 0, 4)
             _kernel("mesh_greedy.cl", "greedy")(
                 queue, (nt * ni,), (1,), bp, flags, i32(PW), i32(PH), i32(nx),
                 i32(TW), i32(TH), i32(nt), i32(z0), i32(z1), i32(split), i32(nreg),
-                i32(method == "greedy"), busy, out, count, np.uint32(cap))
+                i32(method == "greedy"), busy, out, count, np.uint32(cap), vt, i32(nb))
             n = np.empty(1, np.uint32)
             cl.enqueue_copy(queue, n, count)
             n = int(n[0])
@@ -117,13 +131,16 @@ def rects(P, tile, nxy, method, z0, z1, split):
                 break
             cap = n          # overflow: grow to the exact need and run again
         _bufs["cap"] = cap
-        rec = np.empty((n, 4), np.uint32)
+        rec = np.empty((n, 8), np.uint32)
         if n:
             cl.enqueue_copy(queue, rec, out)
     r1, r2, r3 = rec[:, 1], rec[:, 2], rec[:, 3]
     cols = (rec[:, 0], r1 & 0xFFFF, r1 >> 16, r2 & 0xFF, (r2 >> 8) & 0xFF, r3 & 0xFFFF,
             r3 >> 16, r2 >> 16)
-    return {c: v.astype(np.int32) for c, v in zip(Q.COLS, cols)}
+    out = {c: v.astype(np.int32) for c, v in zip(Q.COLS, cols)}
+    if vtab is not None:
+        out["verts"] = rec[:, 4:]
+    return out
 
 
 def face_keys(P, za, zb):

@@ -11,7 +11,7 @@ from ..core.errors import VoxelError
 from .faces import area, sort_key, to_quads
 from .run import check, rects
 from . import tint
-from .mesh import CORNERS, T1, T2, quad_indices  # noqa: F401  (the index pattern: meshing API)
+from .mesh import CORNERS, SIDE, T1, T2, quad_indices  # noqa: F401  (the index pattern: meshing API)
 
 # Bench (region-height trade-off, cf. table 6.5): 64 builds fastest (one meshing call per
 # region) with the fewest draw ranges and no extra triangles vs 16/32; the thesis chose 64 too.
@@ -56,6 +56,18 @@ _PAk, _PBk, _PCk = ([np.ascontiguousarray(t[:, k]) for k in range(4)] for t in (
 _HI = np.stack([t.max(1) for t in (_CA, _CB, _CC)])         # (3, 12, 3) per-axis maxima
 _BLOCK_BITS = (_ANIM << 27).astype(np.uint32)
 _INSET_BITS = (_INSET << 29).astype(np.uint32)
+
+
+def _vtab():
+    """The tables of `_pack` in one uint32 array for the OpenCL mesher (gpu/mesh_greedy.cl
+    `put` packs each quad's vertices as it emits it), and the block count."""
+    layer = REGISTRY.face_texture[:, SIDE].astype(np.uint32)    # (blocks, 12)
+    t = np.concatenate([_PA.ravel(), _PB.ravel(), _PC.ravel(), _BLOCK_BITS, _INSET_BITS,
+                        layer.ravel()]).astype(np.uint32)
+    return t, len(REGISTRY.blocks)
+
+
+VTAB = _vtab()
 
 
 def pack(q, origin=(0, 0, 0)) -> np.ndarray:
@@ -130,7 +142,10 @@ def build_chunks(blocks, origin=(0, 0), *, method="greedy", backend="numpy",
     nx, ny = W // 16, H // 16
     r0, r1 = regions or (0, 256 // region_h)
     r = rects(area(blocks, "context"), (16, 16), method=method, backend=backend, split=region_h,
-              z0=r0 * region_h, z1=r1 * region_h)
+              z0=r0 * region_h, z1=r1 * region_h, vtab=VTAB)
+    dv = r.pop("verts", None)       # packed by the OpenCL mesher
+    if data is not None and (r["block"] == tint.COLOR).any():
+        dv = None                   # colour strips are cut from the rects: pack them here
     r = tint.split(r, data, (16, 16), nx)
     region = r["z"] // region_h
     ps = PASS_OF[r["block"]]
@@ -140,9 +155,11 @@ def build_chunks(blocks, origin=(0, 0), *, method="greedy", backend="numpy",
     r = {c: v[order] for c, v in r.items()}
     t, region, ps = r["t"], region[order], ps[order]
     q = to_quads(r)
-    # the mesher keeps quads inside their region: pack without the checks
-    verts = _pack(r["face"], r["x"], r["y"], r["z"] - region * region_h, r["w"], r["h"],
-                  r["block"], q["layer"])
+    if dv is not None:
+        verts = np.take(dv, order, axis=0).ravel()
+    else:  # the mesher keeps quads inside their region: pack without the checks
+        verts = _pack(r["face"], r["x"], r["y"], r["z"] - region * region_h, r["w"], r["h"],
+                      r["block"], q["layer"])
     nreg, npass, nt = 256 // region_h, len(PASSES), nx * ny
     counts = 4 * np.bincount((t * nreg + region) * npass + ps,
                              minlength=nt * nreg * npass).reshape(nt, nreg, npass)

@@ -170,14 +170,16 @@ def build_chunks(blocks, origin=(0, 0), *, method="greedy", backend="numpy",
     cx0, cy0 = origin
     want = None if keys is None else {tuple(k) for k in keys}
     out = {}
+    qs = qstart.tolist()
+    tinted = bool(q["color"].any())
     for i in range(nt):
         key = (cx0 + i % nx, cy0 + i // nx)
         if want is not None and key not in want:
             continue
-        a, b = qstart[i], qstart[i + 1]
-        col = q["color"][a:b]
+        a, b = qs[i], qs[i + 1]
+        col = q["color"][a:b] if tinted else None
         out[key] = ChunkMesh(verts[4 * a:4 * b], ranges[i], region_h, q[a:b],
-                             np.repeat(col, 4) if col.any() else None)
+                             np.repeat(col, 4) if tinted and col.any() else None)
     return out
 
 

@@ -375,7 +375,8 @@ def _remesh(world, last, win, first=None) -> set:
     return out
 
 
-PATCH_MAX = 8   # voxels a stroke may change for meshing.patch (more: the batched mesher)
+PATCH_MAX = 3   # voxels a stroke may change for meshing.patch (more: the batched mesher;
+# measured: about even at 4 clustered voxels, 0.42 vs 0.54 ms process CPU at 1)
 
 
 def _patch(world, meshing, sub, last, first, remesh, rx0, ry0):

@@ -19,6 +19,7 @@ MASKS = True        # block flags as compiled-in bit masks (False: table loads; 
 START_CAP = 1 << 16  # quad records the output buffer holds at first; grows on overflow
 _lock = threading.Lock()
 _bufs: dict = {}
+_local = threading.local()   # per-thread host scratch (_scratch)
 
 
 def _options():
@@ -74,6 +75,15 @@ def _flags():
     return _bufs["flags"]
 
 
+def _scratch(n):
+    """(n, 8) uint32 host records, a view of this thread's buffer (valid until its next
+    call): a fresh MB-sized array per batch costs page faults, ~1 ms per 8x8 batch."""
+    buf = getattr(_local, "rec", None)
+    if buf is None or len(buf) < n:
+        buf = _local.rec = np.empty((max(n, 2 * (0 if buf is None else len(buf))), 8), np.uint32)
+    return buf[:n]
+
+
 def _vtab(vtab):
     """Device copy of the vertex tables (vertex.vtab), one per distinct table."""
     import pyopencl as cl
@@ -87,8 +97,9 @@ def _vtab(vtab):
 
 def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
     """Rect columns like faces.rects, or None when the window does not fit the kernel.
-    With `vtab` (vertex.vtab(): its tables, blocks) also "verts": (n, 4) uint32, each
-    rect's packed viewport vertices (z region-local by `split`), made by the kernel."""
+    With `vtab` (vertex.VTAB: its tables, blocks) also "verts": (n, 4) uint32, each
+    rect's packed viewport vertices (z region-local by `split`), made by the kernel: a
+    view of this thread's scratch, valid until its next call."""
     TW, TH = tile
     if TW > UMAX or max(TW, TH) >= 1 << 16:
         return None
@@ -131,7 +142,7 @@ def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
                 break
             cap = n          # overflow: grow to the exact need and run again
         _bufs["cap"] = cap
-        rec = np.empty((n, 8), np.uint32)
+        rec = _scratch(n)
         if n:
             cl.enqueue_copy(queue, rec, out)
     r1, r2, r3 = rec[:, 1], rec[:, 2], rec[:, 3]

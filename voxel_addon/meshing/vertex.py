@@ -149,9 +149,7 @@ def build_chunks(blocks, origin=(0, 0), *, method="greedy", backend="numpy",
     r = tint.split(r, data, (16, 16), nx)
     region = r["z"] // region_h
     ps = PASS_OF[r["block"]]
-    # keys are unique, so any sort gives this order; the stable one (radix/timsort) is
-    # ~3x faster than quicksort on the kernels' output, which comes in long sorted runs
-    order = np.argsort(sort_key(r, (region, 8), (ps, 2), xy_bits=5), kind="stable")
+    order = _order(r, region, ps, nx * ny, 256 // region_h)
     r = {c: v[order] for c, v in r.items()}
     t, region, ps = r["t"], region[order], ps[order]
     q = to_quads(r)
@@ -181,6 +179,20 @@ def build_chunks(blocks, origin=(0, 0), *, method="greedy", backend="numpy",
         out[key] = ChunkMesh(verts[4 * a:4 * b], ranges[i], region_h, q[a:b],
                              np.repeat(col, 4) if tinted and col.any() else None)
     return out
+
+
+def _order(r, region, ps, nt, nreg):
+    """Vertex order of the rects (tile, region, pass, face, z, y, x); keys are unique.
+    Two stable sorts of 16-bit keys (NumPy sorts those by radix: ~2x faster than one sort
+    of the 64-bit key) where (tile, region, pass, face) fits 16 bits, else the 64-bit
+    key (its stable sort is ~3x faster than quicksort on the kernels' sorted runs)."""
+    npass = len(PASSES)
+    if nt * nreg * npass * 16 <= 1 << 16:
+        lo = ((r["z"] << 8) | (r["y"] << 4) | r["x"]).astype(np.uint16)
+        hi = ((((r["t"] * nreg + region) * npass + ps) << 4) | r["face"]).astype(np.uint16)
+        o1 = np.argsort(lo, kind="stable")
+        return o1[np.argsort(hi[o1], kind="stable")]
+    return np.argsort(sort_key(r, (region, 8), (ps, 2), xy_bits=5), kind="stable")
 
 
 def splice(old: ChunkMesh, new: ChunkMesh, r0: int, r1: int) -> ChunkMesh:

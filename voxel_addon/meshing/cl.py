@@ -97,9 +97,10 @@ def _vtab(vtab):
 
 def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
     """Rect columns like faces.rects, or None when the window does not fit the kernel.
-    With `vtab` (vertex.VTAB: its tables, blocks) also "verts": (n, 4) uint32, each
-    rect's packed viewport vertices (z region-local by `split`), made by the kernel: a
-    view of this thread's scratch, valid until its next call."""
+    With `vtab` (vertex.VTAB: its tables, blocks) {"rec": (n, 8) uint32} instead: the
+    kernel's records (see gpu/mesh_greedy.cl `Sink`), each with its rect's four packed
+    viewport vertices (z region-local by `split`); a view of this thread's scratch,
+    valid until its next call (`columns` turns it into rect columns)."""
     TW, TH = tile
     if TW > UMAX or max(TW, TH) >= 1 << 16:
         return None
@@ -145,13 +146,17 @@ def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
         rec = _scratch(n)
         if n:
             cl.enqueue_copy(queue, rec, out)
+    if vtab is not None:
+        return {"rec": rec}
+    return columns(rec)
+
+
+def columns(rec):
+    """Rect columns (faces.COLS) of raw records (rects(..., vtab))."""
     r1, r2, r3 = rec[:, 1], rec[:, 2], rec[:, 3]
     cols = (rec[:, 0], r1 & 0xFFFF, r1 >> 16, r2 & 0xFF, (r2 >> 8) & 0xFF, r3 & 0xFFFF,
             r3 >> 16, r2 >> 16)
-    out = {c: v.astype(np.int32) for c, v in zip(Q.COLS, cols)}
-    if vtab is not None:
-        out["verts"] = rec[:, 4:]
-    return out
+    return {c: v.astype(np.int32) for c, v in zip(Q.COLS, cols)}
 
 
 def face_keys(P, za, zb):

@@ -16,8 +16,10 @@ relit with light.update on a window holding every voxel's relight box (a darkeni
 edit clears and refills only the light that moved), which equals a full solve
 (tests). With the world's resource stack the window holds the blocks as the full
 solve sees them (world/models.Sight: a rail, door or slab passes light), and a
-change of state alone is relit too. Meshes: only the render regions (64 layers) around the changed voxels are
-meshed again and spliced in. The payloads are also queued on every Stream of the
+change of state alone is relit too. Meshes: a stroke of a few voxels without colours or
+Minecraft models has only the slices through them meshed again, on this thread
+(meshing.patch: no kernel launch); otherwise the render regions (64 layers) around the
+changed voxels are meshed again and spliced in. The payloads are also queued on every Stream of the
 world, so a consumer that only drains sees them as well.
 
 Writing: edit(..., write=True) hands the stroke to the world's writer thread

@@ -67,7 +67,8 @@ inline void put(Sink k, int t, int x, int y, int z, int face, int w, int h, uint
     uint slot = atomic_inc(k.count);
     if (slot >= k.cap) return;
     k.out[2 * slot] = (uint4)((uint)t, (uint)x | ((uint)y << 16),
-                              (uint)z | ((uint)face << 8) | (block << 16), (uint)w | ((uint)h << 16));
+                              (uint)z | ((uint)face << 8) | (block << 16),
+                              (uint)w | ((uint)h << 16));
     if (!k.nb) return;
     __global const uint *vt = k.vt;
     uint zl = (uint)(k.split ? z % k.split : z);

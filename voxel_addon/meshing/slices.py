@@ -35,8 +35,9 @@ def patch(old: ChunkMesh, P, cells, before=None, origin=(0, 0)) -> ChunkMesh | N
     P[ox:ox + 18, oy:oy + 18] (`origin` = (ox, oy)) after the voxels `cells` changed
     ((x, y, z) chunk-local; x, y may be -1 or 16: a neighbour's voxel). `old`: its
     mesh before (as build_chunks made it). `before`: the old block id of each cell
-    (optional: slices whose faces stay the same are then kept as they are). None where this does not apply: coloured
-    voxels (tint: their colour is data this does not see) — mesh those in full."""
+    (optional: slices whose faces stay the same are then kept as they are). None
+    where this does not apply: coloured voxels (tint: their colour is data this does
+    not see) — mesh those in full."""
     if old.colors is not None or (old.quads["block"] == _COLOR).any():
         return None
     ox, oy = origin

@@ -11,7 +11,7 @@ from ..core.errors import VoxelError
 from .faces import QUAD, area, sort_key, to_quads
 from .run import check, rects
 from . import cl, tint
-from .mesh import CORNERS, SIDE, T1, T2, quad_indices  # noqa: F401  (the index pattern: meshing API)
+from .mesh import CORNERS, SIDE, T1, T2, quad_indices  # noqa: F401  (index pattern: API)
 
 # Bench (region-height trade-off, cf. table 6.5): 64 builds fastest (one meshing call per
 # region) with the fewest draw ranges and no extra triangles vs 16/32; the thesis chose 64 too.

@@ -49,33 +49,57 @@ __kernel void band(__global const uchar *lay, int z0, int z1, int ntiles,
 
 inline bool is_busy(__global const uint *B, int z) { return (B[z >> 5] >> (z & 31)) & 1u; }
 
-// Record: (tile, x | y << 16, z | face << 8 | block << 16, w | h << 16), tile-local.
-inline void put(__global uint4 *out, __global uint *count, uint cap, int t, int x, int y,
-                int z, int face, int w, int h, uint block) {
-    uint slot = atomic_inc(count);
-    if (slot < cap)
-        out[slot] = (uint4)((uint)t, (uint)x | ((uint)y << 16),
-                            (uint)z | ((uint)face << 8) | (block << 16), (uint)w | ((uint)h << 16));
+// Where quads go: records (tile, x | y << 16, z | face << 8 | block << 16, w | h << 16),
+// tile-local, two uint4 per quad, the second the quad's four packed viewport vertices
+// (meshing/vertex.py `_pack`) when nb > 0: vt holds its tables (per face code and
+// corner the position offsets A, B, C at 0, 48, 96; per block the animation bits at
+// 144, the # inset bits at 144 + nb, the texture layer per face code at 144 + 2 nb).
+// Packing here spares the host a pass over every quad; z is region-local (split).
+typedef struct {
+    __global uint4 *out;
+    __global uint *count;
+    uint cap;
+    __global const uint *vt;
+    int nb, split;
+} Sink;
+
+inline void put(Sink k, int t, int x, int y, int z, int face, int w, int h, uint block) {
+    uint slot = atomic_inc(k.count);
+    if (slot >= k.cap) return;
+    k.out[2 * slot] = (uint4)((uint)t, (uint)x | ((uint)y << 16),
+                              (uint)z | ((uint)face << 8) | (block << 16),
+                              (uint)w | ((uint)h << 16));
+    if (!k.nb) return;
+    __global const uint *vt = k.vt;
+    uint zl = (uint)(k.split ? z % k.split : z);
+    uint base = (uint)x | ((uint)y << 5) | (zl << 10) | ((uint)face << 17)
+                | (vt[144 + 2 * k.nb + block * 12 + face] << 21) | vt[144 + block]
+                | (face >= 8 ? vt[144 + k.nb + block] : 0u);
+    int c = 4 * face;
+    uint uw = (uint)w, uh = (uint)h;
+    k.out[2 * slot + 1] = (uint4)(base + vt[c] * uw + vt[48 + c] * uh + vt[96 + c],
+                                  base + vt[c + 1] * uw + vt[49 + c] * uh + vt[97 + c],
+                                  base + vt[c + 2] * uw + vt[50 + c] * uh + vt[98 + c],
+                                  base + vt[c + 3] * uw + vt[51 + c] * uh + vt[99 + c]);
 }
 
 // Rect in slice view (rows v.., columns u..) -> quad fields (as faces.aggregate_pieces).
-inline void put_rect(__global uint4 *out, __global uint *count, uint cap, int t, int d,
-                     int s, int v, int u, int rows, int cols, uint block) {
+inline void put_rect(Sink k, int t, int d, int s, int v, int u, int rows, int cols, uint block) {
     int a = d >> 1;
-    if (a == 0) put(out, count, cap, t, s, v, u, d, rows, cols, block);
-    else if (a == 1) put(out, count, cap, t, v, s, u, d, rows, cols, block);
-    else put(out, count, cap, t, u, v, s, d, cols, rows, block);
+    if (a == 0) put(k, t, s, v, u, d, rows, cols, block);
+    else if (a == 1) put(k, t, v, s, u, d, rows, cols, block);
+    else put(k, t, u, v, s, d, cols, rows, block);
 }
 
 // Greedy (merge) or unit faces over columns [ulo, uhi) of one slice.
 inline void span(__global const ushort *P, __constant uchar *flags, long c0, long sv, long su,
                  long step, bool edge, uint want, int V, int ulo, int uhi, int merge,
-                 int t, int d, int s, __global uint4 *out, __global uint *count, uint cap) {
+                 int t, int d, int s, Sink sink) {
     if (!merge) {
         for (int v = 0; v < V; v++)
             for (int u = ulo; u < uhi; u++) {
                 ushort k = face_key(P, flags, c0 + v * sv + u * su, step, edge, want);
-                if (k) put_rect(out, count, cap, t, d, s, v, u, 1, 1, k);
+                if (k) put_rect(sink, t, d, s, v, u, 1, 1, k);
             }
         return;
     }
@@ -99,7 +123,7 @@ inline void span(__global const ushort *P, __constant uchar *flags, long c0, lon
             bool ok = true;
             for (int j = 0; j < w && ok; j++) ok = rk[u + j] == k;
             if (!ok) {
-                put_rect(out, count, cap, t, d, s, orow[u], u, v - orow[u], w, k);
+                put_rect(sink, t, d, s, orow[u], u, v - orow[u], w, k);
                 for (int j = 0; j < w; j++) ost[u + j] = NONE;
                 nopen--;
             }
@@ -117,7 +141,7 @@ inline void span(__global const ushort *P, __constant uchar *flags, long c0, lon
         }
     }
     for (int u = ulo; u < uhi; u++)
-        if (ost[u] == u) put_rect(out, count, cap, t, d, s, orow[u], u, V - orow[u], ow[u], okey[u]);
+        if (ost[u] == u) put_rect(sink, t, d, s, orow[u], u, V - orow[u], ow[u], okey[u]);
 }
 
 // Work items per tile: 2*TW x-slices and 2*TH y-slices (each walks its render regions
@@ -129,7 +153,8 @@ inline void span(__global const ushort *P, __constant uchar *flags, long c0, lon
 __kernel void greedy(__global const ushort *P, __constant uchar *flags, int PW, int PH,
                      int nx, int TW, int TH, int ntiles, int z0, int z1, int split, int nreg,
                      int merge, __global const uint *busy, __global uint4 *out,
-                     __global uint *count, uint cap) {
+                     __global uint *count, uint cap, __global const uint *vt, int nb) {
+    Sink sink = {out, count, cap, vt, nb, split};
     int ni = 2 * (TW + TH) + 2 * ZK;
     int t = get_global_id(0) / ni, i = get_global_id(0) % ni;
     if (t >= ntiles) return;
@@ -155,8 +180,7 @@ __kernel void greedy(__global const ushort *P, __constant uchar *flags, int PW, 
                 if (!is_busy(B, u)) { u++; continue; }
                 int u1 = u + 1;
                 while (u1 < re && is_busy(B, u1)) u1++;
-                span(P, flags, c0, sv, PL, step, false, want, V, u, u1, merge, t, d, s,
-                     out, count, cap);
+                span(P, flags, c0, sv, PL, step, false, want, V, u, u1, merge, t, d, s, sink);
                 u = u1;
             }
         }
@@ -170,13 +194,13 @@ __kernel void greedy(__global const ushort *P, __constant uchar *flags, int PW, 
                 for (int u = 0; u < TW; u++) {
                     ushort b = P[c0 + v * PW + u];
                     uint f = flags[b];
-                    if (f & F_X) { put(out, count, cap, t, u, v, z, 6, 1, 1, b);
-                                   put(out, count, cap, t, u, v, z, 7, 1, 1, b); }
+                    if (f & F_X) { put(sink, t, u, v, z, 6, 1, 1, b);
+                                   put(sink, t, u, v, z, 7, 1, 1, b); }
                     if (f & F_HASH)
-                        for (int k = 8; k < 12; k++) put(out, count, cap, t, u, v, z, k, 1, 1, b);
+                        for (int k = 8; k < 12; k++) put(sink, t, u, v, z, k, 1, 1, b);
                 }
         }
         bool edge = (d == 4 && z == 0) || (d == 5 && z == 255);
-        span(P, flags, c0, PW, 1, step, edge, want, TH, 0, TW, merge, t, d, z, out, count, cap);
+        span(P, flags, c0, PW, 1, step, edge, want, TH, 0, TW, merge, t, d, z, sink);
     }
 }

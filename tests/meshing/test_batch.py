@@ -122,3 +122,13 @@ def test_opencl_flag_table_path(cl_device, cave):
                               meshing.quads(b, method="none", backend="opencl"))
     finally:
         mcl.MASKS = True
+
+
+@pytest.mark.parametrize("region_h", [64, 1])   # the 16-bit radix order and the 64-bit key
+def test_build_chunks_vertex_order(cave, region_h):
+    from voxel_addon.meshing.vertex import PASS_OF
+    for m in meshing.build_chunks(cave, region_h=region_h).values():
+        q = m.quads
+        want = np.lexsort((q["x"], q["y"], q["z"], q["face"], PASS_OF[q["block"]],
+                           q["z"] // region_h))
+        assert (want == np.arange(len(q))).all()

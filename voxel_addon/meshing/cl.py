@@ -19,6 +19,7 @@ MASKS = True        # block flags as compiled-in bit masks (False: table loads; 
 START_CAP = 1 << 16  # quad records the output buffer holds at first; grows on overflow
 _lock = threading.Lock()
 _bufs: dict = {}
+_local = threading.local()   # per-thread host scratch (_scratch)
 
 
 def _options():
@@ -74,8 +75,32 @@ def _flags():
     return _bufs["flags"]
 
 
-def rects(P, tile, nxy, method, z0, z1, split):
-    """Rect columns like faces.rects, or None when the window does not fit the kernel."""
+def _scratch(n):
+    """(n, 8) uint32 host records, a view of this thread's buffer (valid until its next
+    call): a fresh MB-sized array per batch costs page faults, ~1 ms per 8x8 batch."""
+    buf = getattr(_local, "rec", None)
+    if buf is None or len(buf) < n:
+        buf = _local.rec = np.empty((max(n, 2 * (0 if buf is None else len(buf))), 8), np.uint32)
+    return buf[:n]
+
+
+def _vtab(vtab):
+    """Device copy of the vertex tables (vertex.vtab), one per distinct table."""
+    import pyopencl as cl
+    key = ("vt", vtab.tobytes())
+    if key not in _bufs:
+        ctx, _, _ = opencl.context()
+        _bufs[key] = cl.Buffer(ctx, cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR,
+                               hostbuf=vtab)
+    return _bufs[key]
+
+
+def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
+    """Rect columns like faces.rects, or None when the window does not fit the kernel.
+    With `vtab` (vertex.VTAB: its tables, blocks) {"rec": (n, 8) uint32} instead: the
+    kernel's records (see gpu/mesh_greedy.cl `Sink`), each with its rect's four packed
+    viewport vertices (z region-local by `split`); a view of this thread's scratch,
+    valid until its next call (`columns` turns it into rect columns)."""
     TW, TH = tile
     if TW > UMAX or max(TW, TH) >= 1 << 16:
         return None
@@ -89,25 +114,28 @@ def rects(P, tile, nxy, method, z0, z1, split):
     nreg = len(Q.regions(z0, z1, split))
     ni = 2 * (TW + TH) + 2 * ZK
     i32 = np.int32
+    ctx = opencl.context()[0]
+    host = np.asfortranarray(P, np.uint16).ravel(order="K")
     with _lock:
-        bp = _buf("P", P.nbytes)
+        # the kernels read the caller's array in place (a CPU device: no copy; the
+        # blocking reads below end every use of it before this returns)
+        bp = cl.Buffer(ctx, cl.mem_flags.READ_ONLY | cl.mem_flags.USE_HOST_PTR, hostbuf=host)
         lay, busy, count = _buf("lay", nt * 256), _buf("busy", nt * 32), _buf("count", 4)
         flags = _flags()
-        cl.enqueue_copy(queue, bp, np.asfortranarray(P, np.uint16).ravel(order="K"),
-                        is_blocking=False)
+        vt, nb = (_vtab(vtab[0]), vtab[1]) if vtab is not None else (flags, 0)
         _kernel("mesh_greedy.cl", "layers")(
             queue, (nt * 256,), (16,), bp, flags, i32(PW), i32(PH), i32(nx), i32(TW), i32(TH),
             i32(nt), lay)
         _kernel("mesh_greedy.cl", "band")(queue, (nt,), (1,), lay, i32(z0), i32(z1), i32(nt), busy)
         cap = _bufs.get("cap", START_CAP)
         while True:
-            out = _buf("out", cap * 16)
-            cap = out.size // 16
+            out = _buf("out", cap * 32)
+            cap = out.size // 32
             cl.enqueue_fill_buffer(queue, count, np.uint32(0), 0, 4)
             _kernel("mesh_greedy.cl", "greedy")(
                 queue, (nt * ni,), (1,), bp, flags, i32(PW), i32(PH), i32(nx),
                 i32(TW), i32(TH), i32(nt), i32(z0), i32(z1), i32(split), i32(nreg),
-                i32(method == "greedy"), busy, out, count, np.uint32(cap))
+                i32(method == "greedy"), busy, out, count, np.uint32(cap), vt, i32(nb))
             n = np.empty(1, np.uint32)
             cl.enqueue_copy(queue, n, count)
             n = int(n[0])
@@ -115,9 +143,16 @@ def rects(P, tile, nxy, method, z0, z1, split):
                 break
             cap = n          # overflow: grow to the exact need and run again
         _bufs["cap"] = cap
-        rec = np.empty((n, 4), np.uint32)
+        rec = _scratch(n)
         if n:
             cl.enqueue_copy(queue, rec, out)
+    if vtab is not None:
+        return {"rec": rec}
+    return columns(rec)
+
+
+def columns(rec):
+    """Rect columns (faces.COLS) of raw records (rects(..., vtab))."""
     r1, r2, r3 = rec[:, 1], rec[:, 2], rec[:, 3]
     cols = (rec[:, 0], r1 & 0xFFFF, r1 >> 16, r2 & 0xFF, (r2 >> 8) & 0xFF, r3 & 0xFFFF,
             r3 >> 16, r2 >> 16)

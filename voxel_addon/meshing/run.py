@@ -25,13 +25,14 @@ def check(blocks, border, method, backend, z0, z1) -> str:
     return opencl.pick(backend, "meshing")
 
 
-def rects(P, tile, *, method="greedy", backend="numpy", z0=0, z1=256, split=0):
+def rects(P, tile, *, method="greedy", backend="numpy", z0=0, z1=256, split=0, vtab=None):
     """Rect columns (faces.COLS -> int arrays, unordered) of every tile of area P
-    ((W+2, H+2, 256) with ring); tiles are TW x TH, numbered x fastest."""
+    ((W+2, H+2, 256) with ring); tiles are TW x TH, numbered x fastest. `vtab`: the
+    OpenCL mesher may add "verts", the packed vertices (cl.rects)."""
     W, H = P.shape[0] - 2, P.shape[1] - 2
     nxy = (W // tile[0], H // tile[1])
     if backend == "opencl":
-        got = cl.rects(P, tile, nxy, method, z0, z1, split)
+        got = cl.rects(P, tile, nxy, method, z0, z1, split, vtab)
         if got is not None:
             return got  # else a window wider than the kernel takes
     return faces.rects(P, tile, nxy, method, z0, z1, split)
@@ -48,4 +49,4 @@ def quads(blocks, *, border="context", method="greedy", backend="numpy", z0=0, z
               z0=z0, z1=z1, split=split)
     if data is not None:
         r = tint.split(r, area(data, border), (P.shape[0] - 2, P.shape[1] - 2), 1)
-    return to_quads(r)[np.argsort(sort_key(r))]
+    return to_quads(r)[np.argsort(sort_key(r), kind="stable")]  # unique keys: same order

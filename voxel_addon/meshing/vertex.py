@@ -8,10 +8,10 @@ import numpy as np
 
 from ..core.blocks import ANIMATIONS, REGISTRY, RENDERS
 from ..core.errors import VoxelError
-from .faces import area, sort_key, to_quads
+from .faces import QUAD, area, sort_key, to_quads
 from .run import check, rects
-from . import tint
-from .mesh import CORNERS, T1, T2, quad_indices  # noqa: F401  (the index pattern: meshing API)
+from . import cl, tint
+from .mesh import CORNERS, SIDE, T1, T2, quad_indices  # noqa: F401  (index pattern: API)
 
 # Bench (region-height trade-off, cf. table 6.5): 64 builds fastest (one meshing call per
 # region) with the fewest draw ranges and no extra triangles vs 16/32; the thesis chose 64 too.
@@ -56,6 +56,18 @@ _PAk, _PBk, _PCk = ([np.ascontiguousarray(t[:, k]) for k in range(4)] for t in (
 _HI = np.stack([t.max(1) for t in (_CA, _CB, _CC)])         # (3, 12, 3) per-axis maxima
 _BLOCK_BITS = (_ANIM << 27).astype(np.uint32)
 _INSET_BITS = (_INSET << 29).astype(np.uint32)
+
+
+def _vtab():
+    """The tables of `_pack` in one uint32 array for the OpenCL mesher (gpu/mesh_greedy.cl
+    `put` packs each quad's vertices as it emits it), and the block count."""
+    layer = REGISTRY.face_texture[:, SIDE].astype(np.uint32)    # (blocks, 12)
+    t = np.concatenate([_PA.ravel(), _PB.ravel(), _PC.ravel(), _BLOCK_BITS, _INSET_BITS,
+                        layer.ravel()]).astype(np.uint32)
+    return t, len(REGISTRY.blocks)
+
+
+VTAB = _vtab()
 
 
 def pack(q, origin=(0, 0, 0)) -> np.ndarray:
@@ -130,20 +142,16 @@ def build_chunks(blocks, origin=(0, 0), *, method="greedy", backend="numpy",
     nx, ny = W // 16, H // 16
     r0, r1 = regions or (0, 256 // region_h)
     r = rects(area(blocks, "context"), (16, 16), method=method, backend=backend, split=region_h,
-              z0=r0 * region_h, z1=r1 * region_h)
-    r = tint.split(r, data, (16, 16), nx)
-    region = r["z"] // region_h
-    ps = PASS_OF[r["block"]]
-    order = np.argsort(sort_key(r, (region, 8), (ps, 2), xy_bits=5))
-    r = {c: v[order] for c, v in r.items()}
-    t, region, ps = r["t"], region[order], ps[order]
-    q = to_quads(r)
-    # the mesher keeps quads inside their region: pack without the checks
-    verts = _pack(r["face"], r["x"], r["y"], r["z"] - region * region_h, r["w"], r["h"],
-                  r["block"], q["layer"])
+              z0=r0 * region_h, z1=r1 * region_h, vtab=VTAB)
     nreg, npass, nt = 256 // region_h, len(PASSES), nx * ny
-    counts = 4 * np.bincount((t * nreg + region) * npass + ps,
-                             minlength=nt * nreg * npass).reshape(nt, nreg, npass)
+    rec = r.get("rec")   # the OpenCL mesher's records, vertices packed
+    if rec is not None and data is not None and ((rec[:, 2] >> 16) == tint.COLOR).any():
+        r, rec = cl.columns(rec), None  # colour strips are cut from the rects: pack here
+    if rec is not None:
+        q, verts, slot = _from_records(rec, region_h, nt, nreg)
+    else:
+        q, verts, slot = _from_columns(tint.split(r, data, (16, 16), nx), region_h, nt, nreg)
+    counts = 4 * np.bincount(slot, minlength=nt * nreg * npass).reshape(nt, nreg, npass)
     per_tile = counts.reshape(nt, -1).sum(1)
     qstart = np.concatenate([[0], np.cumsum(per_tile // 4)])
     first = (np.cumsum(counts.reshape(nt, -1), 1) - counts.reshape(nt, -1)).reshape(counts.shape)
@@ -151,15 +159,65 @@ def build_chunks(blocks, origin=(0, 0), *, method="greedy", backend="numpy",
     cx0, cy0 = origin
     want = None if keys is None else {tuple(k) for k in keys}
     out = {}
+    qs = qstart.tolist()
+    tinted = bool(q["color"].any())
     for i in range(nt):
         key = (cx0 + i % nx, cy0 + i // nx)
         if want is not None and key not in want:
             continue
-        a, b = qstart[i], qstart[i + 1]
-        col = q["color"][a:b]
+        a, b = qs[i], qs[i + 1]
+        col = q["color"][a:b] if tinted else None
         out[key] = ChunkMesh(verts[4 * a:4 * b], ranges[i], region_h, q[a:b],
-                             np.repeat(col, 4) if col.any() else None)
+                             np.repeat(col, 4) if tinted and col.any() else None)
     return out
+
+
+def _from_records(rec, region_h, nt, nreg):
+    """(quads, vertices, (tile, region, pass) slot per quad) from the kernel's records
+    (cl.rects with vtab): sorted once as whole records, fields cut from the sorted ones."""
+    r1, r2 = rec[:, 1], rec[:, 2]
+    z, block = r2 & 0xFF, r2 >> 16
+    region, ps = z // region_h, PASS_OF[block]
+    order = _order({"t": rec[:, 0], "x": r1 & 0xFFFF, "y": r1 >> 16, "z": z,
+                    "face": (r2 >> 8) & 0xFF}, region, ps, nt, nreg)
+    slot = (rec[:, 0] * nreg + region) * len(PASSES) + ps
+    s = np.take(rec, order, axis=0)
+    s1, s2, s3 = s[:, 1], s[:, 2], s[:, 3]
+    q = np.empty(len(s), QUAD)
+    q["x"], q["y"], q["z"] = s1 & 0xFFFF, s1 >> 16, s2 & 0xFF
+    q["face"], q["block"] = (s2 >> 8) & 0xFF, s2 >> 16
+    q["w"], q["h"] = s3 & 0xFFFF, s3 >> 16
+    q["layer"] = REGISTRY.face_texture[q["block"], SIDE[q["face"]]]
+    q["color"] = 0
+    return q, np.ascontiguousarray(s[:, 4:]).ravel(), slot
+
+
+def _from_columns(r, region_h, nt, nreg):
+    """The same from rect columns (NumPy mesher, colour strips): vertices packed here."""
+    region = r["z"] // region_h
+    ps = PASS_OF[r["block"]]
+    order = _order(r, region, ps, nt, nreg)
+    r = {c: v[order] for c, v in r.items()}
+    region, ps = region[order], ps[order]
+    q = to_quads(r)
+    # the mesher keeps quads inside their region: pack without the checks
+    verts = _pack(r["face"], r["x"], r["y"], r["z"] - region * region_h, r["w"], r["h"],
+                  r["block"], q["layer"])
+    return q, verts, (r["t"] * nreg + region) * len(PASSES) + ps
+
+
+def _order(r, region, ps, nt, nreg):
+    """Vertex order of the rects (tile, region, pass, face, z, y, x); keys are unique.
+    Two stable sorts of 16-bit keys (NumPy sorts those by radix: ~2x faster than one sort
+    of the 64-bit key) where (tile, region, pass, face) fits 16 bits, else the 64-bit
+    key (its stable sort is ~3x faster than quicksort on the kernels' sorted runs)."""
+    npass = len(PASSES)
+    if nt * nreg * npass * 16 <= 1 << 16:
+        lo = ((r["z"] << 8) | (r["y"] << 4) | r["x"]).astype(np.uint16)
+        hi = ((((r["t"] * nreg + region) * npass + ps) << 4) | r["face"]).astype(np.uint16)
+        o1 = np.argsort(lo, kind="stable")
+        return o1[np.argsort(hi[o1], kind="stable")]
+    return np.argsort(sort_key(r, (region, 8), (ps, 2), xy_bits=5), kind="stable")
 
 
 def splice(old: ChunkMesh, new: ChunkMesh, r0: int, r1: int) -> ChunkMesh:

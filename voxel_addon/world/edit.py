@@ -16,8 +16,10 @@ relit with light.update on a window holding every voxel's relight box (a darkeni
 edit clears and refills only the light that moved), which equals a full solve
 (tests). With the world's resource stack the window holds the blocks as the full
 solve sees them (world/models.Sight: a rail, door or slab passes light), and a
-change of state alone is relit too. Meshes: only the render regions (64 layers) around the changed voxels are
-meshed again and spliced in. The payloads are also queued on every Stream of the
+change of state alone is relit too. Meshes: a stroke of a few voxels without colours or
+Minecraft models has only the slices through them meshed again, on this thread
+(meshing.patch: no kernel launch); otherwise the render regions (64 layers) around the
+changed voxels are meshed again and spliced in. The payloads are also queued on every Stream of the
 world, so a consumer that only drains sees them as well.
 
 Writing: edit(..., write=True) hands the stroke to the world's writer thread
@@ -261,7 +263,7 @@ def _apply(world, items, write=True):
             t = world.tick()
             for k, vox in per.items():  # the rows go to the file through commit/hold
                 world.blocks_changed(k, vox, edits=False, tick=t, relit=True)
-            remeshed = _remesh(world, last, win)
+            remeshed = _remesh(world, last, win, first)
             if opened is not None:   # the light sees the blocks the full solve sees
                 blocks[opened] = 0
             relit = _relight(world, blocks, lit, steps, near, win, sight)
@@ -321,43 +323,80 @@ def _set_voxels(world, items):
     return first, last, steps
 
 
-def _remesh(world, last, win) -> set:
+def _remesh(world, last, win, first=None) -> set:
     """Mesh the window's chunks again, only the render regions (64 layers) that hold
     a changed voxel's faces; keep the meshes that differ (call after the stroke is
-    in the chunks). Returns the keys whose mesh changed."""
+    in the chunks). A few voxels without colours or Minecraft models: only the slices
+    through them, on this thread (meshing.patch: no kernel launch). Returns the keys
+    whose mesh changed."""
     from .. import meshing
     remesh = win.remesh
     rx0, ry0 = min(k[0] for k in remesh), min(k[1] for k in remesh)
     rx1, ry1 = max(k[0] for k in remesh) + 1, max(k[1] for k in remesh) + 1
     gx, gy = rx0 * S - 1, ry0 * S - 1  # the chunks with their one-voxel ring
-    sub = _gather(world, gx, gy, rx1 * S + 1, ry1 * S + 1, "blocks", exact=True)
-    data = None
-    if (sub == tint.COLOR).any():  # coloured voxels: their colour is their data (after the stroke)
-        data = np.array(_gather(world, gx, gy, gx + sub.shape[0], gy + sub.shape[1], "data"),
-                        order="F")
     zs = [z for _, _, z in last]
     r0 = max(min(zs) - 1, 0) // meshing.REGION_H
     r1 = min(max(zs) + 1, C.HEIGHT - 1) // meshing.REGION_H + 1
     whole = any(world.chunks.get(k) is not None and world.chunks[k].mesh is None
                 for k in remesh)
     regions = None if whole else (r0, r1)
+    stack = mcmodels.stack(world)
+    # a region remesh reads its layers and one more on each side; the others stay stale
+    za, zb = (0, C.HEIGHT) if whole or stack is not None else \
+        (max(r0 * meshing.REGION_H - 1, 0), min(r1 * meshing.REGION_H + 1, C.HEIGHT))
+    sub = _gather(world, gx, gy, rx1 * S + 1, ry1 * S + 1, "blocks", za, zb, exact=True)
+    data = None
+    if (sub[:, :, za:zb] == tint.COLOR).any():  # coloured voxels: their colour is their data
+        data = np.array(_gather(world, gx, gy, gx + sub.shape[0], gy + sub.shape[1], "data"),
+                        order="F")
     models = {}
-    if mcmodels.stack(world) is not None:  # Minecraft model blocks: air for the mesher
+    if stack is not None:  # Minecraft model blocks: air for the mesher
         small = data if data is not None else np.array(
             _gather(world, gx, gy, gx + sub.shape[0], gy + sub.shape[1], "data"), order="F")
         models = mcmodels.build(world, sub, small, rx0, ry0)
-    meshes = _mesh(meshing, sub, (rx0, ry0), remesh, regions, data)
+    patched = None
+    if regions is not None and data is None and stack is None and first is not None \
+            and len(last) <= PATCH_MAX:
+        patched = _patch(world, meshing, sub, last, first, remesh, rx0, ry0)
+    meshes = None if patched is not None else _mesh(meshing, sub, (rx0, ry0), remesh,
+                                                    regions, data)
     out = set()
     for k in remesh:
         c = world.chunks.get(k)
         if c is None or k in world.corrupt:
             continue
-        m = meshes[k] if regions is None else meshing.splice(c.mesh, meshes[k], r0, r1)
+        if patched is not None:
+            m = patched[k]
+        else:
+            m = meshes[k] if regions is None else meshing.splice(c.mesh, meshes[k], r0, r1)
         m.models = models.get(k)
         if _same(c.mesh, m) and m.models is None and getattr(c.mesh, "models", None) is None:
             continue  # e.g. a hidden face stayed hidden: no new payload
         c.mesh = m
         out.add(k)
+    return out
+
+
+PATCH_MAX = 3   # voxels a stroke may change for meshing.patch (more: the batched mesher;
+# measured: about even at 4 clustered voxels, 0.42 vs 0.54 ms process CPU at 1)
+
+
+def _patch(world, meshing, sub, last, first, remesh, rx0, ry0):
+    """{key: mesh} of the remeshed chunks by meshing.patch, or None where it does not
+    apply to one of them (then all are meshed in full)."""
+    cells = list(last)
+    before = [first[v][0] for v in cells]
+    out = {}
+    for k in remesh:
+        c = world.chunks.get(k)
+        if c is None or k in world.corrupt:
+            continue
+        ox, oy = k[0] * S, k[1] * S
+        m = meshing.patch(c.mesh, sub, [(x - ox, y - oy, z) for x, y, z in cells], before,
+                          ((k[0] - rx0) * S, (k[1] - ry0) * S))
+        if m is None:
+            return None
+        out[k] = m
     return out
 
 

@@ -31,44 +31,50 @@ def grid(shape_zyx: tuple[int, int, int]) -> tuple[tuple[int, int, int], tuple[i
     return (z + 4, y + 2, x + 2), (x + 2, (x + 2) * (y + 2))
 
 
-def flood(f: np.ndarray, cost: np.ndarray, seeds: np.ndarray, shift: int,
-          sy: int, sz: int) -> None:
-    """Raise nibble `shift` of flat `f` in place to the fixpoint reachable from `seeds`
-    (flat voxel indices, any order, duplicates allowed)."""
+def levels(fc: np.ndarray, cost: np.ndarray, seeds: np.ndarray, vals: np.ndarray,
+           sy: int, sz: int, owner: np.ndarray):
+    """Flood one component to the fixpoint from `seeds` (flat voxel indices, start
+    values `vals`), brightest first (Dial's buckets, as Minecraft's light queue).
+
+    `fc` holds per voxel value + cost (uint8; >= 16 never rises: opaque, rim): a source
+    at v raises n iff v > fc[n], to v - cost[n], after which fc[n] = v. Processing the
+    values from 15 down, a voxel is written once, with its final value (every better
+    path comes through a brighter voxel, done earlier), and all writes of one level to
+    one voxel carry the same value, so scatters need no max. Returns the written
+    (indices, values) per level; `owner`: int32 scratch as large as fc."""
     offs = np.array([-1, 1, -sy, sy, -sz, sz], np.int64)
-    idx = np.asarray(seeds, np.int64)
-    sh = np.uint16(shift)
-    keep = ~np.uint16(15 << shift)
-    owner = np.empty(f.size, np.int32)
-    while idx.size:
-        val = ((f[idx] >> sh) & np.uint16(15)).astype(np.int16)
-        live = val > 1  # a 1 pushes 0: nothing
-        if not live.all():
-            idx, val = idx[live], val[live]
-            if not idx.size:
-                break
+    buckets = [[] for _ in range(model.MAX + 1)]
+    seeds = np.asarray(seeds, np.int64)
+    vals = np.asarray(vals)
+    for v in np.unique(vals).tolist():
+        if v > 1:
+            buckets[v].append(seeds[vals == v])
+    out = []
+    for v in range(model.MAX, 1, -1):
+        if not buckets[v]:
+            continue
+        idx = buckets[v][0] if len(buckets[v]) == 1 else np.concatenate(buckets[v])
+        buckets[v] = None
         n = (idx[:, None] + offs).ravel()
-        cand = np.repeat(val, 6) - cost[n]
-        m = cand > ((f[n] >> sh) & np.uint16(15)).astype(np.int16)
-        n, cand = n[m], cand[m]
+        n = n[fc[n] < v]  # stale seeds (raised since) find nothing here: harmless
         if not n.size:
-            break
-        idx = _raise(f, n, cand, sh, keep, owner)  # the next frontier
-
-
-def _raise(f, n, cand, sh, keep, owner):
-    """Write each target's best candidate into nibble `sh` without sorting: write
-    all (an arbitrary one wins among duplicates), then rewrite those that lost to a
-    better one until none did (values only rise, so this ends). Returns the targets
-    once each (`owner`: int32 scratch as large as f, read only where written)."""
-    a, c = n, cand.astype(np.uint16)
-    while a.size:
-        f[a] = (f[a] & keep) | (c << sh)
-        lost = ((f[a] >> sh) & np.uint16(15)) < c
-        a, c = a[lost], c[lost]
-    i = np.arange(n.size, dtype=np.int32)
-    owner[n] = i
-    return n[owner[n] == i]
+            continue
+        i = np.arange(n.size, dtype=np.int32)
+        owner[n] = i
+        n = n[owner[n] == i]  # once each
+        fc[n] = v
+        c = cost[n]
+        if (c == 1).all():  # the common case: plain air
+            out.append((n, v - 1))
+            if v > 2:
+                buckets[v - 1].append(n)
+            continue
+        for k in np.unique(c).tolist():
+            t = n[c == k]
+            out.append((t, v - k))
+            if v - k > 1:
+                buckets[v - k].append(t)
+    return out
 
 
 def _best(n: np.ndarray, cand: np.ndarray):
@@ -83,22 +89,20 @@ def _best(n: np.ndarray, cand: np.ndarray):
     return key >> 4, key & 15
 
 
-def seeds(f: np.ndarray, cost: np.ndarray, shift: int, offs, lo: int, hi: int) -> np.ndarray:
-    """Flat indices in [lo, hi) whose nibble can raise a neighbour at one of the
-    offsets `offs` (positive; both directions are checked) right now: a dense check,
-    one Jacobi step's worth of work on that range."""
-    m = max(offs)
-    assert lo >= m and hi + m <= f.size
-    a0, a1 = lo - m, hi + m
-    v = ((f[a0:a1] >> np.uint16(shift)) & np.uint16(15)).astype(np.int16)
-    c = cost[a0:a1].astype(np.int16)
-    lo, hi = lo - a0, hi - a0
-    out = np.zeros(hi - lo, bool)
-    for o in offs:
-        # i raises i+o: v[i] - c[i+o] > v[i+o]; i raises i-o likewise.
-        out |= v[lo:hi] - c[lo + o:hi + o] > v[lo + o:hi + o]
-        out |= v[lo:hi] - c[lo - o:hi - o] > v[lo - o:hi - o]
-    return np.flatnonzero(out) + (lo + a0)
+def edge(fc: np.ndarray, cost: np.ndarray, offs, lo: int, hi: int):
+    """Flat indices in [lo, hi) (of a `levels` grid) whose value can raise a neighbour
+    at one of the offsets `offs` (positive; both directions are checked) right now,
+    and their values: v = fc - cost raises n iff v > fc[n]. A dense check, one
+    Jacobi step's worth of work on that range."""
+    assert lo >= max(offs) and hi + max(offs) <= fc.size
+    v = fc[lo:hi] - cost[lo:hi]  # opaque and rim: 255 - 255 = 0
+    o = offs[0]
+    low = np.minimum(fc[lo + o:hi + o], fc[lo - o:hi - o])
+    for o in offs[1:]:  # the neighbour easiest to raise decides
+        np.minimum(low, fc[lo + o:hi + o], out=low)
+        np.minimum(low, fc[lo - o:hi - o], out=low)
+    i = np.flatnonzero(v > low)
+    return i + lo, v[i]
 
 
 def flood_lanes(f: np.ndarray, cost: np.ndarray, seeds: np.ndarray, sy: int, sz: int,
@@ -125,24 +129,6 @@ def flood_lanes(f: np.ndarray, cost: np.ndarray, seeds: np.ndarray, sy: int, sz:
         f[idx] = v.astype(np.uint8)
         if written is not None:
             written.append(idx)
-
-
-def seeds_lanes(f: np.ndarray, cost: np.ndarray, offs, lo: int, hi: int) -> np.ndarray:
-    """`seeds` for flat lanes: lane indices of voxels [lo, hi) that can raise a
-    neighbour at +-offs (voxel strides) in that component."""
-    m = max(offs)
-    assert lo >= m and hi + m <= cost.size
-    # i raises its neighbour j iff v[i] - c[j] > v[j], i.e. v[i] > w[j] = v[j] + c[j]:
-    # uint8 throughout (a cost above MAX + 1 blocks like 16 does), no int16 copies;
-    # some neighbour can be raised iff v[i] > the least w of the six.
-    v = f.reshape(-1, 4)[lo - m:hi + m]
-    w = np.minimum(cost[lo - m:hi + m], np.uint8(model.MAX + 1))[:, None] + v
-    a, b = m, m + hi - lo
-    low = np.minimum(w[a + offs[0]:b + offs[0]], w[a - offs[0]:b - offs[0]])
-    for o in offs[1:]:  # the neighbour easiest to raise decides
-        np.minimum(low, w[a + o:b + o], out=low)
-        np.minimum(low, w[a - o:b - o], out=low)
-    return np.flatnonzero(v[a:b] > low) + 4 * lo
 
 
 assert model.OPAQUE_COST > model.MAX  # v - OPAQUE_COST < 0: such voxels never rise

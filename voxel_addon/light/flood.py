@@ -32,17 +32,18 @@ def grid(shape_zyx: tuple[int, int, int]) -> tuple[tuple[int, int, int], tuple[i
 
 
 def levels(fc: np.ndarray, cost: np.ndarray, seeds: np.ndarray, vals: np.ndarray,
-           sy: int, sz: int, owner: np.ndarray):
-    """Flood one component to the fixpoint from `seeds` (flat voxel indices, start
-    values `vals`), brightest first (Dial's buckets, as Minecraft's light queue).
+           sy: int, sz: int):
+    """Flood one component to the fixpoint from `seeds` (distinct flat voxel indices,
+    start values `vals`), brightest first (Dial's buckets, as Minecraft's light queue).
 
     `fc` holds per voxel value + cost (uint8; >= 16 never rises: opaque, rim): a source
     at v raises n iff v > fc[n], to v - cost[n], after which fc[n] = v. Processing the
     values from 15 down, a voxel is written once, with its final value (every better
-    path comes through a brighter voxel, done earlier), and all writes of one level to
-    one voxel carry the same value, so scatters need no max. Returns the written
-    (indices, values) per level; `owner`: int32 scratch as large as fc."""
-    offs = np.array([-1, 1, -sy, sy, -sz, sz], np.int64)
+    path comes through a brighter voxel, done earlier). One neighbour direction at a
+    time, each claiming what it raised before the next looks, so every voxel enters a
+    bucket once and no scatter has duplicates. Returns the written (indices, value)
+    per level."""
+    offs = (-1, 1, -sy, sy, -sz, sz)
     buckets = [[] for _ in range(model.MAX + 1)]
     seeds = np.asarray(seeds, np.int64)
     vals = np.asarray(vals)
@@ -55,14 +56,15 @@ def levels(fc: np.ndarray, cost: np.ndarray, seeds: np.ndarray, vals: np.ndarray
             continue
         idx = buckets[v][0] if len(buckets[v]) == 1 else np.concatenate(buckets[v])
         buckets[v] = None
-        n = (idx[:, None] + offs).ravel()
-        n = n[fc[n] < v]  # stale seeds (raised since) find nothing here: harmless
+        got = []
+        for o in offs:  # a stale seed (raised since) finds nothing: harmless
+            t = idx + o
+            t = t[fc[t] < v]
+            fc[t] = v
+            got.append(t)
+        n = np.concatenate(got)
         if not n.size:
             continue
-        i = np.arange(n.size, dtype=np.int32)
-        owner[n] = i
-        n = n[owner[n] == i]  # once each
-        fc[n] = v
         c = cost[n]
         if (c == 1).all():  # the common case: plain air
             out.append((n, v - 1))

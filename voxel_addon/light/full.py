@@ -90,36 +90,40 @@ def solve_slab(blocks: np.ndarray) -> np.ndarray:
         dlo = z
         if not dhi and carry.min() < model.MAX:
             dhi = z + 1
-    owner = np.empty(fc.size, np.int32)
     fc = fc.reshape(-1)
     cost = cost.reshape(-1)
     if dhi > dlo:  # daylight only moves sideways from its column pass
         s, v = flood.edge(fc, cost, (1, sy), (dlo + 2) * sz, (dhi + 2) * sz)
-        flood.levels(fc, cost, s, v, sy, sz, owner)
+        flood.levels(fc, cost, s, v, sy, sz)
     f = np.subtract(fc, cost).astype(np.uint16)  # D (opaque: 255 - 255)
     f <<= 12
     pem = _padded(em, h, w, sy, sz)
     if pem.size:
         ep = packed[eid]
-        f[pem] |= ep
         # Most emitters are weak ores walled in by stone: an emitter with no
         # non-opaque face neighbour raises nothing (values only rise, so it never
         # will), and dropping them saves the floods a round over all of them.
         offs = np.array([-1, 1, -sy, sy, -sz, sz], np.int64)
         lit = (cost[pem[:, None] + offs] != model.OPAQUE_COST).any(axis=1)
         clear = cost[pem] != model.OPAQUE_COST  # these start at e + cost in fc
-        fcl = cost.copy()
+        fcl = fc  # the daylight is in f now: reuse its grid
         for shift in flood.SHIFTS[:3]:
             e = ((ep >> shift) & 15).astype(np.uint8)
             if not (e[lit] > 1).any():
                 continue
+            fcl[...] = cost
             fcl[pem[clear]] = e[clear] + cost[pem[clear]]
-            out = flood.levels(fcl, cost, pem[lit], e[lit], sy, sz, owner)
-            fcl[pem] = cost[pem]
-            keep = np.uint16(~(15 << shift) & 0xFFFF)
-            for n, v in out:
-                f[n] = (f[n] & keep) | np.uint16(v << shift)
-                fcl[n] = cost[n]
+            out = flood.levels(fcl, cost, pem[lit], e[lit], sy, sz)
+            if out:  # nibbles still 0 here: emitters come after
+                n = np.concatenate([n for n, _ in out])
+                v = np.concatenate([np.full(n.size, v << shift, np.uint16) for n, v in out])
+                f[n] |= v
+        # An emitter holds the larger of its emission and what reached it.
+        cur = f[pem]
+        for shift in flood.SHIFTS[:3]:
+            m = np.uint16(15 << shift)
+            cur = (cur & ~m) | np.maximum(cur & m, ep & m)
+        f[pem] = cur
     return f.reshape(shape)[2:-2, 1:-1, 1:-1].T
 
 

@@ -79,18 +79,6 @@ def levels(fc: np.ndarray, cost: np.ndarray, seeds: np.ndarray, vals: np.ndarray
     return out
 
 
-def _best(n: np.ndarray, cand: np.ndarray):
-    """One write per target, its best candidate: sort (target, value) keys and keep
-    each target's last. Returns (targets, values 0..15)."""
-    key = (n << 4) | cand.astype(np.int64)
-    key.sort()
-    last = np.empty(key.size, bool)
-    last[-1] = True
-    np.not_equal(key[1:] >> 4, key[:-1] >> 4, out=last[:-1])
-    key = key[last]
-    return key >> 4, key & 15
-
-
 def edge(fc: np.ndarray, cost: np.ndarray, offs, lo: int, hi: int):
     """Flat indices in [lo, hi) (of a `levels` grid) whose value can raise a neighbour
     at one of the offsets `offs` (positive; both directions are checked) right now,
@@ -107,30 +95,44 @@ def edge(fc: np.ndarray, cost: np.ndarray, offs, lo: int, hi: int):
     return i + lo, v[i]
 
 
-def flood_lanes(f: np.ndarray, cost: np.ndarray, seeds: np.ndarray, sy: int, sz: int,
-                written: list | None = None) -> None:
-    """`flood` for all four components at once on flat uint8 lanes (4 per voxel, R, G,
-    B, D; lane i belongs to voxel i >> 2): fewer, larger NumPy steps for small boxes.
-    `seeds` are lane indices; `written`, when given, gets the lanes each round wrote."""
+def levels_lanes(fc: np.ndarray, cost: np.ndarray, seeds: np.ndarray, vals: np.ndarray,
+                 sy: int, sz: int):
+    """`levels` for all four components at once on flat uint8 lanes (4 per voxel, R,
+    G, B, D; lane i belongs to voxel i >> 2): fewer, larger NumPy steps for the small
+    boxes of an edit. `fc` = lane value + cost of its voxel (>= 16 never rises),
+    `cost` per voxel; `seeds` are lane indices (duplicates allowed) holding `vals`. All six
+    directions at once per level (a level's writes to one lane carry the same value,
+    so duplicates only need dropping from the next bucket). Returns the written
+    lanes and their values."""
     offs = 4 * np.array([-1, 1, -sy, sy, -sz, sz], np.int64)
-    idx = np.asarray(seeds, np.int64)
-    while idx.size:
-        val = f[idx].astype(np.int16)
-        live = val > 1
-        if not live.all():
-            idx, val = idx[live], val[live]
-            if not idx.size:
-                break
+    seeds = np.asarray(seeds, np.int64)
+    buckets = [[] for _ in range(model.MAX + 1)]
+    for v in np.unique(vals).tolist():
+        if v > 1:
+            buckets[v].append(seeds[vals == v])
+    lanes, values = [], []
+    for v in range(model.MAX, 1, -1):
+        if not buckets[v]:
+            continue
+        idx = buckets[v][0] if len(buckets[v]) == 1 else np.concatenate(buckets[v])
         n = (idx[:, None] + offs).ravel()
-        cand = np.repeat(val, 6) - cost[n >> 2]
-        m = cand > f[n]
-        n, cand = n[m], cand[m]
+        n = np.unique(n[fc[n] < v])  # stale seeds (raised since) find nothing here
         if not n.size:
-            break
-        idx, v = _best(n, cand)
-        f[idx] = v.astype(np.uint8)
-        if written is not None:
-            written.append(idx)
+            continue
+        fc[n] = v
+        nv = v - cost[n >> 2].astype(np.int16)
+        lanes.append(n)
+        values.append(nv)
+        if (nv == v - 1).all():  # the common case: plain air
+            if v > 2:
+                buckets[v - 1].append(n)
+            continue
+        for k in np.unique(nv).tolist():
+            if k > 1:
+                buckets[k].append(n[nv == k])
+    if not lanes:
+        return np.zeros(0, np.int64), np.zeros(0, np.uint8)
+    return np.concatenate(lanes), np.concatenate(values).astype(np.uint8)
 
 
 assert model.OPAQUE_COST > model.MAX  # v - OPAQUE_COST < 0: such voxels never rise

@@ -85,9 +85,10 @@ def solve_slab(blocks: np.ndarray) -> np.ndarray:
         carry -= att
         np.add(carry, c, out=fc[z + 2, 1:-1, 1:-1])
         top = carry.max()
-        if top < 2:
+        if top == 0:
             break
-        dlo = z
+        if top > 1:  # a 1 raises nothing
+            dlo = z
         if not dhi and carry.min() < model.MAX:
             dhi = z + 1
     fc = fc.reshape(-1)

@@ -23,6 +23,8 @@ light and floods only from the voxels whose start value rose (flood.py).
 """
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from ..core import chunk
@@ -31,11 +33,95 @@ from . import flood, model
 R = model.MAX - 1  # reach of a change
 
 
-def _column_day(col: np.ndarray) -> np.ndarray:
+def _column_days(blocks: np.ndarray, x: int, y: int, z: int, old: int) -> np.ndarray:
+    """Column-pass daylight of column (x, y) at layers 0..z with the block at z as it
+    is now (row 0) and as `old` (row 1): (2, z + 1)."""
     _, att, opaque, _, _, _ = model.tables()
-    a = att[col].astype(np.int16)[::-1]
-    blocked = np.maximum.accumulate(opaque[col][::-1]).astype(bool)
-    return np.where(blocked, 0, np.clip(model.MAX - np.cumsum(a), 0, model.MAX))[::-1]
+    above = blocks[x, y, z + 1:]
+    carry = 0 if opaque[above].any() else max(model.MAX - int(att[above].sum()), 0)
+    col = np.empty((2, z + 1), blocks.dtype)
+    col[:] = blocks[x, y, z::-1]  # from z down
+    col[1, 0] = old
+    a = np.cumsum(att[col], axis=1, dtype=np.int16)
+    blocked = np.maximum.accumulate(opaque[col], axis=1).astype(bool)
+    return np.where(blocked, 0, np.clip(carry - a, 0, model.MAX))[:, ::-1]
+
+
+@lru_cache(maxsize=1)
+def _lut() -> np.ndarray:
+    """Packed uint16 light -> its four lanes as one little-endian uint32 (256 KiB):
+    one gather unpacks a box."""
+    return model.unpack(np.arange(1 << 16, dtype=np.uint16)).view(np.uint32).reshape(-1)
+
+
+STATS = {"local": 0, "box": 0}  # how edits were relit (tests check both paths run)
+SHIFTS = (0, 4, 8, 12)
+
+
+def _local(blocks, light, x, y, z, now, zc, brighter):
+    """Relight an edit that changes no voxel but p = (x, y, z), as most edits do
+    (digging in the dark, a block placed where nothing depends on the light at p):
+    p's new light, written; None when other voxels may change. Exact because:
+    - p's new value is max(start, neighbour - cost) per component (an opaque p holds
+      its emission) with every other voxel unchanged;
+    - a p that ends at most 1, or no brighter than before, raises nothing;
+    - a p that darkens from v >= 2 only darkens a neighbour n whose value is v -
+      cost(n) if n has no other support: its emission, or a neighbour m != p with
+      L(m) - cost(n) >= L(n); such an m has L(m) >= v, so its own best path cannot
+      run through p (that would leave it <= v - 2): n keeps its value, and so does
+      everything lit through n;
+    - the column below p: rising start values there must not exceed the old light
+      (brighter edits); a darker edit must not change it at all."""
+    cost_t, _, _, emis, _, _ = model.tables()
+    w, h, zs = blocks.shape
+    if zc < z and not (brighter and (now[zc:z] <= (light[x, y, zc:z] >> 12)).all()):
+        return None
+    new = int(blocks[x, y, z])
+    nb = [q for q in ((x - 1, y, z), (x + 1, y, z), (x, y - 1, z), (x, y + 1, z),
+                      (x, y, z - 1), (x, y, z + 1))
+          if 0 <= q[0] < w and 0 <= q[1] < h and 0 <= q[2] < zs]
+    lp = int(light[x, y, z])
+    was = [(lp >> k) & 15 for k in SHIFTS]
+    c = int(cost_t[new])
+    e = [int(v) for v in emis[new]]
+    if c == model.OPAQUE_COST:
+        val = e + [0]
+    else:
+        val = e + [int(now[z])]
+        for q in nb:
+            lq = int(light[q])
+            val = [max(a, ((lq >> k) & 15) - c) for a, k in zip(val, SHIFTS)]
+    for k, (a, b) in enumerate(zip(val, was)):
+        if a > b and a > 1:
+            return None  # p shines further than before
+        if a < b and b > 1 and not _kept(blocks, light, (x, y, z), nb, k, b):
+            return None
+    if val == was:
+        return (slice(x, x), slice(y, y), slice(z, z))
+    light[x, y, z] = val[0] | val[1] << 4 | val[2] << 8 | val[3] << 12
+    return (slice(x, x + 1), slice(y, y + 1), slice(z, z + 1))
+
+
+def _kept(blocks, light, p, nb, k, v):
+    """Whether every neighbour of p that may owe component k to p's old value v has
+    another support (see _local)."""
+    cost_t, _, _, emis, _, _ = model.tables()
+    w, h, zs = blocks.shape
+    sh = SHIFTS[k]
+    for q in nb:
+        cq = int(cost_t[blocks[q]])
+        lq = (int(light[q]) >> sh) & 15
+        if cq == model.OPAQUE_COST or lq != v - cq or lq == 0:
+            continue  # opaque, lit better elsewhere, or dark anyway
+        if k < 3 and emis[blocks[q]][k] >= lq:
+            continue
+        i, j, l = q
+        if not any(0 <= m[0] < w and 0 <= m[1] < h and 0 <= m[2] < zs and m != p
+                   and ((int(light[m]) >> sh) & 15) - cq >= lq
+                   for m in ((i - 1, j, l), (i + 1, j, l), (i, j - 1, l), (i, j + 1, l),
+                             (i, j, l - 1), (i, j, l + 1))):
+            return False
+    return True
 
 
 def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: int):
@@ -50,15 +136,16 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
     if old == new:
         return (slice(x, x), slice(y, y), slice(z, z))
     cost_t, _, _, emis, _, _ = model.tables()
-    above = blocks[x, y, z + 1:]
-    col = np.array(blocks[x, y, :z + 1])
-    now = _column_day(np.append(col, above))[:z + 1]
-    col[z] = old
-    before = _column_day(np.append(col, above))[:z + 1]
+    now, before = _column_days(blocks, x, y, z, old)
     diff = np.flatnonzero(now != before)
     zc = int(diff[0]) if diff.size else z
     brighter = (cost_t[new] <= cost_t[old] and (emis[new] >= emis[old]).all()
                 and (now >= before).all())
+    box = _local(blocks, light, x, y, z, now, zc, brighter)
+    if box is not None:
+        STATS["local"] += 1
+        return box
+    STATS["box"] += 1
     sx = slice(max(x - R, 0), min(x + R + 1, w))
     sy = slice(max(y - R, 0), min(y + R + 1, h))
     sz = slice(max(zc - R, 0), min(z + R + 1, zs))
@@ -70,11 +157,11 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
     shape, (gy, gz) = flood.grid((nz, ny, nx))
     f = np.zeros(shape + (4,), np.uint8)  # lanes: all components flood at once
     ox, oy, oz = 1 - (sx.start - ex.start), 1 - (sy.start - ey.start), 2 - (sz.start - ez.start)
-    model.unpack(light[ex, ey, ez].T, out=f[oz:oz + ez.stop - ez.start,
-                                           oy:oy + ey.stop - ey.start, ox:ox + ex.stop - ex.start])
+    f.view(np.uint32).reshape(shape)[oz:oz + ez.stop - ez.start, oy:oy + ey.stop - ey.start,
+                                     ox:ox + ex.stop - ex.start] = np.take(
+        _lut(), light[ex, ey, ez].T, mode="clip")
     cost = np.full(shape, model.OPAQUE_COST, np.uint8)
-    inner = (slice(2, -2), slice(1, -1), slice(1, -1))
-    cost[inner] = cost_t[blocks[sx, sy, sz].T]
+    cost[2:-2, 1:-1, 1:-1] = np.take(cost_t, blocks[sx, sy, sz].T, mode="clip")
     px, py = x - sx.start + 1, y - sy.start + 1
     if brighter:
         # Old light stays; raise p and the column below it to their new start values.
@@ -101,7 +188,14 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
         # ... and p's neighbours, which may now shine into it (its cost may have dropped)
         seeds = np.concatenate([seeds, (4 * (vox[-1] + np.array([-1, 1, -gy, gy, -gz, gz]))
                                         [:, None] + np.arange(4)).ravel()])
-    flood.flood_lanes(f.reshape(-1), cost.reshape(-1), seeds, gy, gz, written)
+    # value + cost per lane (a cost >= 16 blocks like 255 does and cannot overflow)
+    fc = f.view(np.uint32).reshape(shape) + (np.minimum(cost, model.MAX + 1).astype(np.uint32)
+                                             * np.uint32(0x01010101))  # 4 lanes a word
+    fc = fc.view(np.uint8).reshape(-1)
+    fl, cost = f.reshape(-1), cost.reshape(-1)
+    n, nv = flood.levels_lanes(fc, cost, seeds, fl[seeds], gy, gz)
+    fl[n] = nv
+    written.append(n)
     # only the written voxels can differ: pack and store their bounds (padded grid
     # coordinates: x, y from 1, z from 2, as `inner`)
     v = np.concatenate(written) >> 2

@@ -1,0 +1,101 @@
+"""The incremental relight's local path (incremental._local: an edit that changes no
+voxel but the edited one skips the relight box) against a full solve: scenes built
+so that the local reasoning is wrong by one step if any of its conditions slips (a p
+that rises to exactly 2, a neighbour that kept its daylight only through p, a column
+below p that changes), and a stream of random edits in caves with both paths taken."""
+import numpy as np
+
+from voxel_addon.core.blocks import REGISTRY as R
+from voxel_addon.light import full, incremental
+
+STONE, ORE, MUSH = R.id("stone"), R.id("ore"), R.id("glowing_mushroom")
+
+
+def _rock():
+    b = np.zeros((24, 24, 256), np.uint16, order="F")
+    b[:, :, :60] = STONE
+    return b
+
+
+def _edit(b, L, p, block):
+    """Edit, check against a full solve; returns which path relit it."""
+    before = dict(incremental.STATS)
+    incremental.edit(b, L, *p, block)
+    assert np.array_equal(L, full.solve(b, "numpy")), (p, block)
+    return "local" if incremental.STATS["local"] > before["local"] else "box"
+
+
+def test_p_rising_to_two_lights_its_neighbour():
+    """Ore (red 3) at the end of a dark tunnel: reopening the voxel next to it gives
+    it red 2, which reaches the next voxel as 1 (the box path must run)."""
+    b = _rock()
+    b[5:16, 10, 30] = 0
+    b[4, 10, 30] = ORE
+    L = full.solve(b, "numpy")
+    assert (L[6, 10, 30] & 15) == 1
+    assert _edit(b, L, (5, 10, 30), STONE) == "box"
+    assert (L[6, 10, 30] & 15) == 0
+    assert _edit(b, L, (5, 10, 30), 0) == "box"
+    assert (L[6, 10, 30] & 15) == 1
+
+
+def test_daylight_kept_only_through_p():
+    """A mushroom (blue 14, no daylight of its own) beside the bottom of a sky shaft:
+    its daylight 14 comes only through p; its blue emission is no support for it.
+    (A second mushroom above p keeps p's blue from mattering to the shaft.)"""
+    b = _rock()
+    b[10, 10, 30:] = 0
+    b[11, 10, 30] = MUSH
+    b[10, 10, 31] = MUSH
+    L = full.solve(b, "numpy")
+    assert L[11, 10, 30] >> 12 == 14
+    assert _edit(b, L, (10, 10, 30), STONE) == "box"
+    assert L[11, 10, 30] >> 12 == 0
+
+
+def test_column_below_rising_to_one():
+    """Under 14 leaves in a well the daylight is 1: digging the stone under it gives
+    p daylight 1 (too faint to spread) but also the sealed air column below it."""
+    b = _rock()
+    b[10, 10, 46:60] = R.id("leaves")
+    b[10, 10, 40:45] = 0
+    L = full.solve(b, "numpy")
+    assert L[10, 10, 46] >> 12 == 1 and L[10, 10, 42] >> 12 == 0
+    assert _edit(b, L, (10, 10, 45), 0) == "box"
+    assert L[10, 10, 42] >> 12 == 1
+
+
+def test_local_edits():
+    """Digging in the dark and walling off voxels that nothing depends on stay local,
+    and so does a darker edit whose neighbours keep their light from elsewhere."""
+    b = _rock()
+    b[3:20, 3:20, 40:44] = 0  # a dark sealed cave
+    b[8, 8, 41] = ORE
+    b[12, 12, 50:] = 0  # a shaft with daylight
+    b[11:14, 12, 50] = 0  # and a wide bottom
+    L = full.solve(b, "numpy")
+    assert _edit(b, L, (15, 15, 30), 0) == "local"  # dig in the rock
+    assert _edit(b, L, (15, 15, 42), STONE) == "local"  # dark cave voxel walled
+    assert _edit(b, L, (12, 12, 52), R.id("glass")) == "local"  # same light class
+    # the wide bottom's ends keep daylight 14 from the shaft... but p is the shaft:
+    # the column below p changes, so not local
+    assert _edit(b, L, (12, 12, 55), STONE) == "box"
+
+
+def test_random_cave_edits_both_paths():
+    rng = np.random.default_rng(11)
+    b = _rock()
+    b[2:22, 2:22, 30:40] = np.where(rng.random((20, 20, 10)) < 0.5, 0, STONE)
+    b[6, 6, 40:] = 0  # daylight shafts into it
+    b[17, 14, 40:] = 0
+    where = rng.random((20, 20, 10)) < 0.03
+    b[2:22, 2:22, 30:40][where] = rng.choice([ORE, MUSH, R.id("lamp_red")], int(where.sum()))
+    L = full.solve(b, "numpy")
+    ids = [0, 0, STONE, STONE, ORE, MUSH, R.id("water"), R.id("glass")]
+    paths = []
+    for _ in range(60):
+        p = (int(rng.integers(2, 22)), int(rng.integers(2, 22)), int(rng.integers(29, 41)))
+        new = int(rng.choice(ids))
+        if b[p] != new:
+            paths.append(_edit(b, L, p, new))
+    assert paths.count("local") >= 10 and paths.count("box") >= 10, paths

@@ -1,18 +1,17 @@
 """Sparse NumPy relaxation: push light outwards from seed voxels only (the NumPy full
 solve and the incremental relight).
 
-Works on a padded C-order grid [z, y, x] flattened: `f` packed uint16 light (SPEC §3
-nibbles), `cost` uint8 per voxel (1 + attenuation; OPAQUE_COST for voxels that never
-receive: opaque blocks, the fixed rim and two guard layers in z). A frontier of voxels
-pushes `v - cost(n)` into its 6 neighbours n; neighbours that rise form the next
-frontier. Values only rise and never beyond the fixpoint (each write is a path value),
-and after k rounds every voxel holds at least its best path of <= k steps from a seed,
-so when the frontier empties the grid is at the fixpoint of model.relax provided every
-voxel whose start value can raise a neighbour was a seed. Work is proportional to the
-light that actually moves (~5 % of a generated slab), not to the volume.
-
-Components are separate passes (one nibble each), so a scatter never writes two
-different nibbles of one uint16 at once.
+Works on a padded C-order grid [z, y, x] flattened (`grid`): per voxel `cost` (uint8,
+1 + attenuation; OPAQUE_COST for voxels that never receive: opaque blocks, the fixed
+rim and two guard layers in z) and per component `fc` = value + cost (uint8). A voxel
+at value v raises its neighbour n iff v > fc[n], to v - cost[n]: one gather and a
+compare per candidate. Values are processed brightest first (`levels`: Dial's
+buckets, 15 down to 2), so each voxel is written once, with its final value, and
+when the buckets empty the grid is at the fixpoint of model.relax provided every
+voxel whose start value can raise a neighbour was a seed (`edge` finds them densely
+in a range of layers). Work is proportional to the light that actually moves (~5 %
+of a generated slab), not to the volume. `levels_lanes` floods all four components
+of a small box at once (the incremental relight).
 """
 from __future__ import annotations
 

@@ -77,6 +77,8 @@ def test_local_edits():
     assert _edit(b, L, (15, 15, 30), 0) == "local"  # dig in the rock
     assert _edit(b, L, (15, 15, 42), STONE) == "local"  # dark cave voxel walled
     assert _edit(b, L, (12, 12, 52), R.id("glass")) == "local"  # same light class
+    assert _edit(b, L, (3, 3, 59), 0) == "local"  # the top block, dug in the open
+    assert _edit(b, L, (3, 3, 59), STONE) == "local"  # and put back
     # the wide bottom's ends keep daylight 14 from the shaft... but p is the shaft:
     # the column below p changes, so not local
     assert _edit(b, L, (12, 12, 55), STONE) == "box"

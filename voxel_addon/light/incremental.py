@@ -60,11 +60,13 @@ SHIFTS = (0, 4, 8, 12)
 
 def _local(blocks, light, x, y, z, now, zc, brighter):
     """Relight an edit that changes no voxel but p = (x, y, z), as most edits do
-    (digging in the dark, a block placed where nothing depends on the light at p):
+    (digging in the dark or in the open, a block placed where nothing depends on the
+    light at p):
     p's new light, written; None when other voxels may change. Exact because:
     - p's new value is max(start, neighbour - cost) per component (an opaque p holds
       its emission) with every other voxel unchanged;
-    - a p that ends at most 1, or no brighter than before, raises nothing;
+    - a p that brightens raises nothing unless some neighbour n < value - cost(n)
+      (a block dug out in the open: its neighbours are in daylight already);
     - a p that darkens from v >= 2 only darkens a neighbour n whose value is v -
       cost(n) if n has no other support: its emission, or a neighbour m != p with
       L(m) - cost(n) >= L(n); such an m has L(m) >= v, so its own best path cannot
@@ -92,7 +94,7 @@ def _local(blocks, light, x, y, z, now, zc, brighter):
             lq = int(light[q])
             val = [max(a, ((lq >> k) & 15) - c) for a, k in zip(val, SHIFTS)]
     for k, (a, b) in enumerate(zip(val, was)):
-        if a > b and a > 1:
+        if a > b and a > 1 and _raises(blocks, light, nb, k, a):
             return None  # p shines further than before
         if a < b and b > 1 and not _kept(blocks, light, (x, y, z), nb, k, b):
             return None
@@ -100,6 +102,13 @@ def _local(blocks, light, x, y, z, now, zc, brighter):
         return (slice(x, x), slice(y, y), slice(z, z))
     light[x, y, z] = val[0] | val[1] << 4 | val[2] << 8 | val[3] << 12
     return (slice(x, x + 1), slice(y, y + 1), slice(z, z + 1))
+
+
+def _raises(blocks, light, nb, k, v):
+    """Whether p at value v of component k raises one of its neighbours `nb`."""
+    cost_t = model.tables()[0]
+    sh = SHIFTS[k]
+    return any(v - int(cost_t[blocks[q]]) > (int(light[q]) >> sh) & 15 for q in nb)
 
 
 def _kept(blocks, light, p, nb, k, v):

@@ -101,7 +101,7 @@ def levels_lanes(fc: np.ndarray, cost: np.ndarray, seeds: np.ndarray, vals: np.n
     boxes of an edit. `fc` = lane value + cost of its voxel (>= 16 never rises),
     `cost` per voxel; `seeds` are lane indices (duplicates allowed) holding `vals`. All six
     directions at once per level (a level's writes to one lane carry the same value,
-    so duplicates only need dropping from the next bucket). Returns the written
+    so duplicates only need dropping from the next bucket: `owner` keeps one). Returns the written
     lanes and their values."""
     offs = 4 * np.array([-1, 1, -sy, sy, -sz, sz], np.int64)
     seeds = np.asarray(seeds, np.int64)
@@ -110,14 +110,19 @@ def levels_lanes(fc: np.ndarray, cost: np.ndarray, seeds: np.ndarray, vals: np.n
         if v > 1:
             buckets[v].append(seeds[vals == v])
     lanes, values = [], []
+    owner = np.empty(fc.size, np.int32)  # scratch, read only where just written
+    ramp = np.arange(4096, dtype=np.int32)
     for v in range(model.MAX, 1, -1):
         if not buckets[v]:
             continue
         idx = buckets[v][0] if len(buckets[v]) == 1 else np.concatenate(buckets[v])
         n = (idx[:, None] + offs).ravel()
-        n = np.unique(n[fc[n] < v])  # stale seeds (raised since) find nothing here
+        n = n[fc[n] < v]  # stale seeds (raised since) find nothing here
         if not n.size:
             continue
+        i = ramp[:n.size] if n.size <= ramp.size else np.arange(n.size, dtype=np.int32)
+        owner[n] = i
+        n = n[owner[n] == i]  # once each (the last writer of each lane)
         fc[n] = v
         nv = v - cost[n >> 2].astype(np.int16)
         lanes.append(n)

@@ -206,7 +206,7 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
     fl[n] = nv
     written.append(n)
     # only the written voxels can differ: pack and store their bounds (padded grid
-    # coordinates: x, y from 1, z from 2, as `inner`)
+    # coordinates: the inside starts at x, y = 1 and z = 2, flood.grid)
     v = np.concatenate(written) >> 2
     zz, yy, xx = v // gz, v % gz // gy, v % gy
     lo = [max(int(a.min()), o) for a, o in ((xx, 1), (yy, 1), (zz, 2))]

@@ -64,7 +64,9 @@ def _local(blocks, light, x, y, z, now, zc, brighter):
     """Relight an edit that changes no voxel but p = (x, y, z), as most edits do
     (digging in the dark or in the open, a block placed where nothing depends on the
     light at p):
-    p's new light, written; None when other voxels may change. Exact because:
+    p's new light, written, and its box; None when other voxels may lose light; p's
+    new light (a list, nothing written) when only p's brighter components spread (a
+    lamp set in the open: the box floods from p, no removal). Exact because:
     - p's new value is max(start, neighbour - cost) per component (an opaque p holds
       its emission) with every other voxel unchanged;
     - a p that brightens raises nothing unless some neighbour n < value - cost(n)
@@ -95,11 +97,14 @@ def _local(blocks, light, x, y, z, now, zc, brighter):
         for q in nb:
             lq = int(light[q])
             val = [max(a, ((lq >> k) & 15) - c) for a, k in zip(val, SHIFTS)]
+    spreads = False
     for k, (a, b) in enumerate(zip(val, was)):
         if a > b and a > 1 and _raises(blocks, light, nb, k, a):
-            return None  # p shines further than before
+            spreads = True  # p shines further than before
         if a < b and b > 1 and not _kept(blocks, light, (x, y, z), nb, k, b):
             return None
+    if spreads:
+        return val
     if val == was:
         return (slice(x, x), slice(y, y), slice(z, z))
     light[x, y, z] = val[0] | val[1] << 4 | val[2] << 8 | val[3] << 12
@@ -268,9 +273,10 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
     brighter = (cost_t[new] <= cost_t[old] and (emis[new] >= emis[old]).all()
                 and (now >= before).all())
     box = _local(blocks, light, x, y, z, now, zc, brighter)
-    if box is not None:
+    if isinstance(box, tuple):
         STATS["local"] += 1
         return box
+    pval = box  # p's exact new light when only its rising components must flood
     if max(emis[new].max(), emis[old].max()) <= SPARSE_EMISSION:
         box = _sparse(blocks, light, x, y, z, old, now, zc, brighter)
         if box is not None:
@@ -294,8 +300,9 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
     cost = np.full(shape, model.OPAQUE_COST, np.uint8)
     cost[2:-2, 1:-1, 1:-1] = np.take(cost_t, blocks[sx, sy, sz].T, mode="clip")
     px, py = x - sx.start + 1, y - sy.start + 1
-    if brighter:
-        # Old light stays; raise p and the column below it to their new start values.
+    if brighter or pval is not None:
+        # Old light stays; raise p and the column below it to their new start values
+        # (or set p to its new light: what fell there took nothing else with it).
         pz = np.arange(zc, z + 1) - sz.start + 2
         new_start = np.zeros((pz.size, 4), np.uint8)
         new_start[:, 3] = now[zc:z + 1]
@@ -303,6 +310,8 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
         f[pz, py, px] = np.maximum(f[pz, py, px], new_start)
         if cost_t[new] == model.OPAQUE_COST:  # an opaque voxel holds exactly its emission
             f[pz[-1], py, px] = new_start[-1]
+        if pval is not None:
+            f[pz[-1], py, px] = pval
         vox = pz * gz + py * gy + px
         # ... and p's neighbours, which may now shine into it (its cost may have dropped).
         vox = np.concatenate([vox, vox[-1] + np.array([-1, 1, -gy, gy, -gz, gz])])

@@ -30,3 +30,18 @@ def test_daylight_of_two_spreads_sideways(backend, request):
     L = full.solve(b, backend)
     assert L[5, 5, 27] >> 12 == 2 and L[6, 5, 27] >> 12 == 1
     assert np.array_equal(L, _reference(b))
+
+
+@pytest.mark.parametrize("backend", ["numpy", "opencl"])
+def test_daylight_of_one_goes_down_its_column(backend, request):
+    """14 leaves leave D = 1, which spreads nowhere but still fills the air column
+    below (the column pass must not stop where nothing can spread any more)."""
+    if backend == "opencl":
+        request.getfixturevalue("cl_device")
+    b = np.zeros((12, 10, 256), np.uint16, order="F")
+    b[:, :, :60] = STONE
+    b[5, 5, 46:60] = LEAVES
+    b[5, 5, 40:46] = 0
+    L = full.solve(b, backend)
+    assert L[5, 5, 46] >> 12 == 1 and L[5, 5, 40] >> 12 == 1
+    assert np.array_equal(L, _reference(b))

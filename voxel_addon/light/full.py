@@ -8,6 +8,8 @@ Backends: "opencl", "numpy" (the reference), None = OpenCL when available.
 """
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from .. import opencl
@@ -52,64 +54,102 @@ def _solve_into(blocks: np.ndarray, out: np.ndarray, m: int, backend) -> None:
 
 def solve_slab(blocks: np.ndarray) -> np.ndarray:
     """Light of a (W, H, Z) slab with open sky right above it and dark air around:
-    start values, then flood.py from every voxel that can raise a neighbour."""
+    start values, then flood.levels from every voxel that can raise a neighbour.
+
+    Works on a padded grid (flood.grid) of value + cost per component (flood.levels
+    says why): `cost` is shared, the daylight's `fc` is dense (the column pass fills
+    it), the colours flood one `fc` in turn, sparse (only emitters start above 0)."""
     w, h, zs = blocks.shape
     shape, (sy, sz) = flood.grid((zs, h, w))
-    cost_t, _, _, _, packed, _ = model.tables()
+    code_t, cost_c, packed = _codes()
     bt = blocks.T  # [z, y, x]
-    cost = np.full(shape, model.OPAQUE_COST, np.uint8)
-    inner = (slice(2, -2), slice(1, -1), slice(1, -1))
-    cost[inner] = cost_t[bt]
-    f = np.zeros(shape, np.uint16)
-    em = _emitters(bt, packed)  # flat [z, y, x] indices of the inside
+    code = _lookup(code_t, bt)  # every voxel's cost, emitters marked (codes 128-254)
+    em = np.flatnonzero((code ^ 128) < 127)  # flat [z, y, x] indices of the inside
+    eid = bt.reshape(-1)[em]
     pem = _padded(em, h, w, sy, sz)
-    f.reshape(-1)[pem] = packed[bt.reshape(-1)[em]]
-    # Daylight column pass, layer by layer from the top (carry 15 above the slab).
-    carry = np.full((h, w), model.MAX, np.int16)
-    dlo, dhi = zs, 0  # layers with a non-opaque voxel below 15 and a voxel >= 2
+    cost = np.full(shape, model.OPAQUE_COST, np.uint8)
+    cost[2:-2, 1:-1, 1:-1] = code
+    cost.reshape(-1)[pem] = cost_c[eid]
+    # Daylight column pass, layer by layer from the top (carry 15 above the slab);
+    # fc = D + cost (opaque: 0 + 255). Below the layer where every column is dark,
+    # fc = cost already.
+    fc = cost.copy()
+    carry = np.full((h, w), model.MAX, np.uint8)
+    att = np.empty((h, w), np.uint8)
+    dlo, dhi = zs, 0  # D seeds lie in [dlo, dhi): below, D <= 1; above, all 15 and clear
     for z in range(zs - 1, -1, -1):
         c = cost[z + 2, 1:-1, 1:-1]
-        op = c == model.OPAQUE_COST
-        carry -= c
-        carry += 1
-        np.maximum(carry, 0, out=carry)
-        carry[op] = 0
-        f[z + 2, 1:-1, 1:-1] |= carry.astype(np.uint16) << 12
+        np.subtract(c, 1, out=att)  # opaque: 254, takes any carry to 0
+        np.maximum(carry, att, out=carry)
+        carry -= att
+        np.add(carry, c, out=fc[z + 2, 1:-1, 1:-1])
         top = carry.max()
-        if top >= 2 and (carry[~op] < model.MAX).any():
-            dlo, dhi = z, max(dhi, z + 1)
         if top == 0:
             break
-    f = f.reshape(-1)
+        if top > 1:  # a 1 raises nothing
+            dlo = z
+        if not dhi and carry.min() < model.MAX:
+            dhi = z + 1
+    fc = fc.reshape(-1)
     cost = cost.reshape(-1)
-    em = pem
-    if em.size:
+    if dhi > dlo:  # daylight only moves sideways from its column pass
+        s, v = flood.edge(fc, cost, (1, sy), (dlo + 2) * sz, (dhi + 2) * sz)
+        flood.levels(fc, cost, s, v, sy, sz)
+    f = np.subtract(fc, cost).astype(np.uint16)  # D (opaque: 255 - 255)
+    f <<= 12
+    if pem.size:
+        ep = packed[eid]
         # Most emitters are weak ores walled in by stone: an emitter with no
         # non-opaque face neighbour raises nothing (values only rise, so it never
-        # will), and dropping them here saves the floods a round over all of them.
+        # will), and dropping them saves the floods a round over all of them.
         offs = np.array([-1, 1, -sy, sy, -sz, sz], np.int64)
-        em = em[(cost[em[:, None] + offs] != model.OPAQUE_COST).any(axis=1)]
-    for k, shift in enumerate(flood.SHIFTS[:3]):
-        s = em[((f[em] >> shift) & 15) > 1]
-        if s.size:
-            flood.flood(f, cost, s, shift, sy, sz)
-    if dhi > dlo:  # daylight only moves sideways from its column pass
-        s = flood.seeds(f, cost, 12, (1, sy), (dlo + 2) * sz, (dhi + 2) * sz)
-        flood.flood(f, cost, s, 12, sy, sz)
-    return f.reshape(shape)[inner].T
+        lit = (cost[pem[:, None] + offs] != model.OPAQUE_COST).any(axis=1)
+        clear = cost[pem] != model.OPAQUE_COST  # these start at e + cost in fc
+        fcl = fc  # the daylight is in f now: reuse its grid
+        for shift in flood.SHIFTS[:3]:
+            e = ((ep >> shift) & 15).astype(np.uint8)
+            if not (e[lit] > 1).any():
+                continue
+            fcl[...] = cost
+            fcl[pem[clear]] = e[clear] + cost[pem[clear]]
+            out = flood.levels(fcl, cost, pem[lit], e[lit], sy, sz)
+            if out:  # nibbles still 0 here: emitters come after
+                n = np.concatenate([n for n, _ in out])
+                v = np.concatenate([np.full(n.size, v << shift, np.uint16) for n, v in out])
+                f[n] |= v
+        # An emitter holds the larger of its emission and what reached it.
+        cur = f[pem]
+        for shift in flood.SHIFTS[:3]:
+            m = np.uint16(15 << shift)
+            cur = (cur & ~m) | np.maximum(cur & m, ep & m)
+        f[pem] = cur
+    return f.reshape(shape)[2:-2, 1:-1, 1:-1].T
 
 
-def _emitters(bt: np.ndarray, packed: np.ndarray) -> np.ndarray:
-    """Flat indices of the emitting voxels of C-order `bt`: a compare per emitting
-    block id is ~10x cheaper than a table lookup over the whole slab."""
+def _lookup(code_t: np.ndarray, bt: np.ndarray) -> np.ndarray:
+    """code_t[bt], C order: np.take without bounds checks (after one max) is ~2x
+    cheaper than indexing. (bytes.translate would be cheaper still, but its fresh
+    bytes objects page-fault on every solve.)"""
+    top = int(bt.max()) if bt.size else 0
+    if top >= code_t.size:
+        raise VoxelError(f"block id {top} is unknown to the light tables "
+                         f"(ids 0-{code_t.size - 1})")
+    return np.take(code_t, bt, mode="clip")
+
+
+@lru_cache(maxsize=1)
+def _codes():
+    """Per block id a uint8 code: its cost (>= 16 blocks like opaque: 255) or, for an
+    emitter, 128 + its rank; the cost per id; packed emission per id."""
+    cost, _, _, _, packed, _ = model.tables()
+    c = np.where(cost > model.MAX, model.OPAQUE_COST, cost).astype(np.uint8)
     ids = np.flatnonzero(packed)
-    flat = bt.reshape(-1)
-    if ids.size > 8:
-        return np.flatnonzero(packed[flat])
-    m = np.zeros(flat.shape, bool)
-    for i in ids.tolist():
-        m |= flat == i
-    return np.flatnonzero(m)
+    code = c.copy()
+    if ids.size < 127:
+        code[ids] = 128 + np.arange(ids.size)
+    else:  # too many emitters to mark: take every voxel as one (exact, slower)
+        code[:] = 128
+    return code, c, packed
 
 
 def _padded(i: np.ndarray, h: int, w: int, sy: int, sz: int) -> np.ndarray:

@@ -23,6 +23,8 @@ light and floods only from the voxels whose start value rose (flood.py).
 """
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from ..core import chunk
@@ -31,11 +33,226 @@ from . import flood, model
 R = model.MAX - 1  # reach of a change
 
 
-def _column_day(col: np.ndarray) -> np.ndarray:
+def _column_days(blocks: np.ndarray, x: int, y: int, z: int, old: int) -> np.ndarray:
+    """Column-pass daylight of column (x, y) at layers 0..z with the block at z as it
+    is now (row 0) and as `old` (row 1): (2, z + 1)."""
     _, att, opaque, _, _, _ = model.tables()
-    a = att[col].astype(np.int16)[::-1]
-    blocked = np.maximum.accumulate(opaque[col][::-1]).astype(bool)
-    return np.where(blocked, 0, np.clip(model.MAX - np.cumsum(a), 0, model.MAX))[::-1]
+    above = blocks[x, y, z + 1:]
+    carry = 0 if opaque[above].any() else max(model.MAX - int(att[above].sum()), 0)
+    col = np.empty((2, z + 1), blocks.dtype)
+    col[:] = blocks[x, y, z::-1]  # from z down
+    col[1, 0] = old
+    a = np.cumsum(att[col], axis=1, dtype=np.int16)
+    blocked = np.maximum.accumulate(opaque[col], axis=1).astype(bool)
+    return np.where(blocked, 0, np.clip(carry - a, 0, model.MAX))[:, ::-1]
+
+
+@lru_cache(maxsize=1)
+def _lut() -> np.ndarray:
+    """Packed uint16 light -> its four lanes as one little-endian uint32 (256 KiB):
+    one gather unpacks a box."""
+    return model.unpack(np.arange(1 << 16, dtype=np.uint16)).view(np.uint32).reshape(-1)
+
+
+STATS = {"local": 0, "sparse": 0, "box": 0}  # how edits were relit (tests check each runs)
+SPARSE_BUDGET = 200  # lane writes a sparse relight may make before it leaves it to the box
+SPARSE_EMISSION = 3  # a lamp placed or removed floods thousands of voxels: box at once
+SHIFTS = (0, 4, 8, 12)
+
+
+def _local(blocks, light, x, y, z, now, zc, brighter):
+    """Relight an edit that changes no voxel but p = (x, y, z), as most edits do
+    (digging in the dark or in the open, a block placed where nothing depends on the
+    light at p):
+    p's new light, written, and its box; None when other voxels may lose light; p's
+    new light (a list, nothing written) when only p's brighter components spread (a
+    lamp set in the open: the box floods from p, no removal). Exact because:
+    - p's new value is max(start, neighbour - cost) per component (an opaque p holds
+      its emission) with every other voxel unchanged;
+    - a p that brightens raises nothing unless some neighbour n < value - cost(n)
+      (a block dug out in the open: its neighbours are in daylight already);
+    - a p that darkens from v >= 2 only darkens a neighbour n whose value is v -
+      cost(n) if n has no other support: its emission, or a neighbour m != p with
+      L(m) - cost(n) >= L(n); such an m has L(m) >= v, so its own best path cannot
+      run through p (that would leave it <= v - 2): n keeps its value, and so does
+      everything lit through n;
+    - the column below p: rising start values there must not exceed the old light
+      (brighter edits); a darker edit must not change it at all."""
+    cost_t, _, _, emis, _, _ = model.tables()
+    w, h, zs = blocks.shape
+    if zc < z and not (brighter and (now[zc:z] <= (light[x, y, zc:z] >> 12)).all()):
+        return None
+    new = int(blocks[x, y, z])
+    nb = [q for q in ((x - 1, y, z), (x + 1, y, z), (x, y - 1, z), (x, y + 1, z),
+                      (x, y, z - 1), (x, y, z + 1))
+          if 0 <= q[0] < w and 0 <= q[1] < h and 0 <= q[2] < zs]
+    lp = int(light[x, y, z])
+    was = [(lp >> k) & 15 for k in SHIFTS]
+    c = int(cost_t[new])
+    e = [int(v) for v in emis[new]]
+    if c == model.OPAQUE_COST:
+        val = e + [0]
+    else:
+        val = e + [int(now[z])]
+        for q in nb:
+            lq = int(light[q])
+            val = [max(a, ((lq >> k) & 15) - c) for a, k in zip(val, SHIFTS)]
+    spreads = False
+    for k, (a, b) in enumerate(zip(val, was)):
+        if a > b and a > 1 and _raises(blocks, light, nb, k, a):
+            spreads = True  # p shines further than before
+        if a < b and b > 1 and not _kept(blocks, light, (x, y, z), nb, k, b):
+            return None
+    if spreads:
+        return val
+    if val == was:
+        return (slice(x, x), slice(y, y), slice(z, z))
+    light[x, y, z] = val[0] | val[1] << 4 | val[2] << 8 | val[3] << 12
+    return (slice(x, x + 1), slice(y, y + 1), slice(z, z + 1))
+
+
+def _sparse(blocks, light, x, y, z, old, now, zc, brighter):
+    """The box path's relight (removal, then a brightest-first refill) in plain Python
+    on the voxels it touches, for an edit whose light barely moves (leaves or water on
+    top: the daylight of the column below p changes); None (nothing written) once it
+    has written SPARSE_BUDGET lanes."""
+    cost_t, _, _, emis, _, _ = model.tables()
+    w, h, zs = blocks.shape
+    cur: dict = {}  # voxel -> its four lanes as now (read from `light` on first use)
+    costs: dict = {}
+    days: dict = {}  # column -> its column-pass daylight (blocks as they are now)
+
+    def get(v):
+        lv = cur.get(v)
+        if lv is None:
+            pv = int(light[v])
+            lv = cur[v] = [pv & 15, pv >> 4 & 15, pv >> 8 & 15, pv >> 12]
+        return lv
+
+    def cost(v):
+        c = costs.get(v)
+        if c is None:
+            c = costs[v] = int(cost_t[blocks[v]])
+        return c
+
+    def near(v):
+        i, j, k = v
+        out = []
+        if i > 0:
+            out.append((i - 1, j, k))
+        if i < w - 1:
+            out.append((i + 1, j, k))
+        if j > 0:
+            out.append((i, j - 1, k))
+        if j < h - 1:
+            out.append((i, j + 1, k))
+        if k > 0:
+            out.append((i, j, k - 1))
+        if k < zs - 1:
+            out.append((i, j, k + 1))
+        return out
+
+    def start(v, c):
+        if c < 3:
+            return int(emis[blocks[v]][c])
+        col = days.get(v[:2])
+        if col is None:
+            i, j = v[:2]
+            col = days[v[:2]] = _column_days(blocks, i, j, zs - 1, int(blocks[i, j, -1]))[0]
+        return int(col[v[2]])
+
+    p = (x, y, z)
+    column = [(x, y, k) for k in range(zc, z)]
+    seeds = [(q, c) for q in near(p) for c in range(4)]
+    writes = 0
+    if brighter:
+        for q in column:
+            lq = get(q)
+            lq[3] = max(lq[3], int(now[q[2]]))
+        lp = get(p)
+        e = [int(a) for a in emis[blocks[p]]] + [int(now[z])]
+        lp[:] = e if cost(p) == model.OPAQUE_COST else [max(a, b) for a, b in zip(lp, e)]
+        seeds += [(q, 3) for q in column] + [(p, c) for c in range(4)]
+    else:  # removal from the changed lanes, as _remove does
+        stack = []
+        gone = [(q, 3) for q in column] + [(p, c) for c in range(4)]
+        for q, c in gone:
+            lq = get(q)
+            if lq[c] > 1:
+                stack.append((q, c, lq[c]))
+            lq[c] = 0
+        while stack:
+            q, c, val = stack.pop()
+            for n in near(q):
+                ln = get(n)
+                if 0 < ln[c] < val and cost(n) != model.OPAQUE_COST:
+                    writes += 1
+                    if writes > SPARSE_BUDGET:
+                        return None
+                    if ln[c] > 1:
+                        stack.append((n, c, ln[c]))
+                    ln[c] = 0
+                    gone.append((n, c))
+        for q, c in gone:
+            get(q)[c] = start(q, c)
+        seeds += gone + [(n, c) for q, c in gone for n in near(q)]
+    buckets: list = [[] for _ in range(model.MAX + 1)]
+    for q, c in seeds:
+        buckets[get(q)[c]].append((q, c))
+    for val in range(model.MAX, 1, -1):
+        for q, c in buckets[val]:
+            if cur[q][c] != val:
+                continue  # raised since: done at its new value
+            for n in near(q):
+                nv = val - cost(n)
+                ln = get(n)
+                if nv > ln[c]:
+                    writes += 1
+                    if writes > SPARSE_BUDGET:
+                        return None
+                    ln[c] = nv
+                    buckets[nv].append((n, c))
+    lo, hi = [x, y, z], [x, y, z]
+    moved = False
+    for v, lv in cur.items():
+        pv = lv[0] | lv[1] << 4 | lv[2] << 8 | lv[3] << 12
+        if pv != light[v]:
+            light[v] = pv
+            moved = True
+            lo = [min(a, b) for a, b in zip(lo, v)]
+            hi = [max(a, b) for a, b in zip(hi, v)]
+    if not moved:
+        return (slice(x, x), slice(y, y), slice(z, z))
+    return tuple(slice(a, b + 1) for a, b in zip(lo, hi))
+
+
+def _raises(blocks, light, nb, k, v):
+    """Whether p at value v of component k raises one of its neighbours `nb`."""
+    cost_t = model.tables()[0]
+    sh = SHIFTS[k]
+    return any(v - int(cost_t[blocks[q]]) > (int(light[q]) >> sh) & 15 for q in nb)
+
+
+def _kept(blocks, light, p, nb, k, v):
+    """Whether every neighbour of p that may owe component k to p's old value v has
+    another support (see _local)."""
+    cost_t, _, _, emis, _, _ = model.tables()
+    w, h, zs = blocks.shape
+    sh = SHIFTS[k]
+    for q in nb:
+        cq = int(cost_t[blocks[q]])
+        lq = (int(light[q]) >> sh) & 15
+        if cq == model.OPAQUE_COST or lq != v - cq or lq == 0:
+            continue  # opaque, lit better elsewhere, or dark anyway
+        if k < 3 and emis[blocks[q]][k] >= lq:
+            continue
+        i, j, l = q
+        if not any(0 <= m[0] < w and 0 <= m[1] < h and 0 <= m[2] < zs and m != p
+                   and ((int(light[m]) >> sh) & 15) - cq >= lq
+                   for m in ((i - 1, j, l), (i + 1, j, l), (i, j - 1, l), (i, j + 1, l),
+                             (i, j, l - 1), (i, j, l + 1))):
+            return False
+    return True
 
 
 def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: int):
@@ -50,15 +267,22 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
     if old == new:
         return (slice(x, x), slice(y, y), slice(z, z))
     cost_t, _, _, emis, _, _ = model.tables()
-    above = blocks[x, y, z + 1:]
-    col = np.array(blocks[x, y, :z + 1])
-    now = _column_day(np.append(col, above))[:z + 1]
-    col[z] = old
-    before = _column_day(np.append(col, above))[:z + 1]
+    now, before = _column_days(blocks, x, y, z, old)
     diff = np.flatnonzero(now != before)
     zc = int(diff[0]) if diff.size else z
     brighter = (cost_t[new] <= cost_t[old] and (emis[new] >= emis[old]).all()
                 and (now >= before).all())
+    box = _local(blocks, light, x, y, z, now, zc, brighter)
+    if isinstance(box, tuple):
+        STATS["local"] += 1
+        return box
+    pval = box  # p's exact new light when only its rising components must flood
+    if max(emis[new].max(), emis[old].max()) <= SPARSE_EMISSION:
+        box = _sparse(blocks, light, x, y, z, old, now, zc, brighter)
+        if box is not None:
+            STATS["sparse"] += 1
+            return box
+    STATS["box"] += 1
     sx = slice(max(x - R, 0), min(x + R + 1, w))
     sy = slice(max(y - R, 0), min(y + R + 1, h))
     sz = slice(max(zc - R, 0), min(z + R + 1, zs))
@@ -70,14 +294,15 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
     shape, (gy, gz) = flood.grid((nz, ny, nx))
     f = np.zeros(shape + (4,), np.uint8)  # lanes: all components flood at once
     ox, oy, oz = 1 - (sx.start - ex.start), 1 - (sy.start - ey.start), 2 - (sz.start - ez.start)
-    model.unpack(light[ex, ey, ez].T, out=f[oz:oz + ez.stop - ez.start,
-                                           oy:oy + ey.stop - ey.start, ox:ox + ex.stop - ex.start])
+    f.view(np.uint32).reshape(shape)[oz:oz + ez.stop - ez.start, oy:oy + ey.stop - ey.start,
+                                     ox:ox + ex.stop - ex.start] = np.take(
+        _lut(), light[ex, ey, ez].T, mode="clip")
     cost = np.full(shape, model.OPAQUE_COST, np.uint8)
-    inner = (slice(2, -2), slice(1, -1), slice(1, -1))
-    cost[inner] = cost_t[blocks[sx, sy, sz].T]
+    cost[2:-2, 1:-1, 1:-1] = np.take(cost_t, blocks[sx, sy, sz].T, mode="clip")
     px, py = x - sx.start + 1, y - sy.start + 1
-    if brighter:
-        # Old light stays; raise p and the column below it to their new start values.
+    if brighter or pval is not None:
+        # Old light stays; raise p and the column below it to their new start values
+        # (or set p to its new light: what fell there took nothing else with it).
         pz = np.arange(zc, z + 1) - sz.start + 2
         new_start = np.zeros((pz.size, 4), np.uint8)
         new_start[:, 3] = now[zc:z + 1]
@@ -85,6 +310,8 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
         f[pz, py, px] = np.maximum(f[pz, py, px], new_start)
         if cost_t[new] == model.OPAQUE_COST:  # an opaque voxel holds exactly its emission
             f[pz[-1], py, px] = new_start[-1]
+        if pval is not None:
+            f[pz[-1], py, px] = pval
         vox = pz * gz + py * gy + px
         # ... and p's neighbours, which may now shine into it (its cost may have dropped).
         vox = np.concatenate([vox, vox[-1] + np.array([-1, 1, -gy, gy, -gz, gz])])
@@ -101,9 +328,16 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
         # ... and p's neighbours, which may now shine into it (its cost may have dropped)
         seeds = np.concatenate([seeds, (4 * (vox[-1] + np.array([-1, 1, -gy, gy, -gz, gz]))
                                         [:, None] + np.arange(4)).ravel()])
-    flood.flood_lanes(f.reshape(-1), cost.reshape(-1), seeds, gy, gz, written)
+    # value + cost per lane (a cost >= 16 blocks like 255 does and cannot overflow)
+    fc = f.view(np.uint32).reshape(shape) + (np.minimum(cost, model.MAX + 1).astype(np.uint32)
+                                             * np.uint32(0x01010101))  # 4 lanes a word
+    fc = fc.view(np.uint8).reshape(-1)
+    fl, cost = f.reshape(-1), cost.reshape(-1)
+    n, nv = flood.levels_lanes(fc, cost, seeds, fl[seeds], gy, gz)
+    fl[n] = nv
+    written.append(n)
     # only the written voxels can differ: pack and store their bounds (padded grid
-    # coordinates: x, y from 1, z from 2, as `inner`)
+    # coordinates: the inside starts at x, y = 1 and z = 2, flood.grid)
     v = np.concatenate(written) >> 2
     zz, yy, xx = v // gz, v % gz // gy, v % gy
     lo = [max(int(a.min()), o) for a, o in ((xx, 1), (yy, 1), (zz, 2))]

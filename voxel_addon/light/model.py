@@ -90,14 +90,21 @@ def slab(blocks: np.ndarray) -> tuple[int, int]:
     cost, _, _, emis, _, air = tables()
     zs = blocks.shape[2]
     only0 = bool(air[0]) and int(air.sum()) == 1  # a compare is ~10x cheaper than a lookup
-    top = _scan(blocks, range(zs - 1, -1, -1), (lambda b: b != 0) if only0 else (lambda b: ~air[b]))
+    top = _scan(blocks, range(zs - 1, -1, -1), (lambda b: b != 0) if only0 else (lambda b: ~_take(air, b)))
     top = -1 if top is None else top
     lit = emis.max(axis=1) > 0
-    em = _scan(blocks, range(top, max(top - MAX + 2, 0) - 1, -1), lambda b: lit[b])
+    em = _scan(blocks, range(top, max(top - MAX + 2, 0) - 1, -1), lambda b: _take(lit, b))
     z1 = min(zs, max(top + 2, em + MAX if em is not None else 0, 1))
-    clear = _scan(blocks, range(z1), lambda b: cost[b] != OPAQUE_COST)
+    clear = _scan(blocks, range(z1), lambda b: _take(cost, b) != OPAQUE_COST)
     z0 = max(0, clear - 1) if clear is not None else max(0, z1 - 1)
     return z0, z1
+
+
+def _take(table: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """table[b] for a band of layers, in its own memory order: np.take without bounds
+    checks is ~2x cheaper than indexing (the solve checks the ids)."""
+    o = "F" if b.flags.f_contiguous else "C"
+    return np.take(table, b.ravel(order=o), mode="clip").reshape(b.shape, order=o)
 
 
 def _scan(blocks: np.ndarray, zs: range, hit, band: int = 16):

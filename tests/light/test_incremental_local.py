@@ -1,0 +1,141 @@
+"""The incremental relight's cheap paths against a full solve: incremental._local (an
+edit that changes no voxel but the edited one skips the relight box), in scenes built
+so that its reasoning is wrong by one step if any of its conditions slips (a p that
+rises to exactly 2, a neighbour that kept its daylight only through p, a column
+below p that changes), and incremental._sparse (the box path's algorithm on the
+voxels it touches, for light that barely moves: leaves and water on top), with
+streams of random edits that take every path."""
+import numpy as np
+
+from voxel_addon.core.blocks import REGISTRY as R
+from voxel_addon.light import full, incremental
+
+STONE, ORE, MUSH = R.id("stone"), R.id("ore"), R.id("glowing_mushroom")
+
+
+def _rock():
+    b = np.zeros((24, 24, 256), np.uint16, order="F")
+    b[:, :, :60] = STONE
+    return b
+
+
+def _edit(b, L, p, block):
+    """Edit, check against a full solve; returns which path relit it."""
+    before = dict(incremental.STATS)
+    incremental.edit(b, L, *p, block)
+    assert np.array_equal(L, full.solve(b, "numpy")), (p, block)
+    return next(k for k, n in incremental.STATS.items() if n > before[k])
+
+
+def test_p_rising_to_two_lights_its_neighbour():
+    """Ore (red 3) at the end of a dark tunnel: reopening the voxel next to it gives
+    it red 2, which reaches the next voxel as 1 (the box path must run)."""
+    b = _rock()
+    b[5:16, 10, 30] = 0
+    b[4, 10, 30] = ORE
+    L = full.solve(b, "numpy")
+    assert (L[6, 10, 30] & 15) == 1
+    assert _edit(b, L, (5, 10, 30), STONE) != "local"
+    assert (L[6, 10, 30] & 15) == 0
+    assert _edit(b, L, (5, 10, 30), 0) != "local"
+    assert (L[6, 10, 30] & 15) == 1
+
+
+def test_daylight_kept_only_through_p():
+    """A mushroom (blue 14, no daylight of its own) beside the bottom of a sky shaft:
+    its daylight 14 comes only through p; its blue emission is no support for it.
+    (A second mushroom above p keeps p's blue from mattering to the shaft.)"""
+    b = _rock()
+    b[10, 10, 30:] = 0
+    b[11, 10, 30] = MUSH
+    b[10, 10, 31] = MUSH
+    L = full.solve(b, "numpy")
+    assert L[11, 10, 30] >> 12 == 14
+    assert _edit(b, L, (10, 10, 30), STONE) != "local"
+    assert L[11, 10, 30] >> 12 == 0
+
+
+def test_column_below_rising_to_one():
+    """Under 14 leaves in a well the daylight is 1: digging the stone under it gives
+    p daylight 1 (too faint to spread) but also the sealed air column below it."""
+    b = _rock()
+    b[10, 10, 46:60] = R.id("leaves")
+    b[10, 10, 40:45] = 0
+    L = full.solve(b, "numpy")
+    assert L[10, 10, 46] >> 12 == 1 and L[10, 10, 42] >> 12 == 0
+    assert _edit(b, L, (10, 10, 45), 0) != "local"
+    assert L[10, 10, 42] >> 12 == 1
+
+
+def test_local_edits():
+    """Digging in the dark and walling off voxels that nothing depends on stay local,
+    and so does a darker edit whose neighbours keep their light from elsewhere."""
+    b = _rock()
+    b[3:20, 3:20, 40:44] = 0  # a dark sealed cave
+    b[8, 8, 41] = ORE
+    b[12, 12, 50:] = 0  # a shaft with daylight
+    b[11:14, 12, 50] = 0  # and a wide bottom
+    L = full.solve(b, "numpy")
+    assert _edit(b, L, (15, 15, 30), 0) == "local"  # dig in the rock
+    assert _edit(b, L, (15, 15, 42), STONE) == "local"  # dark cave voxel walled
+    assert _edit(b, L, (12, 12, 52), R.id("glass")) == "local"  # same light class
+    assert _edit(b, L, (3, 3, 59), 0) == "local"  # the top block, dug in the open
+    assert _edit(b, L, (3, 3, 59), STONE) == "local"  # and put back
+    # the wide bottom's ends keep daylight 14 from the shaft... but p is the shaft:
+    # the column below p changes, so not local
+    assert _edit(b, L, (12, 12, 55), STONE) != "local"
+
+
+def test_random_cave_edits_both_paths():
+    rng = np.random.default_rng(11)
+    b = _rock()
+    b[2:22, 2:22, 30:40] = np.where(rng.random((20, 20, 10)) < 0.5, 0, STONE)
+    b[6, 6, 40:] = 0  # daylight shafts into it
+    b[17, 14, 40:] = 0
+    where = rng.random((20, 20, 10)) < 0.03
+    b[2:22, 2:22, 30:40][where] = rng.choice([ORE, MUSH, R.id("lamp_red")], int(where.sum()))
+    L = full.solve(b, "numpy")
+    ids = [0, 0, STONE, STONE, ORE, MUSH, R.id("water"), R.id("glass")]
+    paths = []
+    for _ in range(60):
+        p = (int(rng.integers(2, 22)), int(rng.integers(2, 22)), int(rng.integers(29, 41)))
+        new = int(rng.choice(ids))
+        if b[p] != new:
+            paths.append(_edit(b, L, p, new))
+    assert paths.count("local") >= 10 and len(paths) - paths.count("local") >= 10, paths
+
+
+def test_leaves_on_top_go_sparse():
+    """Stone set on a leaf column darkens the daylight below it; digging the top leaf
+    brightens it: a few voxels each, relit without the box."""
+    b = _rock()
+    b[:, :, 60:64] = STONE
+    b[10, 10, 60:64] = R.id("leaves")  # a leaf column sunk in the rock
+    b[11, 10, 60] = R.id("leaves")  # roofed: lit only through the column
+    L = full.solve(b, "numpy")
+    assert L[10, 10, 60] >> 12 == 11 and L[11, 10, 60] >> 12 == 9
+    assert _edit(b, L, (10, 10, 64), STONE) == "sparse"
+    assert L[11, 10, 60] >> 12 == 0
+    assert _edit(b, L, (10, 10, 64), 0) == "sparse"
+    assert _edit(b, L, (10, 10, 63), 0) == "sparse"
+
+
+def test_random_forest_edits_all_paths():
+    """Random leaf and water columns on flat ground, edits on and around them."""
+    rng = np.random.default_rng(5)
+    b = _rock()
+    tops = rng.integers(60, 66, (24, 24))
+    kinds = rng.choice([R.id("leaves"), R.id("water"), R.id("glass"), 0, 0], (24, 24))
+    for i in range(24):
+        for j in range(24):
+            b[i, j, 60:tops[i, j]] = kinds[i, j]
+    L = full.solve(b, "numpy")
+    ids = [0, 0, STONE, R.id("leaves"), R.id("water"), R.id("glass"), ORE, R.id("lamp_red")]
+    paths = []
+    for _ in range(90):
+        i, j = (int(v) for v in rng.integers(0, 24, 2))
+        p = (i, j, int(rng.integers(58, 67)))
+        new = int(rng.choice(ids))
+        if b[p] != new:
+            paths.append(_edit(b, L, p, new))
+    assert min(paths.count(k) for k in ("local", "sparse", "box")) >= 3, paths

@@ -121,6 +121,16 @@ def available() -> bool:
         return False
 
 
+def on_cpu() -> bool:
+    """Whether the OpenCL device is the CPU itself (pocl): there a NumPy twin that does
+    less work can beat its kernel (the light's flood: light.full.backend)."""
+    try:
+        import pyopencl as cl
+        return bool(context()[2].type & cl.device_type.CPU)
+    except NoOpenCL:
+        return False
+
+
 BACKENDS = ("opencl", "numpy")  # every kernel's OpenCL twin and its NumPy reference
 
 

@@ -187,6 +187,14 @@ def _unpack_all(found) -> None:
         if f[2] is not None and f[2].dtype != np.uint16:
             groups.setdefault(bits_for(len(f[1])), []).append(f)
     for bits, fs in groups.items():
+        if bits == 4:   # two indices a byte: no 64-bit shifts (most sections)
+            u8 = np.concatenate([f[2] for f in fs]).astype("<u8").view(np.uint8)
+            out = np.empty((len(u8), 2), np.uint16)
+            np.bitwise_and(u8, 15, out=out[:, 0])
+            np.right_shift(u8, 4, out=out[:, 1])
+            for f, row in zip(fs, out.reshape(len(fs), 4096)):
+                f[2] = row
+            continue
         per = 64 // bits
         words = np.concatenate([f[2] for f in fs], dtype=np.int64).view(np.uint64)
         shifts = np.arange(per, dtype=np.uint64) * np.uint64(bits)

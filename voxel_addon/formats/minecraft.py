@@ -21,7 +21,8 @@ from __future__ import annotations
 import gzip
 import json
 import time
-from collections import Counter
+from collections import Counter, deque
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -34,9 +35,10 @@ from ..core.errors import VoxelError
 from ..storage import minecraft as mcfile
 from . import anvil, mapping, mcstate, nbt, region
 from .budget import Budget, Exceeded
-from .region import External, Region, RegionError
+from .region import MAX_NBT, External, Region, RegionError
 
 BATCH = 32
+AHEAD = 48   # chunks inflated ahead of the parse
 LAYOUTS = ("dimensions/minecraft/overworld/region", "region")  # 26.1 first, then older
 LEVEL_KEEP = {"Data": {"DataVersion": None}}
 LEVEL_TAGS = 1 << 18   # a level.dat has hundreds to thousands
@@ -153,6 +155,7 @@ class _Palettes:
         self.colors = colors.parse(world.file.meta)
         self.states = mcstate.States(world.file)
         self.ids: dict = {}
+        self.keyed: dict = {}
         self.changed = False
 
     def of(self, name: str, props: dict | None = None) -> tuple[int, int]:
@@ -189,6 +192,7 @@ def convert(ch: anvil.Chunk, y_min: int, pal: _Palettes):
     gives the data stored as 0 per block id (its default state, mcstate.States)."""
     blocks, data, dropped = C.empty(), None, 0
     counts = pal.report.blocks
+    keyed = pal.keyed   # a palette's bytes -> what `of` gives its entries
     ids_l, vals_l, n_l, secs = [], [], [], []
     for s in ch.sections:
         start = len(ids_l)
@@ -200,8 +204,12 @@ def convert(ch: anvil.Chunk, y_min: int, pal: _Palettes):
             n_l.append(4096)
             secs.append((s, start, start + 1, None))
             continue
-        for name, p in zip(s.palette, s.props or [None] * len(s.palette)):
-            bid, d = pal.of(name, p)
+        got = keyed.get(s.key) if s.key is not None else None
+        if got is None:
+            got = [pal.of(name, p) for name, p in zip(s.palette, s.props or [None] * len(s.palette))]
+            if s.key is not None:
+                keyed[s.key] = got
+        for bid, d in got:
             ids_l.append(bid)
             vals_l.append(d)
         n = np.bincount(s.indices, minlength=len(s.palette)) if s.indices is not None \
@@ -283,6 +291,26 @@ def import_world(world, path, *, y_min=None, area=None, replace=False, progress=
     return report
 
 
+def _inflate(reg, cx, cz):
+    """A chunk's NBT with the per-chunk limit only (region.MAX_NBT), or the error."""
+    try:
+        return reg.payload(cx, cz)
+    except RegionError as e:
+        return e
+
+
+def _charged(got, reg, cx, cz, budget):
+    """_inflate's answer charged to the import's budget: what reg.payload(cx, cz,
+    budget) gives. While the budget has MAX_NBT left that is the same decode with the
+    same limit; closer to its end the chunk is decoded again under what is left."""
+    if budget.bytes < MAX_NBT:
+        return reg.payload(cx, cz, budget)
+    if isinstance(got, BaseException):
+        raise got
+    budget.spend_bytes(len(got))
+    return got
+
+
 def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
           resources=None):
     """The import as a generator of (chunks done, total), one step per batch written,
@@ -305,45 +333,60 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
     pal = _Palettes(world, report)
     if resources is not None:   # written with the first batch
         world.file.stage_meta(mcstate.RESOURCES, json.dumps([str(r) for r in resources]))
+    # a helper thread inflates the chunks ahead and compresses the rows behind (zlib
+    # and zstd let go of the GIL): this thread only parses, converts and writes
+    ex = ThreadPoolExecutor(1, thread_name_prefix="mc-import")
+    enc = world.file.encoder()
+    ahead = deque()
+    nxt = 0
     batch, biomes = [], []
-    for done, (reg, cx, cz) in enumerate(todo, 1):
-        try:
-            ch = anvil.read(reg.payload(cx, cz, budget), budget)
-        except Exceeded as e:
-            raise VoxelError(f"{reg.path.name} chunk ({cx}, {cz}): {e}; import refused") \
-                from None
-        except External:
-            report.external += 1
-            ch = None
-        except (RegionError, anvil.ChunkError, nbt.NbtError) as e:
-            msg = str(e)
-            old += "before 1.13" in msg
-            report.damaged.append(msg if msg.startswith(reg.path.name)
-                                  else f"{reg.path.name} chunk ({cx}, {cz}): {msg}")
-            ch = None
-        if ch is not None:
-            if report.version is None:
-                report.version = version if version is not None else ch.version
-                report.y_min = y_min if y_min is not None else (
-                    -64 if report.version >= anvil.V_NO_LEVEL else 0)
-                world.file.stage_meta(mcfile.Y_MIN, str(report.y_min))
-            if ch.status not in anvil.DONE:
-                report.unfinished[ch.status] += 1
-            else:
-                blocks, data, dropped = convert(ch, report.y_min, pal)
-                report.dropped += dropped
-                batch.append((to_key(cx, cz), blocks, data))
-                cols = pal.states.columns(ch, blocks, report.y_min)
-                if cols is not None:
-                    biomes.append((to_key(cx, cz), cols))
-        if len(batch) >= BATCH or (done == len(todo) and batch):
-            pal.save()
-            kept = world.store_chunks(batch, replace=replace, since=start)
-            report.chunks += len(batch) - len(kept)
-            report.kept += len(kept)
-            mcfile.write(world.file, [(k, b) for k, b in biomes if k not in set(kept)])
-            batch, biomes = [], []
-            yield done, len(todo)
+    try:
+        for done, (reg, cx, cz) in enumerate(todo, 1):
+            while nxt < len(todo) and nxt < done + AHEAD:
+                ahead.append(ex.submit(_inflate, *todo[nxt]))
+                nxt += 1
+            got = ahead.popleft().result()
+            try:
+                ch = anvil.read(_charged(got, reg, cx, cz, budget), budget)
+            except Exceeded as e:
+                raise VoxelError(f"{reg.path.name} chunk ({cx}, {cz}): {e}; import refused") \
+                    from None
+            except External:
+                report.external += 1
+                ch = None
+            except (RegionError, anvil.ChunkError, nbt.NbtError) as e:
+                msg = str(e)
+                old += "before 1.13" in msg
+                report.damaged.append(msg if msg.startswith(reg.path.name)
+                                      else f"{reg.path.name} chunk ({cx}, {cz}): {msg}")
+                ch = None
+            if ch is not None:
+                if report.version is None:
+                    report.version = version if version is not None else ch.version
+                    report.y_min = y_min if y_min is not None else (
+                        -64 if report.version >= anvil.V_NO_LEVEL else 0)
+                    world.file.stage_meta(mcfile.Y_MIN, str(report.y_min))
+                if ch.status not in anvil.DONE:
+                    report.unfinished[ch.status] += 1
+                else:
+                    blocks, data, dropped = convert(ch, report.y_min, pal)
+                    report.dropped += dropped
+                    key = to_key(cx, cz)
+                    cols = pal.states.columns(ch, blocks, report.y_min)
+                    batch.append(ex.submit(enc.row, key, blocks, data))
+                    if cols is not None:
+                        biomes.append((key, cols))
+            if len(batch) >= BATCH or (done == len(todo) and batch):
+                pal.save()
+                rows = [f.result() for f in batch]
+                kept = world.store_rows(rows, replace=replace, since=start)
+                report.chunks += len(batch) - len(kept)
+                report.kept += len(kept)
+                mcfile.write(world.file, [(k, b) for k, b in biomes if k not in set(kept)])
+                batch, biomes = [], []
+                yield done, len(todo)
+    finally:
+        ex.shutdown(wait=True, cancel_futures=True)
     if old and old == len(report.damaged) and not (report.chunks or report.unfinished):
         # nothing written: a world Minecraft never saved in 1.13+ is refused whole
         raise VoxelError(f"none of the {old} chunks is from Minecraft 1.13 or newer, nothing "

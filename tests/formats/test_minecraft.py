@@ -189,3 +189,21 @@ def test_interrupted_import_keeps_finished_batches(tmp_path):
         with pytest.raises(VoxelError, match="replace"):
             minecraft.import_world(world, tmp_path)
         assert minecraft.import_world(world, tmp_path, replace=True).chunks == 40
+
+
+def test_a_refused_import_keeps_the_batches_before_it(tmp_path):
+    """Batches are written behind the parse (formats/minecraft.steps): a hostile
+    chunk in the second batch refuses the import with the first batch written."""
+    secs = {0: np.full((16, 16, 16), "minecraft:stone", object)}
+    body = mc.chunk_nbt(0, 0, secs)
+    deep = b"\x0a\x00\x00\x03\x00\x0bDataVersion\x00\x00\x0f\x71" + b"\x0a\x00\x01x" * 600 \
+        + b"\x00" * 601
+    chunks = {(x, z): body for x in range(8) for z in range(5)}
+    chunks[(3, 4)] = deep          # the 36th in the import's order (z, then x)
+    mc.write_region(tmp_path / "region", chunks, 3)
+    w = tmp_path / "w.sqlite"
+    with World.create(w, seed=0, generator="empty", loader=False) as world:
+        with pytest.raises(VoxelError, match="refused"):
+            minecraft.import_world(world, tmp_path)
+    with World.open(w, loader=False) as world:
+        assert world.file.chunk_count() == minecraft.BATCH

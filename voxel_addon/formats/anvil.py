@@ -4,7 +4,8 @@
 data}`, root `Status`. 1.13-1.17 (1451..2843): `Level.Sections[]` with `Palette` and
 `BlockStates`, `Level.Status`; before 1.16 (DataVersion 2529) indices run on across
 longs, since then a long holds 64 // bits whole indices. Older worlds (numeric ids)
-are refused. Index order in a section: y * 256 + z * 16 + x.
+are refused. Index order in a section's data: y * 256 + z * 16 + x; Section.indices
+holds them z-flipped (y * 256 + (15 - z) * 16 + x, a world chunk's layer order).
 
 A chunk's NBT may hold at most CHUNK_TAGS tags (arrays count as one): a full 1.21
 chunk has a few thousand, one with a thousand filled chests some hundred thousand;
@@ -37,7 +38,7 @@ class ChunkError(ValueError):
 class Section(NamedTuple):
     y: int                  # section index: blocks 16*y .. 16*y + 15
     palette: list           # block names
-    indices: np.ndarray | None  # (4096,) uint16 into palette; None: all palette[0]
+    indices: np.ndarray | None  # (4096,) intp into palette, y*256 + (15-z)*16 + x; None: all palette[0]
     props: list | None = None   # each palette entry's properties ({str: str}), or None
     biomes: tuple | None = None  # 1.18+: (names, packed longs or None): cells() unpacks them
     key: bytes | None = None     # the palette's bytes (chunkscan): equal keys, equal palettes
@@ -161,7 +162,7 @@ def _section(s, version):
         if not isinstance(data, np.ndarray) or data.dtype != np.dtype(">i8"):
             raise ChunkError(f"section {s['Y']}: block data is not a long array")
         if version < V_PACKED:
-            idx = unpack(data, len(names), spanning=True)
+            idx = _flip(unpack(data, len(names), spanning=True))
         else:
             bits = bits_for(len(names))
             _need(len(data), bits)
@@ -180,28 +181,38 @@ def _need(n: int, bits: int) -> None:
 
 
 def _unpack_all(found) -> None:
-    """Replace the packed longs of `found` sections by their 4096 indices, the
-    sections of one bit width in one pass."""
+    """Replace the packed longs of `found` sections by their 4096 indices (Section's
+    order and type: _flip), the sections of one bit width in one pass."""
     groups: dict = {}
     for f in found:
-        if f[2] is not None and f[2].dtype != np.uint16:
+        if f[2] is not None and f[2].dtype == _PACKED:
             groups.setdefault(bits_for(len(f[1])), []).append(f)
     for bits, fs in groups.items():
+        n = len(fs)
         if bits == 4:   # two indices a byte: no 64-bit shifts (most sections)
             u8 = np.concatenate([f[2] for f in fs]).astype("<u8").view(np.uint8)
-            out = np.empty((len(u8), 2), np.uint16)
-            np.bitwise_and(u8, 15, out=out[:, 0])
-            np.right_shift(u8, 4, out=out[:, 1])
-            for f, row in zip(fs, out.reshape(len(fs), 4096)):
-                f[2] = row
-            continue
-        per = 64 // bits
-        words = np.concatenate([f[2] for f in fs], dtype=np.int64).view(np.uint64)
-        shifts = np.arange(per, dtype=np.uint64) * np.uint64(bits)
-        out = (words[:, None] >> shifts[None, :]) & np.uint64((1 << bits) - 1)
-        out = out.reshape(len(fs), -1)[:, :4096].astype(np.uint16)
-        for f, row in zip(fs, out):
+            u8 = u8.reshape(n, 16, 16, 8)[:, :, ::-1]     # z flipped as it is read
+            out = np.empty((n, 16, 16, 8, 2), np.intp)
+            np.bitwise_and(u8, 15, out=out[..., 0])
+            np.right_shift(u8, 4, out=out[..., 1])
+        else:
+            per = 64 // bits
+            words = np.concatenate([f[2] for f in fs], dtype=np.int64).view(np.uint64)
+            shifts = np.arange(per, dtype=np.uint64) * np.uint64(bits)
+            out = (words[:, None] >> shifts[None, :]) & np.uint64((1 << bits) - 1)
+            out = out.reshape(n, -1)[:, :4096].reshape(n, 16, 16, 16)[:, :, ::-1].astype(np.intp)
+        for f, row in zip(fs, out.reshape(n, 4096)):
             f[2] = row
+
+
+_PACKED = np.dtype(">i8")
+
+
+def _flip(idx: np.ndarray) -> np.ndarray:
+    """File order (y*256 + z*16 + x) -> Section's: y*256 + (15 - z)*16 + x as intp,
+    the order of a world chunk's layer (x fastest, north up): convert takes from it
+    without a copy and NumPy without a cast."""
+    return idx.reshape(16, 16, 16)[:, ::-1].astype(np.intp).reshape(4096)
 
 
 def _biomes(b):

@@ -38,7 +38,7 @@ from .budget import Budget, Exceeded
 from .region import MAX_NBT, External, Region, RegionError
 
 BATCH = 32
-AHEAD = 48   # chunks inflated ahead of the parse
+GROUP = 16   # chunks a helper task inflates
 LAYOUTS = ("dimensions/minecraft/overworld/region", "region")  # 26.1 first, then older
 LEVEL_KEEP = {"Data": {"DataVersion": None}}
 LEVEL_TAGS = 1 << 18   # a level.dat has hundreds to thousands
@@ -240,9 +240,9 @@ def convert(ch: anvil.Chunk, y_min: int, pal: _Palettes):
                     data = C.empty()
                 data[:, :, lo:hi] = vals[0]
             continue
-        # [y][z][x] -> [x][15 - z][y]: blocks is x-fastest, so its .T is [y][15 - z][x]
-        # in C order and take writes it in place (no strided gather, no temporary)
-        sec = s.indices.reshape(16, 16, 16)[lo - z0:hi - z0, ::-1, :]
+        # indices are [y][15 - z][x] (anvil): blocks is x-fastest, so its .T is
+        # [y][15 - z][x] in C order and take writes it in place (no gather, no temporary)
+        sec = s.indices.reshape(16, 16, 16)[lo - z0:hi - z0]
         ids.take(sec, out=blocks.T[lo:hi], mode="clip")   # indices checked by anvil
         if vals.any():
             if data is None:
@@ -291,12 +291,20 @@ def import_world(world, path, *, y_min=None, area=None, replace=False, progress=
     return report
 
 
-def _inflate(reg, cx, cz):
-    """A chunk's NBT with the per-chunk limit only (region.MAX_NBT), or the error."""
-    try:
-        return reg.payload(cx, cz)
-    except RegionError as e:
-        return e
+def _inflate(items):
+    """Each (region, cx, cz)'s NBT with the per-chunk limit only (region.MAX_NBT), or
+    its error."""
+    out = []
+    for reg, cx, cz in items:
+        try:
+            out.append(reg.payload(cx, cz))
+        except RegionError as e:
+            out.append(e)
+    return out
+
+
+def _rows(enc, items):
+    return [enc.row(k, b, d) for k, b, d in items]
 
 
 def _charged(got, reg, cx, cz, budget):
@@ -333,21 +341,37 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
     pal = _Palettes(world, report)
     if resources is not None:   # written with the first batch
         world.file.stage_meta(mcstate.RESOURCES, json.dumps([str(r) for r in resources]))
-    # a helper thread inflates the chunks ahead and compresses the rows behind (zlib
-    # and zstd let go of the GIL): this thread only parses, converts and writes
+    # a helper thread inflates chunks ahead (GROUP a task) and compresses each batch's
+    # rows while the next batch is parsed (zlib and zstd let go of the GIL; few, large
+    # tasks: each hand-over of the GIL costs): this thread parses, converts and writes.
+    # A batch is written once the next one is converted, in the same order and with
+    # the same staged meta as one after the other; an error writes the batch in hand
+    # first, as the sequential import had (a close at a yield drops the one ahead).
     ex = ThreadPoolExecutor(1, thread_name_prefix="mc-import")
     enc = world.file.encoder()
-    ahead = deque()
+    ahead, got = deque(), deque()
     nxt = 0
-    batch, biomes = [], []
+    batch, biomes, pending = [], [], None
+
+    def flush():
+        nonlocal pending
+        fut, bio, upto = pending
+        pending = None
+        kept = world.store_rows(fut.result(), replace=replace, since=start)
+        report.chunks += len(fut.result()) - len(kept)
+        report.kept += len(kept)
+        mcfile.write(world.file, [(k, b) for k, b in bio if k not in set(kept)])
+        return upto
+
     try:
         for done, (reg, cx, cz) in enumerate(todo, 1):
-            while nxt < len(todo) and nxt < done + AHEAD:
-                ahead.append(ex.submit(_inflate, *todo[nxt]))
-                nxt += 1
-            got = ahead.popleft().result()
+            while nxt < len(todo) and len(ahead) < 2:
+                ahead.append(ex.submit(_inflate, todo[nxt:nxt + GROUP]))
+                nxt += GROUP
+            if not got:
+                got.extend(ahead.popleft().result())
             try:
-                ch = anvil.read(_charged(got, reg, cx, cz, budget), budget)
+                ch = anvil.read(_charged(got.popleft(), reg, cx, cz, budget), budget)
             except Exceeded as e:
                 raise VoxelError(f"{reg.path.name} chunk ({cx}, {cz}): {e}; import refused") \
                     from None
@@ -373,18 +397,24 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
                     report.dropped += dropped
                     key = to_key(cx, cz)
                     cols = pal.states.columns(ch, blocks, report.y_min)
-                    batch.append(ex.submit(enc.row, key, blocks, data))
+                    batch.append((key, blocks, data))
                     if cols is not None:
                         biomes.append((key, cols))
             if len(batch) >= BATCH or (done == len(todo) and batch):
-                pal.save()
-                rows = [f.result() for f in batch]
-                kept = world.store_rows(rows, replace=replace, since=start)
-                report.chunks += len(batch) - len(kept)
-                report.kept += len(kept)
-                mcfile.write(world.file, [(k, b) for k, b in biomes if k not in set(kept)])
+                upto = flush() if pending else None
+                pal.save()   # staged for this batch's transaction, as before
+                pending = (ex.submit(_rows, enc, batch), biomes, done)
                 batch, biomes = [], []
-                yield done, len(todo)
+                if upto is not None:
+                    yield upto, len(todo)
+        if pending:
+            yield flush(), len(todo)
+    except GeneratorExit:   # closed at a yield: the sequential import had written
+        raise               # up to that batch, not the one converted since
+    except BaseException:
+        if pending:   # the batch in hand, written as the sequential import had
+            flush()
+        raise
     finally:
         ex.shutdown(wait=True, cancel_futures=True)
     if old and old == len(report.damaged) and not (report.chunks or report.unfinished):

@@ -121,13 +121,9 @@ def _fast(found):
     """chunkscan's sections unpacked, or None when an index lies outside its palette
     (the general path then reports it)."""
     rows = [[y, p.names, data, p, bio] for y, p, data, bio in found]
-    _unpack_all(rows)
-    out = []
-    for y, names, idx, p, bio in rows:
-        if idx is not None and int(idx.max()) >= len(names):
-            return None
-        out.append(Section(y, names, idx, p.props, bio, p.key))
-    return out
+    if not _unpack_all(rows):
+        return None
+    return [Section(y, names, idx, p.props, bio, p.key) for y, names, idx, p, bio in rows]
 
 
 def _section(s, version):
@@ -180,13 +176,15 @@ def _need(n: int, bits: int) -> None:
                          f"({bits} bits per block)")
 
 
-def _unpack_all(found) -> None:
+def _unpack_all(found) -> bool:
     """Replace the packed longs of `found` sections by their 4096 indices (Section's
-    order and type: _flip), the sections of one bit width in one pass."""
+    order and type: _flip), the sections of one bit width in one pass; whether all
+    of those indices lie inside their palettes."""
     groups: dict = {}
     for f in found:
         if f[2] is not None and f[2].dtype == _PACKED:
             groups.setdefault(bits_for(len(f[1])), []).append(f)
+    fits = True
     for bits, fs in groups.items():
         n = len(fs)
         if bits == 4:   # two indices a byte: no 64-bit shifts (most sections)
@@ -201,8 +199,12 @@ def _unpack_all(found) -> None:
             shifts = np.arange(per, dtype=np.uint64) * np.uint64(bits)
             out = (words[:, None] >> shifts[None, :]) & np.uint64((1 << bits) - 1)
             out = out.reshape(n, -1)[:, :4096].reshape(n, 16, 16, 16)[:, :, ::-1].astype(np.intp)
-        for f, row in zip(fs, out.reshape(n, 4096)):
+        out = out.reshape(n, 4096)
+        if (out.max(axis=1) >= [len(f[1]) for f in fs]).any():
+            fits = False
+        for f, row in zip(fs, out):
             f[2] = row
+    return fits
 
 
 _PACKED = np.dtype(">i8")

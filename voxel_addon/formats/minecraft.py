@@ -196,19 +196,18 @@ def convert(ch: anvil.Chunk, y_min: int, pal: _Palettes):
     ids_l, vals_l, n_l, secs = [], [], [], []
     for s in ch.sections:
         start = len(ids_l)
-        if s.indices is None and len(s.palette) == 1:      # one block: often all air
-            bid, d = pal.of(s.palette[0], s.props[0] if s.props else None)
-            counts[s.palette[0]][2] += 4096
-            ids_l.append(bid)
-            vals_l.append(d)
-            n_l.append(4096)
-            secs.append((s, start, start + 1, None))
-            continue
         got = keyed.get(s.key) if s.key is not None else None
         if got is None:
             got = [pal.of(name, p) for name, p in zip(s.palette, s.props or [None] * len(s.palette))]
             if s.key is not None:
                 keyed[s.key] = got
+        if s.indices is None and len(s.palette) == 1:      # one block: often all air
+            counts[s.palette[0]][2] += 4096
+            ids_l.append(got[0][0])
+            vals_l.append(got[0][1])
+            n_l.append(4096)
+            secs.append((s, start, start + 1, None))
+            continue
         for bid, d in got:
             ids_l.append(bid)
             vals_l.append(d)
@@ -225,29 +224,30 @@ def convert(ch: anvil.Chunk, y_min: int, pal: _Palettes):
     ids_a, vals_a = np.array(ids_l, np.uint16), np.array(vals_l, np.uint16)
     dflt = pal.settle(ids_a, vals_a, np.array(n_l))
     vals_a[vals_a == dflt[ids_a]] = 0                   # a block's default state: 0
+    idl, vall = ids_l, vals_a.tolist()   # Python ints: no NumPy scalars per section
     for s, i, j, n in secs:
-        ids, vals = ids_a[i:j], vals_a[i:j]
         z0 = 16 * s.y - y_min
         lo, hi = max(z0, 0), min(z0 + 16, C.HEIGHT)
         if lo >= hi:
-            dropped += 4096 if n is None and ids[0] else 0 if n is None else int(n[ids != 0].sum())
+            dropped += (4096 if idl[i] else 0) if n is None else int(n[ids_a[i:j] != 0].sum())
             continue
         if s.indices is None:
-            if ids[0]:
-                blocks[:, :, lo:hi] = ids[0]
-            if vals[0]:
+            if idl[i]:
+                blocks[:, :, lo:hi] = idl[i]
+            if vall[i]:
                 if data is None:
                     data = C.empty()
-                data[:, :, lo:hi] = vals[0]
+                data[:, :, lo:hi] = vall[i]
             continue
+        ids = ids_a[i:j]
         # indices are [y][15 - z][x] (anvil): blocks is x-fastest, so its .T is
         # [y][15 - z][x] in C order and take writes it in place (no gather, no temporary)
         sec = s.indices.reshape(16, 16, 16)[lo - z0:hi - z0]
         ids.take(sec, out=blocks.T[lo:hi], mode="clip")   # indices checked by anvil
-        if vals.any():
+        if any(vall[i:j]):
             if data is None:
                 data = C.empty()
-            vals.take(sec, out=data.T[lo:hi], mode="clip")
+            vals_a[i:j].take(sec, out=data.T[lo:hi], mode="clip")
         if hi - lo < 16:
             outside = np.ones(16, bool)
             outside[lo - z0:hi - z0] = False

@@ -187,12 +187,9 @@ def _unpack_all(found) -> bool:
     fits = True
     for bits, fs in groups.items():
         n = len(fs)
-        if bits == 4:   # two indices a byte: no 64-bit shifts (most sections)
-            u8 = np.concatenate([f[2] for f in fs]).astype("<u8").view(np.uint8)
-            u8 = u8.reshape(n, 16, 16, 8)[:, :, ::-1]     # z flipped as it is read
-            out = np.empty((n, 16, 16, 8, 2), np.intp)
-            np.bitwise_and(u8, 15, out=out[..., 0])
-            np.right_shift(u8, 4, out=out[..., 1])
+        if bits == 4:   # two indices a byte, looked up (most sections): no shifts
+            u8 = np.concatenate([f[2] for f in fs], dtype="<i8").view(np.uint8)
+            out = _NIBBLES.take(u8.reshape(n, 16, 16, 8)[:, :, ::-1], axis=0)  # z flipped
         else:
             per = 64 // bits
             words = np.concatenate([f[2] for f in fs], dtype=np.int64).view(np.uint64)
@@ -208,6 +205,7 @@ def _unpack_all(found) -> bool:
 
 
 _PACKED = np.dtype(">i8")
+_NIBBLES = np.array([[b & 15, b >> 4] for b in range(256)], np.intp)   # a byte's two indices
 
 
 def _flip(idx: np.ndarray) -> np.ndarray:

@@ -4,6 +4,8 @@ negative chunks, every compression type, both folder layouts, old versions, the
 report, --replace, --area, Status, y-min."""
 from __future__ import annotations
 
+import sqlite3
+
 import numpy as np
 import pytest
 
@@ -207,3 +209,27 @@ def test_a_refused_import_keeps_the_batches_before_it(tmp_path):
             minecraft.import_world(world, tmp_path)
     with World.open(w, loader=False) as world:
         assert world.file.chunk_count() == minecraft.BATCH
+
+
+def test_the_import_without_its_helper_thread_writes_the_same(tmp_path, monkeypatch):
+    """VOXEL_IMPORT_THREAD=0 (or one core): inflate and compress inline, same rows."""
+    rng = np.random.default_rng(5)
+    names = np.array(["minecraft:stone", "minecraft:air", "minecraft:oak_planks",
+                      "minecraft:water[level=3]"], object)
+    chunks = {(x, z): mc.chunk_nbt(x, z, {y: names[rng.integers(0, 4, (16, 16, 16))]
+                                          for y in (-1, 0, 3)}) for x in range(6) for z in range(6)}
+    mc.write_region(tmp_path / "region", chunks, 2)
+    rows = []
+    for flag in ("1", "0"):
+        monkeypatch.setenv("VOXEL_IMPORT_THREAD", flag)
+        ex = minecraft._helper()
+        assert isinstance(ex, minecraft._Inline) == (flag == "0")
+        ex.shutdown()
+        w = tmp_path / f"w{flag}.sqlite"
+        with World.create(w, seed=0, generator="empty", loader=False) as world:
+            minecraft.import_world(world, tmp_path)
+        db = sqlite3.connect(w)
+        rows.append(db.execute("SELECT cx, cy, blocks, data FROM chunks ORDER BY cx, cy").fetchall()
+                    + db.execute("SELECT * FROM mc_biomes ORDER BY cx, cy").fetchall())
+        db.close()
+    assert len(rows[0]) == 72 and rows[0] == rows[1]

@@ -20,9 +20,10 @@ from __future__ import annotations
 
 import gzip
 import json
+import os
 import time
 from collections import Counter, deque
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -303,6 +304,28 @@ def _inflate(items):
     return out
 
 
+class _Inline:
+    """The helper's interface without a thread: each task runs when submitted."""
+
+    def submit(self, fn, *args):
+        f = Future()
+        try:
+            f.set_result(fn(*args))
+        except BaseException as e:   # handed over as the thread's future would
+            f.set_exception(e)
+        return f
+
+    def shutdown(self, **kw):
+        pass
+
+
+def _helper():
+    """The import's helper thread; none with VOXEL_IMPORT_THREAD=0 or on one core."""
+    if os.environ.get("VOXEL_IMPORT_THREAD", "1") == "0" or (os.cpu_count() or 1) < 2:
+        return _Inline()
+    return ThreadPoolExecutor(1, thread_name_prefix="mc-import")
+
+
 def _rows(enc, items):
     return [enc.row(k, b, d) for k, b, d in items]
 
@@ -347,7 +370,7 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
     # A batch is written once the next one is converted, in the same order and with
     # the same staged meta as one after the other; an error writes the batch in hand
     # first, as the sequential import had (a close at a yield drops the one ahead).
-    ex = ThreadPoolExecutor(1, thread_name_prefix="mc-import")
+    ex = _helper()
     enc = world.file.encoder()
     ahead, got = deque(), deque()
     nxt = 0

@@ -233,3 +233,22 @@ def test_the_import_without_its_helper_thread_writes_the_same(tmp_path, monkeypa
                     + db.execute("SELECT * FROM mc_biomes ORDER BY cx, cy").fetchall())
         db.close()
     assert len(rows[0]) == 72 and rows[0] == rows[1]
+
+
+def test_a_large_chunk_is_not_inflated_ahead_and_still_imported(tmp_path):
+    """The helper thread holds at most AHEAD_MAX bytes of a chunk (a compression bomb
+    is decoded only under the import's own limits): a larger chunk comes back None
+    from _inflate and is decoded again by the import."""
+    secs = {0: np.full((16, 16, 16), "minecraft:stone", object)}
+    small = mc.chunk_nbt(0, 0, secs)
+    junk = b"\x07\x00\x04junk" + (minecraft.AHEAD_MAX + 8).to_bytes(4, "big") \
+        + bytes(minecraft.AHEAD_MAX + 8)
+    big = small[:3] + junk + small[3:]                   # first in the root compound
+    mc.write_region(tmp_path / "region", {(0, 0): big, (1, 0): small}, 2)
+    from voxel_addon.formats.region import Region
+    reg = Region(tmp_path / "region" / "r.0.0.mca")
+    got = minecraft._inflate([(reg, 0, 0), (reg, 1, 0)])
+    assert got[0] is None and got[1] == small
+    with World.create(tmp_path / "w.sqlite", seed=0, generator="empty", loader=False) as world:
+        rep = minecraft.import_world(world, tmp_path)
+        assert rep.chunks == 2 and not rep.damaged and world.file.chunk_count() == 2

@@ -36,10 +36,11 @@ from ..core.errors import VoxelError
 from ..storage import minecraft as mcfile
 from . import anvil, mapping, mcstate, nbt, region
 from .budget import Budget, Exceeded
-from .region import MAX_NBT, External, Region, RegionError
+from .region import MAX_NBT, External, Region, RegionError, decompress
 
 BATCH = 32
 GROUP = 16   # chunks a helper task inflates
+AHEAD_MAX = 1 << 20   # bytes of one chunk's NBT inflated ahead (real ones: tens of KB)
 LAYOUTS = ("dimensions/minecraft/overworld/region", "region")  # 26.1 first, then older
 LEVEL_KEEP = {"Data": {"DataVersion": None}}
 LEVEL_TAGS = 1 << 18   # a level.dat has hundreds to thousands
@@ -293,14 +294,20 @@ def import_world(world, path, *, y_min=None, area=None, replace=False, progress=
 
 
 def _inflate(items):
-    """Each (region, cx, cz)'s NBT with the per-chunk limit only (region.MAX_NBT), or
-    its error."""
+    """Each (region, cx, cz)'s NBT when it inflates to at most AHEAD_MAX bytes, else
+    None (the import's thread decodes it as before: a bomb is never held ahead), or
+    the error of reading its sectors."""
     out = []
     for reg, cx, cz in items:
         try:
-            out.append(reg.payload(cx, cz))
+            kind, body = reg.raw(cx, cz)
         except RegionError as e:
             out.append(e)
+            continue
+        try:
+            out.append(decompress(kind, body, AHEAD_MAX))
+        except ValueError:   # larger, or damaged: decoded again with the real limits
+            out.append(None)
     return out
 
 
@@ -332,9 +339,10 @@ def _rows(enc, items):
 
 def _charged(got, reg, cx, cz, budget):
     """_inflate's answer charged to the import's budget: what reg.payload(cx, cz,
-    budget) gives. While the budget has MAX_NBT left that is the same decode with the
-    same limit; closer to its end the chunk is decoded again under what is left."""
-    if budget.bytes < MAX_NBT:
+    budget) gives. While the budget has MAX_NBT left that is the same decode (it fits
+    the limit); a chunk _inflate left, or one near the budget's end, is decoded again
+    here under what is left."""
+    if got is None or budget.bytes < MAX_NBT:
         return reg.payload(cx, cz, budget)
     if isinstance(got, BaseException):
         raise got

@@ -121,3 +121,26 @@ def test_deep_and_flooded_chunks_are_refused_as_before():
     flood = head + b"\x09\x00\x01x\x0a" + n.to_bytes(4, "big") + b"\x00" * n + b"\x00"
     with pytest.raises(nbt.TooMany):
         anvil.read(flood)
+
+
+def test_the_palette_memos_stay_bounded():
+    """A flood of distinct block and biome palettes (each chunk its own) cannot grow
+    the memos past their bounds."""
+    import struct
+
+    def doc(i):
+        name = f"minecraft:b{i}".encode()
+        block = name if i % 2 else b"minecraft:stone"   # half share one block palette
+        ent = b"\x08\x00\x04Name" + struct.pack(">H", len(block)) + block + b"\x00"
+        sec = (b"\x01\x00\x01Y\x00\x0a\x00\x0cblock_states\x09\x00\x07palette\x0a"
+               + struct.pack(">i", 1) + ent + b"\x00\x0a\x00\x06biomes\x09\x00\x07palette\x08"
+               + struct.pack(">i", 1) + struct.pack(">H", len(name)) + name + b"\x00\x00")
+        return (b"\x0a\x00\x00\x03\x00\x0bDataVersion\x00\x00\x0f\x71\x09\x00\x08sections\x0a"
+                + struct.pack(">i", 1) + sec + b"\x00")
+    for i in range(3 * chunkscan._MEMO_MAX):
+        ch = anvil.read(doc(i))
+        assert ch.sections[0].palette == [f"minecraft:b{i}" if i % 2 else "minecraft:stone"]
+        assert ch.sections[0].biomes[0] == [f"minecraft:b{i}"]
+        assert len(chunkscan._MEMO) <= chunkscan._MEMO_MAX
+        assert len(chunkscan._BIOMES) <= chunkscan._MEMO_MAX
+        assert chunkscan._held[0] <= chunkscan._HELD_MAX

@@ -46,16 +46,21 @@ class Palette:
 _MEMO: dict = {}
 _MEMO_MAX, _PER_KEY, _PREFIX, _RAW_MAX, _HELD_MAX = 1024, 16, 24, 2048, 1 << 20
 _held = [0]
-_BIOMES: dict = {}     # bytes of a biome palette -> its names (tuple)
+_BIOMES: dict = {}     # bytes of a biome palette -> its names; both memos hold at most
+# _MEMO_MAX keys and _HELD_MAX bytes of palettes (a hostile flood of distinct ones)
+
+
+def _clear() -> None:
+    _MEMO.clear()
+    _BIOMES.clear()
+    _held[0] = 0
 
 
 def _remember(mk, p: Palette) -> None:
     if len(p.key) > _RAW_MAX:
         return
     if len(_MEMO) >= _MEMO_MAX or _held[0] + len(p.key) > _HELD_MAX:
-        _MEMO.clear()
-        _BIOMES.clear()
-        _held[0] = 0
+        _clear()
     got = _MEMO.setdefault(mk, [])
     if len(got) < _PER_KEY:
         got.append(p)
@@ -235,7 +240,10 @@ def _biomes(b, pos, tags, limit):
                     names.append(_text(b[q + 2:e]))
                     q = e
                 if len(raw) <= _RAW_MAX:
+                    if len(_BIOMES) >= _MEMO_MAX or _held[0] + len(raw) > _HELD_MAX:
+                        _clear()
                     _BIOMES[raw] = names
+                    _held[0] += len(raw)
             tags += c
         elif key == b"data":
             if t != LONGS:

@@ -44,3 +44,25 @@ def test_edit_on_cold_chunks_changes_exactly_one_voxel(tmp_path, monkeypatch):
         for k in [(i, j) for j in (-1, 0, 1) for i in (-1, 0, 1)]:
             i, j = (k[0] + 1) * C.SIZE, (k[1] + 1) * C.SIZE
             assert np.array_equal(w.chunks[k].light, want[i:i + C.SIZE, j:j + C.SIZE]), k
+
+
+def test_reloaded_batch_packs_its_light_once(tmp_path, monkeypatch):
+    """A stream's batch of chunks read from the file (issue 29): their stored light
+    goes to the payloads as read (not packed on load and rebuilt for the payload)
+    and is packed once, by the compact after; a plain load packs it at once."""
+    path = tmp_path / "w.sqlite"
+    with World.create(path, seed=7, backend="numpy") as w:
+        build.light_and_mesh(w, -1, -1, 3, 3, backends_=("numpy", "numpy"))
+        want = w.chunks[(0, 0)].light.copy()
+    packs = []
+    real = C.pack
+    monkeypatch.setattr(C, "pack", lambda a: packs.append(a.dtype) or real(a))
+    with World.open(path) as w:
+        got = build.light_and_mesh(w, 0, 0, 1, 1, backends_=("numpy", "numpy"))
+        assert [p.key for p in got] == [(0, 0)]
+        c = w.chunks[(0, 0)]
+        assert got[0].light is c._light and np.array_equal(got[0].light, want)
+        n = len(packs)
+        assert _cold(w) and len(packs) == n + 9  # each loaded light packed once, here
+        w.load([(2, 2)])  # not a batch: packed on load
+        assert w.chunks[(2, 2)]._light is None and w.chunks[(2, 2)]._lpack is not None

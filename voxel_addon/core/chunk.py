@@ -162,6 +162,15 @@ class Chunk:
             return
         self._lpack.into(out, xs, ys, z0, z1)
 
+    def light_out(self) -> np.ndarray | None:
+        """The final light for a reader that keeps it (a payload): the hot array
+        itself, or one rebuilt from the packed light that the chunk does not keep,
+        so the next compact() has nothing to pack again (a reloaded chunk's light was
+        packed on load). Arrays handed out are never written in place (edit.py
+        copies before it writes): a later write into .light leaves this one."""
+        a = self._light
+        return a if a is not None or self._lpack is None else self._lpack.unpack()
+
     @light.setter
     def light(self, value) -> None:
         self._light, self._lpack = value, None

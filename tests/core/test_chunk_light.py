@@ -106,6 +106,8 @@ def test_pack_round_trips_exactly(kinds):
         assert b.flags.f_contiguous and b.flags.writeable
         b[0, 0, 0] ^= 1  # a new array each time
         assert np.array_equal(p.unpack(), a0)
+        out = np.full(a0.shape, 77, a0.dtype, order="F")  # or into a given one
+        assert p.unpack(out) is out and np.array_equal(out, a0)
         for _ in range(4):
             x0, x1 = sorted(int(v) for v in rng.integers(0, shape[0] + 1, 2))
             y0, y1 = sorted(int(v) for v in rng.integers(0, shape[1] + 1, 2))

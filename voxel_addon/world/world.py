@@ -303,7 +303,8 @@ class World(Saving):
             if snap is None:
                 read.append(key)
                 continue
-            c = found[key] = Chunk(key, snap[0].copy(order="F"),
+            b = snap[0]  # a Packed one (Chunk.saved) never changes: no copy
+            c = found[key] = Chunk(key, b if isinstance(b, C.Packed) else b.copy(order="F"),
                                    None if snap[1] is None else snap[1].copy(order="F"))
             c.light = snap[2]  # light arrays are replaced, never changed in place
             vers[key] = None

@@ -153,11 +153,12 @@ inline void span(__global const ushort *P, __constant uchar *flags, long c0, lon
 __kernel void greedy(__global const ushort *P, __constant uchar *flags, int PW, int PH,
                      int nx, int TW, int TH, int ntiles, int z0, int z1, int split, int nreg,
                      int merge, __global const uint *busy, __global uint4 *out,
-                     __global uint *count, uint cap, __global const uint *vt, int nb) {
+                     __global uint *count, uint cap, __global const uint *vt, int nb, int xy) {
     Sink sink = {out, count, cap, vt, nb, split};
-    int ni = 2 * (TW + TH) + 2 * ZK;
+    int ni = (xy ? 2 * (TW + TH) : 0) + 2 * ZK;   // xy == 0: `runs` does the x/y slices
     int t = get_global_id(0) / ni, i = get_global_id(0) % ni;
     if (t >= ntiles) return;
+    if (!xy) i += 2 * (TW + TH);
     __global const uint *B = busy + 8 * t;
     int ox = (t % nx) * TW, oy = (t / nx) * TH;
     long PL = (long)PW * PH;
@@ -202,5 +203,143 @@ __kernel void greedy(__global const ushort *P, __constant uchar *flags, int PW, 
         }
         bool edge = (d == 4 && z == 0) || (d == 5 && z == 255);
         span(P, flags, c0, PW, 1, step, edge, want, TH, 0, TW, merge, t, d, z, sink);
+    }
+}
+
+// ---- x/y slices on bit masks (merge only) ------------------------------------------
+// A x/y slice's row is one column (x, y) of the tile along z, so `masks` walks each
+// column once (busy layers only) and keeps per cell bits instead of keys: per side
+// direction "this face is drawn", and "same block as the cell below" (cleared at
+// region starts: merges stop there). `runs` then runs the same greedy as `span` on
+// 256-bit rows: a rectangle continues while its cells are drawn and chained by "same",
+// and has its key at its first cell (one load); free cells are found with bit scans.
+// Equal keys of drawn cells are equal blocks, so the rects are those of `span`.
+#define MW 4              // ulong words per 256-bit row
+#define MSTRIDE (5 * MW)  // per column: V for d = 0..3, then "same"
+
+inline int ctz64(ulong x) { return (int)popcount((x & (0 - x)) - 1); }
+
+__kernel void masks(__global const ushort *P, __constant uchar *flags, int PW, int PH,
+                    int nx, int TW, int TH, int ntiles, int split,
+                    __global const uint *busy, __global ulong *M) {
+    int n = TW * TH;
+    int t = get_global_id(0) / n, c = get_global_id(0) % n;
+    if (t >= ntiles) return;
+    int x = c % TW, y = c / TW;
+    long PL = (long)PW * PH;
+    long c0 = (t % nx) * TW + x + 1 + (long)PW * ((t / nx) * TH + y + 1);
+    __global const uint *B = busy + 8 * t;
+    __global ulong *m = M + (long)MSTRIDE * get_global_id(0);
+    for (int w = 0; w < MW; w++) {
+        ulong v0 = 0, v1 = 0, v2 = 0, v3 = 0, e = 0;
+        ulong bits = (ulong)B[2 * w] | ((ulong)B[2 * w + 1] << 32);
+        while (bits) {
+            int k = ctz64(bits);
+            bits &= bits - 1;
+            int z = 64 * w + k;
+            long cz = c0 + PL * z;
+            ulong one = 1UL << k;
+            if (face_key(P, flags, cz, -1, false, F_CUBE)) v0 |= one;
+            if (face_key(P, flags, cz, 1, false, F_CUBE)) v1 |= one;
+            if (face_key(P, flags, cz, -PW, false, F_CUBE)) v2 |= one;
+            if (face_key(P, flags, cz, PW, false, F_CUBE)) v3 |= one;
+            if (z > 0 && (split == 0 || z % split) && P[cz] == P[cz - PL]) e |= one;
+        }
+        m[w] = v0; m[MW + w] = v1; m[2 * MW + w] = v2; m[3 * MW + w] = v3; m[4 * MW + w] = e;
+    }
+}
+
+// How many bits of m are set in a row from bit i on.
+inline int ones_from(const ulong *m, int i) {
+    int n = 0;
+    while (i < 64 * MW) {
+        int avail = 64 - (i & 63);
+        ulong inv = ~(m[i >> 6] >> (i & 63));   // the shifted-in top bits read as unset
+        int k = inv ? ctz64(inv) : 64;
+        k = min(k, avail);
+        n += k;
+        i += k;
+        if (k < avail) break;
+    }
+    return n;
+}
+
+inline void clear_bits(ulong *m, int a, int b) {  // bits [a, b)
+    for (int i = a; i < b;) {
+        int k = min(b - i, 64 - (i & 63));
+        ulong r = (k == 64 ? ~0UL : ((1UL << k) - 1)) << (i & 63);
+        m[i >> 6] &= ~r;
+        i += k;
+    }
+}
+
+// One work item per (tile, side direction, slice): rows v, columns u = z.
+__kernel void runs(__global const ushort *P, int PW, int PH, int nx, int TW, int TH,
+                   int ntiles, __global const ulong *M, __global uint4 *out,
+                   __global uint *count, uint cap, __global const uint *vt, int nb, int split) {
+    Sink sink = {out, count, cap, vt, nb, split};
+    int ni = 2 * (TW + TH);
+    int t = get_global_id(0) / ni, i = get_global_id(0) % ni;
+    if (t >= ntiles) return;
+    int d, s;
+    if (i < 2 * TW) { d = i / TW; s = i % TW; }
+    else { i -= 2 * TW; d = 2 + i / TH; s = i % TH; }
+    int a = d >> 1;
+    int V = a == 0 ? TH : TW;
+    long PL = (long)PW * PH;
+    int ox = (t % nx) * TW, oy = (t / nx) * TH;
+    __global const ulong *Mt = M + (long)MSTRIDE * TW * TH * t;
+    ushort okey[UMAX], ow[UMAX], orow[UMAX];
+    ulong os[MW] = {0, 0, 0, 0}, occ[MW] = {0, 0, 0, 0};   // open rects: starts, cells
+    int nopen = 0;
+    for (int v = 0; v <= V; v++) {
+        ulong vis[MW] = {0, 0, 0, 0}, ch[MW] = {0, 0, 0, 0};
+        int x = a == 0 ? s : v, y = a == 0 ? v : s;
+        long cell = ox + x + 1 + (long)PW * (oy + y + 1);
+        bool any = false;
+        if (v < V) {
+            __global const ulong *m = Mt + (long)MSTRIDE * (y * TW + x);
+            for (int w = 0; w < MW; w++) {
+                vis[w] = m[d * MW + w];
+                ch[w] = vis[w] & m[4 * MW + w];   // drawn, and the same as below
+                any |= vis[w] != 0;
+            }
+        }
+        if (!any && !nopen) continue;
+        for (int w = 0; w < MW && nopen; w++) {  // open rectangles: continue or close
+            ulong b = os[w];
+            while (b) {
+                int u = 64 * w + ctz64(b);
+                b &= b - 1;
+                int wd = ow[u];
+                bool ok = ((vis[u >> 6] >> (u & 63)) & 1UL)
+                          && (wd == 1 || ones_from(ch, u + 1) >= wd - 1)
+                          && P[cell + PL * u] == okey[u];
+                if (!ok) {
+                    put_rect(sink, t, d, s, orow[u], u, v - orow[u], wd, okey[u]);
+                    os[w] &= ~(1UL << (u & 63));
+                    clear_bits(occ, u, u + wd);
+                    nopen--;
+                }
+            }
+        }
+        if (v == V) break;
+        ulong fc[MW];     // free cells: new maximal runs (fc: free and the same as below)
+        for (int w = 0; w < MW; w++) { vis[w] &= ~occ[w]; fc[w] = ch[w] & vis[w]; }
+        for (int w = 0; w < MW; w++) {
+            while (vis[w]) {
+                int u = 64 * w + ctz64(vis[w]);
+                int wd = 1 + ones_from(fc, u + 1);
+                clear_bits(vis, u, u + wd);
+                for (int j = u; j < u + wd;) {   // mark cells occupied
+                    int k = min(u + wd - j, 64 - (j & 63));
+                    occ[j >> 6] |= (k == 64 ? ~0UL : ((1UL << k) - 1)) << (j & 63);
+                    j += k;
+                }
+                os[w] |= 1UL << (u & 63);
+                okey[u] = P[cell + PL * u]; ow[u] = wd; orow[u] = v;
+                nopen++;
+            }
+        }
     }
 }

@@ -144,6 +144,207 @@ inline void span(__global const ushort *P, __constant uchar *flags, long c0, lon
         if (ost[u] == u) put_rect(sink, t, d, s, orow[u], u, V - orow[u], ow[u], okey[u]);
 }
 
+// ---- greedy on bit masks (merge: `tile`) -------------------------------------------
+// The same greedy as `span`, on rows of bits: a row is "drawn" bits (key != 0) and
+// "chained" bits (drawn and the same block as the cell before); an open rectangle
+// continues while its cells are drawn and chained and its first cell has its key (one
+// load); free cells are found with bit scans. Equal keys of drawn cells are equal
+// blocks, so the rects are those of `span`.
+#define MW 4              // ulong words per 256-bit row
+#define MSTRIDE (5 * MW)  // per column: V for d = 0..3, then "same"
+
+inline int ctz64(ulong x) { return (int)popcount((x & (0 - x)) - 1); }
+
+// How many bits of m are set in a row from bit i on.
+inline int ones_from(const ulong *m, int i) {
+    int n = 0;
+    while (i < 64 * MW) {
+        int avail = 64 - (i & 63);
+        ulong inv = ~(m[i >> 6] >> (i & 63));   // the shifted-in top bits read as unset
+        int k = inv ? ctz64(inv) : 64;
+        k = min(k, avail);
+        n += k;
+        i += k;
+        if (k < avail) break;
+    }
+    return n;
+}
+
+inline void clear_bits(ulong *m, int a, int b) {  // bits [a, b)
+    for (int i = a; i < b;) {
+        int k = min(b - i, 64 - (i & 63));
+        ulong r = (k == 64 ? ~0UL : ((1UL << k) - 1)) << (i & 63);
+        m[i >> 6] &= ~r;
+        i += k;
+    }
+}
+
+// The greedy's state over one slice: open rectangles by start column (bits `os`,
+// their cells `occ`; key, width and first row at the start column).
+typedef struct {
+    ulong os[MW], occ[MW];
+    int nopen;
+    ushort okey[UMAX], ow[UMAX], orow[UMAX];
+} Open;
+
+inline void set_bits(ulong *m, int a, int b) {  // bits [a, b)
+    for (int i = a; i < b;) {
+        int k = min(b - i, 64 - (i & 63));
+        m[i >> 6] |= (k == 64 ? ~0UL : ((1UL << k) - 1)) << (i & 63);
+        i += k;
+    }
+}
+
+// One row v of a slice (v == V: past the last row, closes everything): vis = the
+// drawn cells, ch = drawn and the same block as the cell before (u - 1); the key of
+// cell u is K[ku * u]. Rects: put_rect(t, d, s, first row, u, rows, columns, key).
+inline void row_step(Open *o, ulong *vis, const ulong *ch, int v, __global const ushort *K,
+                     long ku, Sink sink, int t, int d, int s) {
+    for (int w = 0; w < MW && o->nopen; w++) {  // open rectangles: continue or close
+        ulong b = o->os[w];
+        while (b) {
+            int u = 64 * w + ctz64(b);
+            b &= b - 1;
+            int wd = o->ow[u];
+            if (((vis[w] >> (u & 63)) & 1UL) && (wd == 1 || ones_from(ch, u + 1) >= wd - 1)
+                && K[ku * u] == o->okey[u])
+                continue;
+            put_rect(sink, t, d, s, o->orow[u], u, v - o->orow[u], wd, o->okey[u]);
+            o->os[w] &= ~(1UL << (u & 63));
+            clear_bits(o->occ, u, u + wd);
+            o->nopen--;
+        }
+    }
+    ulong fc[MW];     // free cells start maximal runs (fc: free and the same as before)
+    for (int w = 0; w < MW; w++) { vis[w] &= ~o->occ[w]; fc[w] = ch[w] & vis[w]; }
+    for (int w = 0; w < MW; w++) {
+        while (vis[w]) {
+            int u = 64 * w + ctz64(vis[w]);
+            int wd = 1 + ones_from(fc, u + 1);
+            clear_bits(vis, u, u + wd);
+            set_bits(o->occ, u, u + wd);
+            o->os[w] |= 1UL << (u & 63);
+            o->okey[u] = K[ku * u]; o->ow[u] = wd; o->orow[u] = v;
+            o->nopen++;
+        }
+    }
+}
+
+inline void open_init(Open *o) {
+    for (int w = 0; w < MW; w++) o->os[w] = o->occ[w] = 0;
+    o->nopen = 0;
+}
+
+// A z slice (rows v = y, columns u = x, both from the cells' P at c0 + v * PW + u).
+inline void span_z(__global const ushort *P, __constant uchar *flags, long c0, int PW,
+                   long step, bool edge, int V, int U, int t, int d, int s, Sink sink) {
+    Open o;
+    open_init(&o);
+    for (int v = 0; v <= V; v++) {
+        ulong vis[MW] = {0, 0, 0, 0}, ch[MW] = {0, 0, 0, 0};
+        long cv = c0 + (long)v * PW;
+        if (v < V) {
+            if (U <= 64) {      // one word: a loop the compiler can vectorize
+                ulong a = 0, e = 0;
+                for (int u = 0; u < U; u++) {
+                    a |= (ulong)(face_key(P, flags, cv + u, step, edge, F_CUBE | F_CAP) != 0) << u;
+                    e |= (ulong)(u > 0 && P[cv + u] == P[cv + u - 1]) << u;
+                }
+                vis[0] = a; ch[0] = a & e;
+            } else {
+                for (int u = 0; u < U; u++) {
+                    ulong bit = 1UL << (u & 63);
+                    if (face_key(P, flags, cv + u, step, edge, F_CUBE | F_CAP)) vis[u >> 6] |= bit;
+                    if (u > 0 && P[cv + u] == P[cv + u - 1]) ch[u >> 6] |= bit;
+                }
+                for (int w = 0; w < MW; w++) ch[w] &= vis[w];
+            }
+            if (!(vis[0] | vis[1] | vis[2] | vis[3]) && !o.nopen) continue;
+        }
+        row_step(&o, vis, ch, v, P + cv, 1, sink, t, d, s);
+    }
+}
+
+
+// Merge: one work item per tile does all of it while the tile's busy layers are in
+// the cache (the kernels per slice each fetched them again: memory-bound on a CPU).
+// Per busy layer z (ascending): the X/# planes, both z slices (rows from the layer and
+// its neighbours), and per column (x, y) bit z of its x/y masks (a x/y slice's row is
+// one column along z): per side direction "drawn", and "same block as below" (cleared
+// at region starts: merges stop there). Then the x/y slices from the masks. M: per
+// tile TW*TH columns of MSTRIDE ulongs; words of no busy layer are left unwritten.
+__kernel void tile(__global const ushort *P, __constant uchar *flags, int PW, int PH,
+                   int nx, int TW, int TH, int ntiles, int split,
+                   __global const uint *busy, __global ulong *M, __global uint4 *out,
+                   __global uint *count, uint cap, __global const uint *vt, int nb) {
+    Sink sink = {out, count, cap, vt, nb, split};
+    int t = get_global_id(0);
+    if (t >= ntiles) return;
+    __global const uint *B = busy + 8 * t;
+    int ox = (t % nx) * TW, oy = (t / nx) * TH, n = TW * TH;
+    long PL = (long)PW * PH;
+    long base = ox + 1 + (long)PW * (oy + 1);
+    __global ulong *Mt = M + (long)MSTRIDE * n * t;
+    ulong words[MW];
+    for (int w = 0; w < MW; w++) {
+        ulong bits = (ulong)B[2 * w] | ((ulong)B[2 * w + 1] << 32);
+        words[w] = bits;
+        if (!bits) continue;
+        for (int c = 0; c < n; c++)
+            for (int k = 0; k < 5; k++) Mt[(long)MSTRIDE * c + k * MW + w] = 0;
+        while (bits) {
+            int k = ctz64(bits);
+            bits &= bits - 1;
+            int z = 64 * w + k;
+            ulong one = 1UL << k;
+            long cz = base + PL * z;
+            bool chain = z > 0 && (split == 0 || z % split);
+            for (int y = 0; y < TH; y++)
+                for (int x = 0; x < TW; x++) {
+                    long c = cz + (long)PW * y + x;
+                    ushort b = P[c];
+                    if (!b) continue;
+                    uint f = flags[b];
+                    if (f & F_X) { put(sink, t, x, y, z, 6, 1, 1, b);
+                                   put(sink, t, x, y, z, 7, 1, 1, b); }
+                    if (f & F_HASH)
+                        for (int h = 8; h < 12; h++) put(sink, t, x, y, z, h, 1, 1, b);
+                    __global ulong *m = Mt + (long)MSTRIDE * (y * TW + x) + w;
+                    if (face_key(P, flags, c, -1, false, F_CUBE)) m[0] |= one;
+                    if (face_key(P, flags, c, 1, false, F_CUBE)) m[MW] |= one;
+                    if (face_key(P, flags, c, -PW, false, F_CUBE)) m[2 * MW] |= one;
+                    if (face_key(P, flags, c, PW, false, F_CUBE)) m[3 * MW] |= one;
+                    if (chain && b == P[c - PL]) m[4 * MW] |= one;
+                }
+            span_z(P, flags, cz, PW, -PL, z == 0, TH, TW, t, 4, z, sink);
+            span_z(P, flags, cz, PW, PL, z == 255, TH, TW, t, 5, z, sink);
+        }
+    }
+    Open o;
+    for (int d = 0; d < 4; d++) {
+        int a = d >> 1, S = a == 0 ? TW : TH, V = a == 0 ? TH : TW;
+        for (int s = 0; s < S; s++) {
+            open_init(&o);
+            for (int v = 0; v <= V; v++) {
+                ulong vis[MW] = {0, 0, 0, 0}, ch[MW] = {0, 0, 0, 0};
+                int x = a == 0 ? s : v, y = a == 0 ? v : s;
+                if (v < V) {
+                    __global const ulong *m = Mt + (long)MSTRIDE * (y * TW + x);
+                    bool any = false;
+                    for (int w = 0; w < MW; w++)
+                        if (words[w]) {
+                            vis[w] = m[d * MW + w];
+                            ch[w] = vis[w] & m[4 * MW + w];
+                            any |= vis[w] != 0;
+                        }
+                    if (!any && !o.nopen) continue;
+                }
+                row_step(&o, vis, ch, v, P + base + x + (long)PW * y, PL, sink, t, d, s);
+            }
+        }
+    }
+}
+
 // Work items per tile: 2*TW x-slices and 2*TH y-slices (each walks its render regions
 // and, in them, the runs of busy layers: quiet layers have no faces, so cutting there
 // changes nothing), then 2*ZK z items (each takes every ZK-th busy layer). Few idle
@@ -153,12 +354,11 @@ inline void span(__global const ushort *P, __constant uchar *flags, long c0, lon
 __kernel void greedy(__global const ushort *P, __constant uchar *flags, int PW, int PH,
                      int nx, int TW, int TH, int ntiles, int z0, int z1, int split, int nreg,
                      int merge, __global const uint *busy, __global uint4 *out,
-                     __global uint *count, uint cap, __global const uint *vt, int nb, int xy) {
+                     __global uint *count, uint cap, __global const uint *vt, int nb) {
     Sink sink = {out, count, cap, vt, nb, split};
-    int ni = (xy ? 2 * (TW + TH) : 0) + 2 * ZK;   // xy == 0: `runs` does the x/y slices
+    int ni = 2 * (TW + TH) + 2 * ZK;
     int t = get_global_id(0) / ni, i = get_global_id(0) % ni;
     if (t >= ntiles) return;
-    if (!xy) i += 2 * (TW + TH);
     __global const uint *B = busy + 8 * t;
     int ox = (t % nx) * TW, oy = (t / nx) * TH;
     long PL = (long)PW * PH;
@@ -206,140 +406,3 @@ __kernel void greedy(__global const ushort *P, __constant uchar *flags, int PW, 
     }
 }
 
-// ---- x/y slices on bit masks (merge only) ------------------------------------------
-// A x/y slice's row is one column (x, y) of the tile along z, so `masks` walks each
-// column once (busy layers only) and keeps per cell bits instead of keys: per side
-// direction "this face is drawn", and "same block as the cell below" (cleared at
-// region starts: merges stop there). `runs` then runs the same greedy as `span` on
-// 256-bit rows: a rectangle continues while its cells are drawn and chained by "same",
-// and has its key at its first cell (one load); free cells are found with bit scans.
-// Equal keys of drawn cells are equal blocks, so the rects are those of `span`.
-#define MW 4              // ulong words per 256-bit row
-#define MSTRIDE (5 * MW)  // per column: V for d = 0..3, then "same"
-
-inline int ctz64(ulong x) { return (int)popcount((x & (0 - x)) - 1); }
-
-__kernel void masks(__global const ushort *P, __constant uchar *flags, int PW, int PH,
-                    int nx, int TW, int TH, int ntiles, int split,
-                    __global const uint *busy, __global ulong *M) {
-    int n = TW * TH;
-    int t = get_global_id(0) / n, c = get_global_id(0) % n;
-    if (t >= ntiles) return;
-    int x = c % TW, y = c / TW;
-    long PL = (long)PW * PH;
-    long c0 = (t % nx) * TW + x + 1 + (long)PW * ((t / nx) * TH + y + 1);
-    __global const uint *B = busy + 8 * t;
-    __global ulong *m = M + (long)MSTRIDE * get_global_id(0);
-    for (int w = 0; w < MW; w++) {
-        ulong v0 = 0, v1 = 0, v2 = 0, v3 = 0, e = 0;
-        ulong bits = (ulong)B[2 * w] | ((ulong)B[2 * w + 1] << 32);
-        while (bits) {
-            int k = ctz64(bits);
-            bits &= bits - 1;
-            int z = 64 * w + k;
-            long cz = c0 + PL * z;
-            ulong one = 1UL << k;
-            if (face_key(P, flags, cz, -1, false, F_CUBE)) v0 |= one;
-            if (face_key(P, flags, cz, 1, false, F_CUBE)) v1 |= one;
-            if (face_key(P, flags, cz, -PW, false, F_CUBE)) v2 |= one;
-            if (face_key(P, flags, cz, PW, false, F_CUBE)) v3 |= one;
-            if (z > 0 && (split == 0 || z % split) && P[cz] == P[cz - PL]) e |= one;
-        }
-        m[w] = v0; m[MW + w] = v1; m[2 * MW + w] = v2; m[3 * MW + w] = v3; m[4 * MW + w] = e;
-    }
-}
-
-// How many bits of m are set in a row from bit i on.
-inline int ones_from(const ulong *m, int i) {
-    int n = 0;
-    while (i < 64 * MW) {
-        int avail = 64 - (i & 63);
-        ulong inv = ~(m[i >> 6] >> (i & 63));   // the shifted-in top bits read as unset
-        int k = inv ? ctz64(inv) : 64;
-        k = min(k, avail);
-        n += k;
-        i += k;
-        if (k < avail) break;
-    }
-    return n;
-}
-
-inline void clear_bits(ulong *m, int a, int b) {  // bits [a, b)
-    for (int i = a; i < b;) {
-        int k = min(b - i, 64 - (i & 63));
-        ulong r = (k == 64 ? ~0UL : ((1UL << k) - 1)) << (i & 63);
-        m[i >> 6] &= ~r;
-        i += k;
-    }
-}
-
-// One work item per (tile, side direction, slice): rows v, columns u = z.
-__kernel void runs(__global const ushort *P, int PW, int PH, int nx, int TW, int TH,
-                   int ntiles, __global const ulong *M, __global uint4 *out,
-                   __global uint *count, uint cap, __global const uint *vt, int nb, int split) {
-    Sink sink = {out, count, cap, vt, nb, split};
-    int ni = 2 * (TW + TH);
-    int t = get_global_id(0) / ni, i = get_global_id(0) % ni;
-    if (t >= ntiles) return;
-    int d, s;
-    if (i < 2 * TW) { d = i / TW; s = i % TW; }
-    else { i -= 2 * TW; d = 2 + i / TH; s = i % TH; }
-    int a = d >> 1;
-    int V = a == 0 ? TH : TW;
-    long PL = (long)PW * PH;
-    int ox = (t % nx) * TW, oy = (t / nx) * TH;
-    __global const ulong *Mt = M + (long)MSTRIDE * TW * TH * t;
-    ushort okey[UMAX], ow[UMAX], orow[UMAX];
-    ulong os[MW] = {0, 0, 0, 0}, occ[MW] = {0, 0, 0, 0};   // open rects: starts, cells
-    int nopen = 0;
-    for (int v = 0; v <= V; v++) {
-        ulong vis[MW] = {0, 0, 0, 0}, ch[MW] = {0, 0, 0, 0};
-        int x = a == 0 ? s : v, y = a == 0 ? v : s;
-        long cell = ox + x + 1 + (long)PW * (oy + y + 1);
-        bool any = false;
-        if (v < V) {
-            __global const ulong *m = Mt + (long)MSTRIDE * (y * TW + x);
-            for (int w = 0; w < MW; w++) {
-                vis[w] = m[d * MW + w];
-                ch[w] = vis[w] & m[4 * MW + w];   // drawn, and the same as below
-                any |= vis[w] != 0;
-            }
-        }
-        if (!any && !nopen) continue;
-        for (int w = 0; w < MW && nopen; w++) {  // open rectangles: continue or close
-            ulong b = os[w];
-            while (b) {
-                int u = 64 * w + ctz64(b);
-                b &= b - 1;
-                int wd = ow[u];
-                bool ok = ((vis[u >> 6] >> (u & 63)) & 1UL)
-                          && (wd == 1 || ones_from(ch, u + 1) >= wd - 1)
-                          && P[cell + PL * u] == okey[u];
-                if (!ok) {
-                    put_rect(sink, t, d, s, orow[u], u, v - orow[u], wd, okey[u]);
-                    os[w] &= ~(1UL << (u & 63));
-                    clear_bits(occ, u, u + wd);
-                    nopen--;
-                }
-            }
-        }
-        if (v == V) break;
-        ulong fc[MW];     // free cells: new maximal runs (fc: free and the same as below)
-        for (int w = 0; w < MW; w++) { vis[w] &= ~occ[w]; fc[w] = ch[w] & vis[w]; }
-        for (int w = 0; w < MW; w++) {
-            while (vis[w]) {
-                int u = 64 * w + ctz64(vis[w]);
-                int wd = 1 + ones_from(fc, u + 1);
-                clear_bits(vis, u, u + wd);
-                for (int j = u; j < u + wd;) {   // mark cells occupied
-                    int k = min(u + wd - j, 64 - (j & 63));
-                    occ[j >> 6] |= (k == 64 ? ~0UL : ((1UL << k) - 1)) << (j & 63);
-                    j += k;
-                }
-                os[w] |= 1UL << (u & 63);
-                okey[u] = P[cell + PL * u]; ow[u] = wd; orow[u] = v;
-                nopen++;
-            }
-        }
-    }
-}

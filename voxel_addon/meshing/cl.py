@@ -16,9 +16,6 @@ from . import faces as Q
 UMAX = 256          # columns per slice the greedy kernel keeps state for (mesh_greedy.cl)
 ZK = 8              # z items per direction and tile (mesh_greedy.cl)
 MASKS = True        # block flags as compiled-in bit masks (False: table loads; tests)
-import os
-LS_G = int(os.environ.get("LS_G", 1))
-LS_R = int(os.environ.get("LS_R", 1))
 START_CAP = 1 << 16  # quad records the output buffer holds at first; grows on overflow
 _lock = threading.Lock()
 _bufs: dict = {}
@@ -116,7 +113,7 @@ def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
     nt = nx * ny
     nreg = len(Q.regions(z0, z1, split))
     merge = method == "greedy"
-    ni = (0 if merge else 2 * (TW + TH)) + 2 * ZK
+    ni = 2 * (TW + TH) + 2 * ZK
     i32 = np.int32
     ctx = opencl.context()[0]
     host = np.asfortranarray(P, np.uint16).ravel(order="K")
@@ -131,24 +128,22 @@ def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
             queue, (nt * 256,), (16,), bp, flags, i32(PW), i32(PH), i32(nx), i32(TW), i32(TH),
             i32(nt), lay)
         _kernel("mesh_greedy.cl", "band")(queue, (nt,), (1,), lay, i32(z0), i32(z1), i32(nt), busy)
-        if merge:   # x/y slices: per column bit masks, once (gpu/mesh_greedy.cl `masks`)
-            masks = _buf("masks", nt * TW * TH * 160)
-            _kernel("mesh_greedy.cl", "masks")(
-                queue, (nt * TW * TH,), (TW,), bp, flags, i32(PW), i32(PH), i32(nx), i32(TW),
-                i32(TH), i32(nt), i32(split), busy, masks)
+        masks = _buf("masks", nt * TW * TH * 160) if merge else None
         cap = _bufs.get("cap", START_CAP)
         while True:
             out = _buf("out", cap * 32)
             cap = out.size // 32
             cl.enqueue_fill_buffer(queue, count, np.uint32(0), 0, 4)
-            _kernel("mesh_greedy.cl", "greedy")(
-                queue, (nt * ni,), (LS_G,), bp, flags, i32(PW), i32(PH), i32(nx),
-                i32(TW), i32(TH), i32(nt), i32(z0), i32(z1), i32(split), i32(nreg),
-                i32(merge), busy, out, count, np.uint32(cap), vt, i32(nb), i32(not merge))
-            if merge:
-                _kernel("mesh_greedy.cl", "runs")(
-                    queue, (nt * 2 * (TW + TH),), (LS_R,), bp, i32(PW), i32(PH), i32(nx), i32(TW),
-                    i32(TH), i32(nt), masks, out, count, np.uint32(cap), vt, i32(nb), i32(split))
+            if merge:   # a tile per work item (gpu/mesh_greedy.cl `tile`)
+                _kernel("mesh_greedy.cl", "tile")(
+                    queue, (nt,), (1,), bp, flags, i32(PW), i32(PH), i32(nx), i32(TW),
+                    i32(TH), i32(nt), i32(split), busy, masks, out, count, np.uint32(cap),
+                    vt, i32(nb))
+            else:
+                _kernel("mesh_greedy.cl", "greedy")(
+                    queue, (nt * ni,), (1,), bp, flags, i32(PW), i32(PH), i32(nx),
+                    i32(TW), i32(TH), i32(nt), i32(z0), i32(z1), i32(split), i32(nreg),
+                    i32(0), busy, out, count, np.uint32(cap), vt, i32(nb))
             n = np.empty(1, np.uint32)
             cl.enqueue_copy(queue, n, count)
             n = int(n[0])

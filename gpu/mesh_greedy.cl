@@ -13,20 +13,32 @@
 #define NONE 0xFFFF
 
 // Per (tile, z): bit 0 = some meshed cell of the layer is not air, bit 1 = the layer
-// with its ring is all opaque cubes. Rows are read with early exits: air layers only
-// need the air test, ground layers stop at the first non-opaque cell.
+// with its ring is all opaque cubes. One work item per layer z walks its tiles row by
+// row: a tile's rows share cache lines with its neighbours', read while they are in
+// the cache (an item per (tile, z) read each line twice, from memory: the first
+// touch of the block array, the largest kernel before).
 __kernel void layers(__global const ushort *P, __constant uchar *flags, int PW, int PH,
                      int nx, int TW, int TH, int ntiles, __global uchar *lay) {
-    int t = get_global_id(0) / 256, z = get_global_id(0) % 256;
-    if (t >= ntiles) return;
-    int ox = (t % nx) * TW, oy = (t / nx) * TH;
-    __global const ushort *L = P + ox + (long)PW * (oy + (long)PH * z);
-    bool any = false, opaque = true;
-    for (int y = 1; y <= TH && !any; y++)
-        for (int x = 1; x <= TW; x++) any |= L[x + PW * y] != 0;
-    for (int y = 0; y < TH + 2 && any && opaque; y++)
-        for (int x = 0; x < TW + 2; x++) opaque &= is_opaque(flags, L[x + PW * y]);
-    lay[t * 256 + z] = (any ? 1 : 0) | (any && opaque ? 2 : 0);
+    int z = get_global_id(0);
+    if (z >= 256) return;
+    __global const ushort *L = P + (long)PW * PH * z;
+    for (int t = 0; t < ntiles; t++) {
+        __global const ushort *T = L + (t % nx) * TW + (long)PW * ((t / nx) * TH);
+        uint any = 0;
+        bool opaque = true;
+        for (int y = 0; y < TH + 2; y++) {
+            __global const ushort *R = T + (long)PW * y;
+            uint a = 0;
+            bool o = is_opaque(flags, R[0]) && is_opaque(flags, R[TW + 1]);
+            for (int x = 1; x <= TW; x++) {
+                a |= R[x];
+                o &= is_opaque(flags, R[x]);
+            }
+            if (y > 0 && y <= TH) any |= a;
+            opaque &= o;
+        }
+        lay[t * 256 + z] = (any ? 1 : 0) | (any && opaque ? 2 : 0);
+    }
 }
 
 // Per tile, 256 bits: layer z (z0 <= z < z1) may have faces: not all air, and not

@@ -125,7 +125,7 @@ def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
         flags = _flags()
         vt, nb = (_vtab(vtab[0]), vtab[1]) if vtab is not None else (flags, 0)
         _kernel("mesh_greedy.cl", "layers")(
-            queue, (nt * 256,), (16,), bp, flags, i32(PW), i32(PH), i32(nx), i32(TW), i32(TH),
+            queue, (256,), (1,), bp, flags, i32(PW), i32(PH), i32(nx), i32(TW), i32(TH),
             i32(nt), lay)
         _kernel("mesh_greedy.cl", "band")(queue, (nt,), (1,), lay, i32(z0), i32(z1), i32(nt), busy)
         masks = _buf("masks", nt * TW * TH * 160) if merge else None

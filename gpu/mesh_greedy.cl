@@ -18,9 +18,11 @@
 // the cache (an item per (tile, z) read each line twice, from memory: the first
 // touch of the block array, the largest kernel before).
 __kernel void layers(__global const ushort *P, __constant uchar *flags, int PW, int PH,
-                     int nx, int TW, int TH, int ntiles, __global uchar *lay) {
+                     int nx, int TW, int TH, int ntiles, __global uchar *lay,
+                     __global uint *count) {
     int z = get_global_id(0);
     if (z >= 256) return;
+    if (z == 0) *count = 0;     // the quad counter of the launch after (one enqueue less)
     __global const ushort *L = P + (long)PW * PH * z;
     for (int t = 0; t < ntiles; t++) {
         __global const ushort *T = L + (t % nx) * TW + (long)PW * ((t / nx) * TH);
@@ -43,20 +45,21 @@ __kernel void layers(__global const ushort *P, __constant uchar *flags, int PW, 
 
 // Per tile, 256 bits: layer z (z0 <= z < z1) may have faces: not all air, and not
 // sealed (it and the layers above and below all opaque; outside the world is air).
+inline uint band_bits(__global const uchar *L, int w, int z0, int z1) {  // layers 32w..
+    uint bits = 0;
+    for (int k = 0; k < 32; k++) {
+        int z = 32 * w + k;
+        bool sealed = z > 0 && z < 255 && (L[z - 1] & L[z] & L[z + 1] & 2);
+        if (z >= z0 && z < z1 && (L[z] & 1) && !sealed) bits |= 1u << k;
+    }
+    return bits;
+}
+
 __kernel void band(__global const uchar *lay, int z0, int z1, int ntiles,
                    __global uint *busy) {
     int t = get_global_id(0);
     if (t >= ntiles) return;
-    __global const uchar *L = lay + t * 256;
-    for (int w = 0; w < 8; w++) {
-        uint bits = 0;
-        for (int k = 0; k < 32; k++) {
-            int z = 32 * w + k;
-            bool sealed = z > 0 && z < 255 && (L[z - 1] & L[z] & L[z + 1] & 2);
-            if (z >= z0 && z < z1 && (L[z] & 1) && !sealed) bits |= 1u << k;
-        }
-        busy[t * 8 + w] = bits;
-    }
+    for (int w = 0; w < 8; w++) busy[t * 8 + w] = band_bits(lay + t * 256, w, z0, z1);
 }
 
 inline bool is_busy(__global const uint *B, int z) { return (B[z >> 5] >> (z & 31)) & 1u; }
@@ -287,20 +290,20 @@ inline void span_z(__global const ushort *P, __constant uchar *flags, long c0, i
 // at region starts: merges stop there). Then the x/y slices from the masks. M: per
 // tile TW*TH columns of MSTRIDE ulongs; words of no busy layer are left unwritten.
 __kernel void tile(__global const ushort *P, __constant uchar *flags, int PW, int PH,
-                   int nx, int TW, int TH, int ntiles, int split,
-                   __global const uint *busy, __global ulong *M, __global uint4 *out,
+                   int nx, int TW, int TH, int ntiles, int z0, int z1, int split,
+                   __global const uchar *lay, __global ulong *M, __global uint4 *out,
                    __global uint *count, uint cap, __global const uint *vt, int nb) {
     Sink sink = {out, count, cap, vt, nb, split};
     int t = get_global_id(0);
     if (t >= ntiles) return;
-    __global const uint *B = busy + 8 * t;
     int ox = (t % nx) * TW, oy = (t / nx) * TH, n = TW * TH;
     long PL = (long)PW * PH;
     long base = ox + 1 + (long)PW * (oy + 1);
     __global ulong *Mt = M + (long)MSTRIDE * n * t;
     ulong words[MW];
     for (int w = 0; w < MW; w++) {
-        ulong bits = (ulong)B[2 * w] | ((ulong)B[2 * w + 1] << 32);
+        __global const uchar *L = lay + 256 * t;   // the busy layers (as `band`)
+        ulong bits = band_bits(L, 2 * w, z0, z1) | ((ulong)band_bits(L, 2 * w + 1, z0, z1) << 32);
         words[w] = bits;
         if (!bits) continue;
         for (int c = 0; c < n; c++)

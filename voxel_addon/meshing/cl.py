@@ -126,19 +126,21 @@ def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
         vt, nb = (_vtab(vtab[0]), vtab[1]) if vtab is not None else (flags, 0)
         _kernel("mesh_greedy.cl", "layers")(
             queue, (256,), (1,), bp, flags, i32(PW), i32(PH), i32(nx), i32(TW), i32(TH),
-            i32(nt), lay)
-        _kernel("mesh_greedy.cl", "band")(queue, (nt,), (1,), lay, i32(z0), i32(z1), i32(nt), busy)
-        masks = _buf("masks", nt * TW * TH * 160) if merge else None
+            i32(nt), lay, count)     # (also zeroes the count)
+        if merge:
+            masks = _buf("masks", nt * TW * TH * 160)
+        else:
+            _kernel("mesh_greedy.cl", "band")(queue, (nt,), (1,), lay, i32(z0), i32(z1),
+                                              i32(nt), busy)
         cap = _bufs.get("cap", START_CAP)
         while True:
             out = _buf("out", cap * 32)
             cap = out.size // 32
-            cl.enqueue_fill_buffer(queue, count, np.uint32(0), 0, 4)
             if merge:   # a tile per work item (gpu/mesh_greedy.cl `tile`)
                 _kernel("mesh_greedy.cl", "tile")(
                     queue, (nt,), (1,), bp, flags, i32(PW), i32(PH), i32(nx), i32(TW),
-                    i32(TH), i32(nt), i32(split), busy, masks, out, count, np.uint32(cap),
-                    vt, i32(nb))
+                    i32(TH), i32(nt), i32(z0), i32(z1), i32(split), lay, masks, out, count,
+                    np.uint32(cap), vt, i32(nb))
             else:
                 _kernel("mesh_greedy.cl", "greedy")(
                     queue, (nt * ni,), (1,), bp, flags, i32(PW), i32(PH), i32(nx),
@@ -150,6 +152,7 @@ def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
             if n <= cap:
                 break
             cap = n          # overflow: grow to the exact need and run again
+            cl.enqueue_fill_buffer(queue, count, np.uint32(0), 0, 4)
         _bufs["cap"] = cap
         rec = _scratch(n)
         if n:

@@ -70,93 +70,71 @@ inline bool is_busy(__global const uint *B, int z) { return (B[z >> 5] >> (z & 3
 // corner the position offsets A, B, C at 0, 48, 96; per block the animation bits at
 // 144, the # inset bits at 144 + nb, the texture layer per face code at 144 + 2 nb).
 // Packing here spares the host a pass over every quad; z is region-local (split).
+// A work item collects SB records and then takes their slots with one atomic add (an
+// atomic per quad on a shared counter cost more than writing the quad).
+#define SB 32
 typedef struct {
     __global uint4 *out;
     __global uint *count;
     uint cap;
     __global const uint *vt;
-    int nb, split;
+    int nb, split, n;
+    uint4 buf[2 * SB];
 } Sink;
 
-inline void put(Sink k, int t, int x, int y, int z, int face, int w, int h, uint block) {
-    uint slot = atomic_inc(k.count);
-    if (slot >= k.cap) return;
-    k.out[2 * slot] = (uint4)((uint)t, (uint)x | ((uint)y << 16),
-                              (uint)z | ((uint)face << 8) | (block << 16),
-                              (uint)w | ((uint)h << 16));
-    if (!k.nb) return;
-    __global const uint *vt = k.vt;
-    uint zl = (uint)(k.split ? z % k.split : z);
-    uint base = (uint)x | ((uint)y << 5) | (zl << 10) | ((uint)face << 17)
-                | (vt[144 + 2 * k.nb + block * 12 + face] << 21) | vt[144 + block]
-                | (face >= 8 ? vt[144 + k.nb + block] : 0u);
-    int c = 4 * face;
-    uint uw = (uint)w, uh = (uint)h;
-    k.out[2 * slot + 1] = (uint4)(base + vt[c] * uw + vt[48 + c] * uh + vt[96 + c],
-                                  base + vt[c + 1] * uw + vt[49 + c] * uh + vt[97 + c],
-                                  base + vt[c + 2] * uw + vt[50 + c] * uh + vt[98 + c],
-                                  base + vt[c + 3] * uw + vt[51 + c] * uh + vt[99 + c]);
+inline void sink_init(Sink *k, __global uint4 *out, __global uint *count, uint cap,
+                      __global const uint *vt, int nb, int split) {
+    k->out = out; k->count = count; k->cap = cap; k->vt = vt; k->nb = nb; k->split = split;
+    k->n = 0;
+}
+
+inline void flush(Sink *k) {
+    if (!k->n) return;
+    uint slot = atomic_add(k->count, (uint)k->n);
+    for (int i = 0; i < k->n && slot + i < k->cap; i++) {
+        k->out[2 * (slot + i)] = k->buf[2 * i];
+        if (k->nb) k->out[2 * (slot + i) + 1] = k->buf[2 * i + 1];
+    }
+    k->n = 0;
+}
+
+inline void put(Sink *k, int t, int x, int y, int z, int face, int w, int h, uint block) {
+    uint4 *r = k->buf + 2 * k->n;
+    r[0] = (uint4)((uint)t, (uint)x | ((uint)y << 16), (uint)z | ((uint)face << 8) | (block << 16),
+                   (uint)w | ((uint)h << 16));
+    if (k->nb) {
+        __global const uint *vt = k->vt;
+        uint zl = (uint)(k->split ? z % k->split : z);
+        uint base = (uint)x | ((uint)y << 5) | (zl << 10) | ((uint)face << 17)
+                    | (vt[144 + 2 * k->nb + block * 12 + face] << 21) | vt[144 + block]
+                    | (face >= 8 ? vt[144 + k->nb + block] : 0u);
+        int c = 4 * face;
+        uint uw = (uint)w, uh = (uint)h;
+        r[1] = (uint4)(base + vt[c] * uw + vt[48 + c] * uh + vt[96 + c],
+                       base + vt[c + 1] * uw + vt[49 + c] * uh + vt[97 + c],
+                       base + vt[c + 2] * uw + vt[50 + c] * uh + vt[98 + c],
+                       base + vt[c + 3] * uw + vt[51 + c] * uh + vt[99 + c]);
+    }
+    if (++k->n == SB) flush(k);
 }
 
 // Rect in slice view (rows v.., columns u..) -> quad fields (as faces.aggregate_pieces).
-inline void put_rect(Sink k, int t, int d, int s, int v, int u, int rows, int cols, uint block) {
+inline void put_rect(Sink *k, int t, int d, int s, int v, int u, int rows, int cols, uint block) {
     int a = d >> 1;
     if (a == 0) put(k, t, s, v, u, d, rows, cols, block);
     else if (a == 1) put(k, t, v, s, u, d, rows, cols, block);
     else put(k, t, u, v, s, d, cols, rows, block);
 }
 
-// Greedy (merge) or unit faces over columns [ulo, uhi) of one slice.
+// Unit faces (method "none") over columns [ulo, uhi) of one slice.
 inline void span(__global const ushort *P, __constant uchar *flags, long c0, long sv, long su,
-                 long step, bool edge, uint want, int V, int ulo, int uhi, int merge,
-                 int t, int d, int s, Sink sink) {
-    if (!merge) {
-        for (int v = 0; v < V; v++)
-            for (int u = ulo; u < uhi; u++) {
-                ushort k = face_key(P, flags, c0 + v * sv + u * su, step, edge, want);
-                if (k) put_rect(sink, t, d, s, v, u, 1, 1, k);
-            }
-        return;
-    }
-    // ost: start column of the open rectangle covering a column (NONE: free); the
-    // start column holds its key, width and first row. rk: the keys of the current row.
-    ushort ost[UMAX], okey[UMAX], ow[UMAX], orow[UMAX], rk[UMAX];
-    int nopen = 0;
-    for (int u = ulo; u < uhi; u++) ost[u] = NONE;
-    for (int v = 0; v < V; v++) {
-        long cv = c0 + v * sv;
-        bool any = false;
+                 long step, bool edge, uint want, int V, int ulo, int uhi,
+                 int t, int d, int s, Sink *sink) {
+    for (int v = 0; v < V; v++)
         for (int u = ulo; u < uhi; u++) {
-            rk[u] = face_key(P, flags, cv + u * su, step, edge, want);
-            any |= rk[u] != 0;
+            ushort k = face_key(P, flags, c0 + v * sv + u * su, step, edge, want);
+            if (k) put_rect(sink, t, d, s, v, u, 1, 1, k);
         }
-        if (!any && !nopen) continue;
-        for (int u = ulo; u < uhi;) {       // open rectangles: continue or close
-            if (ost[u] != u) { u++; continue; }
-            int w = ow[u];
-            ushort k = okey[u];
-            bool ok = true;
-            for (int j = 0; j < w && ok; j++) ok = rk[u + j] == k;
-            if (!ok) {
-                put_rect(sink, t, d, s, orow[u], u, v - orow[u], w, k);
-                for (int j = 0; j < w; j++) ost[u + j] = NONE;
-                nopen--;
-            }
-            u += w;
-        }
-        for (int u = ulo; u < uhi;) {       // free cells: new maximal runs
-            ushort k = rk[u];
-            if (ost[u] != NONE || !k) { u++; continue; }
-            int w = 1;
-            while (u + w < uhi && ost[u + w] == NONE && rk[u + w] == k) w++;
-            for (int j = 0; j < w; j++) ost[u + j] = u;
-            okey[u] = k; ow[u] = w; orow[u] = v;
-            nopen++;
-            u += w;
-        }
-    }
-    for (int u = ulo; u < uhi; u++)
-        if (ost[u] == u) put_rect(sink, t, d, s, orow[u], u, V - orow[u], ow[u], okey[u]);
 }
 
 // ---- greedy on bit masks (merge: `tile`) -------------------------------------------
@@ -215,7 +193,7 @@ inline void set_bits(ulong *m, int a, int b) {  // bits [a, b)
 // drawn cells, ch = drawn and the same block as the cell before (u - 1); the key of
 // cell u is K[ku * u]. Rects: put_rect(t, d, s, first row, u, rows, columns, key).
 inline void row_step(Open *o, ulong *vis, const ulong *ch, int v, __global const ushort *K,
-                     long ku, Sink sink, int t, int d, int s) {
+                     long ku, Sink *sink, int t, int d, int s) {
     for (int w = 0; w < MW && o->nopen; w++) {  // open rectangles: continue or close
         ulong b = o->os[w];
         while (b) {
@@ -253,7 +231,7 @@ inline void open_init(Open *o) {
 
 // A z slice (rows v = y, columns u = x, both from the cells' P at c0 + v * PW + u).
 inline void span_z(__global const ushort *P, __constant uchar *flags, long c0, int PW,
-                   long step, bool edge, int V, int U, int t, int d, int s, Sink sink) {
+                   long step, bool edge, int V, int U, int t, int d, int s, Sink *sink) {
     Open o;
     open_init(&o);
     for (int v = 0; v <= V; v++) {
@@ -293,7 +271,8 @@ __kernel void tile(__global const ushort *P, __constant uchar *flags, int PW, in
                    int nx, int TW, int TH, int ntiles, int z0, int z1, int split,
                    __global const uchar *lay, __global ulong *M, __global uint4 *out,
                    __global uint *count, uint cap, __global const uint *vt, int nb) {
-    Sink sink = {out, count, cap, vt, nb, split};
+    Sink sink;
+    sink_init(&sink, out, count, cap, vt, nb, split);
     int t = get_global_id(0);
     if (t >= ntiles) return;
     int ox = (t % nx) * TW, oy = (t / nx) * TH, n = TW * TH;
@@ -327,10 +306,10 @@ __kernel void tile(__global const ushort *P, __constant uchar *flags, int PW, in
                     ushort b = P[c];
                     if (!b) continue;
                     uint f = flags[b];
-                    if (f & F_X) { put(sink, t, x, y, z, 6, 1, 1, b);
-                                   put(sink, t, x, y, z, 7, 1, 1, b); }
+                    if (f & F_X) { put(&sink, t, x, y, z, 6, 1, 1, b);
+                                   put(&sink, t, x, y, z, 7, 1, 1, b); }
                     if (f & F_HASH)
-                        for (int h = 8; h < 12; h++) put(sink, t, x, y, z, h, 1, 1, b);
+                        for (int h = 8; h < 12; h++) put(&sink, t, x, y, z, h, 1, 1, b);
                     __global ulong *m = Mt + (long)MSTRIDE * (y * TW + x) + w;
                     if (face_key(P, flags, c, -1, false, F_CUBE)) m[0] |= one;
                     if (face_key(P, flags, c, 1, false, F_CUBE)) m[MW] |= one;
@@ -338,8 +317,8 @@ __kernel void tile(__global const ushort *P, __constant uchar *flags, int PW, in
                     if (face_key(P, flags, c, PW, false, F_CUBE)) m[3 * MW] |= one;
                     if (chain && b == P[c - PL]) m[4 * MW] |= one;
                 }
-            span_z(P, flags, cz, PW, -PL, z == 0, TH, TW, t, 4, z, sink);
-            span_z(P, flags, cz, PW, PL, z == 255, TH, TW, t, 5, z, sink);
+            span_z(P, flags, cz, PW, -PL, z == 0, TH, TW, t, 4, z, &sink);
+            span_z(P, flags, cz, PW, PL, z == 255, TH, TW, t, 5, z, &sink);
         }
     }
     Open o;
@@ -361,10 +340,10 @@ __kernel void tile(__global const ushort *P, __constant uchar *flags, int PW, in
                         }
                     if (!any && !o.nopen) continue;
                 }
-                row_step(&o, vis, ch, v, P + base + x + (long)PW * y, PL, sink, t, d, s);
+                row_step(&o, vis, ch, v, P + base + x + (long)PW * y, PL, &sink, t, d, s);
             }
         }
-    }
+    }    flush(&sink);
 }
 
 // Work items per tile: 2*TW x-slices and 2*TH y-slices (each walks its render regions
@@ -373,11 +352,12 @@ __kernel void tile(__global const ushort *P, __constant uchar *flags, int PW, in
 // items: pocl runs a work group's items as one loop, so idle or divergent ones cost.
 #define ZK 8
 
-__kernel void greedy(__global const ushort *P, __constant uchar *flags, int PW, int PH,
+__kernel void unit(__global const ushort *P, __constant uchar *flags, int PW, int PH,
                      int nx, int TW, int TH, int ntiles, int z0, int z1, int split, int nreg,
-                     int merge, __global const uint *busy, __global uint4 *out,
+                     __global const uint *busy, __global uint4 *out,
                      __global uint *count, uint cap, __global const uint *vt, int nb) {
-    Sink sink = {out, count, cap, vt, nb, split};
+    Sink sink;
+    sink_init(&sink, out, count, cap, vt, nb, split);
     int ni = 2 * (TW + TH) + 2 * ZK;
     int t = get_global_id(0) / ni, i = get_global_id(0) % ni;
     if (t >= ntiles) return;
@@ -403,10 +383,11 @@ __kernel void greedy(__global const ushort *P, __constant uchar *flags, int PW, 
                 if (!is_busy(B, u)) { u++; continue; }
                 int u1 = u + 1;
                 while (u1 < re && is_busy(B, u1)) u1++;
-                span(P, flags, c0, sv, PL, step, false, want, V, u, u1, merge, t, d, s, sink);
+                span(P, flags, c0, sv, PL, step, false, want, V, u, u1, t, d, s, &sink);
                 u = u1;
             }
         }
+        flush(&sink);
         return;
     }
     for (int z = z0 + s; z < z1; z += ZK) {
@@ -417,14 +398,14 @@ __kernel void greedy(__global const ushort *P, __constant uchar *flags, int PW, 
                 for (int u = 0; u < TW; u++) {
                     ushort b = P[c0 + v * PW + u];
                     uint f = flags[b];
-                    if (f & F_X) { put(sink, t, u, v, z, 6, 1, 1, b);
-                                   put(sink, t, u, v, z, 7, 1, 1, b); }
+                    if (f & F_X) { put(&sink, t, u, v, z, 6, 1, 1, b);
+                                   put(&sink, t, u, v, z, 7, 1, 1, b); }
                     if (f & F_HASH)
-                        for (int k = 8; k < 12; k++) put(sink, t, u, v, z, k, 1, 1, b);
+                        for (int k = 8; k < 12; k++) put(&sink, t, u, v, z, k, 1, 1, b);
                 }
         }
         bool edge = (d == 4 && z == 0) || (d == 5 && z == 255);
-        span(P, flags, c0, PW, 1, step, edge, want, TH, 0, TW, merge, t, d, z, sink);
-    }
+        span(P, flags, c0, PW, 1, step, edge, want, TH, 0, TW, t, d, z, &sink);
+    }    flush(&sink);
 }
 

@@ -142,10 +142,10 @@ def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
                     i32(TH), i32(nt), i32(z0), i32(z1), i32(split), lay, masks, out, count,
                     np.uint32(cap), vt, i32(nb))
             else:
-                _kernel("mesh_greedy.cl", "greedy")(
+                _kernel("mesh_greedy.cl", "unit")(
                     queue, (nt * ni,), (1,), bp, flags, i32(PW), i32(PH), i32(nx),
                     i32(TW), i32(TH), i32(nt), i32(z0), i32(z1), i32(split), i32(nreg),
-                    i32(0), busy, out, count, np.uint32(cap), vt, i32(nb))
+                    busy, out, count, np.uint32(cap), vt, i32(nb))
             n = np.empty(1, np.uint32)
             cl.enqueue_copy(queue, n, count)
             n = int(n[0])

@@ -64,13 +64,17 @@ __kernel void band(__global const uchar *lay, int z0, int z1, int ntiles,
 
 inline bool is_busy(__global const uint *B, int z) { return (B[z >> 5] >> (z & 31)) & 1u; }
 
-// Where quads go: records (tile, x | y << 16, z | face << 8 | block << 16, w | h << 16),
-// tile-local, two uint4 per quad, the second the quad's four packed viewport vertices
-// (meshing/vertex.py `_pack`) when nb > 0: vt holds its tables (per face code and
+// Where quads go. Without vertices (nb == 0) two uint4 per quad: (tile, x | y << 16,
+// z | face << 8 | block << 16, w | h << 16), tile-local, unused. With them (nb > 0,
+// 16 x 16 tiles, meshing/vertex.py `_from_records`) three: the order key (lo = z << 8 |
+// y << 4 | x, hi = ((tile * regions + region) * 4 + pass) << 4 | face), the 17 bytes
+// of the quad's meshing.QUAD record (colour 0) and the tile; then its four packed
+// viewport vertices (vertex.py `_pack`). vt holds the tables: per face code and
 // corner the position offsets A, B, C at 0, 48, 96; per block the animation bits at
-// 144, the # inset bits at 144 + nb, the texture layer per face code at 144 + 2 nb).
-// Packing here spares the host a pass over every quad; z is region-local (split).
-// A work item collects SB records and then takes their slots with one atomic add (an
+// 144, the # inset bits at 144 + nb, the texture layer per face code at 144 + 2 nb,
+// the render pass at 144 + 14 nb. The host then sorts and slices, nothing per field;
+// z is region-local in the vertices (split: the region height).
+// A work item collects SB quads and then takes their slots with one atomic add (an
 // atomic per quad on a shared counter cost more than writing the quad).
 #define SB 32
 typedef struct {
@@ -78,39 +82,49 @@ typedef struct {
     __global uint *count;
     uint cap;
     __global const uint *vt;
-    int nb, split, n;
-    uint4 buf[2 * SB];
+    int nb, split, n, w;
+    uint4 buf[3 * SB];
 } Sink;
 
 inline void sink_init(Sink *k, __global uint4 *out, __global uint *count, uint cap,
                       __global const uint *vt, int nb, int split) {
     k->out = out; k->count = count; k->cap = cap; k->vt = vt; k->nb = nb; k->split = split;
     k->n = 0;
+    k->w = nb ? 3 : 2;
 }
 
 inline void flush(Sink *k) {
     if (!k->n) return;
     uint slot = atomic_add(k->count, (uint)k->n);
-    for (int i = 0; i < k->n && slot + i < k->cap; i++) {
-        k->out[2 * (slot + i)] = k->buf[2 * i];
-        if (k->nb) k->out[2 * (slot + i) + 1] = k->buf[2 * i + 1];
-    }
+    int used = k->nb ? 3 : 1;
+    for (int i = 0; i < k->n && slot + i < k->cap; i++)
+        for (int j = 0; j < used; j++) k->out[k->w * (slot + i) + j] = k->buf[k->w * i + j];
     k->n = 0;
 }
 
 inline void put(Sink *k, int t, int x, int y, int z, int face, int w, int h, uint block) {
-    uint4 *r = k->buf + 2 * k->n;
-    r[0] = (uint4)((uint)t, (uint)x | ((uint)y << 16), (uint)z | ((uint)face << 8) | (block << 16),
-                   (uint)w | ((uint)h << 16));
-    if (k->nb) {
+    uint4 *r = k->buf + k->w * k->n;
+    uint uw = (uint)w, uh = (uint)h;
+    if (!k->nb) {
+        r[0] = (uint4)((uint)t, (uint)x | ((uint)y << 16), (uint)z | ((uint)face << 8) | (block << 16),
+                       uw | (uh << 16));
+    } else {
         __global const uint *vt = k->vt;
-        uint zl = (uint)(k->split ? z % k->split : z);
+        int nb = k->nb;
+        uint layer = vt[144 + 2 * nb + block * 12 + face];
+        uint pass = vt[144 + 14 * nb + block];
+        uint nreg = k->split ? 256 / k->split : 1, reg = k->split ? z / k->split : 0;
+        uint zl = (uint)z - reg * (uint)k->split;
+        r[0] = (uint4)(((uint)z << 8) | ((uint)y << 4) | (uint)x,
+                       ((((uint)t * nreg + reg) * 4 + pass) << 4) | (uint)face,
+                       (uint)x | ((uint)y << 16),
+                       (uint)z | ((uint)face << 16) | ((uw & 0xFF) << 24));
+        r[1] = (uint4)((uw >> 8) | (uh << 8) | ((block & 0xFF) << 24),
+                       (block >> 8) | (layer << 8), 0u, (uint)t);
         uint base = (uint)x | ((uint)y << 5) | (zl << 10) | ((uint)face << 17)
-                    | (vt[144 + 2 * k->nb + block * 12 + face] << 21) | vt[144 + block]
-                    | (face >= 8 ? vt[144 + k->nb + block] : 0u);
+                    | (layer << 21) | vt[144 + block] | (face >= 8 ? vt[144 + nb + block] : 0u);
         int c = 4 * face;
-        uint uw = (uint)w, uh = (uint)h;
-        r[1] = (uint4)(base + vt[c] * uw + vt[48 + c] * uh + vt[96 + c],
+        r[2] = (uint4)(base + vt[c] * uw + vt[48 + c] * uh + vt[96 + c],
                        base + vt[c + 1] * uw + vt[49 + c] * uh + vt[97 + c],
                        base + vt[c + 2] * uw + vt[50 + c] * uh + vt[98 + c],
                        base + vt[c + 3] * uw + vt[51 + c] * uh + vt[99 + c]);

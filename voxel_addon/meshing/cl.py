@@ -75,13 +75,13 @@ def _flags():
     return _bufs["flags"]
 
 
-def _scratch(n):
-    """(n, 8) uint32 host records, a view of this thread's buffer (valid until its next
-    call): a fresh MB-sized array per batch costs page faults, ~1 ms per 8x8 batch."""
+def _scratch(n, width):
+    """(n, width) uint32 host records, a view of this thread's buffer (valid until its
+    next call): a fresh MB-sized array per batch costs page faults, ~1 ms per 8x8 batch."""
     buf = getattr(_local, "rec", None)
-    if buf is None or len(buf) < n:
-        buf = _local.rec = np.empty((max(n, 2 * (0 if buf is None else len(buf))), 8), np.uint32)
-    return buf[:n]
+    if buf is None or buf.size < n * width:
+        buf = _local.rec = np.empty(max(n * width, 2 * (0 if buf is None else buf.size)), np.uint32)
+    return buf[:n * width].reshape(n, width)
 
 
 def _vtab(vtab):
@@ -97,10 +97,11 @@ def _vtab(vtab):
 
 def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
     """Rect columns like faces.rects, or None when the window does not fit the kernel.
-    With `vtab` (vertex.VTAB: its tables, blocks) {"rec": (n, 8) uint32} instead: the
-    kernel's records (see gpu/mesh_greedy.cl `Sink`), each with its rect's four packed
-    viewport vertices (z region-local by `split`); a view of this thread's scratch,
-    valid until its next call (`columns` turns it into rect columns)."""
+    With `vtab` (vertex.VTAB: its tables, blocks; 16 x 16 tiles) {"rec": (n, 12) uint32}
+    instead: the kernel's records (see gpu/mesh_greedy.cl `put`: order key, QUAD bytes,
+    tile, the rect's four packed viewport vertices, z region-local by `split`); a view of
+    this thread's scratch, valid until its next call (`columns` turns it into rect
+    columns, `quads_of` into QUADs)."""
     TW, TH = tile
     if TW > UMAX or max(TW, TH) >= 1 << 16:
         return None
@@ -113,6 +114,9 @@ def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
     nt = nx * ny
     nreg = len(Q.regions(z0, z1, split))
     merge = method == "greedy"
+    rb = 48 if vtab is not None else 32      # bytes per record (gpu/mesh_greedy.cl `put`)
+    if vtab is not None and (TW, TH) != (16, 16):
+        raise ValueError("packed vertices need 16 x 16 tiles")
     ni = 2 * (TW + TH) + 2 * ZK
     i32 = np.int32
     ctx = opencl.context()[0]
@@ -134,8 +138,8 @@ def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
                                               i32(nt), busy)
         cap = _bufs.get("cap", START_CAP)
         while True:
-            out = _buf("out", cap * 32)
-            cap = out.size // 32
+            out = _buf("out", cap * rb)
+            cap = out.size // rb
             if merge:   # a tile per work item (gpu/mesh_greedy.cl `tile`)
                 _kernel("mesh_greedy.cl", "tile")(
                     queue, (nt,), (1,), bp, flags, i32(PW), i32(PH), i32(nx), i32(TW),
@@ -154,7 +158,7 @@ def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
             cap = n          # overflow: grow to the exact need and run again
             cl.enqueue_fill_buffer(queue, count, np.uint32(0), 0, 4)
         _bufs["cap"] = cap
-        rec = _scratch(n)
+        rec = _scratch(n, rb // 4)
         if n:
             cl.enqueue_copy(queue, rec, out)
     if vtab is not None:
@@ -163,11 +167,24 @@ def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
 
 
 def columns(rec):
-    """Rect columns (faces.COLS) of raw records (rects(..., vtab))."""
+    """Rect columns (faces.COLS) of raw records (rects(..., vtab) or without)."""
+    if rec.shape[1] == 12:      # with vertices: the QUAD bytes and the tile
+        q = quads_of(rec)
+        return {c: (rec[:, 7] if c == "t" else q[c]).astype(np.int32) for c in Q.COLS}
     r1, r2, r3 = rec[:, 1], rec[:, 2], rec[:, 3]
     cols = (rec[:, 0], r1 & 0xFFFF, r1 >> 16, r2 & 0xFF, (r2 >> 8) & 0xFF, r3 & 0xFFFF,
             r3 >> 16, r2 >> 16)
     return {c: v.astype(np.int32) for c, v in zip(Q.COLS, cols)}
+
+
+def blocks_of(rec):
+    """Block ids of records with vertices (QUAD bytes 11, 12)."""
+    return (rec[:, 4] >> 24) | ((rec[:, 5] & 0xFF) << 8)
+
+
+def quads_of(rec):
+    """The meshing.QUAD array of records with vertices (their bytes 8..24)."""
+    return np.ascontiguousarray(rec.view(np.uint8)[:, 8:8 + Q.QUAD.itemsize]).view(Q.QUAD).ravel()
 
 
 def face_keys(P, za, zb):

@@ -243,6 +243,42 @@ inline void open_init(Open *o) {
     o->nopen = 0;
 }
 
+#ifdef FLAG_MASKS
+// Rows of 16 cells as two 8-lane halves (256-bit vectors: wider ones change the ABI
+// without AVX-512); the 64-bit flag masks as 32-bit halves (ids < 64 here).
+inline uint8 has8(ulong m, ushort8 id) {
+    uint8 i = convert_uint8(id);
+    uint8 w = select((uint8)((uint)m), (uint8)((uint)(m >> 32)), as_uint8(i >= (uint8)(32)));
+    return (w >> (i & 31u)) & 1u;
+}
+
+inline uint bits8(uint8 b) {     // lane i (0/1) -> bit i
+    b <<= (uint8)(0, 1, 2, 3, 4, 5, 6, 7);
+    uint4 q = b.lo | b.hi;
+    uint2 p = q.lo | q.hi;
+    return p.x | p.y;
+}
+
+inline uint row8(__global const ushort *A, long step, ulong want) {
+    ushort8 a = vload8(0, A);
+    ushort8 b = step ? vload8(0, A + step) : (ushort8)(0);
+    uint8 hide = has8(M_OPAQUE, b) | (has8(M_SAME, a) & as_uint8(convert_int8(a == b)) & 1u);
+    return bits8(has8(want, a) & ~hide & 1u);
+}
+
+// face_key != 0 of the 16 cells at A toward A + step (step 0: toward air), as bits.
+inline ulong row16(__global const ushort *A, long step, ulong want) {
+    return (ulong)row8(A, step, want) | ((ulong)row8(A + 8, step, want) << 8);
+}
+
+// Cell u is the same block as cell u - 1 (u >= 1), as bits.
+inline ulong same16(__global const ushort *A) {
+    uint lo = bits8(as_uint8(convert_int8(vload8(0, A) == vload8(0, A - 1))) & 1u);
+    uint hi = bits8(as_uint8(convert_int8(vload8(1, A) == vload8(1, A - 1))) & 1u);
+    return ((ulong)lo | ((ulong)hi << 8)) & ~1UL;
+}
+#endif
+
 // A z slice (rows v = y, columns u = x, both from the cells' P at c0 + v * PW + u).
 inline void span_z(__global const ushort *P, __constant uchar *flags, long c0, int PW,
                    long step, bool edge, int V, int U, int t, int d, int s, Sink *sink) {
@@ -252,7 +288,13 @@ inline void span_z(__global const ushort *P, __constant uchar *flags, long c0, i
         ulong vis[MW] = {0, 0, 0, 0}, ch[MW] = {0, 0, 0, 0};
         long cv = c0 + (long)v * PW;
         if (v < V) {
-            if (U <= 64) {      // one word: a loop the compiler can vectorize
+#ifdef FLAG_MASKS
+            if (U == 16) {      // chunk rows: 16 lanes at once
+                vis[0] = row16(P + cv, edge ? 0 : step, M_CUBE_CAP);
+                ch[0] = vis[0] & same16(P + cv);
+            } else
+#endif
+            if (U <= 64) {      // one word
                 ulong a = 0, e = 0;
                 for (int u = 0; u < U; u++) {
                     a |= (ulong)(face_key(P, flags, cv + u, step, edge, F_CUBE | F_CAP) != 0) << u;

@@ -1,16 +1,16 @@
-// Batched meshing of many tiles (chunks) in three launches, output compacted with an
-// atomic counter: `layers` flags each (tile, z) layer, `band` turns them into bits of
-// the layers that can have faces, `greedy` aggregates (or, merge == 0, lists unit
-// faces) one (tile, direction, slice) per work item and appends the quads.
+// Batched meshing of many tiles (chunks), output compacted with an atomic counter:
+// `layers` flags each (tile, z) layer (one item per layer); greedy then runs in `tile`
+// (one item per tile: its busy layers, those that can have faces, while they are in
+// the cache), method "none" in `band` + `unit` (one item per (tile, direction, slice)).
 //
 // Slice views as meshing/faces.py: axis x -> (s, v, u) = (x, y, z); axis y -> (y, x, z);
 // axis z -> (z, y, x). Greedy is Mikola's scan order run row by row: open rectangles
 // continue while the whole row under them has their key; free cells start maximal
-// runs. This needs only per-column state (private arrays of UMAX), not a seen mask.
+// runs. This needs only per-column state (private arrays of UMAX), not a seen mask;
+// rows are bit masks (`row_step`), at most 256 columns.
 #include "mesh.h"
 
 #define UMAX 256
-#define NONE 0xFFFF
 
 // Per (tile, z): bit 0 = some meshed cell of the layer is not air, bit 1 = the layer
 // with its ring is all opaque cubes. One work item per layer z walks its tiles row by

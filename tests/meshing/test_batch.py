@@ -147,3 +147,9 @@ def test_opencl_greedy_bit_rows(cl_device, kw):
     for border in ("air", "context"):
         assert np.array_equal(meshing.quads(b, border=border, **kw),
                               meshing.quads(b, border=border, backend="opencl", **kw))
+    # chunk tiles (rows of 16 as vectors): blend and # blocks stacked, faces between hidden
+    c = random_window(5, shape=(34, 34, 256), band=(60, 140),
+                      names=["water", "glass", "water", "cactus", "stone", "air"])
+    c[:, :, 100:110] = REGISTRY.id("water")
+    _same(meshing.build_chunks(c, region_h=kw.get("split", 64)),
+          meshing.build_chunks(c, region_h=kw.get("split", 64), backend="opencl"))

@@ -158,7 +158,7 @@ inline void span(__global const ushort *P, __constant uchar *flags, long c0, lon
 // load); free cells are found with bit scans. Equal keys of drawn cells are equal
 // blocks, so the rects are those of `span`.
 #define MW 4              // ulong words per 256-bit row
-#define MSTRIDE (5 * MW)  // per column: V for d = 0..3, then "same"
+#define MK 5              // masks per column: drawn for d = 0..3, "same" as below
 
 // (clang's builtin: one instruction; OpenCL C 1.2 has no ctz, popcount was a call)
 inline int ctz64(ulong x) { return __builtin_ctzll(x); }
@@ -316,16 +316,44 @@ inline void span_z(__global const ushort *P, __constant uchar *flags, long c0, i
 }
 
 
+// X and # planes of a cell with block b (none for other shapes).
+inline void shapes(Sink *k, __constant uchar *flags, int t, int x, int y, int z, ushort b) {
+    uint f = flags[b];
+    if (f & F_X) { put(k, t, x, y, z, 6, 1, 1, b); put(k, t, x, y, z, 7, 1, 1, b); }
+    if (f & F_HASH)
+        for (int h = 8; h < 12; h++) put(k, t, x, y, z, h, 1, 1, b);
+}
+
+// Layers 64w.. of mask k of column c: two 32-bit words (the mask pass writes 8 columns
+// of one word as a vector).
+inline ulong word64(__global const uint *Mt, int n, int k, int w, int c) {
+    __global const uint *m = Mt + (long)(k * 2 * MW + 2 * w) * n + c;
+    return (ulong)m[0] | ((ulong)m[n] << 32);
+}
+
+#ifdef FLAG_MASKS
+// Side face of the 8 cells a toward their neighbours b drawn (0/1 lanes).
+inline uint8 vis8(ushort8 a, ushort8 b) {
+    uint8 hide = has8(M_OPAQUE, b) | (has8(M_SAME, a) & as_uint8(convert_int8(a == b)) & 1u);
+    return has8(M_CUBE, a) & ~hide & 1u;
+}
+
+inline void or8(__global uint *m, uint8 lanes, uint one) {
+    vstore8(vload8(0, m) | (lanes * one), 0, m);
+}
+#endif
+
 // Merge: one work item per tile does all of it while the tile's busy layers are in
 // the cache (the kernels per slice each fetched them again: memory-bound on a CPU).
 // Per busy layer z (ascending): the X/# planes, both z slices (rows from the layer and
 // its neighbours), and per column (x, y) bit z of its x/y masks (a x/y slice's row is
 // one column along z): per side direction "drawn", and "same block as below" (cleared
 // at region starts: merges stop there). Then the x/y slices from the masks. M: per
-// tile TW*TH columns of MSTRIDE ulongs; words of no busy layer are left unwritten.
+// tile MK masks x 8 words of 32 layers x TW*TH columns (uint); words of no busy layer
+// are left unwritten.
 __kernel void tile(__global const ushort *P, __constant uchar *flags, int PW, int PH,
                    int nx, int TW, int TH, int ntiles, int z0, int z1, int split,
-                   __global const uchar *lay, __global ulong *M, __global uint4 *out,
+                   __global const uchar *lay, __global uint *M, __global uint4 *out,
                    __global uint *count, uint cap, __global const uint *vt, int nb) {
     Sink sink;
     sink_init(&sink, out, count, cap, vt, nb, split);
@@ -334,20 +362,19 @@ __kernel void tile(__global const ushort *P, __constant uchar *flags, int PW, in
     int ox = (t % nx) * TW, oy = (t / nx) * TH, n = TW * TH;
     long PL = (long)PW * PH;
     long base = ox + 1 + (long)PW * (oy + 1);
-    __global ulong *Mt = M + (long)MSTRIDE * n * t;
+    __global uint *Mt = M + (long)MK * 2 * MW * n * t;   // [mask][32-layer word][column]
     ulong words[MW];
     for (int w = 0; w < MW; w++) {
         __global const uchar *L = lay + 256 * t;   // the busy layers (as `band`)
         ulong bits = band_bits(L, 2 * w, z0, z1) | ((ulong)band_bits(L, 2 * w + 1, z0, z1) << 32);
         words[w] = bits;
         if (!bits) continue;
-        for (int c = 0; c < n; c++)
-            for (int k = 0; k < 5; k++) Mt[(long)MSTRIDE * c + k * MW + w] = 0;
+        for (int k = 0; k < MK; k++)
+            for (int c = 0; c < 2 * n; c++) Mt[(long)(k * 2 * MW + 2 * w) * n + c] = 0;
         while (bits) {
             int k = ctz64(bits);
             bits &= bits - 1;
             int z = 64 * w + k;
-            ulong one = 1UL << k;
             long cz = base + PL * z;
             bool chain = z > 0 && (split == 0 || z % split);
             if (z < 255)    // the layer above: the +z faces' neighbours, often a quiet layer
@@ -356,22 +383,42 @@ __kernel void tile(__global const ushort *P, __constant uchar *flags, int PW, in
                     __builtin_prefetch(r);
                     __builtin_prefetch(r + TW - 1);
                 }
+            __global uint *m0 = Mt + (long)(2 * w + (k >> 5)) * n;   // this layer's word
+            uint one = 1u << (k & 31);
+#ifdef FLAG_MASKS
+            if (TW % 8 == 0) {      // 8 columns at once
+                for (int y = 0; y < TH; y++)
+                    for (int x = 0; x < TW; x += 8) {
+                        __global const ushort *A = P + cz + (long)PW * y + x;
+                        ushort8 a = vload8(0, A);
+                        if (!any(a != (ushort8)(0))) continue;
+                        if (any(has8(M_SHAPE, a) != (uint8)(0)))
+                            for (int i = 0; i < 8; i++) shapes(&sink, flags, t, x + i, y, z, A[i]);
+                        int c = y * TW + x;
+                        long kn = (long)2 * MW * n;
+                        uint8 e = chain ? as_uint8(convert_int8(a == vload8(0, A - PL))) & 1u
+                                        : (uint8)(0);
+                        or8(m0 + c, vis8(a, vload8(0, A - 1)), one);
+                        or8(m0 + kn + c, vis8(a, vload8(0, A + 1)), one);
+                        or8(m0 + 2 * kn + c, vis8(a, vload8(0, A - PW)), one);
+                        or8(m0 + 3 * kn + c, vis8(a, vload8(0, A + PW)), one);
+                        or8(m0 + 4 * kn + c, e, one);
+                    }
+            } else
+#endif
             for (int y = 0; y < TH; y++)
                 for (int x = 0; x < TW; x++) {
                     long c = cz + (long)PW * y + x;
                     ushort b = P[c];
                     if (!b) continue;
-                    uint f = flags[b];
-                    if (f & F_X) { put(&sink, t, x, y, z, 6, 1, 1, b);
-                                   put(&sink, t, x, y, z, 7, 1, 1, b); }
-                    if (f & F_HASH)
-                        for (int h = 8; h < 12; h++) put(&sink, t, x, y, z, h, 1, 1, b);
-                    __global ulong *m = Mt + (long)MSTRIDE * (y * TW + x) + w;
+                    shapes(&sink, flags, t, x, y, z, b);
+                    __global uint *m = m0 + y * TW + x;
+                    long kn = (long)2 * MW * n;
                     if (face_key(P, flags, c, -1, false, F_CUBE)) m[0] |= one;
-                    if (face_key(P, flags, c, 1, false, F_CUBE)) m[MW] |= one;
-                    if (face_key(P, flags, c, -PW, false, F_CUBE)) m[2 * MW] |= one;
-                    if (face_key(P, flags, c, PW, false, F_CUBE)) m[3 * MW] |= one;
-                    if (chain && b == P[c - PL]) m[4 * MW] |= one;
+                    if (face_key(P, flags, c, 1, false, F_CUBE)) m[kn] |= one;
+                    if (face_key(P, flags, c, -PW, false, F_CUBE)) m[2 * kn] |= one;
+                    if (face_key(P, flags, c, PW, false, F_CUBE)) m[3 * kn] |= one;
+                    if (chain && b == P[c - PL]) m[4 * kn] |= one;
                 }
             span_z(P, flags, cz, PW, -PL, z == 0, TH, TW, t, 4, z, &sink);
             span_z(P, flags, cz, PW, PL, z == 255, TH, TW, t, 5, z, &sink);
@@ -386,12 +433,12 @@ __kernel void tile(__global const ushort *P, __constant uchar *flags, int PW, in
                 ulong vis[MW] = {0, 0, 0, 0}, ch[MW] = {0, 0, 0, 0};
                 int x = a == 0 ? s : v, y = a == 0 ? v : s;
                 if (v < V) {
-                    __global const ulong *m = Mt + (long)MSTRIDE * (y * TW + x);
+                    int c = y * TW + x;
                     bool any = false;
                     for (int w = 0; w < MW; w++)
                         if (words[w]) {
-                            vis[w] = m[d * MW + w];
-                            ch[w] = vis[w] & m[4 * MW + w];
+                            vis[w] = word64(Mt, n, d, w, c);
+                            ch[w] = vis[w] & word64(Mt, n, 4, w, c);
                             any |= vis[w] != 0;
                         }
                     if (!any && !o.nopen) continue;
@@ -399,7 +446,8 @@ __kernel void tile(__global const ushort *P, __constant uchar *flags, int PW, in
                 row_step(&o, vis, ch, v, P + base + x + (long)PW * y, PL, &sink, t, d, s);
             }
         }
-    }    flush(&sink);
+    }
+    flush(&sink);
 }
 
 // Work items per tile: 2*TW x-slices and 2*TH y-slices (each walks its render regions

@@ -37,7 +37,7 @@ def _options_for(flags: bytes, masks: bool):
     def mask(bits):
         return int(sum(1 << int(i) for i in np.flatnonzero(F & np.uint64(bits))))
     return ("-DFLAG_MASKS", f"-DM_CUBE={mask(1)}UL", f"-DM_CUBE_CAP={mask(9)}UL",
-            f"-DM_OPAQUE={mask(2)}UL", f"-DM_SAME={mask(4)}UL")
+            f"-DM_OPAQUE={mask(2)}UL", f"-DM_SAME={mask(4)}UL", f"-DM_SHAPE={mask(48)}UL")
 
 
 def _kernel(file, name):

@@ -248,9 +248,14 @@ inline void open_init(Open *o) {
 // without AVX-512); the 64-bit flag masks as 32-bit halves (ids < 64 here).
 inline uint8 has8(ulong m, ushort8 id) {
     uint8 i = convert_uint8(id);
-    uint8 w = select((uint8)((uint)m), (uint8)((uint)(m >> 32)), as_uint8(i >= (uint8)(32)));
+    uint8 lo = (uint8)((uint)m), hi = (uint8)((uint)(m >> 32));
+    uint8 w = lo ^ ((lo ^ hi) & as_uint8(i >= (uint8)(32)));
     return (w >> (i & 31u)) & 1u;
 }
+
+// An unaligned 8-lane load (pocl's vload8 was a call here, not inlined).
+typedef ushort8 __attribute__((aligned(2))) ushort8_u;
+inline ushort8 ld8(__global const ushort *p) { return *(__global const ushort8_u *)p; }
 
 inline uint bits8(uint8 b) {     // lane i (0/1) -> bit i
     b <<= (uint8)(0, 1, 2, 3, 4, 5, 6, 7);
@@ -260,8 +265,8 @@ inline uint bits8(uint8 b) {     // lane i (0/1) -> bit i
 }
 
 inline uint row8(__global const ushort *A, long step, ulong want) {
-    ushort8 a = vload8(0, A);
-    ushort8 b = step ? vload8(0, A + step) : (ushort8)(0);
+    ushort8 a = ld8(A);
+    ushort8 b = step ? ld8(A + step) : (ushort8)(0);
     uint8 hide = has8(M_OPAQUE, b) | (has8(M_SAME, a) & as_uint8(convert_int8(a == b)) & 1u);
     return bits8(has8(want, a) & ~hide & 1u);
 }
@@ -273,8 +278,8 @@ inline ulong row16(__global const ushort *A, long step, ulong want) {
 
 // Cell u is the same block as cell u - 1 (u >= 1), as bits.
 inline ulong same16(__global const ushort *A) {
-    uint lo = bits8(as_uint8(convert_int8(vload8(0, A) == vload8(0, A - 1))) & 1u);
-    uint hi = bits8(as_uint8(convert_int8(vload8(1, A) == vload8(1, A - 1))) & 1u);
+    uint lo = bits8(as_uint8(convert_int8(ld8(A) == ld8(A - 1))) & 1u);
+    uint hi = bits8(as_uint8(convert_int8(ld8(A + 8) == ld8(A + 7))) & 1u);
     return ((ulong)lo | ((ulong)hi << 8)) & ~1UL;
 }
 #endif
@@ -339,7 +344,7 @@ inline uint8 vis8(ushort8 a, ushort8 b) {
 }
 
 inline void or8(__global uint *m, uint8 lanes, uint one) {
-    vstore8(vload8(0, m) | (lanes * one), 0, m);
+    *(__global uint8 *)m |= lanes * one;     // 32-byte aligned: c is a multiple of 8
 }
 #endif
 
@@ -390,18 +395,18 @@ __kernel void tile(__global const ushort *P, __constant uchar *flags, int PW, in
                 for (int y = 0; y < TH; y++)
                     for (int x = 0; x < TW; x += 8) {
                         __global const ushort *A = P + cz + (long)PW * y + x;
-                        ushort8 a = vload8(0, A);
+                        ushort8 a = ld8(A);
                         if (!any(a != (ushort8)(0))) continue;
                         if (any(has8(M_SHAPE, a) != (uint8)(0)))
                             for (int i = 0; i < 8; i++) shapes(&sink, flags, t, x + i, y, z, A[i]);
                         int c = y * TW + x;
                         long kn = (long)2 * MW * n;
-                        uint8 e = chain ? as_uint8(convert_int8(a == vload8(0, A - PL))) & 1u
+                        uint8 e = chain ? as_uint8(convert_int8(a == ld8(A - PL))) & 1u
                                         : (uint8)(0);
-                        or8(m0 + c, vis8(a, vload8(0, A - 1)), one);
-                        or8(m0 + kn + c, vis8(a, vload8(0, A + 1)), one);
-                        or8(m0 + 2 * kn + c, vis8(a, vload8(0, A - PW)), one);
-                        or8(m0 + 3 * kn + c, vis8(a, vload8(0, A + PW)), one);
+                        or8(m0 + c, vis8(a, ld8(A - 1)), one);
+                        or8(m0 + kn + c, vis8(a, ld8(A + 1)), one);
+                        or8(m0 + 2 * kn + c, vis8(a, ld8(A - PW)), one);
+                        or8(m0 + 3 * kn + c, vis8(a, ld8(A + PW)), one);
                         or8(m0 + 4 * kn + c, e, one);
                     }
             } else

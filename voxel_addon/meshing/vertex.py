@@ -8,7 +8,7 @@ import numpy as np
 
 from ..core.blocks import ANIMATIONS, REGISTRY, RENDERS
 from ..core.errors import VoxelError
-from .faces import QUAD, area, sort_key, to_quads
+from .faces import area, sort_key, to_quads
 from .run import check, rects
 from . import cl, tint
 from .mesh import CORNERS, SIDE, T1, T2, quad_indices  # noqa: F401  (index pattern: API)

@@ -160,8 +160,13 @@ inline void span(__global const ushort *P, __constant uchar *flags, long c0, lon
 #define MW 4              // ulong words per 256-bit row
 #define MK 5              // masks per column: drawn for d = 0..3, "same" as below
 
-// (clang's builtin: one instruction; OpenCL C 1.2 has no ctz, popcount was a call)
+// CPU_DEVICE (meshing/cl.py, pocl on the CPU): clang's builtin, one instruction (OpenCL
+// C 1.2 has no ctz, and pocl did not inline popcount); elsewhere the portable form.
+#ifdef CPU_DEVICE
 inline int ctz64(ulong x) { return __builtin_ctzll(x); }
+#else
+inline int ctz64(ulong x) { return (int)popcount((x & (0 - x)) - 1); }
+#endif
 
 // How many bits of m are set in a row from bit i on.
 inline int ones_from(const ulong *m, int i) {
@@ -254,8 +259,12 @@ inline uint8 has8(ulong m, ushort8 id) {
 }
 
 // An unaligned 8-lane load (pocl's vload8 was a call here, not inlined).
+#ifdef CPU_DEVICE
 typedef ushort8 __attribute__((aligned(2))) ushort8_u;
 inline ushort8 ld8(__global const ushort *p) { return *(__global const ushort8_u *)p; }
+#else
+inline ushort8 ld8(__global const ushort *p) { return vload8(0, p); }
+#endif
 
 inline uint bits8(uint8 b) {     // lane i (0/1) -> bit i
     b <<= (uint8)(0, 1, 2, 3, 4, 5, 6, 7);
@@ -382,12 +391,14 @@ __kernel void tile(__global const ushort *P, __constant uchar *flags, int PW, in
             int z = 64 * w + k;
             long cz = base + PL * z;
             bool chain = z > 0 && (split == 0 || z % split);
+#ifdef CPU_DEVICE
             if (z < 255)    // the layer above: the +z faces' neighbours, often a quiet layer
                 for (int y = 0; y < TH; y++) {   // not read since the layer flags: fetch
                     __global const ushort *r = P + cz + PL + (long)PW * y;   // it ahead
                     __builtin_prefetch(r);
                     __builtin_prefetch(r + TW - 1);
                 }
+#endif
             __global uint *m0 = Mt + (long)(2 * w + (k >> 5)) * n;   // this layer's word
             uint one = 1u << (k & 31);
 #ifdef FLAG_MASKS

@@ -112,17 +112,19 @@ def test_wide_window_falls_back(cl_device):
                           meshing.quads(b, border="air", backend="opencl"))
 
 
-def test_opencl_flag_table_path(cl_device, cave):
-    """The kernels' table-lookup variant (used past 64 block types) gives the same."""
+@pytest.mark.parametrize("switch", ["MASKS", "CPU_TUNED"])
+def test_opencl_flag_table_path(cl_device, cave, switch):
+    """The kernels' table-lookup variant (used past 64 block types) and their portable
+    forms (devices other than a CPU) give the same."""
     ref = meshing.build_chunks(cave[:, :18])
-    mcl.MASKS = False
+    setattr(mcl, switch, False)
     try:
         _same(ref, meshing.build_chunks(cave[:, :18], backend="opencl"))
         b = _sparse(3)
         assert np.array_equal(meshing.quads(b, method="none"),
                               meshing.quads(b, method="none", backend="opencl"))
     finally:
-        mcl.MASKS = True
+        setattr(mcl, switch, True)
 
 
 @pytest.mark.parametrize("region_h", [64, 1])   # the 16-bit radix order and the 64-bit key

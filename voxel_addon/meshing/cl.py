@@ -16,6 +16,7 @@ from . import faces as Q
 UMAX = 256          # columns per slice the greedy kernel keeps state for (mesh_greedy.cl)
 ZK = 8              # z items per direction and tile (mesh_greedy.cl)
 MASKS = True        # block flags as compiled-in bit masks (False: table loads; tests)
+CPU_TUNED = True    # CPU-only kernel forms on a CPU device (False: portable ones; tests)
 START_CAP = 1 << 16  # quad records the output buffer holds at first; grows on overflow
 _lock = threading.Lock()
 _bufs: dict = {}
@@ -24,20 +25,30 @@ _local = threading.local()   # per-thread host scratch (_scratch)
 
 def _options():
     """Flag tables as 64-bit masks compiled into the kernels (mesh.h FLAG_MASKS): faster
-    than table loads; the table path stays for registries of more than 64 blocks."""
-    return _options_for(Q.FLAGS.tobytes(), MASKS)  # per launch: cached, not re-derived
+    than table loads; the table path stays for registries of more than 64 blocks.
+    CPU_DEVICE: clang builtins (ctz, prefetch) and unaligned vector loads that pocl's
+    CPU compiler inlines; other devices get the portable OpenCL C 1.2 forms."""
+    cpu = CPU_TUNED and _on_cpu()
+    return _options_for(Q.FLAGS.tobytes(), MASKS, cpu)  # per launch: cached, not re-derived
+
+
+@lru_cache(maxsize=1)
+def _on_cpu() -> bool:
+    import pyopencl as cl
+    return bool(opencl.context()[2].type & cl.device_type.CPU)
 
 
 @lru_cache(maxsize=8)
-def _options_for(flags: bytes, masks: bool):
+def _options_for(flags: bytes, masks: bool, cpu: bool = False):
     F = np.frombuffer(flags, Q.FLAGS.dtype).astype(np.uint64)
     if len(F) > 64 or not masks:
-        return ()
+        return ("-DCPU_DEVICE",) if cpu else ()
 
     def mask(bits):
         return int(sum(1 << int(i) for i in np.flatnonzero(F & np.uint64(bits))))
     return ("-DFLAG_MASKS", f"-DM_CUBE={mask(1)}UL", f"-DM_CUBE_CAP={mask(9)}UL",
-            f"-DM_OPAQUE={mask(2)}UL", f"-DM_SAME={mask(4)}UL", f"-DM_SHAPE={mask(48)}UL")
+            f"-DM_OPAQUE={mask(2)}UL", f"-DM_SAME={mask(4)}UL",
+            f"-DM_SHAPE={mask(48)}UL") + (("-DCPU_DEVICE",) if cpu else ())
 
 
 def _kernel(file, name):

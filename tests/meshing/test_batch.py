@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from voxel_addon import meshing
+from voxel_addon.core.blocks import REGISTRY
 from voxel_addon.core.errors import VoxelError
 from voxel_addon.meshing import cl as mcl
 from voxel_addon.meshing import scenes
@@ -111,17 +112,19 @@ def test_wide_window_falls_back(cl_device):
                           meshing.quads(b, border="air", backend="opencl"))
 
 
-def test_opencl_flag_table_path(cl_device, cave):
-    """The kernels' table-lookup variant (used past 64 block types) gives the same."""
+@pytest.mark.parametrize("switch", ["MASKS", "CPU_TUNED"])
+def test_opencl_flag_table_path(cl_device, cave, switch):
+    """The kernels' table-lookup variant (used past 64 block types) and their portable
+    forms (devices other than a CPU) give the same."""
     ref = meshing.build_chunks(cave[:, :18])
-    mcl.MASKS = False
+    setattr(mcl, switch, False)
     try:
         _same(ref, meshing.build_chunks(cave[:, :18], backend="opencl"))
         b = _sparse(3)
         assert np.array_equal(meshing.quads(b, method="none"),
                               meshing.quads(b, method="none", backend="opencl"))
     finally:
-        mcl.MASKS = True
+        setattr(mcl, switch, True)
 
 
 @pytest.mark.parametrize("region_h", [64, 1])   # the 16-bit radix order and the 64-bit key
@@ -132,3 +135,23 @@ def test_build_chunks_vertex_order(cave, region_h):
         want = np.lexsort((q["x"], q["y"], q["z"], q["face"], PASS_OF[q["block"]],
                            q["z"] // region_h))
         assert (want == np.arange(len(q))).all()
+
+
+@pytest.mark.parametrize("kw", [{}, dict(split=32), dict(z0=61, z1=131, split=64)])
+def test_opencl_greedy_bit_rows(cl_device, kw):
+    """The greedy on bit rows (gpu/mesh_greedy.cl `tile`): z-slice rows wider than one
+    64-bit word, x/y rows (along z) whose runs cross word and region boundaries."""
+    from .helpers import random_window
+    names = ["stone"] * 6 + ["air", "glass", "water", "leaves", "cactus"]
+    b = random_window(4, shape=(150, 7, 256), band=(40, 150), names=names)
+    b[:, 3, 60:140] = REGISTRY.id("glass")     # long runs over z 64 and 128
+    b[5:140, :, 90] = REGISTRY.id("log")       # a layer with one long x run
+    for border in ("air", "context"):
+        assert np.array_equal(meshing.quads(b, border=border, **kw),
+                              meshing.quads(b, border=border, backend="opencl", **kw))
+    # chunk tiles (rows of 16 as vectors): blend and # blocks stacked, faces between hidden
+    c = random_window(5, shape=(34, 34, 256), band=(60, 140),
+                      names=["water", "glass", "water", "cactus", "stone", "air"])
+    c[:, :, 100:110] = REGISTRY.id("water")
+    _same(meshing.build_chunks(c, region_h=kw.get("split", 64)),
+          meshing.build_chunks(c, region_h=kw.get("split", 64), backend="opencl"))

@@ -16,6 +16,7 @@ from . import faces as Q
 UMAX = 256          # columns per slice the greedy kernel keeps state for (mesh_greedy.cl)
 ZK = 8              # z items per direction and tile (mesh_greedy.cl)
 MASKS = True        # block flags as compiled-in bit masks (False: table loads; tests)
+CPU_TUNED = True    # CPU-only kernel forms on a CPU device (False: portable ones; tests)
 START_CAP = 1 << 16  # quad records the output buffer holds at first; grows on overflow
 _lock = threading.Lock()
 _bufs: dict = {}
@@ -24,20 +25,30 @@ _local = threading.local()   # per-thread host scratch (_scratch)
 
 def _options():
     """Flag tables as 64-bit masks compiled into the kernels (mesh.h FLAG_MASKS): faster
-    than table loads; the table path stays for registries of more than 64 blocks."""
-    return _options_for(Q.FLAGS.tobytes(), MASKS)  # per launch: cached, not re-derived
+    than table loads; the table path stays for registries of more than 64 blocks.
+    CPU_DEVICE: clang builtins (ctz, prefetch) and unaligned vector loads that pocl's
+    CPU compiler inlines; other devices get the portable OpenCL C 1.2 forms."""
+    cpu = CPU_TUNED and _on_cpu()
+    return _options_for(Q.FLAGS.tobytes(), MASKS, cpu)  # per launch: cached, not re-derived
+
+
+@lru_cache(maxsize=1)
+def _on_cpu() -> bool:
+    import pyopencl as cl
+    return bool(opencl.context()[2].type & cl.device_type.CPU)
 
 
 @lru_cache(maxsize=8)
-def _options_for(flags: bytes, masks: bool):
+def _options_for(flags: bytes, masks: bool, cpu: bool = False):
     F = np.frombuffer(flags, Q.FLAGS.dtype).astype(np.uint64)
     if len(F) > 64 or not masks:
-        return ()
+        return ("-DCPU_DEVICE",) if cpu else ()
 
     def mask(bits):
         return int(sum(1 << int(i) for i in np.flatnonzero(F & np.uint64(bits))))
     return ("-DFLAG_MASKS", f"-DM_CUBE={mask(1)}UL", f"-DM_CUBE_CAP={mask(9)}UL",
-            f"-DM_OPAQUE={mask(2)}UL", f"-DM_SAME={mask(4)}UL")
+            f"-DM_OPAQUE={mask(2)}UL", f"-DM_SAME={mask(4)}UL",
+            f"-DM_SHAPE={mask(48)}UL") + (("-DCPU_DEVICE",) if cpu else ())
 
 
 def _kernel(file, name):
@@ -75,13 +86,13 @@ def _flags():
     return _bufs["flags"]
 
 
-def _scratch(n):
-    """(n, 8) uint32 host records, a view of this thread's buffer (valid until its next
-    call): a fresh MB-sized array per batch costs page faults, ~1 ms per 8x8 batch."""
+def _scratch(n, width):
+    """(n, width) uint32 host records, a view of this thread's buffer (valid until its
+    next call): a fresh MB-sized array per batch costs page faults, ~1 ms per 8x8 batch."""
     buf = getattr(_local, "rec", None)
-    if buf is None or len(buf) < n:
-        buf = _local.rec = np.empty((max(n, 2 * (0 if buf is None else len(buf))), 8), np.uint32)
-    return buf[:n]
+    if buf is None or buf.size < n * width:
+        buf = _local.rec = np.empty(max(n * width, 2 * (0 if buf is None else buf.size)), np.uint32)
+    return buf[:n * width].reshape(n, width)
 
 
 def _vtab(vtab):
@@ -97,10 +108,11 @@ def _vtab(vtab):
 
 def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
     """Rect columns like faces.rects, or None when the window does not fit the kernel.
-    With `vtab` (vertex.VTAB: its tables, blocks) {"rec": (n, 8) uint32} instead: the
-    kernel's records (see gpu/mesh_greedy.cl `Sink`), each with its rect's four packed
-    viewport vertices (z region-local by `split`); a view of this thread's scratch,
-    valid until its next call (`columns` turns it into rect columns)."""
+    With `vtab` (vertex.VTAB: its tables, blocks; 16 x 16 tiles) {"rec": (n, 12) uint32}
+    instead: the kernel's records (see gpu/mesh_greedy.cl `put`: order key, QUAD bytes,
+    tile, the rect's four packed viewport vertices, z region-local by `split`); a view of
+    this thread's scratch, valid until its next call (`columns` turns it into rect
+    columns, `quads_of` into QUADs)."""
     TW, TH = tile
     if TW > UMAX or max(TW, TH) >= 1 << 16:
         return None
@@ -112,6 +124,10 @@ def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
     nx, ny = nxy
     nt = nx * ny
     nreg = len(Q.regions(z0, z1, split))
+    merge = method == "greedy"
+    rb = 48 if vtab is not None else 32      # bytes per record (gpu/mesh_greedy.cl `put`)
+    if vtab is not None and (TW, TH) != (16, 16):
+        raise ValueError("packed vertices need 16 x 16 tiles")
     ni = 2 * (TW + TH) + 2 * ZK
     i32 = np.int32
     ctx = opencl.context()[0]
@@ -124,26 +140,36 @@ def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
         flags = _flags()
         vt, nb = (_vtab(vtab[0]), vtab[1]) if vtab is not None else (flags, 0)
         _kernel("mesh_greedy.cl", "layers")(
-            queue, (nt * 256,), (16,), bp, flags, i32(PW), i32(PH), i32(nx), i32(TW), i32(TH),
-            i32(nt), lay)
-        _kernel("mesh_greedy.cl", "band")(queue, (nt,), (1,), lay, i32(z0), i32(z1), i32(nt), busy)
+            queue, (256,), (1,), bp, flags, i32(PW), i32(PH), i32(nx), i32(TW), i32(TH),
+            i32(nt), lay, count)     # (also zeroes the count)
+        if merge:
+            masks = _buf("masks", nt * TW * TH * 160)
+        else:
+            _kernel("mesh_greedy.cl", "band")(queue, (nt,), (1,), lay, i32(z0), i32(z1),
+                                              i32(nt), busy)
         cap = _bufs.get("cap", START_CAP)
         while True:
-            out = _buf("out", cap * 32)
-            cap = out.size // 32
-            cl.enqueue_fill_buffer(queue, count, np.uint32(0), 0, 4)
-            _kernel("mesh_greedy.cl", "greedy")(
-                queue, (nt * ni,), (1,), bp, flags, i32(PW), i32(PH), i32(nx),
-                i32(TW), i32(TH), i32(nt), i32(z0), i32(z1), i32(split), i32(nreg),
-                i32(method == "greedy"), busy, out, count, np.uint32(cap), vt, i32(nb))
+            out = _buf("out", cap * rb)
+            cap = out.size // rb
+            if merge:   # a tile per work item (gpu/mesh_greedy.cl `tile`)
+                _kernel("mesh_greedy.cl", "tile")(
+                    queue, (nt,), (1,), bp, flags, i32(PW), i32(PH), i32(nx), i32(TW),
+                    i32(TH), i32(nt), i32(z0), i32(z1), i32(split), lay, masks, out, count,
+                    np.uint32(cap), vt, i32(nb))
+            else:
+                _kernel("mesh_greedy.cl", "unit")(
+                    queue, (nt * ni,), (1,), bp, flags, i32(PW), i32(PH), i32(nx),
+                    i32(TW), i32(TH), i32(nt), i32(z0), i32(z1), i32(split), i32(nreg),
+                    busy, out, count, np.uint32(cap), vt, i32(nb))
             n = np.empty(1, np.uint32)
             cl.enqueue_copy(queue, n, count)
             n = int(n[0])
             if n <= cap:
                 break
             cap = n          # overflow: grow to the exact need and run again
+            cl.enqueue_fill_buffer(queue, count, np.uint32(0), 0, 4)
         _bufs["cap"] = cap
-        rec = _scratch(n)
+        rec = _scratch(n, rb // 4)
         if n:
             cl.enqueue_copy(queue, rec, out)
     if vtab is not None:
@@ -152,11 +178,24 @@ def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
 
 
 def columns(rec):
-    """Rect columns (faces.COLS) of raw records (rects(..., vtab))."""
+    """Rect columns (faces.COLS) of raw records (rects(..., vtab) or without)."""
+    if rec.shape[1] == 12:      # with vertices: the QUAD bytes and the tile
+        q = quads_of(rec)
+        return {c: (rec[:, 7] if c == "t" else q[c]).astype(np.int32) for c in Q.COLS}
     r1, r2, r3 = rec[:, 1], rec[:, 2], rec[:, 3]
     cols = (rec[:, 0], r1 & 0xFFFF, r1 >> 16, r2 & 0xFF, (r2 >> 8) & 0xFF, r3 & 0xFFFF,
             r3 >> 16, r2 >> 16)
     return {c: v.astype(np.int32) for c, v in zip(Q.COLS, cols)}
+
+
+def blocks_of(rec):
+    """Block ids of records with vertices (QUAD bytes 11, 12)."""
+    return (rec[:, 4] >> 24) | ((rec[:, 5] & 0xFF) << 8)
+
+
+def quads_of(rec):
+    """The meshing.QUAD array of records with vertices (their bytes 8..24)."""
+    return np.ascontiguousarray(rec.view(np.uint8)[:, 8:8 + Q.QUAD.itemsize]).view(Q.QUAD).ravel()
 
 
 def face_keys(P, za, zb):

@@ -8,7 +8,7 @@ import numpy as np
 
 from ..core.blocks import ANIMATIONS, REGISTRY, RENDERS
 from ..core.errors import VoxelError
-from .faces import QUAD, area, sort_key, to_quads
+from .faces import area, sort_key, to_quads
 from .run import check, rects
 from . import cl, tint
 from .mesh import CORNERS, SIDE, T1, T2, quad_indices  # noqa: F401  (index pattern: API)
@@ -59,11 +59,13 @@ _INSET_BITS = (_INSET << 29).astype(np.uint32)
 
 
 def _vtab():
-    """The tables of `_pack` in one uint32 array for the OpenCL mesher (gpu/mesh_greedy.cl
-    `put` packs each quad's vertices as it emits it), and the block count."""
+    """The tables of `_pack` and PASS_OF in one uint32 array for the OpenCL mesher
+    (gpu/mesh_greedy.cl `put` packs each quad's vertices and order key as it emits
+    it), and the block count."""
     layer = REGISTRY.face_texture[:, SIDE].astype(np.uint32)    # (blocks, 12)
+    assert len(PASSES) == 4   # the kernel's order key has 2 bits for the pass
     t = np.concatenate([_PA.ravel(), _PB.ravel(), _PC.ravel(), _BLOCK_BITS, _INSET_BITS,
-                        layer.ravel()]).astype(np.uint32)
+                        layer.ravel(), PASS_OF]).astype(np.uint32)
     return t, len(REGISTRY.blocks)
 
 
@@ -145,7 +147,7 @@ def build_chunks(blocks, origin=(0, 0), *, method="greedy", backend="numpy",
               z0=r0 * region_h, z1=r1 * region_h, vtab=VTAB)
     nreg, npass, nt = 256 // region_h, len(PASSES), nx * ny
     rec = r.get("rec")   # the OpenCL mesher's records, vertices packed
-    if rec is not None and data is not None and ((rec[:, 2] >> 16) == tint.COLOR).any():
+    if rec is not None and data is not None and (cl.blocks_of(rec) == tint.COLOR).any():
         r, rec = cl.columns(rec), None  # colour strips are cut from the rects: pack here
     if rec is not None:
         q, verts, slot = _from_records(rec, region_h, nt, nreg)
@@ -174,22 +176,15 @@ def build_chunks(blocks, origin=(0, 0), *, method="greedy", backend="numpy",
 
 def _from_records(rec, region_h, nt, nreg):
     """(quads, vertices, (tile, region, pass) slot per quad) from the kernel's records
-    (cl.rects with vtab): sorted once as whole records, fields cut from the sorted ones."""
-    r1, r2 = rec[:, 1], rec[:, 2]
-    z, block = r2 & 0xFF, r2 >> 16
-    region, ps = z // region_h, PASS_OF[block]
-    order = _order({"t": rec[:, 0], "x": r1 & 0xFFFF, "y": r1 >> 16, "z": z,
-                    "face": (r2 >> 8) & 0xFF}, region, ps, nt, nreg)
-    slot = (rec[:, 0] * nreg + region) * len(PASSES) + ps
+    (cl.rects with vtab: each holds its order key, QUAD bytes and vertices): sorted
+    once as whole records, quads and vertices sliced from the sorted ones."""
+    lo, hi = rec[:, 0], rec[:, 1]     # (z, y, x) and ((tile, region, pass), face)
+    o1 = np.argsort(lo.astype(np.uint16), kind="stable")   # radix sorts (see _order)
+    h = hi[o1]
+    order = o1[np.argsort(h.astype(np.uint16) if nt * nreg * len(PASSES) * 16 <= 1 << 16
+                          else h, kind="stable")]
     s = np.take(rec, order, axis=0)
-    s1, s2, s3 = s[:, 1], s[:, 2], s[:, 3]
-    q = np.empty(len(s), QUAD)
-    q["x"], q["y"], q["z"] = s1 & 0xFFFF, s1 >> 16, s2 & 0xFF
-    q["face"], q["block"] = (s2 >> 8) & 0xFF, s2 >> 16
-    q["w"], q["h"] = s3 & 0xFFFF, s3 >> 16
-    q["layer"] = REGISTRY.face_texture[q["block"], SIDE[q["face"]]]
-    q["color"] = 0
-    return q, np.ascontiguousarray(s[:, 4:]).ravel(), slot
+    return cl.quads_of(s), np.ascontiguousarray(s[:, 8:]).ravel(), hi >> 4
 
 
 def _from_columns(r, region_h, nt, nreg):

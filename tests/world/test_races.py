@@ -115,13 +115,17 @@ def test_overlapping_loads_generate_each_chunk_once(tmp_path):
         made = []
         gen, edits = w.generator.generate, w.apply_stored_edits
 
+        raw = {}
+
         def generate(keys):
             made.extend(map(tuple, keys))
-            return gen(keys)
+            out = gen(keys)
+            raw.update(zip(map(tuple, keys), out))
+            return out
 
-        def slow_edits(key, blocks, data=None):  # widens the window between making
-            time.sleep(0.01)                     # and installing
-            return edits(key, blocks, data)
+        def slow_edits(key, blocks, data=None, **kw):  # widens the window between
+            time.sleep(0.01)                           # making and installing
+            return edits(key, blocks, data, **kw)
         w.generator.generate, w.apply_stored_edits = generate, slow_edits
         go = threading.Barrier(2)
 
@@ -134,6 +138,8 @@ def test_overlapping_loads_generate_each_chunk_once(tmp_path):
         assert all(a[k] is b[k] for k in set(a) & set(b))
         got = {k: c.blocks.copy() for k, c in w.chunks.items()}
         assert not w._made  # nothing left behind
+        glass = REGISTRY.id("glass")  # the edit went into a copy: the other load may
+        assert w.chunks[(1, 0)].get(4, 5, 90) == glass != raw[(1, 0)][4, 5, 90]  # share it
     with World.open(path, loader=False) as w:
         w.file.delete_chunks()
     with World.open(path, loader=False) as w:  # each made alone

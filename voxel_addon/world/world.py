@@ -337,21 +337,25 @@ class World(Saving):
                 # installed, or generated and not installed yet (`_made`: two workers'
                 # overlapping rings made ~3 % of a view twice)
                 to_make = [k for k in to_make if k not in self.chunks]
-                made = {k: self._made[k].copy(order="F") for k in to_make if k in self._made}
+                made = {k: self._made[k] for k in to_make if k in self._made}
                 new = [k for k in to_make if k not in made]
                 arrays = self.generator.generate(new) if new else []
                 self._made.update(zip(new, arrays))
             made.update(zip(new, arrays))
-            for key in to_make:
-                c = Chunk(key, *self.apply_stored_edits(key, made[key]))
+            for key in to_make:  # (arrays in _made stay as generated: shared, read-only)
+                c = Chunk(key, *self.apply_stored_edits(key, made[key], copy=True))
                 c.dirty = not self.readonly
                 found[key] = c
         return found, vers
 
-    def apply_stored_edits(self, key, blocks, data=None):
+    def apply_stored_edits(self, key, blocks, data=None, copy: bool = False):
         """The file's edits inside chunk `key` applied to freshly generated arrays
-        (in place, data values included: the one place that does it); (blocks, data)."""
-        for x, y, z, b, d in self.file.edits_in(key):
+        (in place, data values included: the one place that does it); (blocks, data).
+        COPY: blocks stay as they are; an edited copy is returned (when there are edits)."""
+        edits = self.file.edits_in(key)
+        if copy and edits:
+            blocks = blocks.copy(order="F")
+        for x, y, z, b, d in edits:
             data = C.put(blocks, data, x & 15, y & 15, z, b, d)
         return blocks, data
 

@@ -120,3 +120,17 @@ def test_newer_world_is_refused(tmp_path):
     r = cli("edit", "--world", p, "--set", 0, 0, 100, "stone")
     assert r.returncode == 2 and "newer" in r.stderr
     assert digest(p) == before
+
+
+def test_a_command_builds_its_own_parser_only():
+    """`import ...` does not import what other commands' options list (meshing,
+    render); the whole parser still lists every command."""
+    code = ("import sys, voxel_addon.cli as c; c.parser(c._module(['import', '-h'])); "
+            "print(sorted(m for m in sys.modules if m.startswith('voxel_addon.')))")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       env=dict(os.environ, PYTHONPATH=str(ROOT)))
+    assert r.returncode == 0, r.stderr
+    assert "voxel_addon.meshing" not in r.stdout and "voxel_addon.cli.importer" in r.stdout
+    whole = cli("--help").stdout
+    assert all(c in whole for c in ("generate", "import", "export", "render", "bench"))
+    assert "--from" in cli("import", "--help").stdout

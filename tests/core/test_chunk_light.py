@@ -106,6 +106,8 @@ def test_pack_round_trips_exactly(kinds):
         assert b.flags.f_contiguous and b.flags.writeable
         b[0, 0, 0] ^= 1  # a new array each time
         assert np.array_equal(p.unpack(), a0)
+        out = np.full(a0.shape, 77, a0.dtype, order="F")  # or into a given one
+        assert p.unpack(out) is out and np.array_equal(out, a0)
         for _ in range(4):
             x0, x1 = sorted(int(v) for v in rng.integers(0, shape[0] + 1, 2))
             y0, y1 = sorted(int(v) for v in rng.integers(0, shape[1] + 1, 2))
@@ -188,3 +190,23 @@ def test_windows_of_cold_chunks_read_exactly_and_leave_them_cold(monkeypatch):
         out2 = np.zeros_like(out)
         c.blocks_into(out2, xs, ys, z0, z1)
         assert np.array_equal(out2, a[xs, ys, z0:z1])
+
+
+def test_light_out_leaves_packed_light_packed():
+    """A payload's light (issue 29): the hot array itself, or a new array rebuilt
+    from the packed light that the chunk does not keep (nothing to pack again at
+    the next compact); writes into either stay out of the other."""
+    a = C.empty()
+    a[:, :, 100:] = 0xF000
+    a[3, 4, 90] = 0x0F0F
+    c = Chunk((0, 0))
+    assert c.light_out() is None
+    c.light = a
+    assert c.light_out() is a  # hot: the array itself
+    c.compact()
+    p = c._lpack
+    got = c.light_out()
+    assert np.array_equal(got, a) and got.flags.f_contiguous and got is not a
+    assert c._light is None and c._lpack is p  # still packed, the same pack
+    got[3, 4, 90] = 1
+    assert c.light_out()[3, 4, 90] == 0x0F0F and c.light[3, 4, 90] == 0x0F0F

@@ -4,6 +4,8 @@ negative chunks, every compression type, both folder layouts, old versions, the
 report, --replace, --area, Status, y-min."""
 from __future__ import annotations
 
+import sqlite3
+
 import numpy as np
 import pytest
 
@@ -189,3 +191,64 @@ def test_interrupted_import_keeps_finished_batches(tmp_path):
         with pytest.raises(VoxelError, match="replace"):
             minecraft.import_world(world, tmp_path)
         assert minecraft.import_world(world, tmp_path, replace=True).chunks == 40
+
+
+def test_a_refused_import_keeps_the_batches_before_it(tmp_path):
+    """Batches are written behind the parse (formats/minecraft.steps): a hostile
+    chunk in the second batch refuses the import with the first batch written."""
+    secs = {0: np.full((16, 16, 16), "minecraft:stone", object)}
+    body = mc.chunk_nbt(0, 0, secs)
+    deep = b"\x0a\x00\x00\x03\x00\x0bDataVersion\x00\x00\x0f\x71" + b"\x0a\x00\x01x" * 600 \
+        + b"\x00" * 601
+    chunks = {(x, z): body for x in range(8) for z in range(5)}
+    chunks[(3, 4)] = deep          # the 36th in the import's order (z, then x)
+    mc.write_region(tmp_path / "region", chunks, 3)
+    w = tmp_path / "w.sqlite"
+    with World.create(w, seed=0, generator="empty", loader=False) as world:
+        with pytest.raises(VoxelError, match="refused"):
+            minecraft.import_world(world, tmp_path)
+    with World.open(w, loader=False) as world:
+        assert world.file.chunk_count() == minecraft.BATCH
+
+
+def test_the_import_without_its_helper_thread_writes_the_same(tmp_path, monkeypatch):
+    """VOXEL_IMPORT_THREAD=0 (or one core): inflate and compress inline, same rows."""
+    rng = np.random.default_rng(5)
+    names = np.array(["minecraft:stone", "minecraft:air", "minecraft:oak_planks",
+                      "minecraft:water[level=3]"], object)
+    chunks = {(x, z): mc.chunk_nbt(x, z, {y: names[rng.integers(0, 4, (16, 16, 16))]
+                                          for y in (-1, 0, 3)}) for x in range(6) for z in range(6)}
+    mc.write_region(tmp_path / "region", chunks, 2)
+    rows = []
+    for flag in ("1", "0"):
+        monkeypatch.setenv("VOXEL_IMPORT_THREAD", flag)
+        ex = minecraft._helper()
+        assert isinstance(ex, minecraft._Inline) == (flag == "0")
+        ex.shutdown()
+        w = tmp_path / f"w{flag}.sqlite"
+        with World.create(w, seed=0, generator="empty", loader=False) as world:
+            minecraft.import_world(world, tmp_path)
+        db = sqlite3.connect(w)
+        rows.append(db.execute("SELECT cx, cy, blocks, data FROM chunks ORDER BY cx, cy").fetchall()
+                    + db.execute("SELECT * FROM mc_biomes ORDER BY cx, cy").fetchall())
+        db.close()
+    assert len(rows[0]) == 72 and rows[0] == rows[1]
+
+
+def test_a_large_chunk_is_not_inflated_ahead_and_still_imported(tmp_path):
+    """The helper thread holds at most AHEAD_MAX bytes of a chunk (a compression bomb
+    is decoded only under the import's own limits): a larger chunk comes back None
+    from _inflate and is decoded again by the import."""
+    secs = {0: np.full((16, 16, 16), "minecraft:stone", object)}
+    small = mc.chunk_nbt(0, 0, secs)
+    junk = b"\x07\x00\x04junk" + (minecraft.AHEAD_MAX + 8).to_bytes(4, "big") \
+        + bytes(minecraft.AHEAD_MAX + 8)
+    big = small[:3] + junk + small[3:]                   # first in the root compound
+    mc.write_region(tmp_path / "region", {(0, 0): big, (1, 0): small}, 2)
+    from voxel_addon.formats.region import Region
+    reg = Region(tmp_path / "region" / "r.0.0.mca")
+    got = minecraft._inflate([(reg, 0, 0), (reg, 1, 0)])
+    assert got[0] is None and got[1] == small
+    with World.create(tmp_path / "w.sqlite", seed=0, generator="empty", loader=False) as world:
+        rep = minecraft.import_world(world, tmp_path)
+        assert rep.chunks == 2 and not rep.damaged and world.file.chunk_count() == 2

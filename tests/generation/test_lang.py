@@ -141,7 +141,7 @@ def test_lowering_hoists_merges_and_stays_exact(cl_device):
     ops = [e.op for e in lower.nodes(u3.roots())]
     assert "perlin2" not in ops            # column-only noise went to a hidden 2D field
     assert ops.count("rand3") == 1         # the repeated rand3 is computed once
-    from voxel_addon.generation.cl import source
+    from voxel_addon.generation.clsource import source
     assert "if (" in source(units)         # expensive operands are computed lazily
     keys = [(0, 0), (3, -2)]
     a = Lazy(2, None, "numpy").generate(keys)
@@ -199,7 +199,7 @@ class AllOps(PassGenerator):
 
 
 def test_vector_kernels_every_op_exact(cl_device):
-    from voxel_addon.generation import cl
+    from voxel_addon.generation import clsource as cl
     units = AllOps(5, None, "numpy").units
     assert [cl.vectorizable(u) for u in units if u.kind == "3d"] == [True, True, False]
     # two-load lookups (perlin3_8r) only where x spans < 1 cell per row and y, z are

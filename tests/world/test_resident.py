@@ -44,3 +44,67 @@ def test_edit_on_cold_chunks_changes_exactly_one_voxel(tmp_path, monkeypatch):
         for k in [(i, j) for j in (-1, 0, 1) for i in (-1, 0, 1)]:
             i, j = (k[0] + 1) * C.SIZE, (k[1] + 1) * C.SIZE
             assert np.array_equal(w.chunks[k].light, want[i:i + C.SIZE, j:j + C.SIZE]), k
+
+
+def test_reloaded_batch_packs_its_light_once(tmp_path, monkeypatch):
+    """A stream's batch of chunks read from the file (issue 29): their stored light
+    goes to the payloads as read (not packed on load and rebuilt for the payload)
+    and is packed once, by the compact after; a plain load packs it at once."""
+    path = tmp_path / "w.sqlite"
+    with World.create(path, seed=7, backend="numpy") as w:
+        build.light_and_mesh(w, -1, -1, 3, 3, backends_=("numpy", "numpy"))
+        want = w.chunks[(0, 0)].light.copy()
+    packs = []
+    real = C.pack
+    monkeypatch.setattr(C, "pack", lambda a: packs.append(a.dtype) or real(a))
+    with World.open(path) as w:
+        got = build.light_and_mesh(w, 0, 0, 1, 1, backends_=("numpy", "numpy"))
+        assert [p.key for p in got] == [(0, 0)]
+        c = w.chunks[(0, 0)]
+        assert got[0].light is c._light and np.array_equal(got[0].light, want)
+        n = len(packs)
+        assert _cold(w) and len(packs) == n + 9  # each loaded light packed once, here
+        w.load([(2, 2)])  # not a batch: packed on load
+        assert w.chunks[(2, 2)]._light is None and w.chunks[(2, 2)]._lpack is not None
+
+
+def test_save_encodes_packed_chunks_as_their_arrays(tmp_path, monkeypatch):
+    """A save snapshots cold chunks as their Packed blocks and light (issue 29: no
+    decode under the lock; decoded into one reused buffer to encode): the rows are
+    the bytes the arrays give, with any block numbering; a snapshot taken back (a
+    chunk evicted while its save is in flight) and the reopened file hold them."""
+    from voxel_addon.core.chunk import Chunk
+    from voxel_addon.storage.rows import Encoder
+    monkeypatch.setattr(C, "HOT_S", -1.0)
+    path = tmp_path / "w.sqlite"
+    with World.create(path, seed=7, backend="numpy") as w:
+        build.light_and_mesh(w, -1, -1, 2, 2, backends_=("numpy", "numpy"))
+        assert _cold(w)
+        lit = [k for k in sorted(w.chunks) if w.chunks[k].has_light]
+        assert len(lit) == 9
+        enc = w.file.encoder()
+        mapped = Encoder(enc.codec, np.arange(len(REGISTRY), dtype=np.uint16)[::-1].copy())
+        want = {}
+        for k in lit:
+            c = w.chunks[k]
+            b, light = c.saved()
+            assert b is c._bpack and light is c._lpack
+            arrays = (b.unpack(), light.unpack())
+            want[k] = arrays
+            for e in (enc, mapped):
+                assert e.row(k, b, None, light) == e.row(k, arrays[0], None, arrays[1])
+            back = Chunk(k, b)
+            back.light = light
+            assert back._lpack is light and back._light is None
+            assert np.array_equal(back.blocks, arrays[0]) and np.array_equal(back.light, arrays[1])
+        hot = w.chunks[lit[0]]
+        hot.blocks[0, 0, 255] = REGISTRY.id("stone")  # hot blocks: a copy goes
+        b, _ = hot.saved()
+        assert b is not hot.blocks and np.array_equal(b, hot.blocks)
+        want[lit[0]] = (b, want[lit[0]][1])
+        hot.dirty = True
+    with World.open(path) as w:
+        w.load(lit)
+        for k in lit:
+            c = w.chunks[k]
+            assert np.array_equal(c.blocks, want[k][0]) and np.array_equal(c.light, want[k][1]), k

@@ -17,15 +17,20 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message}\n")
 
 
-def parser() -> argparse.ArgumentParser:
+def parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The whole command line, or with `only` (a module of COMMANDS) that command's
+    alone: a command run does not import what the others' options list (meshing,
+    render, bench: a tenth of a second before an import or a generate starts)."""
     p = _Parser(prog="python -m voxel_addon",
                 description="Voxel Worlds: generate, inspect, edit, render and bake voxel worlds.")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    for name in COMMANDS:
+    for name in [only] if only else COMMANDS:
         try:
             mod = importlib.import_module(f".{name}", __name__)
         except ModuleNotFoundError as e:
             if e.name == f"{__name__}.{name}":
+                if only:
+                    return parser()
                 continue
             raise
         sp = mod.add_parser(sub)
@@ -33,8 +38,17 @@ def parser() -> argparse.ArgumentParser:
     return p
 
 
+def _module(argv) -> str | None:
+    """The module of the command argv starts with, when it starts with one."""
+    first = argv[0] if argv else ""
+    name = {"import": "importer", "export": "exporter"}.get(first, first)
+    return name if name in COMMANDS and first not in ("importer", "exporter") else None
+
+
 def main(argv=None) -> int:
-    args = parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else list(argv)
+    only = _module(argv)
+    args = parser(only).parse_args(argv)
     try:
         return args._run(args) or 0
     except VoxelError as e:

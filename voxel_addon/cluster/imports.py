@@ -47,6 +47,7 @@ class _LocalPalette:
         from types import SimpleNamespace
         self.met = met  # (name, props) -> what `of` looks up: shared by a task's chunks
         self.ids: dict = {}
+        self.keyed: dict = {}
         self.local: list = []
         self.voxels = None
         self.biomes: dict = {}

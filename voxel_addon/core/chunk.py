@@ -90,6 +90,8 @@ class Chunk:
         self.key = tuple(key)
         if blocks is None:
             self._blocks, self._bpack, self._bhot = None, Packed.uniform(SHAPE, np.uint16), 0.0
+        elif isinstance(blocks, Packed):  # a save's snapshot (World._fetch): never changes
+            self._blocks, self._bpack, self._bhot = None, blocks, 0.0
         elif getattr(blocks, "shape", None) == SHAPE and blocks.dtype in (np.uint16, np.uint8):
             # born packed (a generated or loaded chunk is read once by its light and
             # mesh, through blocks_into): 128 KB less for each until something reads it
@@ -162,8 +164,29 @@ class Chunk:
             return
         self._lpack.into(out, xs, ys, z0, z1)
 
+    def light_out(self) -> np.ndarray | None:
+        """The final light for a reader that keeps it (a payload): the hot array
+        itself, or one rebuilt from the packed light that the chunk does not keep,
+        so the next compact() has nothing to pack again (a reloaded chunk's light was
+        packed on load). Arrays handed out are never written in place (edit.py
+        copies before it writes): a later write into .light leaves this one."""
+        a = self._light
+        return a if a is not None or self._lpack is None else self._lpack.unpack()
+
+    def saved(self) -> tuple:
+        """(blocks, light) for a save's snapshot: values no later change of the
+        chunk touches and that cost no decode under the world's lock: the Packed
+        ones (never changed: a pack replaces them), a copy of hot blocks, hot light
+        as is (arrays handed out are replaced, never written in place). Chunk()
+        and .light take them back (World._fetch)."""
+        b = self._bpack if self._blocks is None else self._blocks.copy(order="F")
+        return b, self._lpack if self._light is None else self._light
+
     @light.setter
     def light(self, value) -> None:
+        if isinstance(value, Packed):
+            self._light, self._lpack = None, value
+            return
         self._light, self._lpack = value, None
 
     def compact(self) -> None:
@@ -255,12 +278,31 @@ class Packed:
         return b.nbytes if isinstance(b, np.ndarray) else \
             sum(len(x) if isinstance(x, bytes) else x.nbytes for x in b)
 
-    def unpack(self) -> np.ndarray:
-        """A new (writable, Fortran-ordered) array of the packed values."""
+    def unpack(self, out: np.ndarray | None = None) -> np.ndarray:
+        """A new (writable, Fortran-ordered) array of the packed values, or `out`
+        (Fortran-ordered, of the shape and dtype) filled with them: a save encodes
+        every chunk from one reused buffer (storage/rows.py), as a fresh 128 KB
+        costs page faults in a big process (~30 us)."""
         if isinstance(self.body, np.ndarray):
-            return self.body.copy(order="F")
-        out = np.empty(self.shape, self.dtype, order="F")
-        self.into(out, _ALL, _ALL, 0, self.shape[2])
+            if out is None:
+                return self.body.copy(order="F")
+            out[...] = self.body
+            return out
+        if out is None:
+            out = np.empty(self.shape, self.dtype, order="F")
+        # section by section into the flat array: no joined copy of the decoded
+        # runs (a fresh 128 KB for each: page faults; a save unpacks every chunk)
+        flat = out.reshape(-1, order="F")
+        w, h, z = self.shape
+        n, k = w * h * self.SECTION, w * h * self.dtype.itemsize
+        for t, v in enumerate(self.body):
+            a = t * n
+            if isinstance(v, bytes):
+                m = min(self.SECTION, z - t * self.SECTION)
+                flat[a:a + w * h * m] = np.frombuffer(
+                    _lz4.decompress(v, uncompressed_size=k * m), self.dtype)
+            else:
+                flat[a:a + n] = v
         return out
 
     def into(self, out, xs: slice, ys: slice, z0: int, z1: int) -> None:

@@ -4,7 +4,8 @@
 data}`, root `Status`. 1.13-1.17 (1451..2843): `Level.Sections[]` with `Palette` and
 `BlockStates`, `Level.Status`; before 1.16 (DataVersion 2529) indices run on across
 longs, since then a long holds 64 // bits whole indices. Older worlds (numeric ids)
-are refused. Index order in a section: y * 256 + z * 16 + x.
+are refused. Index order in a section's data: y * 256 + z * 16 + x; Section.indices
+holds them z-flipped (y * 256 + (15 - z) * 16 + x, a world chunk's layer order).
 
 A chunk's NBT may hold at most CHUNK_TAGS tags (arrays count as one): a full 1.21
 chunk has a few thousand, one with a thousand filled chests some hundred thousand;
@@ -16,7 +17,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import nbt
+from . import chunkscan, nbt
 
 V_FLATTENING = 1451  # 17w47a: block names and palettes (1.13)
 V_PACKED = 2529      # 20w17a: indices never span two longs
@@ -37,9 +38,10 @@ class ChunkError(ValueError):
 class Section(NamedTuple):
     y: int                  # section index: blocks 16*y .. 16*y + 15
     palette: list           # block names
-    indices: np.ndarray | None  # (4096,) uint16 into palette; None: all palette[0]
+    indices: np.ndarray | None  # (4096,) intp into palette, y*256 + (15-z)*16 + x; None: all palette[0]
     props: list | None = None   # each palette entry's properties ({str: str}), or None
     biomes: tuple | None = None  # 1.18+: (names, packed longs or None): cells() unpacks them
+    key: bytes | None = None     # the palette's bytes (chunkscan): equal keys, equal palettes
 
 
 class Chunk(NamedTuple):
@@ -49,9 +51,22 @@ class Chunk(NamedTuple):
     biomes: np.ndarray | None = None  # 1.13–1.17: Level.Biomes (256 per column or 1024 cells)
 
 
-def read(payload: bytes, budget=None) -> Chunk:
-    """The sections of a chunk's NBT; `budget` (a budget.Budget) is charged its tags."""
+def read(payload: bytes, budget=None, fast: bool = True) -> Chunk:
+    """The sections of a chunk's NBT; `budget` (a budget.Budget) is charged its tags.
+    `fast`: try chunkscan first (False: the general reader only, the tests' oracle)."""
     limit = CHUNK_TAGS if budget is None else min(CHUNK_TAGS, max(budget.tags, 0))
+    payload = payload if isinstance(payload, bytes) else bytes(payload)
+    sections = None
+    if fast:
+        try:   # a well-formed 1.18+ chunk: one pass, nothing else built
+            version, status, found, tags = chunkscan.scan(payload, limit)
+            sections = _fast(found)
+        except chunkscan.Bail:
+            pass
+    if sections is not None:
+        if budget is not None:
+            budget.spend_tags(tags)
+        return Chunk(version, status, sections)
     try:
         root, tags = nbt.read(payload, KEEP, limit)
     except nbt.TooMany:
@@ -102,6 +117,15 @@ def read(payload: bytes, budget=None) -> Chunk:
     return Chunk(version, status, sections, None if old is None else old.astype(np.int32))
 
 
+def _fast(found):
+    """chunkscan's sections unpacked, or None when an index lies outside its palette
+    (the general path then reports it)."""
+    rows = [[y, p.names, data, p, bio] for y, p, data, bio in found]
+    if not _unpack_all(rows):
+        return None
+    return [Section(y, names, idx, p.props, bio, p.key) for y, names, idx, p, bio in rows]
+
+
 def _section(s, version):
     """[y, names, indices (or the packed longs, for _unpack_all), props, biomes] of one
     raw section, None when it holds no blocks; ChunkError when damaged."""
@@ -134,7 +158,7 @@ def _section(s, version):
         if not isinstance(data, np.ndarray) or data.dtype != np.dtype(">i8"):
             raise ChunkError(f"section {s['Y']}: block data is not a long array")
         if version < V_PACKED:
-            idx = unpack(data, len(names), spanning=True)
+            idx = _flip(unpack(data, len(names), spanning=True))
         else:
             bits = bits_for(len(names))
             _need(len(data), bits)
@@ -152,21 +176,43 @@ def _need(n: int, bits: int) -> None:
                          f"({bits} bits per block)")
 
 
-def _unpack_all(found) -> None:
-    """Replace the packed longs of `found` sections by their 4096 indices, the
-    sections of one bit width in one pass."""
+def _unpack_all(found) -> bool:
+    """Replace the packed longs of `found` sections by their 4096 indices (Section's
+    order and type: _flip), the sections of one bit width in one pass; whether all
+    of those indices lie inside their palettes."""
     groups: dict = {}
     for f in found:
-        if f[2] is not None and f[2].dtype != np.uint16:
+        if f[2] is not None and f[2].dtype == _PACKED:
             groups.setdefault(bits_for(len(f[1])), []).append(f)
+    fits = True
     for bits, fs in groups.items():
-        per = 64 // bits
-        words = np.concatenate([f[2] for f in fs], dtype=np.int64).view(np.uint64)
-        shifts = np.arange(per, dtype=np.uint64) * np.uint64(bits)
-        out = (words[:, None] >> shifts[None, :]) & np.uint64((1 << bits) - 1)
-        out = out.reshape(len(fs), -1)[:, :4096].astype(np.uint16)
+        n = len(fs)
+        if bits == 4:   # two indices a byte, looked up (most sections): no shifts
+            u8 = np.concatenate([f[2] for f in fs], dtype="<i8").view(np.uint8)
+            out = _NIBBLES.take(u8.reshape(n, 16, 16, 8)[:, :, ::-1], axis=0)  # z flipped
+        else:
+            per = 64 // bits
+            words = np.concatenate([f[2] for f in fs], dtype=np.int64).view(np.uint64)
+            shifts = np.arange(per, dtype=np.uint64) * np.uint64(bits)
+            out = (words[:, None] >> shifts[None, :]) & np.uint64((1 << bits) - 1)
+            out = out.reshape(n, -1)[:, :4096].reshape(n, 16, 16, 16)[:, :, ::-1].astype(np.intp)
+        out = out.reshape(n, 4096)
+        if (out.max(axis=1) >= [len(f[1]) for f in fs]).any():
+            fits = False
         for f, row in zip(fs, out):
             f[2] = row
+    return fits
+
+
+_PACKED = np.dtype(">i8")
+_NIBBLES = np.array([[b & 15, b >> 4] for b in range(256)], np.intp)   # a byte's two indices
+
+
+def _flip(idx: np.ndarray) -> np.ndarray:
+    """File order (y*256 + z*16 + x) -> Section's: y*256 + (15 - z)*16 + x as intp,
+    the order of a world chunk's layer (x fastest, north up): convert takes from it
+    without a copy and NumPy without a cast."""
+    return idx.reshape(16, 16, 16)[:, ::-1].astype(np.intp).reshape(4096)
 
 
 def _biomes(b):

@@ -215,16 +215,19 @@ def columns(ch, blocks: np.ndarray, y_min: int, biome, memo: dict | None = None)
     if not secs:
         return None
     ys = sorted(secs)
-    out = np.zeros((16, 16), np.uint8)
     sy = np.clip(y >> 4, ys[0], ys[-1])
-    for s in sorted(set(sy.ravel().tolist())):
-        near = min(ys, key=lambda v: abs(v - s))
+    ds = sorted(set(sy.ravel().tolist()))
+    # each section met: its 64 cells' world biomes; then one lookup for all columns
+    table = np.empty((len(ds), 64), np.uint8)
+    for k, s in enumerate(ds):
+        near = s if s in secs else min(ys, key=lambda v: abs(v - s))
         names, _ = secs[near]
         key = tuple(names)
         glob = memo.get(key)
         if glob is None:
             glob = memo[key] = np.array([biome(n) for n in names], np.uint8)
         idx = cells(secs[near])
-        m = sy == s
-        out[m] = glob[0] if idx is None else glob[idx[((y[m] & 15) >> 2) * 16 + cell_xz[m]]]
-    return out
+        table[k] = glob[0] if idx is None else glob[idx]
+    rank = np.zeros(ys[-1] - ys[0] + 1, np.intp)
+    rank[np.array(ds) - ys[0]] = np.arange(len(ds))
+    return table[rank[sy - ys[0]], ((y & 15) >> 2) * 16 + cell_xz]

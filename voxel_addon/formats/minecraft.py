@@ -20,8 +20,10 @@ from __future__ import annotations
 
 import gzip
 import json
+import os
 import time
-from collections import Counter
+from collections import Counter, deque
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -34,9 +36,11 @@ from ..core.errors import VoxelError
 from ..storage import minecraft as mcfile
 from . import anvil, mapping, mcstate, nbt, region
 from .budget import Budget, Exceeded
-from .region import External, Region, RegionError
+from .region import MAX_NBT, External, Region, RegionError, decompress
 
 BATCH = 32
+GROUP = 16   # chunks a helper task inflates
+AHEAD_MAX = 1 << 20   # bytes of one chunk's NBT inflated ahead (real ones: tens of KB)
 LAYOUTS = ("dimensions/minecraft/overworld/region", "region")  # 26.1 first, then older
 LEVEL_KEEP = {"Data": {"DataVersion": None}}
 LEVEL_TAGS = 1 << 18   # a level.dat has hundreds to thousands
@@ -153,6 +157,7 @@ class _Palettes:
         self.colors = colors.parse(world.file.meta)
         self.states = mcstate.States(world.file)
         self.ids: dict = {}
+        self.keyed: dict = {}
         self.changed = False
 
     def of(self, name: str, props: dict | None = None) -> tuple[int, int]:
@@ -189,19 +194,23 @@ def convert(ch: anvil.Chunk, y_min: int, pal: _Palettes):
     gives the data stored as 0 per block id (its default state, mcstate.States)."""
     blocks, data, dropped = C.empty(), None, 0
     counts = pal.report.blocks
+    keyed = pal.keyed   # a palette's bytes -> what `of` gives its entries
     ids_l, vals_l, n_l, secs = [], [], [], []
     for s in ch.sections:
         start = len(ids_l)
+        got = keyed.get(s.key) if s.key is not None else None
+        if got is None:
+            got = [pal.of(name, p) for name, p in zip(s.palette, s.props or [None] * len(s.palette))]
+            if s.key is not None:
+                keyed[s.key] = got
         if s.indices is None and len(s.palette) == 1:      # one block: often all air
-            bid, d = pal.of(s.palette[0], s.props[0] if s.props else None)
             counts[s.palette[0]][2] += 4096
-            ids_l.append(bid)
-            vals_l.append(d)
+            ids_l.append(got[0][0])
+            vals_l.append(got[0][1])
             n_l.append(4096)
             secs.append((s, start, start + 1, None))
             continue
-        for name, p in zip(s.palette, s.props or [None] * len(s.palette)):
-            bid, d = pal.of(name, p)
+        for bid, d in got:
             ids_l.append(bid)
             vals_l.append(d)
         n = np.bincount(s.indices, minlength=len(s.palette)) if s.indices is not None \
@@ -217,29 +226,30 @@ def convert(ch: anvil.Chunk, y_min: int, pal: _Palettes):
     ids_a, vals_a = np.array(ids_l, np.uint16), np.array(vals_l, np.uint16)
     dflt = pal.settle(ids_a, vals_a, np.array(n_l))
     vals_a[vals_a == dflt[ids_a]] = 0                   # a block's default state: 0
+    idl, vall = ids_l, vals_a.tolist()   # Python ints: no NumPy scalars per section
     for s, i, j, n in secs:
-        ids, vals = ids_a[i:j], vals_a[i:j]
         z0 = 16 * s.y - y_min
         lo, hi = max(z0, 0), min(z0 + 16, C.HEIGHT)
         if lo >= hi:
-            dropped += 4096 if n is None and ids[0] else 0 if n is None else int(n[ids != 0].sum())
+            dropped += (4096 if idl[i] else 0) if n is None else int(n[ids_a[i:j] != 0].sum())
             continue
         if s.indices is None:
-            if ids[0]:
-                blocks[:, :, lo:hi] = ids[0]
-            if vals[0]:
+            if idl[i]:
+                blocks[:, :, lo:hi] = idl[i]
+            if vall[i]:
                 if data is None:
                     data = C.empty()
-                data[:, :, lo:hi] = vals[0]
+                data[:, :, lo:hi] = vall[i]
             continue
-        # [y][z][x] -> [x][15 - z][y]: blocks is x-fastest, so its .T is [y][15 - z][x]
-        # in C order and take writes it in place (no strided gather, no temporary)
-        sec = s.indices.reshape(16, 16, 16)[lo - z0:hi - z0, ::-1, :]
+        ids = ids_a[i:j]
+        # indices are [y][15 - z][x] (anvil): blocks is x-fastest, so its .T is
+        # [y][15 - z][x] in C order and take writes it in place (no gather, no temporary)
+        sec = s.indices.reshape(16, 16, 16)[lo - z0:hi - z0]
         ids.take(sec, out=blocks.T[lo:hi], mode="clip")   # indices checked by anvil
-        if vals.any():
+        if any(vall[i:j]):
             if data is None:
                 data = C.empty()
-            vals.take(sec, out=data.T[lo:hi], mode="clip")
+            vals_a[i:j].take(sec, out=data.T[lo:hi], mode="clip")
         if hi - lo < 16:
             outside = np.ones(16, bool)
             outside[lo - z0:hi - z0] = False
@@ -283,6 +293,63 @@ def import_world(world, path, *, y_min=None, area=None, replace=False, progress=
     return report
 
 
+def _inflate(items):
+    """Each (region, cx, cz)'s NBT when it inflates to at most AHEAD_MAX bytes, else
+    None (the import's thread decodes it as before: a bomb is never held ahead), or
+    the error of reading its sectors."""
+    out = []
+    for reg, cx, cz in items:
+        try:
+            kind, body = reg.raw(cx, cz)
+        except RegionError as e:
+            out.append(e)
+            continue
+        try:
+            out.append(decompress(kind, body, AHEAD_MAX))
+        except ValueError:   # larger, or damaged: decoded again with the real limits
+            out.append(None)
+    return out
+
+
+class _Inline:
+    """The helper's interface without a thread: each task runs when submitted."""
+
+    def submit(self, fn, *args):
+        f = Future()
+        try:
+            f.set_result(fn(*args))
+        except BaseException as e:   # handed over as the thread's future would
+            f.set_exception(e)
+        return f
+
+    def shutdown(self, **kw):
+        pass
+
+
+def _helper():
+    """The import's helper thread; none with VOXEL_IMPORT_THREAD=0 or on one core."""
+    if os.environ.get("VOXEL_IMPORT_THREAD", "1") == "0" or (os.cpu_count() or 1) < 2:
+        return _Inline()
+    return ThreadPoolExecutor(1, thread_name_prefix="mc-import")
+
+
+def _rows(enc, items):
+    return [enc.row(k, b, d) for k, b, d in items]
+
+
+def _charged(got, reg, cx, cz, budget):
+    """_inflate's answer charged to the import's budget: what reg.payload(cx, cz,
+    budget) gives. While the budget has MAX_NBT left that is the same decode (it fits
+    the limit); a chunk _inflate left, or one near the budget's end, is decoded again
+    here under what is left."""
+    if got is None or budget.bytes < MAX_NBT:
+        return reg.payload(cx, cz, budget)
+    if isinstance(got, BaseException):
+        raise got
+    budget.spend_bytes(len(got))
+    return got
+
+
 def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
           resources=None):
     """The import as a generator of (chunks done, total), one step per batch written,
@@ -305,45 +372,82 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
     pal = _Palettes(world, report)
     if resources is not None:   # written with the first batch
         world.file.stage_meta(mcstate.RESOURCES, json.dumps([str(r) for r in resources]))
-    batch, biomes = [], []
-    for done, (reg, cx, cz) in enumerate(todo, 1):
-        try:
-            ch = anvil.read(reg.payload(cx, cz, budget), budget)
-        except Exceeded as e:
-            raise VoxelError(f"{reg.path.name} chunk ({cx}, {cz}): {e}; import refused") \
-                from None
-        except External:
-            report.external += 1
-            ch = None
-        except (RegionError, anvil.ChunkError, nbt.NbtError) as e:
-            msg = str(e)
-            old += "before 1.13" in msg
-            report.damaged.append(msg if msg.startswith(reg.path.name)
-                                  else f"{reg.path.name} chunk ({cx}, {cz}): {msg}")
-            ch = None
-        if ch is not None:
-            if report.version is None:
-                report.version = version if version is not None else ch.version
-                report.y_min = y_min if y_min is not None else (
-                    -64 if report.version >= anvil.V_NO_LEVEL else 0)
-                world.file.stage_meta(mcfile.Y_MIN, str(report.y_min))
-            if ch.status not in anvil.DONE:
-                report.unfinished[ch.status] += 1
-            else:
-                blocks, data, dropped = convert(ch, report.y_min, pal)
-                report.dropped += dropped
-                batch.append((to_key(cx, cz), blocks, data))
-                cols = pal.states.columns(ch, blocks, report.y_min)
-                if cols is not None:
-                    biomes.append((to_key(cx, cz), cols))
-        if len(batch) >= BATCH or (done == len(todo) and batch):
-            pal.save()
-            kept = world.store_chunks(batch, replace=replace, since=start)
-            report.chunks += len(batch) - len(kept)
-            report.kept += len(kept)
-            mcfile.write(world.file, [(k, b) for k, b in biomes if k not in set(kept)])
-            batch, biomes = [], []
-            yield done, len(todo)
+    # a helper thread inflates chunks ahead (GROUP a task) and compresses each batch's
+    # rows while the next batch is parsed (zlib and zstd let go of the GIL; few, large
+    # tasks: each hand-over of the GIL costs): this thread parses, converts and writes.
+    # A batch is written once the next one is converted, in the same order and with
+    # the same staged meta as one after the other; an error writes the batch in hand
+    # first, as the sequential import had (a close at a yield drops the one ahead).
+    ex = _helper()
+    enc = world.file.encoder()
+    ahead, got = deque(), deque()
+    nxt = 0
+    batch, biomes, pending = [], [], None
+
+    def flush():
+        nonlocal pending
+        fut, bio, upto = pending
+        pending = None
+        kept = world.store_rows(fut.result(), replace=replace, since=start)
+        report.chunks += len(fut.result()) - len(kept)
+        report.kept += len(kept)
+        mcfile.write(world.file, [(k, b) for k, b in bio if k not in set(kept)])
+        return upto
+
+    try:
+        for done, (reg, cx, cz) in enumerate(todo, 1):
+            while nxt < len(todo) and len(ahead) < 2:
+                ahead.append(ex.submit(_inflate, todo[nxt:nxt + GROUP]))
+                nxt += GROUP
+            if not got:
+                got.extend(ahead.popleft().result())
+            try:
+                ch = anvil.read(_charged(got.popleft(), reg, cx, cz, budget), budget)
+            except Exceeded as e:
+                raise VoxelError(f"{reg.path.name} chunk ({cx}, {cz}): {e}; import refused") \
+                    from None
+            except External:
+                report.external += 1
+                ch = None
+            except (RegionError, anvil.ChunkError, nbt.NbtError) as e:
+                msg = str(e)
+                old += "before 1.13" in msg
+                report.damaged.append(msg if msg.startswith(reg.path.name)
+                                      else f"{reg.path.name} chunk ({cx}, {cz}): {msg}")
+                ch = None
+            if ch is not None:
+                if report.version is None:
+                    report.version = version if version is not None else ch.version
+                    report.y_min = y_min if y_min is not None else (
+                        -64 if report.version >= anvil.V_NO_LEVEL else 0)
+                    world.file.stage_meta(mcfile.Y_MIN, str(report.y_min))
+                if ch.status not in anvil.DONE:
+                    report.unfinished[ch.status] += 1
+                else:
+                    blocks, data, dropped = convert(ch, report.y_min, pal)
+                    report.dropped += dropped
+                    key = to_key(cx, cz)
+                    cols = pal.states.columns(ch, blocks, report.y_min)
+                    batch.append((key, blocks, data))
+                    if cols is not None:
+                        biomes.append((key, cols))
+            if len(batch) >= BATCH or (done == len(todo) and batch):
+                upto = flush() if pending else None
+                pal.save()   # staged for this batch's transaction, as before
+                pending = (ex.submit(_rows, enc, batch), biomes, done)
+                batch, biomes = [], []
+                if upto is not None:
+                    yield upto, len(todo)
+        if pending:
+            yield flush(), len(todo)
+    except GeneratorExit:   # closed at a yield: the sequential import had written
+        raise               # up to that batch, not the one converted since
+    except BaseException:
+        if pending:   # the batch in hand, written as the sequential import had
+            flush()
+        raise
+    finally:
+        ex.shutdown(wait=True, cancel_futures=True)
     if old and old == len(report.damaged) and not (report.chunks or report.unfinished):
         # nothing written: a world Minecraft never saved in 1.13+ is refused whole
         raise VoxelError(f"none of the {old} chunks is from Minecraft 1.13 or newer, nothing "

@@ -2,6 +2,8 @@
 gives writers that encode away from the file (the Dask workers, a save's batch)."""
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 
 from ..core import chunk as C
@@ -16,7 +18,10 @@ class Encoder:
 
     def row(self, key, blocks, data=None, light=None) -> tuple:
         codec = self.codec
-        ids = blocks if self.to_file is None else self.to_file[blocks]
+        if self.to_file is not None:
+            ids = self.to_file[blocks.unpack() if isinstance(blocks, C.Packed) else blocks]
+        else:
+            ids = blocks
         lblob = None if light is None else codecs.encode(codec, _linear(light))
         return (int(key[0]), int(key[1]), codec, codecs.encode_u16(codec, _linear(ids)),
                 self.data(data), lblob)
@@ -27,9 +32,19 @@ class Encoder:
             codecs.encode(self.codec, _linear(data))
 
 
-def _linear(a: np.ndarray):
+_scratch = threading.local()
+
+
+def _linear(a):
     """C.to_linear's bytes, as a view of the array's memory when it holds them
-    already (uint16, Fortran order, a little-endian machine): no copy to compress."""
+    already (uint16, Fortran order, a little-endian machine): no copy to compress.
+    A Packed one (a save's snapshot) is decoded into this thread's one buffer,
+    valid until the next call (each blob is compressed before the next)."""
+    if isinstance(a, C.Packed):
+        buf = getattr(_scratch, "buf", None)
+        if buf is None or buf.shape != a.shape or buf.dtype != a.dtype:
+            buf = _scratch.buf = np.empty(a.shape, a.dtype, order="F")
+        a = a.unpack(buf)
     if a.dtype == np.uint16 and a.flags.f_contiguous and codecs.LITTLE:
         return memoryview(a.reshape(-1, order="F")).cast("B")
     return C.to_linear(a)

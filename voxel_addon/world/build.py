@@ -152,7 +152,7 @@ def light_and_mesh(world, cx0: int, cy0: int, cx1: int, cy1: int, *, backends_=N
     ring = keys_of(cx0 - 1, cy0 - 1, cx1 + 1, cy1 + 1)
     if load:
         with trace.span("batch.load", n=len(ring)):
-            world.load(ring)
+            world.load(ring, hot=True)  # the caller compacts (Stream._make)
     with world.locked():  # light stored in the file (loaded with the blocks) is final
         need = any(c is not None and not c.has_light
                    for c in map(world.chunks.get, keys_of(cx0, cy0, cx1, cy1)))
@@ -203,7 +203,7 @@ def store(world, cx0, cy0, cx1, cy1, lit, meshes, ticks) -> list[Payload]:
                 continue
             c.mesh = meshes[k]
             v = world.pver[k] = world.tick()
-            out.append(Payload(k, c.mesh, c.light, v))
+            out.append(Payload(k, c.mesh, c.light_out(), v))
     return out
 
 
@@ -211,9 +211,9 @@ def payload(world, key) -> Payload | None:
     """The current payload of an active chunk whose light and mesh are known."""
     with world.locked():
         c = world.chunks.get(key)
-        if c is None or c.light is None or c.mesh is None:
+        if c is None or not c.has_light or c.mesh is None:
             return None
         v = world.pver.get(key)
         if v is None:
             v = world.pver[key] = world.tick()
-        return Payload(key, c.mesh, c.light, v)
+        return Payload(key, c.mesh, c.light_out(), v)

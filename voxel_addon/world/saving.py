@@ -131,10 +131,10 @@ class Saving:
         with self._lock:
             for k in self.chunks if keys is None else [k for k in keys if k in self.chunks]:
                 c = self.chunks[k]
-                if c.dirty:
-                    self._saving[k] = self._snapshot(k, c.blocks_copy(),
-                                                     None if c.data is None
-                                                     else c.data.copy(order="F"), c.light)
+                if c.dirty:  # packed blocks and light go as they are: decoded outside
+                    b, light = c.saved()  # the lock, into one buffer (storage/rows.py)
+                    self._saving[k] = self._snapshot(k, b, None if c.data is None
+                                                     else c.data.copy(order="F"), light)
                     c.dirty = False
             saving = dict(self._saving)
             edits = [(x, y, z, b, d) for (x, y, z), (b, d) in self._edits.items()]

@@ -254,9 +254,12 @@ class World(Saving):
                 raise CorruptChunk(self.corrupt[k])
         return [got[k] for k in keys]
 
-    def load(self, keys) -> dict:
+    def load(self, keys, hot: bool = False) -> dict:
         """Make `keys` active (load, or generate + apply stored edits); returns
-        {key: Chunk} without the corrupt ones (shown as missing).
+        {key: Chunk} without the corrupt ones (shown as missing). `hot`: the caller
+        hands the light on (a stream's batch: its payloads) and compacts the chunks
+        after, so light read from the file stays an array (packed here, it would be
+        rebuilt for the payload at once).
 
         Reading happens outside the lock, so another thread may load, edit and evict
         the same chunk meanwhile; the eviction counter catches that and the stale
@@ -265,17 +268,17 @@ class World(Saving):
         out: dict = {}
         pending = [k for k in dict.fromkeys(map(tuple, keys)) if k not in self.corrupt]
         try:
-            self._load(pending, out)
+            self._load(pending, out, hot)
         finally:  # generated here: installed now, or thrown away
             for k in pending:
                 self._made.pop(k, None)
         return out
 
-    def _load(self, pending, out) -> None:
+    def _load(self, pending, out, hot: bool) -> None:
         while pending:
             with self._lock:
                 epochs = {k: self._evictions.get(k, 0) for k in pending}
-            found, vers = self._fetch([k for k in pending if k not in self.chunks])
+            found, vers = self._fetch([k for k in pending if k not in self.chunks], hot)
             retry = []
             with self._lock:
                 now = time.monotonic()
@@ -295,7 +298,7 @@ class World(Saving):
                     out[k] = c
             pending = retry
 
-    def _fetch(self, keys) -> tuple[dict, dict]:
+    def _fetch(self, keys, hot: bool = False) -> tuple[dict, dict]:
         """New Chunk objects for keys: from an unsaved snapshot, the file, or the
         generator; and the stored version each stands on ({key: version}; None for
         a snapshot: its own stays)."""
@@ -308,7 +311,8 @@ class World(Saving):
             if snap is None:
                 read.append(key)
                 continue
-            c = found[key] = Chunk(key, snap[0].copy(order="F"),
+            b = snap[0]  # a Packed one (Chunk.saved) never changes: no copy
+            c = found[key] = Chunk(key, b if isinstance(b, C.Packed) else b.copy(order="F"),
                                    None if snap[1] is None else snap[1].copy(order="F"))
             c.light = snap[2]  # light arrays are replaced, never changed in place
             vers[key] = None
@@ -330,7 +334,8 @@ class World(Saving):
             if got is not None:
                 c = found[key] = Chunk(key, got[0], got[1])
                 c.light = got[2]
-                c.compact()
+                if not hot:
+                    c.compact()
         if to_make:
             with self._gen_lock:
                 # another thread may have made some while this one waited for the lock:

@@ -98,3 +98,51 @@ def test_an_import_racing_edits_keeps_every_edit(tmp_path):
         assert world.file.chunk_count() >= wide * side  # edits stored their neighbours too
         assert world.get_block(16 * 5 + 1, -16 * 5 - 1, 140) == REGISTRY.id("stone")  # imported
     print(out)
+
+
+def test_overlapping_loads_generate_each_chunk_once(tmp_path):
+    """Two threads loading overlapping rectangles (a stream's two workers and their
+    rings): a chunk one made and has not installed yet is taken, not made again;
+    both get the same blocks, with the file's edits, as a lone load."""
+    import threading
+    from voxel_addon.world import build
+    path = tmp_path / "w.sqlite"
+    with World.create(path, seed=3) as w:
+        w.set_block(20, 5, 90, "glass")  # a stored edit in the shared column of chunks
+    with World.open(path, loader=False) as w:
+        w.file.delete_chunks()  # the edit stays: applied to the chunk made again
+    with World.open(path, loader=False) as w:
+        made = []
+        gen, edits = w.generator.generate, w.apply_stored_edits
+
+        raw = {}
+
+        def generate(keys):
+            made.extend(map(tuple, keys))
+            out = gen(keys)
+            raw.update(zip(map(tuple, keys), out))
+            return out
+
+        def slow_edits(key, blocks, data=None, **kw):  # widens the window between
+            time.sleep(0.01)                           # making and installing
+            return edits(key, blocks, data, **kw)
+        w.generator.generate, w.apply_stored_edits = generate, slow_edits
+        go = threading.Barrier(2)
+
+        def load(cx0):
+            go.wait()
+            return w.load(build.keys_of(cx0, -1, cx0 + 3, 2))
+        with ThreadPoolExecutor(2) as ex:
+            a, b = ex.map(load, (-1, 1))  # columns of chunks 1 and 2 are shared
+        assert len(made) == len(set(made)) == 15
+        assert all(a[k] is b[k] for k in set(a) & set(b))
+        got = {k: c.blocks.copy() for k, c in w.chunks.items()}
+        assert not w._made  # nothing left behind
+        glass = REGISTRY.id("glass")  # the edit went into a copy: the other load may
+        assert w.chunks[(1, 0)].get(4, 5, 90) == glass != raw[(1, 0)][4, 5, 90]  # share it
+    with World.open(path, loader=False) as w:
+        w.file.delete_chunks()
+    with World.open(path, loader=False) as w:  # each made alone
+        for k, blocks in got.items():
+            assert np.array_equal(w.load([k])[k].blocks, blocks), k
+        assert w.get_block(20, 5, 90) == REGISTRY.id("glass")

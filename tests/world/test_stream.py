@@ -231,3 +231,32 @@ def test_warm_up_once_per_generator(world_path, tmp_path, cl_device, monkeypatch
         assert not build.warm(a) and build.warm(b)     # each world's generator once
         opencl._warm["thread"].join(60)
         assert opencl.warm_state()["error"] is None
+
+
+def test_reload_meshes_with_a_one_voxel_ring_equal_one_shot(world_path, monkeypatch):
+    """A reopened file's chunks come with their light: the stream's batches then only
+    mesh, from a snapshot with one voxel of the ring (build.snapshot's pad). Coloured
+    blocks (small data) on both sides of chunk and batch borders: the ring's blocks
+    and data must land on the right voxels; the result is the one-shot path's."""
+    from voxel_addon import light
+    from voxel_addon.world.edit import edit
+    with World.create(world_path, seed=SEED) as w:
+        with Stream(w, 3, tile=2) as s:
+            s.set_view(8, 8)
+            collect(s)
+            cols = []
+            for i, x in enumerate((-17, -16, -1, 0, 15, 16, 31, 32)):
+                y = (3 * i) % 40 - 20
+                top = int(np.flatnonzero(w.chunk_at(x >> 4, y >> 4).blocks[x & 15, y & 15])[-1])
+                cols += [(x, y, top + 1, "color", 1000 + 77 * i), (y, x, top + 2, "stone")]
+            edit(w, cols)
+    solves = []
+    real = light.region_light
+    monkeypatch.setattr(light, "region_light", lambda *a, **kw: solves.append(1) or real(*a, **kw))
+    with World.open(world_path) as w:
+        with Stream(w, 2, tile=2) as s:
+            s.set_view(8, 8)
+            got = collect(s)
+    assert not solves  # every batch only meshed (the light came from the file)
+    area, meshes = one_shot(world_path, 8, 8, 2)
+    check_equal(got, area, meshes)

@@ -99,26 +99,40 @@ def keys_of(cx0: int, cy0: int, cx1: int, cy1: int) -> list[tuple[int, int]]:
     return [(x, y) for y in range(cy0, cy1) for x in range(cx0, cx1)]
 
 
-def snapshot(world, cx0: int, cy0: int, cx1: int, cy1: int, data: bool = False):
+def snapshot(world, cx0: int, cy0: int, cx1: int, cy1: int, data: bool = False,
+             pad: int = C.SIZE):
     """(blocks, ticks): active chunks of [cx0, cx1) x [cy0, cy1) as one array (air
     where a chunk is not active, e.g. corrupt) and {key: block tick} at copy time;
-    with data=True (blocks, ticks, small data or None when no chunk has any)."""
-    out = C.empty(width=C.SIZE * (cx1 - cx0), depth=C.SIZE * (cy1 - cy0))
+    with data=True (blocks, ticks, small data or None when no chunk has any).
+    PAD < 16: the outer chunks give only their PAD voxels next to the inner ones
+    (a batch that only meshes reads a one-voxel ring: the rest was copied for
+    nothing); the array then starts at voxel (cx0 * 16 + 16 - pad, ...)."""
+    s, o = C.SIZE, C.SIZE - pad  # o: voxels of the outer chunks left out on each side
+    out = C.empty(width=s * (cx1 - cx0) - 2 * o, depth=s * (cy1 - cy0) - 2 * o)
+    w, h = out.shape[:2]
     small = None
     ticks = {}
     with world.locked():
         for k in keys_of(cx0, cy0, cx1, cy1):
             ticks[k] = world.bver.get(k, 0)
             c = world.chunks.get(k)
-            if c is not None:
-                x, y = (k[0] - cx0) * C.SIZE, (k[1] - cy0) * C.SIZE
-                # a cold chunk decodes into the window and stays packed (issue 29)
-                c.blocks_into(out[x:x + C.SIZE, y:y + C.SIZE], _ALL, _ALL, 0, C.HEIGHT)
-                if data and c.data is not None:
-                    if small is None:
-                        small = np.zeros_like(out)
-                    small[x:x + C.SIZE, y:y + C.SIZE] = c.data
+            if c is None:
+                continue
+            x, y = (k[0] - cx0) * s - o, (k[1] - cy0) * s - o  # chunk origin in `out`
+            xa, ya = max(x, 0), max(y, 0)
+            xs, ys = slice(xa - x, min(x + s, w) - x), slice(ya - y, min(y + s, h) - y)
+            win = (slice(xa, x + xs.stop), slice(ya, y + ys.stop))
+            whole = xs == _ALL16 and ys == _ALL16
+            # a cold chunk decodes into the window and stays packed (issue 29)
+            c.blocks_into(out[win], _ALL if whole else xs, _ALL if whole else ys, 0, C.HEIGHT)
+            if data and c.data is not None:
+                if small is None:
+                    small = np.zeros_like(out)
+                small[win] = c.data[xs, ys]
     return (out, ticks, small) if data else (out, ticks)
+
+
+_ALL16 = slice(0, C.SIZE)
 
 
 def _run(backend, fn, *a, **kw):
@@ -139,26 +153,30 @@ def light_and_mesh(world, cx0: int, cy0: int, cx1: int, cy1: int, *, backends_=N
     if load:
         with trace.span("batch.load", n=len(ring)):
             world.load(ring, hot=True)  # the caller compacts (Stream._make)
-    blocks, ticks, data = snapshot(world, cx0 - 1, cy0 - 1, cx1 + 1, cy1 + 1, data=True)
     with world.locked():  # light stored in the file (loaded with the blocks) is final
         need = any(c is not None and not c.has_light
                    for c in map(world.chunks.get, keys_of(cx0, cy0, cx1, cy1)))
+    # light reads the whole ring (15 voxels of light come in from it), meshing one
+    # voxel of it: a reloaded view's batches copy ~1/3 less (the ring's chunks)
+    with trace.span("batch.snapshot", need=need):
+        blocks, ticks, data = snapshot(world, cx0 - 1, cy0 - 1, cx1 + 1, cy1 + 1, data=True,
+                                       pad=C.SIZE if need else 1)
     # one solve for the whole rectangle: its ring is the only overhead
     # model blocks that are no whole cube pass light (with the world's resource stack)
     with trace.span("batch.light", backend=lb, need=need):
         lit = _run(lb, light.region_light, mcmodels.light_blocks(world, blocks, data),
                    tile=max(cx1 - cx0, cy1 - cy0)) if need else None
-    inner = blocks[15:-15, 15:-15]
+    inner, data = (blocks[15:-15, 15:-15], None if data is None else data[15:-15, 15:-15]) \
+        if need else (blocks, data)
     # Minecraft model blocks (with the world's resource stack): air for the mesher
-    models = mcmodels.build(world, inner, None if data is None else data[15:-15, 15:-15],
-                            cx0, cy0)
+    models = mcmodels.build(world, inner, data, cx0, cy0)
     with trace.span("batch.mesh", backend=mb):
-        meshes = _run(mb, meshing.build_chunks, inner, (cx0, cy0),
-                      data=None if data is None else data[15:-15, 15:-15])
+        meshes = _run(mb, meshing.build_chunks, inner, (cx0, cy0), data=data)
     for k, m in models.items():
         if k in meshes:
             meshes[k].models = m
-    return store(world, cx0, cy0, cx1, cy1, lit, meshes, ticks)
+    with trace.span("batch.store"):
+        return store(world, cx0, cy0, cx1, cy1, lit, meshes, ticks)
 
 
 def store(world, cx0, cy0, cx1, cy1, lit, meshes, ticks) -> list[Payload]:

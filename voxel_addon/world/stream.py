@@ -319,7 +319,9 @@ class Stream:
                                          backends_=backends)
             if done and self.first_backends is None:
                 self.first_backends = backends
-        with world.locked():  # compact now: _maintain's sweep over all chunks is throttled
+        from ..core import trace
+        # compact now: _maintain's sweep over all chunks is throttled
+        with trace.span("batch.compact"), world.locked():
             for p in done:
                 c = world.chunks.get(p.key)
                 if c is not None:

@@ -147,9 +147,9 @@ def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
         else:
             _kernel("mesh_greedy.cl", "band")(queue, (nt,), (1,), lay, i32(z0), i32(z1),
                                               i32(nt), busy)
-        cap = _bufs.get("cap", START_CAP)
-        while True:
-            out = _buf("out", cap * rb)
+        need = _bufs.get("cap", START_CAP)   # records (not the buffer's size: records
+        while True:                          # of 32 and 48 bytes alternate; it doubled)
+            out = _buf("out", need * rb)
             cap = out.size // rb
             if merge:   # a tile per work item (gpu/mesh_greedy.cl `tile`)
                 _kernel("mesh_greedy.cl", "tile")(
@@ -166,9 +166,9 @@ def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
             n = int(n[0])
             if n <= cap:
                 break
-            cap = n          # overflow: grow to the exact need and run again
+            need = n         # overflow: grow to the exact need and run again
             cl.enqueue_fill_buffer(queue, count, np.uint32(0), 0, 4)
-        _bufs["cap"] = cap
+        _bufs["cap"] = need
         rec = _scratch(n, rb // 4)
         if n:
             cl.enqueue_copy(queue, rec, out)

@@ -1,7 +1,8 @@
 // Batched meshing of many tiles (chunks), output compacted with an atomic counter:
 // `layers` flags each (tile, z) layer (one item per layer); greedy then runs in `tile`
 // (one item per tile: its busy layers, those that can have faces, while they are in
-// the cache), method "none" in `band` + `unit` (one item per (tile, direction, slice)).
+// the cache; a CPU device) or in `band` + `slices` (one item per (tile, direction,
+// slice): a GPU, and method "none" everywhere); meshing/cl.py `path` picks.
 //
 // Slice views as meshing/faces.py: axis x -> (s, v, u) = (x, y, z); axis y -> (y, x, z);
 // axis z -> (z, y, x). Greedy is Mikola's scan order run row by row: open rectangles
@@ -466,15 +467,41 @@ __kernel void tile(__global const ushort *P, __constant uchar *flags, int PW, in
     flush(&sink);
 }
 
+// ---- per-slice kernels (`slices`: greedy on a GPU, method "none" everywhere) -------
+// The same greedy rows as `tile` (`row_step`) for one x/y slice's columns [ulo, uhi)
+// along z: cell u at c0 + v * sv + u * su; runs chain only within [ulo, uhi).
+inline void span_greedy(__global const ushort *P, __constant uchar *flags, long c0, long sv,
+                        long su, long step, uint want, int V, int ulo, int uhi,
+                        int t, int d, int s, Sink *sink) {
+    Open o;
+    open_init(&o);
+    for (int v = 0; v <= V; v++) {
+        ulong vis[MW] = {0, 0, 0, 0}, ch[MW] = {0, 0, 0, 0};
+        long cv = c0 + (long)v * sv;
+        if (v < V) {
+            for (int u = ulo; u < uhi; u++) {
+                ulong bit = 1UL << (u & 63);
+                long c = cv + u * su;
+                if (face_key(P, flags, c, step, false, want)) vis[u >> 6] |= bit;
+                if (u > ulo && P[c] == P[c - su]) ch[u >> 6] |= bit;
+            }
+            for (int w = 0; w < MW; w++) ch[w] &= vis[w];
+            if (!(vis[0] | vis[1] | vis[2] | vis[3]) && !o.nopen) continue;
+        }
+        row_step(&o, vis, ch, v, P + cv, su, sink, t, d, s);
+    }
+}
+
 // Work items per tile: 2*TW x-slices and 2*TH y-slices (each walks its render regions
 // and, in them, the runs of busy layers: quiet layers have no faces, so cutting there
-// changes nothing), then 2*ZK z items (each takes every ZK-th busy layer). Few idle
-// items: pocl runs a work group's items as one loop, so idle or divergent ones cost.
+// changes nothing), then 2*ZK z items (each takes every ZK-th busy layer). Many items
+// per tile keep a GPU busy (`tile`'s one per tile leaves it idle: meshing/cl.py picks);
+// pocl runs a work group's items as one loop, so idle or divergent ones cost there.
 #define ZK 8
 
-__kernel void unit(__global const ushort *P, __constant uchar *flags, int PW, int PH,
+__kernel void slices(__global const ushort *P, __constant uchar *flags, int PW, int PH,
                      int nx, int TW, int TH, int ntiles, int z0, int z1, int split, int nreg,
-                     __global const uint *busy, __global uint4 *out,
+                     int merge, __global const uint *busy, __global uint4 *out,
                      __global uint *count, uint cap, __global const uint *vt, int nb) {
     Sink sink;
     sink_init(&sink, out, count, cap, vt, nb, split);
@@ -503,7 +530,8 @@ __kernel void unit(__global const ushort *P, __constant uchar *flags, int PW, in
                 if (!is_busy(B, u)) { u++; continue; }
                 int u1 = u + 1;
                 while (u1 < re && is_busy(B, u1)) u1++;
-                span(P, flags, c0, sv, PL, step, false, want, V, u, u1, t, d, s, &sink);
+                if (merge) span_greedy(P, flags, c0, sv, PL, step, want, V, u, u1, t, d, s, &sink);
+                else span(P, flags, c0, sv, PL, step, false, want, V, u, u1, t, d, s, &sink);
                 u = u1;
             }
         }
@@ -513,19 +541,12 @@ __kernel void unit(__global const ushort *P, __constant uchar *flags, int PW, in
     for (int z = z0 + s; z < z1; z += ZK) {
         if (!is_busy(B, z)) continue;
         long c0 = (ox + 1) + (long)PW * (oy + 1) + PL * z;
-        if (d == 4) {  // X and # planes of this layer, once per cell
+        if (d == 4)  // X and # planes of this layer, once per cell
             for (int v = 0; v < TH; v++)
-                for (int u = 0; u < TW; u++) {
-                    ushort b = P[c0 + v * PW + u];
-                    uint f = flags[b];
-                    if (f & F_X) { put(&sink, t, u, v, z, 6, 1, 1, b);
-                                   put(&sink, t, u, v, z, 7, 1, 1, b); }
-                    if (f & F_HASH)
-                        for (int k = 8; k < 12; k++) put(&sink, t, u, v, z, k, 1, 1, b);
-                }
-        }
+                for (int u = 0; u < TW; u++) shapes(&sink, flags, t, u, v, z, P[c0 + v * PW + u]);
         bool edge = (d == 4 && z == 0) || (d == 5 && z == 255);
-        span(P, flags, c0, PW, 1, step, edge, want, TH, 0, TW, t, d, z, &sink);
-    }    flush(&sink);
+        if (merge) span_z(P, flags, c0, PW, step, edge, TH, TW, t, d, z, &sink);
+        else span(P, flags, c0, PW, 1, step, edge, want, TH, 0, TW, t, d, z, &sink);
+    }
+    flush(&sink);
 }
-

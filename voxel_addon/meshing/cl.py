@@ -5,6 +5,7 @@ face keys from gpu/mesh_faces.cl and aggregate them with NumPy. Output equals Nu
 """
 from __future__ import annotations
 
+import os
 import threading
 from functools import lru_cache
 
@@ -17,6 +18,8 @@ UMAX = 256          # columns per slice the greedy kernel keeps state for (mesh_
 ZK = 8              # z items per direction and tile (mesh_greedy.cl)
 MASKS = True        # block flags as compiled-in bit masks (False: table loads; tests)
 CPU_TUNED = True    # CPU-only kernel forms on a CPU device (False: portable ones; tests)
+PATHS = ("tile", "slices")  # greedy kernels (gpu/mesh_greedy.cl), see `path`
+PATH = None         # force one of PATHS (tests); None: VOXEL_MESH_KERNEL, else by device
 START_CAP = 1 << 16  # quad records the output buffer holds at first; grows on overflow
 _lock = threading.Lock()
 _bufs: dict = {}
@@ -34,8 +37,20 @@ def _options():
 
 @lru_cache(maxsize=1)
 def _on_cpu() -> bool:
-    import pyopencl as cl
-    return bool(opencl.context()[2].type & cl.device_type.CPU)
+    return opencl.on_cpu()
+
+
+def path() -> str:
+    """The greedy kernel: `tile` (one work item per chunk, its layers while they are in
+    the cache) on a CPU device, `slices` (one per chunk, direction and slice: enough
+    work items to fill a GPU) elsewhere; VOXEL_MESH_KERNEL=tile|slices overrides."""
+    p = PATH or os.environ.get("VOXEL_MESH_KERNEL", "")
+    if not p:
+        return "tile" if _on_cpu() else "slices"
+    if p not in PATHS:
+        from ..core.errors import VoxelError
+        raise VoxelError(f"VOXEL_MESH_KERNEL={p!r}: expected one of {', '.join(PATHS)}")
+    return p
 
 
 @lru_cache(maxsize=8)
@@ -125,6 +140,7 @@ def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
     nt = nx * ny
     nreg = len(Q.regions(z0, z1, split))
     merge = method == "greedy"
+    tiled = merge and path() == "tile"
     rb = 48 if vtab is not None else 32      # bytes per record (gpu/mesh_greedy.cl `put`)
     if vtab is not None and (TW, TH) != (16, 16):
         raise ValueError("packed vertices need 16 x 16 tiles")
@@ -142,7 +158,7 @@ def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
         _kernel("mesh_greedy.cl", "layers")(
             queue, (256,), (1,), bp, flags, i32(PW), i32(PH), i32(nx), i32(TW), i32(TH),
             i32(nt), lay, count)     # (also zeroes the count)
-        if merge:
+        if tiled:
             masks = _buf("masks", nt * TW * TH * 160)
         else:
             _kernel("mesh_greedy.cl", "band")(queue, (nt,), (1,), lay, i32(z0), i32(z1),
@@ -151,16 +167,19 @@ def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
         while True:                          # of 32 and 48 bytes alternate; it doubled)
             out = _buf("out", need * rb)
             cap = out.size // rb
-            if merge:   # a tile per work item (gpu/mesh_greedy.cl `tile`)
+            if tiled:   # a tile per work item (gpu/mesh_greedy.cl `tile`)
                 _kernel("mesh_greedy.cl", "tile")(
                     queue, (nt,), (1,), bp, flags, i32(PW), i32(PH), i32(nx), i32(TW),
                     i32(TH), i32(nt), i32(z0), i32(z1), i32(split), lay, masks, out, count,
                     np.uint32(cap), vt, i32(nb))
             else:
-                _kernel("mesh_greedy.cl", "unit")(
-                    queue, (nt * ni,), (1,), bp, flags, i32(PW), i32(PH), i32(nx),
-                    i32(TW), i32(TH), i32(nt), i32(z0), i32(z1), i32(split), i32(nreg),
-                    busy, out, count, np.uint32(cap), vt, i32(nb))
+                # (work groups of one on pocl: it runs a group's items as one loop;
+                # a GPU's driver picks its size)
+                _kernel("mesh_greedy.cl", "slices")(
+                    queue, (nt * ni,), (1,) if _on_cpu() else None, bp, flags, i32(PW),
+                    i32(PH), i32(nx), i32(TW), i32(TH), i32(nt), i32(z0), i32(z1),
+                    i32(split), i32(nreg), i32(merge), busy, out, count, np.uint32(cap),
+                    vt, i32(nb))
             n = np.empty(1, np.uint32)
             cl.enqueue_copy(queue, n, count)
             n = int(n[0])

@@ -168,3 +168,14 @@ def test_greedy_path_by_device(cl_device, monkeypatch):
     monkeypatch.setenv("VOXEL_MESH_KERNEL", "tiles")
     with pytest.raises(VoxelError, match="VOXEL_MESH_KERNEL='tiles'"):
         meshing.build_chunks(np.zeros((18, 18, 256), np.uint16), backend="opencl")
+
+
+def test_greedy_as_on_a_gpu(cl_device, cave, monkeypatch):
+    """What a GPU platform runs (`slices`, work groups of up to 64 over a padded launch,
+    no CPU_DEVICE forms), here on pocl: the NumPy reference's meshes."""
+    monkeypatch.setattr(mcl, "_on_cpu", lambda: False)
+    monkeypatch.delenv("VOXEL_MESH_KERNEL", raising=False)
+    assert mcl.path() == "slices"
+    for m in ("greedy", "none"):
+        _same(meshing.build_chunks(cave, method=m),
+              meshing.build_chunks(cave, method=m, backend="opencl"))

@@ -76,6 +76,18 @@ def _kernel_built(file, name, options):
     return cl.Kernel(opencl.program(file, options), name)
 
 
+def _group(k) -> int:
+    """Work group size of the per-slice kernel: 1 on a CPU (pocl runs a group's items as
+    one loop: idle or divergent ones cost), else up to 64 (whole warps/wavefronts; the
+    launch is padded, items past the last tile return)."""
+    if _on_cpu():
+        return 1
+    import pyopencl as cl
+    g = min(64, k.get_work_group_info(cl.kernel_work_group_info.WORK_GROUP_SIZE,
+                                      opencl.context()[2]))
+    return 1 << (g.bit_length() - 1)
+
+
 def _up(n, k):
     return -(-n // k) * k
 
@@ -173,10 +185,9 @@ def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
                     i32(TH), i32(nt), i32(z0), i32(z1), i32(split), lay, masks, out, count,
                     np.uint32(cap), vt, i32(nb))
             else:
-                # (work groups of one on pocl: it runs a group's items as one loop;
-                # a GPU's driver picks its size)
-                _kernel("mesh_greedy.cl", "slices")(
-                    queue, (nt * ni,), (1,) if _on_cpu() else None, bp, flags, i32(PW),
+                k = _kernel("mesh_greedy.cl", "slices")
+                g = _group(k)
+                k(queue, (_up(nt * ni, g),), (g,), bp, flags, i32(PW),
                     i32(PH), i32(nx), i32(TW), i32(TH), i32(nt), i32(z0), i32(z1),
                     i32(split), i32(nreg), i32(merge), busy, out, count, np.uint32(cap),
                     vt, i32(nb))

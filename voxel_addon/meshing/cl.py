@@ -14,7 +14,7 @@ import numpy as np
 from .. import opencl
 from . import faces as Q
 
-UMAX = 256          # columns per slice the greedy kernel keeps state for (mesh_greedy.cl)
+UMAX = 256          # columns per slice the greedy kernel keeps state for (mesh_rows.h)
 ZK = 8              # z items per direction and tile (mesh_greedy.cl)
 MASKS = True        # block flags as compiled-in bit masks (False: table loads; tests)
 CPU_TUNED = True    # CPU-only kernel forms on a CPU device (False: portable ones; tests)
@@ -136,7 +136,7 @@ def _vtab(vtab):
 def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
     """Rect columns like faces.rects, or None when the window does not fit the kernel.
     With `vtab` (vertex.VTAB: its tables, blocks; 16 x 16 tiles) {"rec": (n, 12) uint32}
-    instead: the kernel's records (see gpu/mesh_greedy.cl `put`: order key, QUAD bytes,
+    instead: the kernel's records (see gpu/mesh_rows.h `put`: order key, QUAD bytes,
     tile, the rect's four packed viewport vertices, z region-local by `split`); a view of
     this thread's scratch, valid until its next call (`columns` turns it into rect
     columns, `quads_of` into QUADs)."""
@@ -153,7 +153,7 @@ def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
     nreg = len(Q.regions(z0, z1, split))
     merge = method == "greedy"
     tiled = merge and path() == "tile"
-    rb = 48 if vtab is not None else 32      # bytes per record (gpu/mesh_greedy.cl `put`)
+    rb = 48 if vtab is not None else 32      # bytes per record (gpu/mesh_rows.h `put`)
     if vtab is not None and (TW, TH) != (16, 16):
         raise ValueError("packed vertices need 16 x 16 tiles")
     ni = 2 * (TW + TH) + 2 * ZK

@@ -40,12 +40,12 @@ def test_build_chunks_equals_one_by_one(cave):
 
 
 @pytest.mark.parametrize("method", meshing.METHODS)
-def test_build_chunks_opencl_equals_numpy(method, cl_device, cave):
+def test_build_chunks_opencl_equals_numpy(method, greedy_path, cave):
     _same(meshing.build_chunks(cave, method=method),
           meshing.build_chunks(cave, method=method, backend="opencl"))
 
 
-def test_opencl_z_range_and_split(cl_device, cave):
+def test_opencl_z_range_and_split(greedy_path, cave):
     w = np.asfortranarray(cave[16:34, 0:18])
     for kw in (dict(z0=5, z1=200, split=16), dict(z0=33, z1=40), dict(z0=0, z1=1),
                dict(split=1, z0=60, z1=75)):
@@ -97,7 +97,7 @@ def _sparse(seed):
 
 
 @pytest.mark.parametrize("seed", [1, 2])
-def test_opencl_sparse_edges(seed, cl_device):
+def test_opencl_sparse_edges(seed, greedy_path):
     b = _sparse(seed)
     for m in ("greedy", "none"):
         _same(meshing.build_chunks(b, method=m), meshing.build_chunks(b, method=m, backend="opencl"))
@@ -113,7 +113,7 @@ def test_wide_window_falls_back(cl_device):
 
 
 @pytest.mark.parametrize("switch", ["MASKS", "CPU_TUNED"])
-def test_opencl_flag_table_path(cl_device, cave, switch):
+def test_opencl_flag_table_path(greedy_path, cave, switch):
     """The kernels' table-lookup variant (used past 64 block types) and their portable
     forms (devices other than a CPU) give the same."""
     ref = meshing.build_chunks(cave[:, :18])
@@ -138,7 +138,7 @@ def test_build_chunks_vertex_order(cave, region_h):
 
 
 @pytest.mark.parametrize("kw", [{}, dict(split=32), dict(z0=61, z1=131, split=64)])
-def test_opencl_greedy_bit_rows(cl_device, kw):
+def test_opencl_greedy_bit_rows(greedy_path, kw):
     """The greedy on bit rows (gpu/mesh_greedy.cl `tile`): z-slice rows wider than one
     64-bit word, x/y rows (along z) whose runs cross word and region boundaries."""
     from .helpers import random_window
@@ -155,3 +155,27 @@ def test_opencl_greedy_bit_rows(cl_device, kw):
     c[:, :, 100:110] = REGISTRY.id("water")
     _same(meshing.build_chunks(c, region_h=kw.get("split", 64)),
           meshing.build_chunks(c, region_h=kw.get("split", 64), backend="opencl"))
+
+
+def test_greedy_path_by_device(cl_device, monkeypatch):
+    """The tile kernel on a CPU device (pocl), the per-slice kernels elsewhere; the
+    environment overrides, a wrong name is a one-line error."""
+    from voxel_addon import opencl
+    monkeypatch.delenv("VOXEL_MESH_KERNEL", raising=False)
+    assert mcl.path() == ("tile" if opencl.on_cpu() else "slices")
+    monkeypatch.setenv("VOXEL_MESH_KERNEL", "slices")
+    assert mcl.path() == "slices"
+    monkeypatch.setenv("VOXEL_MESH_KERNEL", "tiles")
+    with pytest.raises(VoxelError, match="VOXEL_MESH_KERNEL='tiles'"):
+        meshing.build_chunks(np.zeros((18, 18, 256), np.uint16), backend="opencl")
+
+
+def test_greedy_as_on_a_gpu(cl_device, cave, monkeypatch):
+    """What a GPU platform runs (`slices`, work groups of up to 64 over a padded launch,
+    no CPU_DEVICE forms), here on pocl: the NumPy reference's meshes."""
+    monkeypatch.setattr(mcl, "_on_cpu", lambda: False)
+    monkeypatch.delenv("VOXEL_MESH_KERNEL", raising=False)
+    assert mcl.path() == "slices"
+    for m in ("greedy", "none"):
+        _same(meshing.build_chunks(cave, method=m),
+              meshing.build_chunks(cave, method=m, backend="opencl"))

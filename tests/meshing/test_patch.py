@@ -55,7 +55,7 @@ def test_patch_equals_full_mesh(seed):
     _same(meshing.patch(old, b, cells), want)          # no old ids: every slice again
 
 
-def test_patch_equals_opencl_on_terrain(cl_device):
+def test_patch_equals_opencl_on_terrain(greedy_path):
     """Surface edits on real terrain (a window inside a bigger area: `origin`) against
     the OpenCL mesher; each patched mesh is the next edit's old one."""
     area = np.asfortranarray(scenes.blocks("landscape")[:34, :34])   # 2x2 chunks + ring

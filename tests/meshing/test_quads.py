@@ -70,7 +70,7 @@ def test_split_keeps_regions_apart(landscape):
 
 
 @pytest.mark.parametrize("method", meshing.METHODS)
-def test_opencl_equals_numpy(method, cl_device, landscape):
+def test_opencl_equals_numpy(method, greedy_path, landscape):
     cases = [random_window(5), random_window(6, band=(0, 256)),
              np.asfortranarray(landscape[16:34, 16:34]), scenes.blocks("cave")[0:18, 16:34]]
     for b in cases:

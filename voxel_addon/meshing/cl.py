@@ -5,6 +5,7 @@ face keys from gpu/mesh_faces.cl and aggregate them with NumPy. Output equals Nu
 """
 from __future__ import annotations
 
+import os
 import threading
 from functools import lru_cache
 
@@ -13,10 +14,12 @@ import numpy as np
 from .. import opencl
 from . import faces as Q
 
-UMAX = 256          # columns per slice the greedy kernel keeps state for (mesh_greedy.cl)
+UMAX = 256          # columns per slice the greedy kernel keeps state for (mesh_rows.h)
 ZK = 8              # z items per direction and tile (mesh_greedy.cl)
 MASKS = True        # block flags as compiled-in bit masks (False: table loads; tests)
 CPU_TUNED = True    # CPU-only kernel forms on a CPU device (False: portable ones; tests)
+PATHS = ("tile", "slices")  # greedy kernels (gpu/mesh_greedy.cl), see `path`
+PATH = None         # force one of PATHS (tests); None: VOXEL_MESH_KERNEL, else by device
 START_CAP = 1 << 16  # quad records the output buffer holds at first; grows on overflow
 _lock = threading.Lock()
 _bufs: dict = {}
@@ -34,8 +37,20 @@ def _options():
 
 @lru_cache(maxsize=1)
 def _on_cpu() -> bool:
-    import pyopencl as cl
-    return bool(opencl.context()[2].type & cl.device_type.CPU)
+    return opencl.on_cpu()
+
+
+def path() -> str:
+    """The greedy kernel: `tile` (one work item per chunk, its layers while they are in
+    the cache) on a CPU device, `slices` (one per chunk, direction and slice: enough
+    work items to fill a GPU) elsewhere; VOXEL_MESH_KERNEL=tile|slices overrides."""
+    p = PATH or os.environ.get("VOXEL_MESH_KERNEL", "")
+    if not p:
+        return "tile" if _on_cpu() else "slices"
+    if p not in PATHS:
+        from ..core.errors import VoxelError
+        raise VoxelError(f"VOXEL_MESH_KERNEL={p!r}: expected one of {', '.join(PATHS)}")
+    return p
 
 
 @lru_cache(maxsize=8)
@@ -59,6 +74,18 @@ def _kernel(file, name):
 def _kernel_built(file, name, options):
     import pyopencl as cl
     return cl.Kernel(opencl.program(file, options), name)
+
+
+def _group(k) -> int:
+    """Work group size of the per-slice kernel: 1 on a CPU (pocl runs a group's items as
+    one loop: idle or divergent ones cost), else up to 64 (whole warps/wavefronts; the
+    launch is padded, items past the last tile return)."""
+    if _on_cpu():
+        return 1
+    import pyopencl as cl
+    g = min(64, k.get_work_group_info(cl.kernel_work_group_info.WORK_GROUP_SIZE,
+                                      opencl.context()[2]))
+    return 1 << (g.bit_length() - 1)
 
 
 def _up(n, k):
@@ -109,7 +136,7 @@ def _vtab(vtab):
 def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
     """Rect columns like faces.rects, or None when the window does not fit the kernel.
     With `vtab` (vertex.VTAB: its tables, blocks; 16 x 16 tiles) {"rec": (n, 12) uint32}
-    instead: the kernel's records (see gpu/mesh_greedy.cl `put`: order key, QUAD bytes,
+    instead: the kernel's records (see gpu/mesh_rows.h `put`: order key, QUAD bytes,
     tile, the rect's four packed viewport vertices, z region-local by `split`); a view of
     this thread's scratch, valid until its next call (`columns` turns it into rect
     columns, `quads_of` into QUADs)."""
@@ -125,7 +152,8 @@ def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
     nt = nx * ny
     nreg = len(Q.regions(z0, z1, split))
     merge = method == "greedy"
-    rb = 48 if vtab is not None else 32      # bytes per record (gpu/mesh_greedy.cl `put`)
+    tiled = merge and path() == "tile"
+    rb = 48 if vtab is not None else 32      # bytes per record (gpu/mesh_rows.h `put`)
     if vtab is not None and (TW, TH) != (16, 16):
         raise ValueError("packed vertices need 16 x 16 tiles")
     ni = 2 * (TW + TH) + 2 * ZK
@@ -142,33 +170,35 @@ def rects(P, tile, nxy, method, z0, z1, split, vtab=None):
         _kernel("mesh_greedy.cl", "layers")(
             queue, (256,), (1,), bp, flags, i32(PW), i32(PH), i32(nx), i32(TW), i32(TH),
             i32(nt), lay, count)     # (also zeroes the count)
-        if merge:
+        if tiled:
             masks = _buf("masks", nt * TW * TH * 160)
         else:
             _kernel("mesh_greedy.cl", "band")(queue, (nt,), (1,), lay, i32(z0), i32(z1),
                                               i32(nt), busy)
-        cap = _bufs.get("cap", START_CAP)
-        while True:
-            out = _buf("out", cap * rb)
+        need = _bufs.get("cap", START_CAP)   # records (not the buffer's size: records
+        while True:                          # of 32 and 48 bytes alternate; it doubled)
+            out = _buf("out", need * rb)
             cap = out.size // rb
-            if merge:   # a tile per work item (gpu/mesh_greedy.cl `tile`)
+            if tiled:   # a tile per work item (gpu/mesh_greedy.cl `tile`)
                 _kernel("mesh_greedy.cl", "tile")(
                     queue, (nt,), (1,), bp, flags, i32(PW), i32(PH), i32(nx), i32(TW),
                     i32(TH), i32(nt), i32(z0), i32(z1), i32(split), lay, masks, out, count,
                     np.uint32(cap), vt, i32(nb))
             else:
-                _kernel("mesh_greedy.cl", "unit")(
-                    queue, (nt * ni,), (1,), bp, flags, i32(PW), i32(PH), i32(nx),
-                    i32(TW), i32(TH), i32(nt), i32(z0), i32(z1), i32(split), i32(nreg),
-                    busy, out, count, np.uint32(cap), vt, i32(nb))
+                k = _kernel("mesh_greedy.cl", "slices")
+                g = _group(k)
+                k(queue, (_up(nt * ni, g),), (g,), bp, flags, i32(PW),
+                    i32(PH), i32(nx), i32(TW), i32(TH), i32(nt), i32(z0), i32(z1),
+                    i32(split), i32(nreg), i32(merge), busy, out, count, np.uint32(cap),
+                    vt, i32(nb))
             n = np.empty(1, np.uint32)
             cl.enqueue_copy(queue, n, count)
             n = int(n[0])
             if n <= cap:
                 break
-            cap = n          # overflow: grow to the exact need and run again
+            need = n         # overflow: grow to the exact need and run again
             cl.enqueue_fill_buffer(queue, count, np.uint32(0), 0, 4)
-        _bufs["cap"] = cap
+        _bufs["cap"] = need
         rec = _scratch(n, rb // 4)
         if n:
             cl.enqueue_copy(queue, rec, out)

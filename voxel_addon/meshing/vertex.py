@@ -60,7 +60,7 @@ _INSET_BITS = (_INSET << 29).astype(np.uint32)
 
 def _vtab():
     """The tables of `_pack` and PASS_OF in one uint32 array for the OpenCL mesher
-    (gpu/mesh_greedy.cl `put` packs each quad's vertices and order key as it emits
+    (gpu/mesh_rows.h `put` packs each quad's vertices and order key as it emits
     it), and the block count."""
     layer = REGISTRY.face_texture[:, SIDE].astype(np.uint32)    # (blocks, 12)
     assert len(PASSES) == 4   # the kernel's order key has 2 bits for the pass

@@ -43,9 +43,10 @@ class _LocalPalette:
     voxels in the chunk, for the writer's mcstate.States.settle); the same for biomes
     (`biomes`: names in the order met)."""
 
-    def __init__(self, met: dict):
+    def __init__(self, met: dict, known=None):
         from types import SimpleNamespace
         self.met = met  # (name, props) -> what `of` looks up: shared by a task's chunks
+        self.known, self.remap = known, None
         self.ids: dict = {}
         self.keyed: dict = {}
         self.local: list = []
@@ -70,8 +71,15 @@ class _LocalPalette:
         return got
 
     def settle(self, ids, vals, counts):
-        """Keep each local index's voxels; no defaults here (the writer's)."""
+        """Keep each local index's voxels; no defaults here (the writer's). Where
+        `known` gives every local state its world value, VALS (what convert writes
+        into the data array) become those values in place (`remap`): the data comes
+        out as the writer would map it, without a gather over the chunk's voxels."""
         self.voxels = np.bincount(vals, counts, minlength=len(self.local) + 1).astype(np.int64)
+        known = self.known
+        if known is not None and all(e[0] in known for e in self.local):
+            self.remap = np.array([0] + [known[e[0]] for e in self.local], np.uint16)
+            vals[:] = self.remap[vals]
         return np.zeros(int(ids.max()) + 1, np.uint16)
 
     def biome(self, name) -> int:
@@ -133,14 +141,14 @@ def read(item, shared):
         if ch.status not in anvil.DONE:
             out.append((("unfinished", ch.version, ch.status), b.spent(), where))
             continue
-        pal = _LocalPalette(met)
+        pal = _LocalPalette(met, known)
         blocks, data, dropped = minecraft.convert(ch, shared["y_min"], pal)
         row = shared["encoder"].row(minecraft.to_key(cx, cz), blocks)
-        if data is not None and all(e[0] in known for e in pal.local):
+        if data is not None and pal.remap is not None:
             # the writer's zstd (the largest share of its time) done here: values once
             # given never change, so this map is the one the writer makes in plan order
-            remap = np.array([0] + [known[e[0]] for e in pal.local], np.uint16)
-            data = (shared["encoder"].data(remap[data]), remap)
+            # (convert already wrote the world values: _LocalPalette.settle)
+            data = (shared["encoder"].data(data), pal.remap)
         cols = mcstate.columns(ch, blocks, shared["y_min"], pal.biome)
         out.append((("ok", ch.version, row, data, (pal.local, pal.voxels), pal.report.blocks, dropped,
                      minecraft.to_key(cx, cz), cols, list(pal.biomes)), b.spent(), where))

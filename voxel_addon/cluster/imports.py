@@ -41,12 +41,14 @@ class _LocalPalette:
     in plan order; `local`: (state key, rgb or None, block id) each), which the writer
     maps to the world's state palette or, for dye states, their colours, and to 0 for
     its block's default state (`voxels`: each local index's voxels in the chunk in
-    hand, for the writer's mcstate.States.settle); the same for biomes (`bnames`:
-    names in the order met) and block names (`names`: (name, block, how) in the order
-    met; `report.blocks` their voxels so far). Being the task's, a section palette met
-    in an earlier chunk (`keyed`, convert's memo) costs one lookup, as in one process.
-    The writer settles a chunk's new entries (those past the previous chunk's) in the
-    order met, so states, colours, biomes and report lines join in one-process order."""
+    hand, for the writer's mcstate.States.settle); the same for block names (`names`:
+    (name, block, how) in the order met; `report.blocks` their voxels so far). Being
+    the task's, a section palette met in an earlier chunk (`keyed`, convert's memo)
+    costs one lookup, as in one process. The writer settles a chunk's new entries
+    (those past the previous chunk's) in the order met, so states, colours and report
+    lines join in one-process order. Biomes stay chunk-local (`biomes`, reset per
+    chunk): the columns hold them as bytes, and a task (of a modded save) may meet
+    more than 256 biomes where a chunk does not."""
 
     def __init__(self, known=None):
         from types import SimpleNamespace
@@ -58,8 +60,6 @@ class _LocalPalette:
         self.unknown: set = set()      # local indices `known` lacks
         self.names: list = []
         self.biomes: dict = {}
-        self.bnames: list = []
-        self.memo: dict = {}           # mcstate.columns' memo: section biome palettes
         self.report = SimpleNamespace(blocks={})
         self.voxels = self.remap = None
 
@@ -94,11 +94,7 @@ class _LocalPalette:
         return np.zeros(int(ids.max()) + 1, np.uint16)
 
     def biome(self, name) -> int:
-        i = self.biomes.get(name)
-        if i is None:
-            i = self.biomes[name] = len(self.bnames)
-            self.bnames.append(name)
-        return i
+        return self.biomes.setdefault(name, len(self.biomes))
 
 
 def _meet(name: str, props):
@@ -125,7 +121,7 @@ def read(item, shared):
     cx, cz, kind, body)) of the task's chunks; result: ("ok", version, row without data,
     data, (local states, how many so far, voxels per local state), (block names, how
     many so far, [(name's index, voxels)]), dropped, key, local biome columns or None,
-    (biome names, how many so far)), ("unfinished", version, status), ("damaged",
+    local biome names), ("unfinished", version, status), ("damaged",
     message, before 1.13?) or ("hostile", message); the lists are the task's
     (_LocalPalette), the same objects in each chunk's result (pickled once).
     `data`: None, or the data blob and the local -> world map it was encoded with
@@ -170,7 +166,8 @@ def read(item, shared):
             # given never change, so this map is the one the writer makes in plan order
             # (convert already wrote the world values: _LocalPalette.settle)
             data = (shared["encoder"].data(data), pal.remap)
-        cols = mcstate.columns(ch, blocks, shared["y_min"], pal.biome, pal.memo)
+        pal.biomes = {}
+        cols = mcstate.columns(ch, blocks, shared["y_min"], pal.biome)
         # this chunk's voxels per block name: what the task's counts grew by
         now = [v[2] for v in counts.values()]
         before += [0] * (len(now) - len(before))
@@ -178,7 +175,7 @@ def read(item, shared):
         before = now
         out.append((("ok", ch.version, row, data, (pal.local, len(pal.local), pal.voxels),
                      (pal.names, len(pal.names), grew), dropped, minecraft.to_key(cx, cz), cols,
-                     (pal.bnames, len(pal.bnames))), b.spent(), where))
+                     list(pal.biomes)), b.spent(), where))
     return out
 
 
@@ -353,8 +350,8 @@ class _Writer:
         self.known: dict = {}  # state key -> its value in the world's data (workers encode with it)
         self.redefaulted = 0   # worker blobs made again by _redefault
         self.task = None       # the task whose lists are mapped (_ok): their world values,
-        self.wv, self.bids, self.refs, self.bglob = [0], [0], [], []   # block ids, report
-        self.arrays = self.barr = None                                  # lines, biomes
+        self.wv, self.bids, self.refs = [0], [0], []   # block ids, report lines
+        self.arrays = None
 
     def settle(self, got) -> None:
         r, (nbytes, tags), where = got
@@ -384,10 +381,10 @@ class _Writer:
         of 4096+ chunks: Python lists here, NumPy once per chunk). The task's lists
         (read) are mapped as far as this chunk reached, once per task, in order."""
         _, _, row, data, (local, nloc, voxels), (names, nnames, grew), dropped, key, cols, \
-            (bnames, nb) = r
+            bnames = r
         rep = self.report
         if local is not self.task:   # the first chunk of the next task
-            self.task, self.wv, self.bids, self.refs, self.bglob = local, [0], [0], [], []
+            self.task, self.wv, self.bids, self.refs = local, [0], [0], []
             self.arrays = None
         refs = self.refs
         if len(refs) < nnames:
@@ -428,11 +425,8 @@ class _Writer:
             blob = None if data is None else self.enc.data(remap[data])
         self.batch.append(row[:4] + (blob,) + row[5:])
         if cols is not None:
-            bg = self.bglob
-            if len(bg) < nb:
-                bg += [self.states.biome(n) for n in bnames[len(bg):nb]]
-                self.barr = np.array(bg, np.uint8)
-            self.biomes.append((key, self.barr[cols]))
+            glob = np.array([self.states.biome(n) for n in bnames], np.uint8)
+            self.biomes.append((key, glob[cols]))
 
     def _redefault(self, key, row, blob, theirs, remap, ids, changed):
         """A worker's data blob encoded before a chunk still in flight decided the

@@ -228,3 +228,19 @@ def test_a_task_met_a_state_its_later_chunks_lack(tmp_path):
     with World.create(two, seed=0, generator="empty", loader=False) as w:
         imports.run(w, Two(), save)
     assert chunks(two) == chunks(one)
+
+
+def test_the_last_tasks_are_smaller():
+    """The last 2 tasks per worker take a quarter of the step, so the workers finish
+    together; every item is in exactly one task."""
+    for n, workers in ((1089, 2), (4096, 2), (800, 8)):
+        step = cluster.task_size(n, workers)
+        sizes, left = [], n
+        while left > 0:   # as the commands slice
+            sizes.append(min(left, cluster.tail(left, step, workers)))
+            left -= sizes[-1]
+        assert sum(sizes) == n and min(sizes) >= 1
+        big = [i for i, s in enumerate(sizes) if s == step]
+        end = sum(sizes[big[-1] + 1:]) if big else n
+        assert 2 * workers * step - step < end <= 2 * workers * step, (n, workers, sizes)
+        assert all(s <= step // 4 for s in sizes[len(big):])

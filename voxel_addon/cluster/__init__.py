@@ -243,6 +243,14 @@ def task_size(n: int, workers: int, most: int = 32) -> int:
     return max(1, min(most, n // (8 * max(1, workers))))
 
 
+def tail(left: int, step: int, workers: int) -> int:
+    """Items in the next task when LEFT items are left: STEP, but a quarter of it over
+    the last 2 tasks per worker, so the workers finish together (the last big task
+    would leave the others idle for up to its whole length; a task costs the writer's
+    process ~4 ms, a few more of them are cheap)."""
+    return step if left > 2 * max(1, workers) * step else max(1, step // 4)
+
+
 class Pool:
     """Tasks on a Dask client; results come back to the caller (the one writer)."""
 

@@ -29,7 +29,7 @@ import numpy as np
 from ..core.errors import VoxelError
 from ..formats.budget import Exceeded
 from ..storage import minecraft as mcfile
-from . import knob, task_size
+from . import knob, tail, task_size
 
 COMMIT = 64  # chunks per transaction
 JOB = "import_job"
@@ -260,7 +260,7 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
     def tasks():  # the bytes are copied as tasks go out, not all at once
         j = 0
         while j < len(plan):
-            n = small if j < first else step
+            n = small if j < first else tail(len(plan) - j, step, pool.size)
             part = plan[j:j + n]
             if near:
                 chunks = tuple((i, (reg.path.name, cx, cz, None, None)) for i, reg, cx, cz in part)

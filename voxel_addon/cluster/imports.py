@@ -349,9 +349,9 @@ class _Writer:
         self.enc = world.file.encoder()
         self.known: dict = {}  # state key -> its value in the world's data (workers encode with it)
         self.redefaulted = 0   # worker blobs made again by _redefault
-        self.task = None       # the task whose lists are mapped (_ok): their world values,
-        self.wv, self.bids, self.refs = [0], [0], []   # block ids, report lines
-        self.arrays = None
+        # the task in hand (its `local` list, _ok): each local state's world value and
+        # block id (as lists and as `arrays`), each of its block names' report line
+        self.task, self.wv, self.bids, self.refs, self.arrays = None, [0], [0], [], None
 
     def settle(self, got) -> None:
         r, (nbytes, tags), where = got
@@ -418,6 +418,8 @@ class _Writer:
         self.known.update(zip([e[0] for e in local[:nloc]], remap[1:].tolist()))
         if isinstance(data, tuple):  # encoded by the worker with what was known then
             blob, theirs = data
+            if len(theirs) != len(remap):
+                raise RuntimeError(f"{key}: a worker numbered block states otherwise")
             changed = (theirs != remap) & (voxels[:len(remap)] > 0)
             if changed.any():
                 blob = self._redefault(key, row, blob, theirs, remap, ids, changed)

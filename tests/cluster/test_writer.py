@@ -116,7 +116,7 @@ def test_workers_encode_data_blobs_as_one_process(tmp_path, monkeypatch):
     save = save_folder(tmp_path / "save")
     one, two = tmp_path / "one.sqlite", tmp_path / "two.sqlite"
     with World.create(one, seed=0, generator="empty", loader=False) as w:
-        minecraft.import_world(w, save)
+        rep1 = minecraft.import_world(w, save)
     made = {"worker": 0, "writer": 0}
     read = imports.read
 
@@ -130,11 +130,23 @@ def test_workers_encode_data_blobs_as_one_process(tmp_path, monkeypatch):
 
     class Two(cluster.Serial):
         size = 2  # tasks of 3 chunks (the first 8 of one)
+    rep2 = minecraft.Report()
     with World.create(two, seed=0, generator="empty", loader=False) as w:
-        imports.run(w, Two(), save)
+        imports.run(w, Two(), save, report=rep2)
     assert made["worker"] > 30 and made["writer"] >= 1, made  # both ways taken
     assert chunks(two) == chunks(one)
-    assert meta(two, "colors") == meta(one, "colors")
+    # a task's palette lists settled chunk by chunk: the same states, colours, biomes
+    # and report lines (names in the order met, voxels per name) as one process
+    for key in ("colors", "mc_states", "mc_state_defaults", "mc_color_states", "mc_biome_names"):
+        assert meta(two, key) == meta(one, key), key
+    assert biomes(two) == biomes(one)
+    assert rep2.lines() == rep1.lines() and list(rep2.blocks) == list(rep1.blocks)
+
+
+def biomes(p):
+    import sqlite3
+    with sqlite3.connect(p) as db:
+        return sorted(db.execute("SELECT * FROM mc_biomes"))
 
 
 def test_a_default_decided_while_tasks_are_out(tmp_path, monkeypatch):
@@ -177,3 +189,58 @@ def test_a_default_decided_while_tasks_are_out(tmp_path, monkeypatch):
         imports.run(w, Two(), save)
     assert made, "no blob was encoded before its block's default was decided"
     assert chunks(two) == chunks(one)
+
+
+def test_a_task_met_a_state_its_later_chunks_lack(tmp_path):
+    """A task's palette is the task's: a chunk that meets a state nobody knew yet makes
+    the later chunks of its task carry that state too (not theirs, no voxel has it)
+    while every state they do have is known: the worker encodes their blobs, and the
+    writer compares only the states the chunk has (else it would take the stranger's
+    value for a changed default and stop the import)."""
+    from tests.cluster.test_cluster import chunks
+    stairs = [f"minecraft:oak_stairs[facing={f},half={h},shape={s}]"
+              for f in ("north", "south", "east", "west") for h in ("top", "bottom")
+              for s in ("straight", "inner_left", "inner_right")]
+    keys = [(x, 0) for x in range(24)]
+    save = tmp_path / "save"
+
+    def write(order):
+        region = {}
+        for pos, k in enumerate(order):
+            a = np.full((16, 16, 16), "minecraft:air", object)
+            a[0] = "minecraft:stone"
+            a[1, 0, :5] = "minecraft:oak_log[axis=y]"   # known once the first is settled
+            if pos == 0:
+                a[2:4] = "minecraft:oak_log[axis=x]"    # 512 voxels: the log's default
+            elif pos % 2 == 0:
+                a[1, 1, 0] = stairs[pos // 2]                # a state met here first
+            region[k] = mc.chunk_nbt(k[0], k[1], {0: a})
+        mc.write_region(save / "region", region)
+    write(keys)
+    order = [(cx, cz) for _, cx, cz in minecraft.plan(save)]
+    write(order)   # the plan's order: every other chunk meets a new state
+    one, two = tmp_path / "one.sqlite", tmp_path / "two.sqlite"
+    with World.create(one, seed=0, generator="empty", loader=False) as w:
+        minecraft.import_world(w, save)
+
+    class Two(cluster.Serial):
+        size = 1  # tasks of 3 chunks after the first window's 4 of one
+    with World.create(two, seed=0, generator="empty", loader=False) as w:
+        imports.run(w, Two(), save)
+    assert chunks(two) == chunks(one)
+
+
+def test_the_last_tasks_are_smaller():
+    """The last 2 tasks per worker take a quarter of the step, so the workers finish
+    together; every item is in exactly one task."""
+    for n, workers in ((1089, 2), (4096, 2), (800, 8)):
+        step = cluster.task_size(n, workers)
+        sizes, left = [], n
+        while left > 0:   # as the commands slice
+            sizes.append(min(left, cluster.tail(left, step, workers)))
+            left -= sizes[-1]
+        assert sum(sizes) == n and min(sizes) >= 1
+        big = [i for i, s in enumerate(sizes) if s == step]
+        end = sum(sizes[big[-1] + 1:]) if big else n
+        assert 2 * workers * step - step < end <= 2 * workers * step, (n, workers, sizes)
+        assert all(s <= step // 4 for s in sizes[len(big):])

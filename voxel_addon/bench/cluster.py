@@ -82,6 +82,11 @@ def _scaling(name, n, unit, what, command):
             yield (f"cluster_{name}_{tag}_writer_cpu_s", own, "s",
                    f"CPU of the command's own process (writer, client, scheduler, process "
                    f"start), {how}")
+            # per item, start included (the README subtracts a tiny run's to leave it out)
+            yield (f"cluster_{name}_{tag}_writer_cpu_ms_per_{unit[:-1]}", 1e3 * own / n, "ms",
+                   f"the command's own process per {unit[:-1]}, {how}")
+            yield (f"cluster_{name}_{tag}_workers_cpu_ms_per_{unit[:-1]}", 1e3 * (cpu - own) / n,
+                   "ms", f"every other process (workers, forkserver) per {unit[:-1]}, {how}")
     yield (f"cluster_{name}_speedup_w2", per["w2"] / per["w1"], "x",
            "--workers 2 over --workers 1, same run (cluster start included in both)")
     yield (f"cluster_{name}_w2_over_one", per["w2"] / per["one"], "x",

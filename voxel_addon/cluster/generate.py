@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import time
 
-from . import knob, task_size
+from . import knob, tail, task_size
 
 COMMIT = 64   # rows per transaction (or what arrived within COMMIT_S)
 COMMIT_S = 1.0
@@ -47,7 +47,11 @@ def run(world, pool, keys, backend=None, progress=None) -> tuple[int, int]:
     have = set(f.chunk_keys())
     todo = [k for k in keys if k not in have]
     step = task_size(len(todo), pool.size)
-    tasks = [tuple(todo[i:i + step]) for i in range(0, len(todo), step)]
+    tasks, i = [], 0
+    while i < len(todo):
+        n = tail(len(todo) - i, step, pool.size)
+        tasks.append(tuple(todo[i:i + n]))
+        i += n
     shared = {"generator": spec(gen, backend), "encoder": f.encoder()}
     buf, made, computed, t = [], 0, 0, time.monotonic()
     every = knob("COMMIT", COMMIT)

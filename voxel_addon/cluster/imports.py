@@ -29,49 +29,68 @@ import numpy as np
 from ..core.errors import VoxelError
 from ..formats.budget import Exceeded
 from ..storage import minecraft as mcfile
-from . import knob, task_size
+from . import knob, tail, task_size
 
 COMMIT = 64  # chunks per transaction
 JOB = "import_job"
 
 
 class _LocalPalette:
-    """formats.minecraft._Palettes on a worker: block states get chunk-local indices
-    (1, 2, ... in the order met; `local`: (state key, rgb or None, block id) each),
-    which the writer maps to the world's state palette or, for dye states, their
-    colours, and to 0 for its block's default state (`voxels`: each local index's
-    voxels in the chunk, for the writer's mcstate.States.settle); the same for biomes
-    (`biomes`: names in the order met)."""
+    """formats.minecraft._Palettes on a worker, one per task: block states get
+    task-local indices (1, 2, ... in the order met over the task's chunks, which are
+    in plan order; `local`: (state key, rgb or None, block id) each), which the writer
+    maps to the world's state palette or, for dye states, their colours, and to 0 for
+    its block's default state (`voxels`: each local index's voxels in the chunk in
+    hand, for the writer's mcstate.States.settle); the same for block names (`names`:
+    (name, block, how) in the order met; `report.blocks` their voxels so far). Being
+    the task's, a section palette met in an earlier chunk (`keyed`, convert's memo)
+    costs one lookup, as in one process. The writer settles a chunk's new entries
+    (those past the previous chunk's) in the order met, so states, colours and report
+    lines join in one-process order. Biomes stay chunk-local (`biomes`, reset per
+    chunk): the columns hold them as bytes, and a task (of a modded save) may meet
+    more than 256 biomes where a chunk does not."""
 
-    def __init__(self, met: dict):
+    def __init__(self, known=None):
         from types import SimpleNamespace
-        self.met = met  # (name, props) -> what `of` looks up: shared by a task's chunks
+        self.known = known
         self.ids: dict = {}
         self.keyed: dict = {}
         self.local: list = []
-        self.voxels = None
+        self.wv: list = [0]            # each local index's value in `known` (0 if none)
+        self.unknown: set = set()      # local indices `known` lacks
+        self.names: list = []
         self.biomes: dict = {}
         self.report = SimpleNamespace(blocks={})
+        self.voxels = self.remap = None
 
     def of(self, name: str, props=None):
         key = (name, tuple(sorted(props.items())) if props else ())
         got = self.ids.get(key)
         if got is None:
-            m = self.met.get(key)
-            if m is None:
-                m = self.met[key] = _meet(name, props)
-            skey, rgb, bid, block, how = m
+            skey, rgb, bid, block, how = _meet(name, props)
             d = 0
             if bid:
                 self.local.append((skey, rgb, bid))
                 d = len(self.local)
+                v = self.known.get(skey) if self.known is not None else None
+                if v is None:
+                    self.unknown.add(d)
+                self.wv.append(v or 0)
             got = self.ids[key] = (bid, d)
-            self.report.blocks.setdefault(name, [block, how, 0])
+            if name not in self.report.blocks:
+                self.report.blocks[name] = [block, how, 0]
+                self.names.append((name, block, how))
         return got
 
     def settle(self, ids, vals, counts):
-        """Keep each local index's voxels; no defaults here (the writer's)."""
+        """Keep each local index's voxels; no defaults here (the writer's). Where
+        `known` gives every state of the chunk its world value, VALS (what convert
+        writes into the data array) become those values in place (`remap`): the data
+        comes out as the writer would map it, without a gather over the voxels."""
         self.voxels = np.bincount(vals, counts, minlength=len(self.local) + 1).astype(np.int64)
+        if self.known is not None and self.unknown.isdisjoint(vals.tolist()):
+            self.remap = np.array(self.wv, np.uint16)
+            vals[:] = self.remap[vals]
         return np.zeros(int(ids.max()) + 1, np.uint16)
 
     def biome(self, name) -> int:
@@ -100,20 +119,26 @@ def packed(item, shared) -> bytes:
 def read(item, shared):
     """Worker: one (result, (bytes, tags) decoded, where) per (index, (region name,
     cx, cz, kind, body)) of the task's chunks; result: ("ok", version, row without data,
-    data, local states, block counts, dropped, key, local biome columns or None, local
-    biome names), ("unfinished", version, status), ("damaged", message, before 1.13?)
-    or ("hostile", message). `data`: None, or the data blob and the local -> world map
-    it was encoded with when the task's `known` (state key -> world value, what the
-    writer had settled when the task went out; a value turns 0 once at most, when a
-    chunk still in flight decides its block's default: _Writer._redefault) covers
-    every local state, else the local data (the writer maps and encodes it). `kind`
+    data, (local states, how many so far, voxels per local state), (block names, how
+    many so far, [(name's index, voxels)]), dropped, key, local biome columns or None,
+    local biome names), ("unfinished", version, status), ("damaged",
+    message, before 1.13?) or ("hostile", message); the lists are the task's
+    (_LocalPalette), the same objects in each chunk's result (pickled once).
+    `data`: None, or the data blob and the local -> world map it was encoded with
+    when the task's `known` (state key -> world value, what the writer had settled
+    when the task went out; a value turns 0 once at most, when a chunk still in flight
+    decides its block's default: _Writer._redefault) covers every state of the chunk
+    (the map's other entries: whatever, no voxel has them), else the local data (the
+    writer maps and encodes it). `kind`
     None: the worker shares the writer's file system (a local cluster) and reads the
     chunk's bytes itself from shared["files"][name], the region's path."""
     from ..formats import anvil, mcstate, minecraft, nbt
     from ..formats.budget import Budget, Exceeded
     from ..formats.region import MAX_NBT, Region, RegionError, unpack
     chunks, known = item
-    out, regions, met = [], {}, {}
+    out, regions = [], {}
+    pal = _LocalPalette(known)
+    counts, before = pal.report.blocks, []
     for _, (name, cx, cz, kind, body) in chunks:
         where = f"{name} chunk ({cx}, {cz})"
         b = Budget(MAX_NBT, anvil.CHUNK_TAGS)  # the per-chunk limits; the writer charges the rest
@@ -133,17 +158,24 @@ def read(item, shared):
         if ch.status not in anvil.DONE:
             out.append((("unfinished", ch.version, ch.status), b.spent(), where))
             continue
-        pal = _LocalPalette(met)
+        pal.voxels = pal.remap = None
         blocks, data, dropped = minecraft.convert(ch, shared["y_min"], pal)
         row = shared["encoder"].row(minecraft.to_key(cx, cz), blocks)
-        if data is not None and all(e[0] in known for e in pal.local):
+        if data is not None and pal.remap is not None:
             # the writer's zstd (the largest share of its time) done here: values once
             # given never change, so this map is the one the writer makes in plan order
-            remap = np.array([0] + [known[e[0]] for e in pal.local], np.uint16)
-            data = (shared["encoder"].data(remap[data]), remap)
+            # (convert already wrote the world values: _LocalPalette.settle)
+            data = (shared["encoder"].data(data), pal.remap)
+        pal.biomes = {}
         cols = mcstate.columns(ch, blocks, shared["y_min"], pal.biome)
-        out.append((("ok", ch.version, row, data, (pal.local, pal.voxels), pal.report.blocks, dropped,
-                     minecraft.to_key(cx, cz), cols, list(pal.biomes)), b.spent(), where))
+        # this chunk's voxels per block name: what the task's counts grew by
+        now = [v[2] for v in counts.values()]
+        before += [0] * (len(now) - len(before))
+        grew = [(i, n - m) for i, (n, m) in enumerate(zip(now, before)) if n != m]
+        before = now
+        out.append((("ok", ch.version, row, data, (pal.local, len(pal.local), pal.voxels),
+                     (pal.names, len(pal.names), grew), dropped, minecraft.to_key(cx, cz), cols,
+                     list(pal.biomes)), b.spent(), where))
     return out
 
 
@@ -228,7 +260,7 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
     def tasks():  # the bytes are copied as tasks go out, not all at once
         j = 0
         while j < len(plan):
-            n = small if j < first else step
+            n = small if j < first else tail(len(plan) - j, step, pool.size)
             part = plan[j:j + n]
             if near:
                 chunks = tuple((i, (reg.path.name, cx, cz, None, None)) for i, reg, cx, cz in part)
@@ -317,6 +349,9 @@ class _Writer:
         self.enc = world.file.encoder()
         self.known: dict = {}  # state key -> its value in the world's data (workers encode with it)
         self.redefaulted = 0   # worker blobs made again by _redefault
+        # the task in hand (its `local` list, _ok): each local state's world value and
+        # block id (as lists and as `arrays`), each of its block names' report line
+        self.task, self.wv, self.bids, self.refs, self.arrays = None, [0], [0], [], None
 
     def settle(self, got) -> None:
         r, (nbytes, tags), where = got
@@ -343,46 +378,59 @@ class _Writer:
 
     def _ok(self, r) -> None:
         """A chunk read: its states, colours and biomes settled (per chunk for each
-        of 4096+ chunks: Python lists here, NumPy once per chunk)."""
-        _, _, row, data, (local, voxels), counts, dropped, key, cols, bnames = r
+        of 4096+ chunks: Python lists here, NumPy once per chunk). The task's lists
+        (read) are mapped as far as this chunk reached, once per task, in order."""
+        _, _, row, data, (local, nloc, voxels), (names, nnames, grew), dropped, key, cols, \
+            bnames = r
         rep = self.report
-        blocks = rep.blocks
-        for name, (b, how, n) in counts.items():
-            got = blocks.get(name)
-            if got is None:
-                got = blocks[name] = [b, how, 0]
-            got[2] += n
+        if local is not self.task:   # the first chunk of the next task
+            self.task, self.wv, self.bids, self.refs = local, [0], [0], []
+            self.arrays = None
+        refs = self.refs
+        if len(refs) < nnames:
+            blocks = rep.blocks
+            for name, b, how in names[len(refs):nnames]:
+                got = blocks.get(name)
+                if got is None:
+                    got = blocks[name] = [b, how, 0]
+                refs.append(got)
+        for i, n in grew:
+            refs[i][2] += n
         rep.dropped += dropped
-        states, of_key = self.states, self.states.of_key
-        vals, ids = [0], [0]   # as formats.minecraft._Palettes
-        for skey, rgb, bid in local:
-            st = of_key(skey)
-            ids.append(bid)
-            if rgb is not None:
-                self.palette, v = states.color(st, self.palette, rgb)
-                vals.append(v)
-                self.grown = True
-            else:
-                vals.append(st)
-        remap = np.array(vals, np.uint16)
-        ids = np.array(ids, np.uint16)
+        wv, bids = self.wv, self.bids   # as formats.minecraft._Palettes
+        if len(wv) <= nloc or self.arrays is None:
+            states, of_key = self.states, self.states.of_key
+            for skey, rgb, bid in local[len(wv) - 1:nloc]:
+                st = of_key(skey)
+                bids.append(bid)
+                if rgb is not None:
+                    self.palette, v = states.color(st, self.palette, rgb)
+                    wv.append(v)
+                    self.grown = True
+                else:
+                    wv.append(st)
+            self.arrays = np.array(wv, np.uint16), np.array(bids, np.uint16)
+        remap, ids = self.arrays
         if voxels is not None:   # each block's default state is stored as 0
-            dflt = states.settle(ids, remap, voxels[:len(remap)])
+            dflt = self.states.settle(ids, remap, voxels[:len(remap)])
             remap = np.where(remap == dflt[ids], 0, remap).astype(np.uint16)
         # a value changes once at most: to 0, when its block's default is decided
-        self.known.update(zip([e[0] for e in local], remap[1:].tolist()))
+        self.known.update(zip([e[0] for e in local[:nloc]], remap[1:].tolist()))
         if isinstance(data, tuple):  # encoded by the worker with what was known then
             blob, theirs = data
-            if len(theirs) != len(remap) or (theirs != remap).any():
-                blob = self._redefault(key, row, blob, theirs, remap, ids)
+            if len(theirs) != len(remap):
+                raise RuntimeError(f"{key}: a worker numbered block states otherwise")
+            changed = (theirs != remap) & (voxels[:len(remap)] > 0)
+            if changed.any():
+                blob = self._redefault(key, row, blob, theirs, remap, ids, changed)
         else:
             blob = None if data is None else self.enc.data(remap[data])
         self.batch.append(row[:4] + (blob,) + row[5:])
         if cols is not None:
-            glob = np.array([states.biome(n) for n in bnames], np.uint8)
+            glob = np.array([self.states.biome(n) for n in bnames], np.uint8)
             self.biomes.append((key, glob[cols]))
 
-    def _redefault(self, key, row, blob, theirs, remap, ids):
+    def _redefault(self, key, row, blob, theirs, remap, ids, changed):
         """A worker's data blob encoded before a chunk still in flight decided the
         default state of some of its blocks: those states' voxels become 0 (colour
         voxels keep their colour index, which may be the same number)."""
@@ -390,7 +438,6 @@ class _Writer:
         from ..core.blocks import REGISTRY
         from ..storage import codecs
         color = REGISTRY.id("color")
-        changed = theirs != remap
         if (remap[changed] != 0).any() or (ids[changed] == color).any():
             raise RuntimeError(f"{key}: a worker mapped block states otherwise")
         vals = codecs.decode_u16(row[2], blob, C.VOLUME)

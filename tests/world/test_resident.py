@@ -68,6 +68,63 @@ def test_reloaded_batch_packs_its_light_once(tmp_path, monkeypatch):
         assert w.chunks[(2, 2)]._light is None and w.chunks[(2, 2)]._lpack is not None
 
 
+def test_reloaded_batch_packs_blocks_once_and_decodes_none(tmp_path, monkeypatch):
+    """A stream's batch of chunks read from the file (issue 29): their blocks stay
+    as read until the batch's snapshot copied them, then each is packed once (not
+    packed on load and decoded for the snapshot); payloads equal those of a batch
+    over chunks loaded the plain way (born packed), and everything ends packed."""
+    path = tmp_path / "w.sqlite"
+    with World.create(path, seed=7, backend="numpy") as w:
+        build.light_and_mesh(w, -2, -2, 3, 3, backends_=("numpy", "numpy"))
+        w.chunks[(0, 1)].set(3, 4, 200, REGISTRY.id("stone"))  # an edited chunk saved
+        build.light_and_mesh(w, -1, 0, 2, 3, backends_=("numpy", "numpy"))
+    nb = ("numpy", "numpy")
+    with World.open(path) as w:  # the old path: packed on load, decoded by the batch
+        w.load(build.keys_of(-2, -2, 3, 3))
+        want = {p.key: p for p in build.light_and_mesh(w, -1, -1, 2, 2, backends_=nb,
+                                                       load=False)}
+        blocks = {k: c.blocks_copy() for k, c in w.chunks.items()}
+    packs, decodes = [], []
+    real, unpack, into = C.pack, C.Packed.unpack, C.Packed.into
+    monkeypatch.setattr(C, "pack", lambda a: packs.append(id(a)) or real(a))
+    monkeypatch.setattr(C.Packed, "unpack",
+                        lambda p, *a: decodes.append(p.dtype) or unpack(p, *a))
+    monkeypatch.setattr(C.Packed, "into", lambda p, *a: decodes.append(p.dtype) or into(p, *a))
+    with World.open(path) as w:
+        got = build.light_and_mesh(w, -1, -1, 2, 2, backends_=nb)
+        assert np.uint16 not in decodes  # no chunk's blocks decoded
+        ring = build.keys_of(-2, -2, 3, 3)
+        assert sorted(w.chunks) == sorted(ring)
+        # each loaded chunk's blocks packed exactly once, and kept so
+        assert len(packs) == len(ring) == len(set(packs))
+        assert all(w.chunks[k]._blocks is None for k in ring)
+        assert sorted(p.key for p in got) == sorted(want)
+        for p in got:
+            q = want[p.key]
+            assert np.array_equal(p.light, q.light), p.key
+            assert np.array_equal(p.mesh.vertices, q.mesh.vertices), p.key
+            assert np.array_equal(p.mesh.ranges, q.mesh.ranges), p.key
+        for k in ring:
+            assert np.array_equal(w.chunks[k].blocks_copy(), blocks[k]), k
+        assert _cold(w)
+
+
+def test_hot_loaded_blocks_read_for_writing_stay_arrays(tmp_path):
+    """Blocks of a hot load that something read through .blocks (which may write
+    into them) are not swapped for the pack made from them meanwhile."""
+    path = tmp_path / "w.sqlite"
+    with World.create(path, seed=7, backend="numpy") as w:
+        w.load([(0, 0)])
+    with World.open(path) as w:
+        c = w.load([(0, 0)], hot=True)[(0, 0)]
+        a = c.unread()
+        assert a is not None and c._bpack is None
+        p = C.pack(a)
+        c.blocks[1, 2, 250] = REGISTRY.id("stone")  # a writer read them
+        assert c.unread() is None and not c.packed(a, p)
+        assert c._blocks is a and c.get(1, 2, 250) == REGISTRY.id("stone")
+
+
 def test_save_encodes_packed_chunks_as_their_arrays(tmp_path, monkeypatch):
     """A save snapshots cold chunks as their Packed blocks and light (issue 29: no
     decode under the lock; decoded into one reused buffer to encode): the rows are

@@ -161,9 +161,11 @@ def light_and_mesh(world, cx0: int, cy0: int, cx1: int, cy1: int, *, backends_=N
     with trace.span("batch.snapshot", need=need):
         blocks, ticks, data = snapshot(world, cx0 - 1, cy0 - 1, cx1 + 1, cy1 + 1, data=True,
                                        pad=C.SIZE if need else 1)
-    if load:
-        with trace.span("batch.pack"):
-            pack_loaded(world, ring)
+    # the rectangle's blocks are packed now (no batch reads them again); the ring's
+    # stay as read for the batch that has them inside (a pack then a decode
+    # there; the stream's compact sweep packs those left over within a second)
+    with trace.span("batch.pack"):
+        pack_loaded(world, keys_of(cx0, cy0, cx1, cy1))
     # one solve for the whole rectangle: its ring is the only overhead
     # model blocks that are no whole cube pass light (with the world's resource stack)
     with trace.span("batch.light", backend=lb, need=need):

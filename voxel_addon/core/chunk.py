@@ -80,7 +80,8 @@ class Chunk:
     `data` stays None while all zero. `large` maps a small-data index to any Python
     object (e.g. a chest's contents). Blocks and light are kept packed (Packed: ~3 KB
     each for generated terrain, of 128 KB) until read, and packed again by compact()
-    (issue 29).
+    (issue 29); a stream batch's load keeps blocks as read until the batch packs
+    them (unread/packed: one pack, no decode).
     """
 
     __slots__ = ("key", "_blocks", "_bpack", "_bhot", "data", "large", "_light", "_lpack",

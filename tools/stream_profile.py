@@ -20,7 +20,7 @@ from pathlib import Path
 os.environ["VOXEL_TRACE"] = "1"  # before the add-on reads it
 
 PHASES = ("batch", "batch.load", "batch.snapshot", "batch.light", "batch.mesh",
-          "batch.store", "batch.compact")
+          "batch.pack", "batch.store", "batch.compact")
 
 
 def thread_cpu() -> dict:

@@ -56,16 +56,84 @@ def test_reloaded_batch_packs_its_light_once(tmp_path, monkeypatch):
         want = w.chunks[(0, 0)].light.copy()
     packs = []
     real = C.pack
-    monkeypatch.setattr(C, "pack", lambda a: packs.append(a.dtype) or real(a))
+    monkeypatch.setattr(C, "pack", lambda a: packs.append(id(a)) or real(a))
     with World.open(path) as w:
         got = build.light_and_mesh(w, 0, 0, 1, 1, backends_=("numpy", "numpy"))
         assert [p.key for p in got] == [(0, 0)]
         c = w.chunks[(0, 0)]
         assert got[0].light is c._light and np.array_equal(got[0].light, want)
-        n = len(packs)
-        assert _cold(w) and len(packs) == n + 9  # each loaded light packed once, here
+        n, lit = len(packs), {id(c._light) for c in w.chunks.values()}
+        assert _cold(w) and sum(a in lit for a in packs[n:]) == 9  # each packed once, here
         w.load([(2, 2)])  # not a batch: packed on load
         assert w.chunks[(2, 2)]._light is None and w.chunks[(2, 2)]._lpack is not None
+
+
+def test_reloaded_batch_packs_blocks_once_and_decodes_none(tmp_path, monkeypatch):
+    """A stream's batch of chunks read from the file (issue 29): their blocks stay
+    as read until the batch's snapshot copied them, then each is packed once (not
+    packed on load and decoded for the snapshot); payloads equal those of a batch
+    over chunks loaded the plain way (born packed), and everything ends packed."""
+    path = tmp_path / "w.sqlite"
+    with World.create(path, seed=7, backend="numpy") as w:
+        build.light_and_mesh(w, -2, -2, 3, 3, backends_=("numpy", "numpy"))
+        w.chunks[(0, 1)].set(3, 4, 200, REGISTRY.id("stone"))  # an edited chunk saved
+        build.light_and_mesh(w, -1, 0, 2, 3, backends_=("numpy", "numpy"))
+    nb = ("numpy", "numpy")
+    with World.open(path) as w:  # the old path: packed on load, decoded by the batch
+        w.load(build.keys_of(-2, -2, 3, 3))
+        want = {p.key: p for p in build.light_and_mesh(w, -1, -1, 2, 2, backends_=nb,
+                                                       load=False)}
+        blocks = {k: c.blocks_copy() for k, c in w.chunks.items()}
+    packs, decodes = [], []
+    real, unpack, into = C.pack, C.Packed.unpack, C.Packed.into
+    monkeypatch.setattr(C, "pack", lambda a: packs.append(id(a)) or real(a))
+    monkeypatch.setattr(C.Packed, "unpack",
+                        lambda p, *a: decodes.append(p.dtype) or unpack(p, *a))
+    monkeypatch.setattr(C.Packed, "into", lambda p, *a: decodes.append(p.dtype) or into(p, *a))
+    with World.open(path) as w:
+        got = build.light_and_mesh(w, -1, -1, 2, 2, backends_=nb)
+        assert np.uint16 not in decodes  # no chunk's blocks decoded
+        ring = build.keys_of(-2, -2, 3, 3)
+        assert sorted(w.chunks) == sorted(ring)
+        # the rectangle's blocks packed once; the ring's kept as read for the batch
+        # that has them inside, or the compact sweep
+        inner = build.keys_of(-1, -1, 2, 2)
+        assert len(packs) == len(inner) == len(set(packs))
+        assert all((w.chunks[k]._blocks is None) == (k in inner) for k in ring)
+        n = len(packs)
+        got2 = build.light_and_mesh(w, -2, -1, -1, 2, backends_=nb)  # a ring strip
+        # (its ring's windows of the 3 chunks packed above are decoded, no more)
+        assert got2 and len(decodes) <= 3 and len(packs) == n + 3
+        # the compact sweep packs the rest once: every chunk's blocks packed once
+        n = len(packs)
+        fresh = {id(c.unread()) for c in w.chunks.values() if c.unread() is not None}
+        lit = {id(c._light) for c in w.chunks.values() if c._light is not None}
+        assert len(fresh) == len(w.chunks) - len(inner) - 3
+        assert _cold(w) and sorted(packs[n:]) == sorted(fresh | lit)
+        assert sorted(p.key for p in got) == sorted(want)
+        for p in got:
+            q = want[p.key]
+            assert np.array_equal(p.light, q.light), p.key
+            assert np.array_equal(p.mesh.vertices, q.mesh.vertices), p.key
+            assert np.array_equal(p.mesh.ranges, q.mesh.ranges), p.key
+        for k in ring:
+            assert np.array_equal(w.chunks[k].blocks_copy(), blocks[k]), k
+
+
+def test_hot_loaded_blocks_read_for_writing_stay_arrays(tmp_path):
+    """Blocks of a hot load that something read through .blocks (which may write
+    into them) are not swapped for the pack made from them meanwhile."""
+    path = tmp_path / "w.sqlite"
+    with World.create(path, seed=7, backend="numpy") as w:
+        w.load([(0, 0)])
+    with World.open(path) as w:
+        c = w.load([(0, 0)], hot=True)[(0, 0)]
+        a = c.unread()
+        assert a is not None and c._bpack is None
+        p = C.pack(a)
+        c.blocks[1, 2, 250] = REGISTRY.id("stone")  # a writer read them
+        assert c.unread() is None and not c.packed(a, p)
+        assert c._blocks is a and c.get(1, 2, 250) == REGISTRY.id("stone")
 
 
 def test_save_encodes_packed_chunks_as_their_arrays(tmp_path, monkeypatch):

@@ -80,15 +80,21 @@ class Chunk:
     `data` stays None while all zero. `large` maps a small-data index to any Python
     object (e.g. a chest's contents). Blocks and light are kept packed (Packed: ~3 KB
     each for generated terrain, of 128 KB) until read, and packed again by compact()
-    (issue 29).
+    (issue 29); a stream batch's load keeps blocks as read until the batch packs
+    them (unread/packed: one pack, no decode).
     """
 
     __slots__ = ("key", "_blocks", "_bpack", "_bhot", "data", "large", "_light", "_lpack",
                  "mesh", "dirty", "last_use", "__weakref__")
 
-    def __init__(self, key, blocks=None, data=None):
+    def __init__(self, key, blocks=None, data=None, hot: bool = False):
         self.key = tuple(key)
-        if blocks is None:
+        if hot and getattr(blocks, "shape", None) == SHAPE and blocks.dtype == np.uint16:
+            # a stream batch's load: kept as read (no other reference: the file's
+            # decode) until its snapshot copied it, then packed once (unread():
+            # packing then decoding every reloaded chunk was ~1/3 of a reload)
+            self._blocks, self._bpack, self._bhot = blocks, None, 0.0
+        elif blocks is None:
             self._blocks, self._bpack, self._bhot = None, Packed.uniform(SHAPE, np.uint16), 0.0
         elif isinstance(blocks, Packed):  # a save's snapshot (World._fetch): never changes
             self._blocks, self._bpack, self._bhot = None, blocks, 0.0
@@ -114,7 +120,24 @@ class Chunk:
         if a is None:
             a = self._blocks = self._bpack.unpack()  # (_bpack stays, as _lpack)
             self._bhot = time.monotonic()
+        elif self._bhot == 0.0:  # loaded hot, read now: it may be written (see unread)
+            self._bhot = time.monotonic()
         return a
+
+    def unread(self) -> np.ndarray | None:
+        """The blocks of a hot load (Chunk(hot=True)) that nothing has read through
+        .blocks since (so nothing writes into them): pack them outside the world's
+        lock and hand the result to packed(); else None."""
+        a = self._blocks
+        return a if a is not None and self._bpack is None and self._bhot == 0.0 else None
+
+    def packed(self, a: np.ndarray, p: "Packed") -> bool:
+        """Keep P (pack(a), a from unread()) in place of the array when the blocks
+        are still A unread (call with the world's lock held); whether it did."""
+        if self._blocks is not a or self._bhot != 0.0:
+            return False
+        self._bpack, self._blocks = p, None
+        return True
 
     def blocks_copy(self) -> np.ndarray:
         """A new array of the blocks (a save's snapshot) that leaves cold ones cold:

@@ -161,6 +161,11 @@ def light_and_mesh(world, cx0: int, cy0: int, cx1: int, cy1: int, *, backends_=N
     with trace.span("batch.snapshot", need=need):
         blocks, ticks, data = snapshot(world, cx0 - 1, cy0 - 1, cx1 + 1, cy1 + 1, data=True,
                                        pad=C.SIZE if need else 1)
+    # the rectangle's blocks are packed now (no batch reads them again); the ring's
+    # stay as read for the batch that has them inside (a pack then a decode
+    # there; the stream's compact sweep packs those left over within a second)
+    with trace.span("batch.pack"):
+        pack_loaded(world, keys_of(cx0, cy0, cx1, cy1))
     # one solve for the whole rectangle: its ring is the only overhead
     # model blocks that are no whole cube pass light (with the world's resource stack)
     with trace.span("batch.light", backend=lb, need=need):
@@ -177,6 +182,21 @@ def light_and_mesh(world, cx0: int, cy0: int, cx1: int, cy1: int, *, backends_=N
             meshes[k].models = m
     with trace.span("batch.store"):
         return store(world, cx0, cy0, cx1, cy1, lit, meshes, ticks)
+
+
+def pack_loaded(world, keys) -> int:
+    """Pack the blocks that load(hot=True) kept as read, now that the snapshot has
+    copied them (issue 29: the resident goal), outside the world's lock (LZ4 of a
+    chunk ~30-45 us); a chunk read or written meanwhile keeps its array (compact()
+    packs it once cold). Returns how many were packed."""
+    with world.locked():
+        todo = [(c, a) for c in map(world.chunks.get, keys) if c is not None
+                for a in (c.unread(),) if a is not None]
+    if not todo:
+        return 0
+    done = [(c, a, C.pack(a)) for c, a in todo]
+    with world.locked():
+        return sum(c.packed(a, p) for c, a, p in done)
 
 
 def store(world, cx0, cy0, cx1, cy1, lit, meshes, ticks) -> list[Payload]:

@@ -259,7 +259,8 @@ class World(Saving):
         {key: Chunk} without the corrupt ones (shown as missing). `hot`: the caller
         hands the light on (a stream's batch: its payloads) and compacts the chunks
         after, so light read from the file stays an array (packed here, it would be
-        rebuilt for the payload at once).
+        rebuilt for the payload at once); blocks read from the file too, until the
+        batch packs them (build.pack_loaded) or compact() finds them.
 
         Reading happens outside the lock, so another thread may load, edit and evict
         the same chunk meanwhile; the eviction counter catches that and the stale
@@ -332,7 +333,7 @@ class World(Saving):
         for key in read:
             got = found.get(key)
             if got is not None:
-                c = found[key] = Chunk(key, got[0], got[1])
+                c = found[key] = Chunk(key, got[0], got[1], hot=hot)
                 c.light = got[2]
                 if not hot:
                     c.compact()

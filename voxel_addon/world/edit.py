@@ -177,7 +177,9 @@ def _gather(world, x0, y0, x1, y1, attr, z0=0, z1=C.HEIGHT, exact=False, fill=Tr
 
 def _fill(world, out, ox, oy, x0, y0, x1, y1, attr, z0, z1):
     """out[x0 - ox:x1 - ox, y0 - oy:y1 - oy, z0:z1] = the world's `attr` there (a
-    window whose column (0, 0) is world column (ox, oy))."""
+    window whose column (0, 0) is world column (ox, oy)); nothing where it is empty."""
+    if x1 <= x0 or y1 <= y0 or z1 <= z0:
+        return
     for cx in range(x0 >> 4, ((x1 - 1) >> 4) + 1):
         for cy in range(y0 >> 4, ((y1 - 1) >> 4) + 1):
             c = world.chunks.get((cx, cy))
@@ -357,7 +359,7 @@ def _remesh(world, last, win, first=None) -> set:
     if regions is not None and stack is None and first is not None and len(last) <= PATCH_MAX:
         # meshing.patch reads only the slices through the changed voxels: gather
         # those (a coloured voxel's quads make it give up: then all, as below)
-        sub = _cross(world, gx, gy, gx1, gy1, last, za, zb)
+        sub = _cross(world, gx, gy, gx1, gy1, last, remesh, za, zb)
         patched = _patch(world, meshing, sub, last, first, remesh, rx0, ry0)
     if patched is not None:
         meshes = data = None
@@ -383,18 +385,24 @@ def _remesh(world, last, win, first=None) -> set:
     return out
 
 
-def _cross(world, gx, gy, gx1, gy1, last, za, zb):
+def _cross(world, gx, gy, gx1, gy1, last, remesh, za, zb):
     """The remesh window [gx, gx1) x [gy, gy1) x [za, zb) with only what meshing.patch
-    reads filled (the rest stale): per changed voxel the columns within 1 of its x
-    (every y) and of its y (every x), and the layers within 1 of its z (every
-    column). The slices it meshes again lie within 1 of the voxel along their axis
-    and their faces look toward it (meshing/slices.py): their cells and the cells
-    they face lie inside. A tenth of the window's voxels."""
+    reads filled (the rest stale): per changed voxel and remeshed chunk, the columns
+    within 1 of the voxel's x (its rows in the chunk, the ring's columns) and of its
+    y (likewise) and the layers within 1 of its z (in the chunk). The slices it
+    meshes again lie within 1 of the voxel along their axis, and their faces look
+    along that axis (meshing/slices.py): their cells and the cells they face lie
+    inside; a slice's rows and a z slice never read the ring across them."""
     sub = _gather(world, gx, gy, gx1, gy1, "blocks", exact=True, fill=False)
-    for x, y, z in last:
-        _fill(world, sub, gx, gy, max(x - 1, gx), gy, min(x + 2, gx1), gy1, "blocks", za, zb)
-        _fill(world, sub, gx, gy, gx, max(y - 1, gy), gx1, min(y + 2, gy1), "blocks", za, zb)
-        _fill(world, sub, gx, gy, gx, gy, gx1, gy1, "blocks", max(z - 1, za), min(z + 2, zb))
+    for kx, ky in remesh:
+        x0, y0 = kx * S, ky * S
+        for x, y, z in last:
+            _fill(world, sub, gx, gy, max(x - 1, x0 - 1), y0, min(x + 2, x0 + S + 1),
+                  y0 + S, "blocks", za, zb)
+            _fill(world, sub, gx, gy, x0, max(y - 1, y0 - 1), x0 + S,
+                  min(y + 2, y0 + S + 1), "blocks", za, zb)
+            _fill(world, sub, gx, gy, x0, y0, x0 + S, y0 + S, "blocks",
+                  max(z - 1, za), min(z + 2, zb))
     return sub
 
 

@@ -326,3 +326,29 @@ def test_patched_remesh_reads_only_what_it_gathers(world_path):
             for x, y, z, b, d in stroke:
                 model[(x, y, z)] = (b, d)
         assert check_against_full(w, world_path, model, 0, 0, 3, 3) >= 9
+
+
+def test_relit_light_is_a_new_array_from_packed_and_hot_chunks(world_path, monkeypatch):
+    """An edit writes relit light into a new array (Chunk.light_copy): a payload
+    handed out before keeps its light, whether the chunk's light was hot or packed,
+    and the result equals a full recompute."""
+    from voxel_addon.core import chunk as C
+    monkeypatch.setattr(C, "HOT_S", -1.0)   # compact() packs whatever was read
+    lamp = REGISTRY.id("lamp_red")
+    model: dict = {}
+    with World.create(world_path, seed=SEED, loader=False) as w:
+        for i, (x, y) in enumerate([(15, 16), (16, 15), (8, 8), (15, 16)]):
+            z = top(w, x, y) + 1
+            payloads, _ = edit(w, (x, y, z, lamp))
+            model[(x, y, z)] = (lamp, 0)
+            held = {p.key: (p.light, p.light.copy()) for p in payloads}
+            if i % 2:    # every other stroke on packed light
+                with w.locked():
+                    for c in w.chunks.values():
+                        c.compact()
+            z = top(w, x + 1, y) + 1
+            edit(w, (x + 1, y, z, lamp))
+            model[(x + 1, y, z)] = (lamp, 0)
+            for a, was in held.values():
+                assert np.array_equal(a, was)
+        assert check_against_full(w, world_path, model, 0, 0, 2, 2) >= 4

@@ -480,9 +480,15 @@ def _relight(world, blocks, lit, steps, near, win, sight=None) -> set:
             box = (slice(i0 + x0 - cx * S, i1 + x0 - cx * S),
                    slice(j0 + y0 - cy * S, j1 + y0 - cy * S), slice(lo[2], hi[2]))
             new = lit[i0:i1, j0:j1, lo[2]:hi[2]]
-            if not np.array_equal(new, c.light[box]):
-                c.light = c.light.copy(order="F")  # payloads out there keep theirs
-                c.light[box] = new
+            # compared without rebuilding a packed light (its sections were decoded
+            # for the window: remembered); changed, a new array (payloads out there
+            # keep theirs) rebuilt or copied once
+            cur = np.empty_like(new, order="F")
+            c.light_into(cur, box[0], box[1], lo[2], hi[2])
+            if not np.array_equal(new, cur):
+                a = c.light_copy()
+                a[box] = new
+                c.light = a
                 c.dirty = True
                 relit.add((cx, cy))
     return relit

@@ -300,3 +300,55 @@ def test_coloured_voxels_mesh_by_colour(world_path):
         m = w.chunk_at(0, 0).mesh
         top = m.quads[(m.quads["block"] == color) & (m.quads["face"] == 5)]
         assert top["color"].tolist() == [5] and top["w"].tolist() == [2]
+
+
+def test_patched_remesh_reads_only_what_it_gathers(world_path):
+    """Small strokes remesh by meshing.patch from a window of which edit.py gathers
+    only the slices through the changed voxels: with the rest of that window made
+    garbage before every stroke, the meshes still equal a full recompute."""
+    from voxel_addon.world import edit as E
+    rng = np.random.default_rng(5)
+    model: dict = {}
+    with World.create(world_path, seed=SEED, loader=False) as w:
+        for _ in range(14):
+            # near chunk borders (x, y = 15/16) half the time: the ring and neighbours
+            cx = int(rng.choice([15, 16, 17, 8])) + 16 * int(rng.integers(0, 2))
+            cy = int(rng.choice([15, 16, 9])) + 16 * int(rng.integers(0, 2))
+            stroke = []
+            for _ in range(int(rng.integers(1, 4))):
+                x, y = cx + int(rng.integers(-1, 2)), cy + int(rng.integers(-1, 2))
+                stroke.append((x, y, top(w, x, y) + int(rng.integers(-1, 2)),
+                               int(rng.choice(PALETTE)), 0))
+            buf = getattr(E._scratch, "blocks_exact", None)
+            if buf is not None:
+                buf[...] = rng.choice(PALETTE, size=buf.shape)
+            edit(w, stroke)
+            for x, y, z, b, d in stroke:
+                model[(x, y, z)] = (b, d)
+        assert check_against_full(w, world_path, model, 0, 0, 3, 3) >= 9
+
+
+def test_relit_light_is_a_new_array_from_packed_and_hot_chunks(world_path, monkeypatch):
+    """An edit writes relit light into a new array (Chunk.light_copy): a payload
+    handed out before keeps its light, whether the chunk's light was hot or packed,
+    and the result equals a full recompute."""
+    from voxel_addon.core import chunk as C
+    monkeypatch.setattr(C, "HOT_S", -1.0)   # compact() packs whatever was read
+    lamp = REGISTRY.id("lamp_red")
+    model: dict = {}
+    with World.create(world_path, seed=SEED, loader=False) as w:
+        for i, (x, y) in enumerate([(15, 16), (16, 15), (8, 8), (15, 16)]):
+            z = top(w, x, y) + 1
+            payloads, _ = edit(w, (x, y, z, lamp))
+            model[(x, y, z)] = (lamp, 0)
+            held = {p.key: (p.light, p.light.copy()) for p in payloads}
+            if i % 2:    # every other stroke on packed light
+                with w.locked():
+                    for c in w.chunks.values():
+                        c.compact()
+            z = top(w, x + 1, y) + 1
+            edit(w, (x + 1, y, z, lamp))
+            model[(x + 1, y, z)] = (lamp, 0)
+            for a, was in held.values():
+                assert np.array_equal(a, was)
+        assert check_against_full(w, world_path, model, 0, 0, 2, 2) >= 4

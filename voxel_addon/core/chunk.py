@@ -196,6 +196,14 @@ class Chunk:
         a = self._light
         return a if a is not None or self._lpack is None else self._lpack.unpack()
 
+    def light_copy(self) -> np.ndarray | None:
+        """A new array of the final light for a writer that sets it back (an edit):
+        the hot one copied, a packed one rebuilt (not kept, not copied again)."""
+        a = self._light
+        if a is not None:
+            return a.copy(order="F")
+        return None if self._lpack is None else self._lpack.unpack()
+
     def saved(self) -> tuple:
         """(blocks, light) for a save's snapshot: values no later change of the
         chunk touches and that cost no decode under the world's lock: the Packed

@@ -147,14 +147,15 @@ def _ensure_lit(world, keys) -> list[Payload]:
     raise VoxelError("could not light the chunks around the edit (they keep unloading)")
 
 
-def _gather(world, x0, y0, x1, y1, attr, z0=0, z1=C.HEIGHT, exact=False):
+def _gather(world, x0, y0, x1, y1, attr, z0=0, z1=C.HEIGHT, exact=False, fill=True):
     """Voxel columns [x0, x1) x [y0, y1) of active chunks' `attr` as one array
     (zeros where a chunk or its array is missing). Call with the world's lock held.
     The array is a view of this thread's scratch buffer for `attr`, valid until the
     next call: a fresh 1.3 MB array per edit costs page faults (~0.5 ms in a big
     process). Only layers [z0, z1) are filled; the others hold stale values.
     `exact`: a Fortran-contiguous buffer of just this shape (the mesher's input; the
-    last one is kept: a single voxel's chunk, mostly)."""
+    last one is kept: a single voxel's chunk, mostly). `fill=False`: the buffer
+    alone, its values stale (the caller fills what it reads, _cross)."""
     w, h = x1 - x0, y1 - y0
     if exact:
         name = attr + "_exact"
@@ -169,12 +170,22 @@ def _gather(world, x0, y0, x1, y1, attr, z0=0, z1=C.HEIGHT, exact=False):
             buf = C.empty(width=n, depth=n)
             setattr(_scratch, attr, buf)
         out = buf[:w, :h]
+    if fill:
+        _fill(world, out, x0, y0, x0, y0, x1, y1, attr, z0, z1)
+    return out
+
+
+def _fill(world, out, ox, oy, x0, y0, x1, y1, attr, z0, z1):
+    """out[x0 - ox:x1 - ox, y0 - oy:y1 - oy, z0:z1] = the world's `attr` there (a
+    window whose column (0, 0) is world column (ox, oy)); nothing where it is empty."""
+    if x1 <= x0 or y1 <= y0 or z1 <= z0:
+        return
     for cx in range(x0 >> 4, ((x1 - 1) >> 4) + 1):
         for cy in range(y0 >> 4, ((y1 - 1) >> 4) + 1):
             c = world.chunks.get((cx, cy))
             ax0, ay0 = max(x0, cx * S), max(y0, cy * S)
             ax1, ay1 = min(x1, cx * S + S), min(y1, cy * S + S)
-            dst = out[ax0 - x0:ax1 - x0, ay0 - y0:ay1 - y0, z0:z1]
+            dst = out[ax0 - ox:ax1 - ox, ay0 - oy:ay1 - oy, z0:z1]
             xs, ys = slice(ax0 - cx * S, ax1 - cx * S), slice(ay0 - cy * S, ay1 - cy * S)
             if c is None:
                 dst[...] = 0
@@ -185,7 +196,6 @@ def _gather(world, x0, y0, x1, y1, attr, z0=0, z1=C.HEIGHT, exact=False):
             else:
                 a = getattr(c, attr)
                 dst[...] = 0 if a is None else a[xs, ys, z0:z1]
-    return out
 
 
 def _light_layers(world, items, sight=None):
@@ -344,22 +354,20 @@ def _remesh(world, last, win, first=None) -> set:
     # a region remesh reads its layers and one more on each side; the others stay stale
     za, zb = (0, C.HEIGHT) if whole or stack is not None else \
         (max(r0 * meshing.REGION_H - 1, 0), min(r1 * meshing.REGION_H + 1, C.HEIGHT))
-    sub = _gather(world, gx, gy, rx1 * S + 1, ry1 * S + 1, "blocks", za, zb, exact=True)
-    data = None
-    if (sub[:, :, za:zb] == tint.COLOR).any():  # coloured voxels: their colour is their data
-        data = np.array(_gather(world, gx, gy, gx + sub.shape[0], gy + sub.shape[1], "data"),
-                        order="F")
-    models = {}
-    if stack is not None:  # Minecraft model blocks: air for the mesher
-        small = data if data is not None else np.array(
-            _gather(world, gx, gy, gx + sub.shape[0], gy + sub.shape[1], "data"), order="F")
-        models = mcmodels.build(world, sub, small, rx0, ry0)
+    gx1, gy1 = rx1 * S + 1, ry1 * S + 1
     patched = None
-    if regions is not None and data is None and stack is None and first is not None \
-            and len(last) <= PATCH_MAX:
+    if regions is not None and stack is None and first is not None and len(last) <= PATCH_MAX:
+        # meshing.patch reads only the slices through the changed voxels: gather
+        # those (a coloured voxel's quads make it give up: then all, as below)
+        sub = _cross(world, gx, gy, gx1, gy1, last, remesh, za, zb)
         patched = _patch(world, meshing, sub, last, first, remesh, rx0, ry0)
-    meshes = None if patched is not None else _mesh(meshing, sub, (rx0, ry0), remesh,
-                                                    regions, data)
+    if patched is not None:
+        meshes = data = None
+        models = {}
+    else:
+        sub = _gather(world, gx, gy, gx1, gy1, "blocks", za, zb, exact=True)
+        meshes, data, models = _remesh_full(world, meshing, sub, gx, gy, rx0, ry0, remesh,
+                                            regions, stack, za, zb)
     out = set()
     for k in remesh:
         c = world.chunks.get(k)
@@ -375,6 +383,41 @@ def _remesh(world, last, win, first=None) -> set:
         c.mesh = m
         out.add(k)
     return out
+
+
+def _cross(world, gx, gy, gx1, gy1, last, remesh, za, zb):
+    """The remesh window [gx, gx1) x [gy, gy1) x [za, zb) with only what meshing.patch
+    reads filled (the rest stale): per changed voxel and remeshed chunk, the columns
+    within 1 of the voxel's x (its rows in the chunk, the ring's columns) and of its
+    y (likewise) and the layers within 1 of its z (in the chunk). The slices it
+    meshes again lie within 1 of the voxel along their axis, and their faces look
+    along that axis (meshing/slices.py): their cells and the cells they face lie
+    inside; a slice's rows and a z slice never read the ring across them."""
+    sub = _gather(world, gx, gy, gx1, gy1, "blocks", exact=True, fill=False)
+    for kx, ky in remesh:
+        x0, y0 = kx * S, ky * S
+        for x, y, z in last:
+            _fill(world, sub, gx, gy, max(x - 1, x0 - 1), y0, min(x + 2, x0 + S + 1),
+                  y0 + S, "blocks", za, zb)
+            _fill(world, sub, gx, gy, x0, max(y - 1, y0 - 1), x0 + S,
+                  min(y + 2, y0 + S + 1), "blocks", za, zb)
+            _fill(world, sub, gx, gy, x0, y0, x0 + S, y0 + S, "blocks",
+                  max(z - 1, za), min(z + 2, zb))
+    return sub
+
+
+def _remesh_full(world, meshing, sub, gx, gy, rx0, ry0, remesh, regions, stack, za, zb):
+    """(meshes, data, models) of the remeshed chunks by the batched mesher."""
+    data = None
+    if (sub[:, :, za:zb] == tint.COLOR).any():  # coloured voxels: their colour is their data
+        data = np.array(_gather(world, gx, gy, gx + sub.shape[0], gy + sub.shape[1], "data"),
+                        order="F")
+    models = {}
+    if stack is not None:  # Minecraft model blocks: air for the mesher
+        small = data if data is not None else np.array(
+            _gather(world, gx, gy, gx + sub.shape[0], gy + sub.shape[1], "data"), order="F")
+        models = mcmodels.build(world, sub, small, rx0, ry0)
+    return _mesh(meshing, sub, (rx0, ry0), remesh, regions, data), data, models
 
 
 PATCH_MAX = 3   # voxels a stroke may change for meshing.patch (more: the batched mesher;
@@ -437,9 +480,15 @@ def _relight(world, blocks, lit, steps, near, win, sight=None) -> set:
             box = (slice(i0 + x0 - cx * S, i1 + x0 - cx * S),
                    slice(j0 + y0 - cy * S, j1 + y0 - cy * S), slice(lo[2], hi[2]))
             new = lit[i0:i1, j0:j1, lo[2]:hi[2]]
-            if not np.array_equal(new, c.light[box]):
-                c.light = c.light.copy(order="F")  # payloads out there keep theirs
-                c.light[box] = new
+            # compared without rebuilding a packed light (its sections were decoded
+            # for the window: remembered); changed, a new array (payloads out there
+            # keep theirs) rebuilt or copied once
+            cur = np.empty_like(new, order="F")
+            c.light_into(cur, box[0], box[1], lo[2], hi[2])
+            if not np.array_equal(new, cur):
+                a = c.light_copy()
+                a[box] = new
+                c.light = a
                 c.dirty = True
                 relit.add((cx, cy))
     return relit

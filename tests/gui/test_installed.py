@@ -29,6 +29,7 @@ def test_installed_extension_generates_renders_bakes_and_exports(app, gui, ext_z
     for name, path in r["modules"].items():
         assert path.startswith(r["user"]) and "/extensions/" in path, (name, path)
     assert "Portable Computing Language" in r["opencl"] and r["backend"] == "opencl", r
+    assert r["warm_started"], r  # New World started the kernels' build (issue 28)
     assert r["edit"] == ["FINISHED"] and r["edited"] == "glass", r
     v = r["view"]
     assert r["render"] == ["FINISHED"] and v["size"] == [160, 90] and v["std"] > 0.02, r

@@ -36,6 +36,10 @@ def run(gui):
     sc.voxel.path, sc.voxel.seed, sc.voxel.generator = p["world"], 7, "overworld"
     assert bpy.ops.voxel.world_new() == {"FINISHED"}
     w = sys.modules[MOD + ".voxel_addon.blender.session"].world(p["world"])
+    # opening a world starts the kernels' warm-up (NumPy meanwhile): OpenCL after it
+    out["warm_started"] = ocl.warm_state()["started"]
+    while ocl.warming():
+        yield 0.1
     out["backend"] = w.generator.backend
     with gui.context(gui.area("VIEW_3D")):  # the edit tool's script form: one stroke
         out["edit"] = sorted(bpy.ops.voxel.edit(location=(3, 4, 200), block="glass"))

@@ -125,10 +125,17 @@ def on_cpu() -> bool:
     """Whether the OpenCL device is the CPU itself (pocl): there a NumPy twin that does
     less work can beat its kernel (the light's flood: light.full.backend)."""
     try:
-        import pyopencl as cl
-        return bool(context()[2].type & cl.device_type.CPU)
+        context()  # raises while switched off, whatever was cached
     except NoOpenCL:
         return False
+    return _device_is_cpu()
+
+
+@lru_cache(maxsize=1)
+def _device_is_cpu() -> bool:
+    """Asked once: light and meshing ask per solve and per launch (hot paths)."""
+    import pyopencl as cl
+    return bool(context()[2].type & cl.device_type.CPU)
 
 
 BACKENDS = ("opencl", "numpy")  # every kernel's OpenCL twin and its NumPy reference

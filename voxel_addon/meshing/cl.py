@@ -35,8 +35,7 @@ def _options():
     return _options_for(Q.FLAGS.tobytes(), MASKS, cpu)  # per launch: cached, not re-derived
 
 
-@lru_cache(maxsize=1)
-def _on_cpu() -> bool:
+def _on_cpu() -> bool:  # a seam: the GPU-configuration test pretends a GPU here
     return opencl.on_cpu()
 
 

@@ -210,3 +210,31 @@ def test_light_out_leaves_packed_light_packed():
     assert c._light is None and c._lpack is p  # still packed, the same pack
     got[3, 4, 90] = 1
     assert c.light_out()[3, 4, 90] == 0x0F0F and c.light[3, 4, 90] == 0x0F0F
+
+
+@pytest.mark.parametrize("lz4", [True, False])
+def test_air_from_is_where_the_blocks_stay_air(monkeypatch, lz4):
+    """Chunk.air_from(z0) (an edit's window copies no air above it): every layer from
+    there up is air, and it is at most a section above the last non-air layer; for
+    packed, hot, and hot blocks written in place since they were packed (the packed
+    copy is then a stale hint)."""
+    if not lz4:
+        monkeypatch.setattr(C, "_lz4", None)
+    rng = np.random.default_rng(8)
+    for t in range(80):
+        a = C.empty()
+        top = int(rng.integers(0, 257)) if t % 4 else 32 * int(rng.integers(0, 9))
+        a[:, :, :top] = rng.integers(0, 3, (16, 16, top)) if t % 2 else 1   # or all stone
+        c = Chunk((0, 0), a.copy(order="F"))
+        if t % 3:
+            b = c.blocks          # hot (the packed copy stays beside it)
+            if t % 3 == 2:        # written in place: the packed copy is stale
+                z = int(rng.integers(0, 256))
+                b[int(rng.integers(0, 16)), int(rng.integers(0, 16)), z] = 5
+                a[:, :, :] = b
+        z0 = int(rng.integers(0, 257))
+        got = c.air_from(z0)
+        nz = np.flatnonzero(a.any(axis=(0, 1)))
+        last = int(nz[-1]) + 1 if nz.size else 0
+        assert z0 <= got <= 256 and not a[:, :, got:].any(), (t, got, last)
+        assert got <= max(z0, -(-last // C.Packed.SECTION) * C.Packed.SECTION), (t, got, last)

@@ -284,6 +284,25 @@ def test_opening_a_deep_shaft_relights_far_below(world_path):
             assert check_against_full(w, world_path, model, 0, 0, 3, 3) >= 9
 
 
+def test_relight_window_keeps_air_above_the_chunks(world_path):
+    """The relight's blocks window copies no air above its chunks' highest non-air
+    section (world/window.py): its buffer must hold air there, also after a stroke
+    wrote a voxel up in the air into it (the next stroke's window, elsewhere, reads
+    that buffer again)."""
+    model: dict = {}
+    stone, glass = REGISTRY.id("stone"), REGISTRY.id("glass")
+    with World.create(world_path, seed=SEED, loader=False) as w:
+        # the first two windows share no chunk: the second reads the buffer where
+        # the first wrote its stone
+        for x, y, b, dz in ((6, 7, stone, 120), (40, 41, 0, 0), (24, 40, glass, 1),
+                            (9, 9, 0, 0)):
+            z = top(w, x, y) + dz
+            edit(w, (x, y, z, b))
+            model[(x, y, z)] = (b, 0)
+            n = check_against_full(w, world_path, model, 0, 0, 3, 3)
+        assert n >= 8
+
+
 def test_coloured_voxels_mesh_by_colour(world_path):
     """The `color` block's faces follow its data through streaming (build) and edits:
     two neighbours of different colours are two quads, the same colour one."""

@@ -156,6 +156,27 @@ class Chunk:
         else:
             self._bpack.into(out, xs, ys, z0, z1)
 
+    def air_from(self, z0: int = 0) -> int:
+        """A layer >= z0 from which the blocks are air up to the world's top (an edit's
+        window need not copy those): from the packed sections' values, else by
+        counting hot blocks from there (a packed copy kept beside hot blocks may be
+        stale: a hint) or a section at a time from the top."""
+        a, p = self._blocks, self._bpack
+        i = None if p is None else p.air_from()
+        if a is None:
+            if i is not None:
+                return max(z0, i)
+            a = p.body
+        if not a.flags.f_contiguous:
+            return a.shape[2]
+        f, n, S = a.reshape(-1, order="F"), a.shape[0] * a.shape[1], Packed.SECTION
+        if i is not None and not np.count_nonzero(f[max(i, z0) * n:]):
+            return max(i, z0)
+        i = a.shape[2]
+        while i > z0 and not np.count_nonzero(f[max(i - S, z0) * n:i * n]):
+            i = max(i - S, z0)
+        return i
+
     @blocks.setter
     def blocks(self, value) -> None:
         self._blocks, self._bpack, self._bhot = value, None, time.monotonic()
@@ -335,6 +356,16 @@ class Packed:
             else:
                 flat[a:a + n] = v
         return out
+
+    def air_from(self) -> int | None:
+        """The layer from which every section holds 0 (None without sections)."""
+        b = self.body
+        if isinstance(b, np.ndarray):
+            return None
+        i = len(b)
+        while i and type(b[i - 1]) is not bytes and not b[i - 1]:
+            i -= 1
+        return min(i * self.SECTION, self.shape[2])
 
     def into(self, out, xs: slice, ys: slice, z0: int, z1: int) -> None:
         """out[...] = unpack()[xs, ys, z0:z1], decoding only the sections it reads."""

@@ -32,7 +32,6 @@ one transaction when it ends.
 """
 from __future__ import annotations
 
-import threading
 from typing import NamedTuple
 
 import numpy as np
@@ -43,9 +42,10 @@ from ..core.errors import VoxelError
 from ..meshing import tint
 from . import build, models as mcmodels
 from .payload import Payload
+from .window import SCRATCH as _scratch  # noqa: F401  (tests garble its buffers)
+from .window import cross as _cross, gather as _gather
 
 S = C.SIZE
-_scratch = threading.local()  # per-thread window buffers (_gather)
 
 
 class Record(NamedTuple):
@@ -147,57 +147,6 @@ def _ensure_lit(world, keys) -> list[Payload]:
     raise VoxelError("could not light the chunks around the edit (they keep unloading)")
 
 
-def _gather(world, x0, y0, x1, y1, attr, z0=0, z1=C.HEIGHT, exact=False, fill=True):
-    """Voxel columns [x0, x1) x [y0, y1) of active chunks' `attr` as one array
-    (zeros where a chunk or its array is missing). Call with the world's lock held.
-    The array is a view of this thread's scratch buffer for `attr`, valid until the
-    next call: a fresh 1.3 MB array per edit costs page faults (~0.5 ms in a big
-    process). Only layers [z0, z1) are filled; the others hold stale values.
-    `exact`: a Fortran-contiguous buffer of just this shape (the mesher's input; the
-    last one is kept: a single voxel's chunk, mostly). `fill=False`: the buffer
-    alone, its values stale (the caller fills what it reads, _cross)."""
-    w, h = x1 - x0, y1 - y0
-    if exact:
-        name = attr + "_exact"
-        out = getattr(_scratch, name, None)
-        if out is None or out.shape[:2] != (w, h):
-            out = C.empty(width=w, depth=h)
-            setattr(_scratch, name, out)
-    else:
-        buf = getattr(_scratch, attr, None)
-        if buf is None or buf.shape[0] < w or buf.shape[1] < h:
-            n = max(w, h, 0 if buf is None else max(buf.shape[:2]))
-            buf = C.empty(width=n, depth=n)
-            setattr(_scratch, attr, buf)
-        out = buf[:w, :h]
-    if fill:
-        _fill(world, out, x0, y0, x0, y0, x1, y1, attr, z0, z1)
-    return out
-
-
-def _fill(world, out, ox, oy, x0, y0, x1, y1, attr, z0, z1):
-    """out[x0 - ox:x1 - ox, y0 - oy:y1 - oy, z0:z1] = the world's `attr` there (a
-    window whose column (0, 0) is world column (ox, oy)); nothing where it is empty."""
-    if x1 <= x0 or y1 <= y0 or z1 <= z0:
-        return
-    for cx in range(x0 >> 4, ((x1 - 1) >> 4) + 1):
-        for cy in range(y0 >> 4, ((y1 - 1) >> 4) + 1):
-            c = world.chunks.get((cx, cy))
-            ax0, ay0 = max(x0, cx * S), max(y0, cy * S)
-            ax1, ay1 = min(x1, cx * S + S), min(y1, cy * S + S)
-            dst = out[ax0 - ox:ax1 - ox, ay0 - oy:ay1 - oy, z0:z1]
-            xs, ys = slice(ax0 - cx * S, ax1 - cx * S), slice(ay0 - cy * S, ay1 - cy * S)
-            if c is None:
-                dst[...] = 0
-            elif attr == "light":
-                c.light_into(dst, xs, ys, z0, z1)
-            elif attr == "blocks":
-                c.blocks_into(dst, xs, ys, z0, z1)
-            else:
-                a = getattr(c, attr)
-                dst[...] = 0 if a is None else a[xs, ys, z0:z1]
-
-
 def _light_layers(world, items, sight=None):
     """Layers [z0, z1) that light.update may read or write for this stroke (call with
     the lock held). Its box reaches R + 1 above the voxel and R + 1 below the lowest
@@ -260,7 +209,8 @@ def _apply(world, items, write=True):
             # light.update reads and writes only layers [z0, z1) of the light and
             # blocks from z0 up (the daylight of a column comes from above)
             z0, z1 = _light_layers(world, items, sight)
-            blocks = _gather(world, win.x0, win.y0, win.x1, win.y1, "blocks", z0)
+            blocks = _gather(world, win.x0, win.y0, win.x1, win.y1, "blocks", z0,
+                             writes=max(z for _, _, z, _, _ in items) + 1)
             lit = _gather(world, win.x0, win.y0, win.x1, win.y1, "light", z0, z1)
             opened = None if sight is None else _opened(world, sight, blocks, win, items, z0)
             first, last, steps = _set_voxels(world, items)
@@ -383,27 +333,6 @@ def _remesh(world, last, win, first=None) -> set:
         c.mesh = m
         out.add(k)
     return out
-
-
-def _cross(world, gx, gy, gx1, gy1, last, remesh, za, zb):
-    """The remesh window [gx, gx1) x [gy, gy1) x [za, zb) with only what meshing.patch
-    reads filled (the rest stale): per changed voxel and remeshed chunk, the columns
-    within 1 of the voxel's x (its rows in the chunk, the ring's columns) and of its
-    y (likewise) and the layers within 1 of its z (in the chunk). The slices it
-    meshes again lie within 1 of the voxel along their axis, and their faces look
-    along that axis (meshing/slices.py): their cells and the cells they face lie
-    inside; a slice's rows and a z slice never read the ring across them."""
-    sub = _gather(world, gx, gy, gx1, gy1, "blocks", exact=True, fill=False)
-    for kx, ky in remesh:
-        x0, y0 = kx * S, ky * S
-        for x, y, z in last:
-            _fill(world, sub, gx, gy, max(x - 1, x0 - 1), y0, min(x + 2, x0 + S + 1),
-                  y0 + S, "blocks", za, zb)
-            _fill(world, sub, gx, gy, x0, max(y - 1, y0 - 1), x0 + S,
-                  min(y + 2, y0 + S + 1), "blocks", za, zb)
-            _fill(world, sub, gx, gy, x0, y0, x0 + S, y0 + S, "blocks",
-                  max(z - 1, za), min(z + 2, zb))
-    return sub
 
 
 def _remesh_full(world, meshing, sub, gx, gy, rx0, ry0, remesh, regions, stack, za, zb):

@@ -15,7 +15,7 @@ import numpy as np
 from ..core.blocks import REGISTRY
 from .faces import FLAGS
 from .mesh import AXIS, SIDE
-from .vertex import PASS_OF, PASSES, ChunkMesh, _pack
+from .vertex import _BLOCK_BITS, _INSET_BITS, _PA, _PB, _PC, PASS_OF, PASSES, ChunkMesh
 
 _WANT_SIDE = (FLAGS & 1) != 0     # cube: side faces
 _WANT_Z = (FLAGS & 9) != 0        # cube or # caps: -z/+z faces
@@ -27,7 +27,9 @@ _SHAPE = _X | _HASH
 _L = {k: v.tolist() for k, v in (("side", _WANT_SIDE), ("z", _WANT_Z), ("opaque", _OPAQUE),
                                        ("same", _SAME), ("shape", _SHAPE))}
 _NPASS = len(PASSES)
-_AX = AXIS[:6].astype(np.int64)
+_AX = AXIS.astype(np.int64)
+_AX[6:] = 3                          # X/# planes: no slice axis
+_AXC = np.minimum(_AX, 2).astype(np.intp)   # the coordinate a face's slice is at
 
 
 def patch(old: ChunkMesh, P, cells, before=None, origin=(0, 0)) -> ChunkMesh | None:
@@ -38,7 +40,8 @@ def patch(old: ChunkMesh, P, cells, before=None, origin=(0, 0)) -> ChunkMesh | N
     (optional: slices whose faces stay the same are then kept as they are). None
     where this does not apply: coloured voxels (tint: their colour is data this does
     not see) — mesh those in full."""
-    if old.colors is not None or (old.quads["block"] == _COLOR).any():
+    q = np.ascontiguousarray(old.quads)
+    if old.colors is not None or (q["block"] == _COLOR).any():
         return None
     ox, oy = origin
     W = P[ox:ox + 18, oy:oy + 18]
@@ -46,33 +49,56 @@ def patch(old: ChunkMesh, P, cells, before=None, origin=(0, 0)) -> ChunkMesh | N
     slices, shapes = _affected(W, cells, before, rh)
     if not slices and not shapes:
         return old
-    q = old.quads
-    f, x, y, z, b = (q[c].astype(np.int64) for c in ("face", "x", "y", "z", "block"))
-    codes = _codes(f, x, y, z, rh)
-    keep = np.ones(len(q), bool)
+    n = len(q)
+    keep = np.ones(n, bool)
     seeds: dict = {}
     if slices:
-        # rows above a slice's first changed row run as before: rects that end above
-        # it stay, those open at it seed the greedy there (gpu/mesh_greedy.cl's state)
-        sc = np.array(sorted(slices), np.int64)
-        i = np.minimum(np.searchsorted(sc, codes), len(sc) - 1)
-        hit = sc[i] == codes
-        a = _AX[np.minimum(f, 5)]
-        v0 = np.where(a == 1, x, y)
-        rows = np.where(a == 2, q["h"], q["w"])
-        first = np.array([slices[c] for c in sc.tolist()], np.int64)[i]
-        keep = ~hit | (v0 + rows < first)
-        for j in np.flatnonzero(hit & (v0 < first) & (v0 + rows >= first)).tolist():
-            u, cols_ = (int(x[j]), int(q["w"][j])) if a[j] == 2 else \
-                (int(z[j]) % rh, int(q["h"][j]))
-            seeds.setdefault(int(codes[j]), []).append((u, cols_, int(b[j]), int(v0[j])))
+        # a quad's (direction, slice, region) as one index into a table of the
+        # slices' first changed rows (+1; 0: not meshed again), built per call
+        f = q["face"].astype(np.intp)
+        s = np.choose(_AXC[f], (q["x"], q["y"], q["z"]))
+        reg = q["z"] // rh
+        nr = 256 // rh
+        code = (f * 256 + s) * nr + reg
+        lut = np.zeros(12 * 256 * nr, np.int8)
+        for c, row in slices.items():
+            d, rest = divmod(c, 65536)
+            sl, r = divmod(rest, 256)
+            i = (d * 256 + sl) * nr
+            if d < 4:
+                lut[i + r] = row + 1
+            else:   # a z slice: every region's code (its quads all lie in one)
+                lut[i:i + nr] = row + 1
+        first = lut[code]
+        hit = np.flatnonzero(first)
+        if hit.size:
+            # rows above a slice's first changed row run as before: rects that end
+            # above it stay, those open at it seed the greedy there
+            # (gpu/mesh_greedy.cl's state)
+            h = q[hit]
+            fh = h["face"].astype(np.intp)
+            a = _AX[fh]
+            x, y = h["x"].astype(np.int64), h["y"].astype(np.int64)
+            wd, ht = h["w"].astype(np.int64), h["h"].astype(np.int64)
+            v0 = np.where(a == 1, x, y)
+            rows = np.where(a == 2, ht, wd)
+            fr = first[hit].astype(np.int64) - 1
+            gone = v0 + rows >= fr
+            keep[hit[gone]] = False
+            # their slice codes as _affected makes them (a z slice: region 0)
+            ch = (fh * 256 + s[hit]) * 256 + np.where(a < 2, reg[hit], 0)
+            for j in np.flatnonzero(gone & (v0 < fr)).tolist():
+                u, cols_ = (int(x[j]), int(wd[j])) if a[j] == 2 else \
+                    (int(h["z"][j]) % rh, int(ht[j]))
+                seeds.setdefault(int(ch[j]), []).append((u, cols_, int(h["block"][j]),
+                                                         int(v0[j])))
     if shapes:
-        cell = (x * 16 + y) * 256 + z
-        keep &= (f < 6) | ~np.isin(cell, list(shapes))
+        cell = (q["x"].astype(np.int64) * 16 + q["y"]) * 256 + q["z"]
+        keep &= (q["face"] < 6) | ~np.isin(cell, list(shapes))
     new = _quads(W, slices, seeds, shapes, rh)
-    if any(k == _COLOR for k in new[6]):
+    if any(t[6] == _COLOR for t in new):
         return None
-    return _merge(old, keep, _order(f, x, y, z, b, rh), (z // rh) * _NPASS + PASS_OF[b], new, rh)
+    return _merge(old, q, keep, new, rh)
 
 
 _COLOR = REGISTRY.id("color")
@@ -80,64 +106,49 @@ _COLOR = REGISTRY.id("color")
 
 def _affected(W, cells, before, rh):
     """{code: first changed row} of the (direction, slice, region) sets to mesh again
-    (codes as _codes makes them) and the codes of the cells whose X/# planes to redo.
-    With `before` (the old block of each cell) a slice whose face keys stay the same
-    is left as it is."""
+    (code = (direction * 256 + slice) * 256 + region, 0 for z slices) and the cells
+    (as patch's `cell`) whose X/# planes to redo. With `before` (the old block of
+    each cell) a slice whose face keys stay the same is left as it is. A face of c
+    in direction d depends on c and its neighbour there: for a changed v, v's own
+    faces and those of each neighbour toward v; all read v and its 6 neighbours."""
     cells = [(int(x), int(y), int(z)) for x, y, z in cells]
     was = None
     if before is not None:
         was = {}
         for c, b in zip(cells, before):
             was.setdefault(c, int(b))       # the first old value of a cell counts
-
-    def inside(c):
-        return 0 <= c[0] < 16 and 0 <= c[1] < 16 and 0 <= c[2] < 256
-
-    def at(c, old):
-        if not 0 <= c[2] < 256:
-            return 0
-        if old and c in was:
-            return was[c]
-        return int(W[c[0] + 1, c[1] + 1, c[2]])
-
-    def key(c, d, old):
-        a = at(c, old)
-        if not (wz if d >= 4 else ws)[a]:
-            return 0
-        n = list(c)
-        n[d >> 1] += 1 if d & 1 else -1
-        b = at(tuple(n), old)
-        return 0 if opq[b] or (same[a] and a == b) else a
-
     ws, wz, opq, same, shape = (_L[k] for k in ("side", "z", "opaque", "same", "shape"))
+
+    def key(a, b, d):
+        return a if (wz if d >= 4 else ws)[a] and not opq[b] and not (same[a] and a == b) \
+            else 0
+
     slices, shapes = {}, set()     # slice code -> its first changed row
     for v in cells:
-        if inside(v) and (was is None or shape[at(v, True)] or shape[at(v, False)]):
-            shapes.add((v[0] * 16 + v[1]) * 256 + v[2])   # as patch's `cell`
+        x, y, z = v
+        around = [v, (x - 1, y, z), (x + 1, y, z), (x, y - 1, z), (x, y + 1, z),
+                  (x, y, z - 1), (x, y, z + 1)]    # v, then per direction d: around[d + 1]
+        new = [int(W[i + 1, j + 1, k]) if -1 <= i <= 16 and -1 <= j <= 16 and 0 <= k < 256
+               else 0 for i, j, k in around]
+        old = new if was is None else [was.get(c, b) for c, b in zip(around, new)]
+        inv = 0 <= x < 16 and 0 <= y < 16
+        if inv and (was is None or shape[old[0]] or shape[new[0]]):
+            shapes.add((x * 16 + y) * 256 + z)
         for d in range(6):
-            a, sign = d >> 1, 1 if d & 1 else -1
-            n = list(v)
-            n[a] -= sign     # the neighbour whose face toward v lies in direction d
-            for c in (v, tuple(n)):
-                if inside(c) and (was is None or key(c, d, True) != key(c, d, False)):
+            a = d >> 1
+            m, n = d + 1, (d ^ 1) + 1   # v's neighbour in direction d, and the other
+            for c, i, j in ((v, 0, m), (around[n], n, 0)):
+                if 0 <= c[0] < 16 and 0 <= c[1] < 16 and 0 <= c[2] < 256 and (
+                        was is None or key(old[i], old[j], d) != key(new[i], new[j], d)):
                     code = (d * 256 + c[a]) * 256 + (c[2] // rh if a < 2 else 0)
                     row = c[0] if a == 1 else c[1]
                     slices[code] = min(row, slices.get(code, row))
     return slices, shapes
 
 
-def _codes(f, x, y, z, rh):
-    """Per quad: its (direction, slice, region) code (cube faces; -1 for X/# planes)."""
-    cube = f < 6
-    a = _AX[np.minimum(f, 5)]
-    s = np.where(a == 0, x, np.where(a == 1, y, z))
-    r = np.where(a < 2, z // rh, 0)
-    return np.where(cube, (f * 256 + s) * 256 + r, -1)
-
-
 def _quads(W, slices, seeds, shapes, rh):
-    """Quad columns (x, y, z, face, w, h, block) of the slices from their first changed
-    row on (`seeds`: the rects open there) and of the shape cells, from the window W
+    """Quads (x, y, z, face, w, h, block) of the slices from their first changed row on
+    (`seeds`: the rects open there) and of the shape cells, from the window W
     (18, 18, 256) of the new blocks."""
     side, flat = [], []     # (d, s, region start, first row, seeds): x/y and z slices
     for code in sorted(slices):
@@ -145,7 +156,7 @@ def _quads(W, slices, seeds, shapes, rh):
         s, r = divmod(rest, 256)
         (side if d < 4 else flat).append((d, s, r * rh, slices[code],
                                           sorted(seeds.get(code, ()))))
-    cols = [[] for _ in range(7)]
+    out: list = []
     if side:
         A = np.empty((len(side), 16, rh), W.dtype)
         B = np.empty_like(A)
@@ -155,7 +166,7 @@ def _quads(W, slices, seeds, shapes, rh):
                 A[i], B[i] = W[s + 1, 1:17, z0:z0 + rh], W[n, 1:17, z0:z0 + rh]
             else:
                 A[i], B[i] = W[1:17, s + 1, z0:z0 + rh], W[1:17, n, z0:z0 + rh]
-        _rects(_keys(A, B, _T_SIDE), side, cols)
+        _rects(_keys(A, B, _T_SIDE), side, out)
     if flat:
         A = np.empty((len(flat), 16, 16), W.dtype)
         B = np.zeros_like(A)                    # outside the world: air
@@ -164,16 +175,14 @@ def _quads(W, slices, seeds, shapes, rh):
             n = z + (1 if d & 1 else -1)
             if 0 <= n < 256:
                 B[i] = W[1:17, 1:17, n].T
-        _rects(_keys(A, B, _T_Z), flat, cols)
+        _rects(_keys(A, B, _T_Z), flat, out)
     for c in sorted(shapes):
         rest, z = divmod(c, 256)
         x, y = divmod(rest, 16)
         b = int(W[x + 1, y + 1, z])
         faces = (6, 7) if _X[b] else (8, 9, 10, 11) if _HASH[b] else ()
-        for f in faces:
-            for col, v in zip(cols, (x, y, z, f, 1, 1, b)):
-                col.append(v)
-    return cols
+        out += [(x, y, z, f, 1, 1, b) for f in faces]
+    return out
 
 
 def _table(want):
@@ -196,9 +205,9 @@ def _keys(A, B, table):
     return K
 
 
-def _rects(K, meta, cols):
+def _rects(K, meta, out):
     """Greedy rects of every slice of K (n, 16, U + 1; last column zero) appended to
-    the quad columns."""
+    `out` as quads."""
     n, V, U1 = K.shape
     F = K.ravel()
     ch = np.flatnonzero(F[1:] != F[:-1]) + 1       # segments: runs of one key
@@ -213,18 +222,14 @@ def _rects(K, meta, cols):
     rows = [[[] for _ in range(V)] for _ in range(n)]
     for r, c, e, k in zip(row.tolist(), u0.tolist(), u1.tolist(), key.tolist()):
         rows[r // V][r % V].append((c, e, k))
-    X, Y, Z, F, Wc, Hc, Bk = cols
     for (d, s, z0, v1, opn), rs in zip(meta, rows):
-        a = d >> 1
-        for v0, u, nr, nc, k in greedy_rows(rs, v1, opn):
-            if a == 0:
-                X.append(s), Y.append(v0), Z.append(z0 + u), Wc.append(nr), Hc.append(nc)
-            elif a == 1:
-                X.append(v0), Y.append(s), Z.append(z0 + u), Wc.append(nr), Hc.append(nc)
-            else:
-                X.append(u), Y.append(v0), Z.append(s), Wc.append(nc), Hc.append(nr)
-            F.append(d)
-            Bk.append(k)
+        got = greedy_rows(rs, v1, opn)
+        if d < 2:
+            out += [(s, v0, z0 + u, d, nr, nc, k) for v0, u, nr, nc, k in got]
+        elif d < 4:
+            out += [(v0, s, z0 + u, d, nr, nc, k) for v0, u, nr, nc, k in got]
+        else:
+            out += [(u, v0, s, d, nc, nr, k) for v0, u, nr, nc, k in got]
 
 
 def greedy_rows(rows, start=0, opn=()):
@@ -267,56 +272,75 @@ def greedy_rows(rows, start=0, opn=()):
     return out
 
 
+def _merge(old, q, keep, new, rh):
+    """The kept old quads (q: old.quads, contiguous) and vertices with the `new` ones
+    (x, y, z, face, w, h, block) put in their places in build_chunks' order: (region,
+    pass) as `ranges` has them, then (face, z, y, x)."""
+    n_old, nn = len(q), len(new)
+    counts = old.ranges[..., 1].ravel() // 4        # quads per (region, pass) slot
+    ends = np.cumsum(counts)
+    c = np.array(new, np.int64).reshape(nn, 7).T
+    x, y, z, f, w, h, b = c
+    reg = z // rh
+    slot = reg * _NPASS + PASS_OF[b]
+    # (face, z, y, x) is the little-endian value of a QUAD's first 7 bytes (x, y, z
+    # u2, face u1): old quads are sorted by it within their slot
+    low = (((f << 16 | z) << 16 | y) << 16 | x).astype(np.uint64)
+    o = np.lexsort((low, slot))
+    x, y, z, f, w, h, b, reg, slot, low = (v[o] for v in (x, y, z, f, w, h, b, reg, slot, low))
+    raw = np.ndarray((n_old,), "<u8", q, 0, (q.itemsize,)) if n_old else \
+        np.zeros(0, np.uint64)
+    # each new quad goes before the first old quad of its slot with a larger key
+    # (keys are unique), and so after the kept ones before that
+    pos = np.empty(nn, np.int64)
+    sl = slot.tolist()
+    i = 0
+    while i < nn:
+        j, s = i + 1, sl[i]
+        while j < nn and sl[j] == s:
+            j += 1
+        a0 = int(ends[s] - counts[s])
+        pos[i:j] = a0 + np.searchsorted(raw[a0:ends[s]] & _LOW7, low[i:j])
+        i = j
+    gone = np.flatnonzero(~keep)
+    at = pos - np.searchsorted(gone, pos) + np.arange(nn)
+    idx = np.empty(n_old - len(gone) + nn, np.intp)
+    mask = np.ones(len(idx), bool)
+    mask[at] = False
+    idx[mask] = np.flatnonzero(keep)
+    idx[at] = np.arange(n_old, n_old + nn)
+    nq = np.zeros(nn, q.dtype)
+    for name, v in zip(("x", "y", "z", "face", "w", "h", "block"), (x, y, z, f, w, h, b)):
+        nq[name] = v
+    nq["layer"] = layer = REGISTRY.face_texture[b, SIDE[f]]
+    quads = _take_records(q, nq, idx)
+    verts = _verts(f, x, y, z - reg * rh, w, h, b, layer)
+    vertices = np.take(np.concatenate([old.vertices.reshape(-1, 4), verts]), idx, 0).ravel()
+    n = len(counts)
+    counts = counts + np.bincount(slot, minlength=n) - \
+        np.bincount(np.searchsorted(ends, gone, "right"), minlength=n)
+    ranges = np.empty((n, 2), np.int32)
+    ranges[:, 1] = counts * 4
+    ranges[:, 0] = (np.cumsum(counts) - counts) * 4
+    return ChunkMesh(vertices, ranges.reshape(256 // rh, _NPASS, 2), rh, quads, None)
+
+
+def _verts(f, x, y, z, w, h, b, layer):
+    """_pack for a few quads (int64 columns already inside their region): fewer,
+    two-dimensional table lookups."""
+    pq = x | y << 5 | z << 10 | f << 17 | layer.astype(np.int64) << 21 | _BITS[b] | (f >= 8) * _INSET[b]
+    return (pq[:, None] + _PA64[f] * w[:, None] + _PB64[f] * h[:, None] + _PC64[f]) \
+        .astype(np.uint32)
+
+
+_LOW7 = np.uint64((1 << 56) - 1)
+_BITS, _INSET = (t.astype(np.int64) for t in (_BLOCK_BITS, _INSET_BITS))
+_PA64, _PB64, _PC64 = (t.astype(np.int64) for t in (_PA, _PB, _PC))
+
+
 def _take_records(q, nq, idx):
     """concatenate([q, nq])[idx] for record arrays, done on their bytes (record copies
     and fancy indexing of records are several times slower)."""
     n = q.dtype.itemsize
-    raw = np.concatenate([np.ascontiguousarray(q).view(np.uint8).reshape(-1, n),
-                          nq.view(np.uint8).reshape(-1, n)])
+    raw = np.concatenate([q.view(np.uint8).reshape(-1, n), nq.view(np.uint8).reshape(-1, n)])
     return np.take(raw, idx, 0).view(q.dtype).ravel()
-
-
-def _order(face, x, y, z, block, rh):
-    """build_chunks' vertex order key: (region, pass, face, z, y, x)."""
-    reg = z // rh
-    ps = PASS_OF[block].astype(np.int64)
-    return ((((reg * _NPASS + ps) * 16 + face) * 256 + z) * 32 + y) * 32 + x
-
-
-def _merge(old, keep, old_key, old_slot, cols, rh):
-    """The kept old quads and vertices with the new ones (cols) put in their places
-    (old_key: the old quads' order keys; old_slot: their (region, pass) index)."""
-    q = old.quads
-    x, y, z, f, w, h, b = (np.array(c, np.int64) for c in cols)
-    key = _order(f, x, y, z, b, rh)
-    o = np.argsort(key)
-    x, y, z, f, w, h, b, key = x[o], y[o], z[o], f[o], w[o], h[o], b[o], key[o]
-    nq = np.zeros(len(x), q.dtype)
-    for c, v in zip(("x", "y", "z", "face", "w", "h", "block"), (x, y, z, f, w, h, b)):
-        nq[c] = v
-    nq["layer"] = REGISTRY.face_texture[b, SIDE[f]]
-    reg = z // rh
-    verts = _pack(f, x, y, z - reg * rh, w, h, b, nq["layer"]).reshape(-1, 4)
-    # final order: kept old quads in their order, each new one before the first old
-    # quad with a larger key (keys are unique)
-    n_old, nn = len(q), len(x)
-    kept = np.flatnonzero(keep)
-    before = np.searchsorted(kept, np.searchsorted(old_key, key))  # kept ones before it
-    at = before + np.arange(nn)
-    idx = np.empty(len(kept) + nn, np.intp)
-    mask = np.ones(len(idx), bool)
-    mask[at] = False
-    idx[mask] = kept
-    idx[at] = n_old + np.arange(nn)
-    quads = _take_records(q, nq, idx)
-    vertices = np.take(np.concatenate([old.vertices.reshape(-1, 4), verts]), idx, 0).ravel()
-    npass = _NPASS
-    counts = old.ranges[..., 1].ravel().copy()
-    gone = ~keep
-    if gone.any():
-        counts -= 4 * np.bincount(old_slot[gone], minlength=len(counts))
-    counts += 4 * np.bincount(reg * npass + PASS_OF[b], minlength=len(counts))
-    first = np.cumsum(counts) - counts
-    ranges = np.stack([first, counts], -1).reshape(256 // rh, npass, 2).astype(np.int32)
-    return ChunkMesh(vertices, ranges, rh, quads, None)
-

@@ -139,3 +139,49 @@ def test_random_forest_edits_all_paths():
         if b[p] != new:
             paths.append(_edit(b, L, p, new))
     assert min(paths.count(k) for k in ("local", "sparse", "box")) >= 3, paths
+
+
+def test_part_window_relights_exactly_or_says_it_cannot():
+    """update(part=True) on only the columns within K of the edit (an edit's first
+    relight window, world/edit.py): either the full relight's result there, with
+    nothing changed outside (the light stayed inside), or None and nothing written."""
+    rng = np.random.default_rng(9)
+    b = np.zeros((40, 40, 256), np.uint16, order="F")
+    b[:, :, :60] = STONE
+    tops = rng.integers(60, 66, (40, 40))
+    kinds = rng.choice([R.id("leaves"), R.id("water"), R.id("glass"), 0, 0], (40, 40))
+    for i in range(40):
+        for j in range(40):
+            b[i, j, 60:tops[i, j]] = kinds[i, j]
+    b[5:35, 5:35, 50:58] = np.where(rng.random((30, 30, 8)) < 0.4, 0, STONE)  # caves
+    L = full.solve(b, "numpy")
+    b[20, 20, 58:tops[20, 20]] = R.id("leaves")  # a leaf column into the rock whose
+    b[20, 20, 60:] = 0                            # daylight fills a roofed tunnel
+    b[21:32, 20, 58] = 0
+    ids = [0, 0, STONE, R.id("leaves"), R.id("water"), R.id("glass"), ORE, R.id("lamp_red")]
+    done = {True: 0, False: 0}
+    for t in range(70):
+        K = 3 + t % 3
+        x, y = (int(v) for v in rng.integers(K, 40 - K, 2))
+        z = int(rng.integers(50, 67))
+        new = int(rng.choice(ids))
+        if t in (0, 1):   # roof the column, open it: the tunnel's light moves past K
+            x, y, z, new = 20, 20, 60, (STONE, 0)[t]
+        if b[x, y, z] == new:
+            continue
+        sx, sy = slice(x - K, x + K + 1), slice(y - K, y + K + 1)
+        pb, pl = b[sx, sy].copy(order="F"), L[sx, sy].copy(order="F")
+        old = int(pb[K, K, z])
+        pb[K, K, z] = new
+        before = L.copy()
+        got = incremental.update(pb, pl, K, K, z, old, part=True)
+        incremental.edit(b, L, x, y, z, new)
+        if got is None:
+            assert np.array_equal(pl, before[sx, sy])           # nothing written
+        else:
+            assert np.array_equal(pl, L[sx, sy]), (x, y, z, new)
+            outside = before != L
+            outside[sx, sy] = False
+            assert not outside.any(), (x, y, z, new)
+        done[got is None] += 1
+    assert min(done.values()) >= 5, done

@@ -303,6 +303,36 @@ def test_relight_window_keeps_air_above_the_chunks(world_path):
         assert n >= 8
 
 
+def test_one_voxel_strokes_relit_in_part_then_whole(world_path, monkeypatch):
+    """A one-voxel stroke is relit first on the columns near it (edit._part) and on
+    the whole window where its light reaches further: both equal the full solve
+    (a narrow part here, so that some strokes need the whole window)."""
+    from voxel_addon.world import edit as E
+    monkeypatch.setattr(E, "PART", 3)
+    calls = {True: 0, False: 0}
+    relight = E._relight
+
+    def counted(*a, **k):
+        got = relight(*a, **k)
+        if a[-1] is True:            # a part
+            calls[got is None] += 1
+        return got
+    monkeypatch.setattr(E, "_relight", counted)
+    rng = np.random.default_rng(4)
+    model: dict = {}
+    ids = [0, REGISTRY.id("stone"), REGISTRY.id("leaves"), REGISTRY.id("water"),
+           REGISTRY.id("glass")]
+    with World.create(world_path, seed=SEED, loader=False) as w:
+        for i in range(16):
+            x, y = (int(v) for v in rng.integers(4, 44, 2))
+            z = top(w, x, y) + int(rng.integers(-1, 2))
+            b = ids[i % len(ids)]
+            edit(w, (x, y, z, b))
+            model[(x, y, z)] = (b, 0)
+        assert check_against_full(w, world_path, model, 0, 0, 3, 3) >= 9
+    assert calls[False] >= 3 and calls[True] >= 1, calls
+
+
 def test_coloured_voxels_mesh_by_colour(world_path):
     """The `color` block's faces follow its data through streaming (build) and edits:
     two neighbours of different colours are two quads, the same colour one."""

@@ -111,11 +111,16 @@ def _local(blocks, light, x, y, z, now, zc, brighter):
     return (slice(x, x + 1), slice(y, y + 1), slice(z, z + 1))
 
 
-def _sparse(blocks, light, x, y, z, old, now, zc, brighter):
+class _Beyond(Exception):
+    """_sparse with `part` reached the arrays' side faces."""
+
+
+def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False):
     """The box path's relight (removal, then a brightest-first refill) in plain Python
     on the voxels it touches, for an edit whose light barely moves (leaves or water on
     top: the daylight of the column below p changes); None (nothing written) once it
-    has written SPARSE_BUDGET lanes."""
+    has written SPARSE_BUDGET lanes or, with `part` (see update), read a voxel on the
+    arrays' side faces (the voxels it reads are those whose neighbours it visits)."""
     cost_t, _, _, emis, _, _ = model.tables()
     w, h, zs = blocks.shape
     cur: dict = {}  # voxel -> its four lanes as now (read from `light` on first use)
@@ -125,6 +130,8 @@ def _sparse(blocks, light, x, y, z, old, now, zc, brighter):
     def get(v):
         lv = cur.get(v)
         if lv is None:
+            if part and not (0 < v[0] < w - 1 and 0 < v[1] < h - 1):
+                raise _Beyond
             pv = int(light[v])
             lv = cur[v] = [pv & 15, pv >> 4 & 15, pv >> 8 & 15, pv >> 12]
         return lv
@@ -255,13 +262,19 @@ def _kept(blocks, light, p, nb, k, v):
     return True
 
 
-def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: int):
+def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: int,
+           part: bool = False):
     """Fix `light` (the exact `solve` of the array before the edit) in place after
     blocks[x, y, z] changed from block id `old` to its current value.
 
     Returns a box holding every voxel whose light changed, as slices (sx, sy, sz)
     of the array (outside it `light` is untouched): the written voxels' bounds,
-    usually far smaller than the relight box (callers copy it out)."""
+    usually far smaller than the relight box (callers copy it out).
+
+    `part`: the arrays are only part of the world's columns around (x, y) (at least
+    3 on each side), so their sides are no boundary: relit where the light reads no
+    voxel on their side faces (the local and sparse paths), else None and nothing
+    written (the caller then relights on every column the relight box reaches)."""
     new = int(blocks[x, y, z])
     w, h, zs = blocks.shape
     if old == new:
@@ -278,10 +291,15 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
         return box
     pval = box  # p's exact new light when only its rising components must flood
     if max(emis[new].max(), emis[old].max()) <= SPARSE_EMISSION:
-        box = _sparse(blocks, light, x, y, z, old, now, zc, brighter)
+        try:
+            box = _sparse(blocks, light, x, y, z, old, now, zc, brighter, part)
+        except _Beyond:
+            return None
         if box is not None:
             STATS["sparse"] += 1
             return box
+    if part:
+        return None
     STATS["box"] += 1
     sx = slice(max(x - R, 0), min(x + R + 1, w))
     sy = slice(max(y - R, 0), min(y + R + 1, h))

@@ -190,6 +190,25 @@ def _window(items) -> _Window:
     return _Window(min(xs) - R - 1, min(ys) - R - 1, max(xs) + R + 2, max(ys) + R + 2, remesh)
 
 
+PART = 5   # columns on each side of a one-voxel stroke in its first relight window
+
+
+def _part(world, items, win) -> _Window | None:
+    """A one-voxel stroke that takes no lamp in or out is mostly relit near the voxel
+    (light.update's local and sparse paths): its first relight window holds only
+    the columns within PART of it (~1/9 of the whole window to copy, and of the
+    packed sections to decode); None for other strokes."""
+    if len(items) != 1:
+        return None
+    from ..light import incremental, model
+    x, y, z, b, _ = items[0]
+    emis = model.tables()[3]
+    old = world.chunks[C.key_of(x, y)].blocks[x & 15, y & 15, z]
+    if max(emis[b].max(), emis[old].max()) > incremental.SPARSE_EMISSION:
+        return None
+    return _Window(x - PART, y - PART, x + PART + 1, y + PART + 1, win.remesh)
+
+
 def _apply(world, items, write=True):
     """The stroke in named steps, all under the world's lock once its 3x3 is lit:
     set the voxels, remesh, relight, keep what changed, hand out payloads, write."""
@@ -209,9 +228,11 @@ def _apply(world, items, write=True):
             # light.update reads and writes only layers [z0, z1) of the light and
             # blocks from z0 up (the daylight of a column comes from above)
             z0, z1 = _light_layers(world, items, sight)
-            blocks = _gather(world, win.x0, win.y0, win.x1, win.y1, "blocks", z0,
-                             writes=max(z for _, _, z, _, _ in items) + 1)
-            lit = _gather(world, win.x0, win.y0, win.x1, win.y1, "light", z0, z1)
+            top = max(z for _, _, z, _, _ in items) + 1   # the stroke's writes, below
+            part = None if sight is not None else _part(world, items, win)
+            w0 = part or win
+            blocks = _gather(world, w0.x0, w0.y0, w0.x1, w0.y1, "blocks", z0, writes=top)
+            lit = _gather(world, w0.x0, w0.y0, w0.x1, w0.y1, "light", z0, z1)
             opened = None if sight is None else _opened(world, sight, blocks, win, items, z0)
             first, last, steps = _set_voxels(world, items)
             if not last:
@@ -226,7 +247,14 @@ def _apply(world, items, write=True):
             remeshed = _remesh(world, last, win, first)
             if opened is not None:   # the light sees the blocks the full solve sees
                 blocks[opened] = 0
-            relit = _relight(world, blocks, lit, steps, near, win, sight)
+            relit = _relight(world, blocks, lit, steps, near, w0, sight, part is not None)
+            if relit is None:   # the light reads past the part: on the whole window
+                blocks = _gather(world, win.x0, win.y0, win.x1, win.y1, "blocks", z0,
+                                 writes=top)
+                lit = _gather(world, win.x0, win.y0, win.x1, win.y1, "light", z0, z1)
+                for (x, y, z), (b, _) in first.items():   # as before the stroke
+                    blocks[x - win.x0, y - win.y0, z] = b
+                relit = _relight(world, blocks, lit, steps, near, win, sight)
             payloads = []
             for k in sorted(relit | remeshed):
                 c = world.chunks[k]
@@ -372,11 +400,12 @@ def _patch(world, meshing, sub, last, first, remesh, rx0, ry0):
     return out
 
 
-def _relight(world, blocks, lit, steps, near, win, sight=None) -> set:
+def _relight(world, blocks, lit, steps, near, win, sight=None, part=False) -> set | None:
     """Relight voxel by voxel (each update starts from the exact light of the blocks
     before it; `blocks` and `lit` are the window as the light sees it, changed in
     place), then keep what changed inside the relit boxes on the chunks. Returns the
-    keys relit."""
+    keys relit; with `part` (the window is a _part) None where the light would
+    read past it (nothing kept)."""
     from .. import light
     x0, y0 = win.x0, win.y0
     lo = [win.x1 - x0, win.y1 - y0, C.HEIGHT]  # union of the relit boxes
@@ -392,7 +421,9 @@ def _relight(world, blocks, lit, steps, near, win, sight=None) -> set:
         if old == b:
             continue     # the same block to the light (a colour, a state it sees alike)
         blocks[wx, wy, z] = b
-        box = light.update(blocks, lit, wx, wy, z, old)
+        box = light.update(blocks, lit, wx, wy, z, old, part)
+        if box is None:
+            return None
         lo = [min(v, sl.start) for v, sl in zip(lo, box)]
         hi = [max(v, sl.stop) for v, sl in zip(hi, box)]
     relit = set()

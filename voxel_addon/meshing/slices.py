@@ -328,7 +328,8 @@ def _merge(old, q, keep, new, rh):
 def _verts(f, x, y, z, w, h, b, layer):
     """_pack for a few quads (int64 columns already inside their region): fewer,
     two-dimensional table lookups."""
-    pq = x | y << 5 | z << 10 | f << 17 | layer.astype(np.int64) << 21 | _BITS[b] | (f >= 8) * _INSET[b]
+    pq = x | y << 5 | z << 10 | f << 17 | layer.astype(np.int64) << 21 | _BITS[b] \
+        | (f >= 8) * _INSET[b]
     return (pq[:, None] + _PA64[f] * w[:, None] + _PB64[f] * h[:, None] + _PC64[f]) \
         .astype(np.uint32)
 

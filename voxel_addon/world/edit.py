@@ -14,8 +14,9 @@ Light: the chunks around the stroke must have final light; those that do not (no
 streamed yet) are lit first in one batch (build.light_and_mesh). Then each voxel is
 relit with light.update on a window holding every voxel's relight box (a darkening
 edit clears and refills only the light that moved), which equals a full solve
-(tests). With the world's resource stack the window holds the blocks as the full
-solve sees them (world/models.Sight: a rail, door or slab passes light), and a
+(tests); a one-voxel stroke without lamps first on the columns near it (_part).
+With the world's resource stack the window holds the blocks as the full solve sees
+them (world/models.Sight: a rail, door or slab passes light), and a
 change of state alone is relit too. Meshes: a stroke of a few voxels without colours or
 Minecraft models has only the slices through them meshed again, on this thread
 (meshing.patch: no kernel launch); otherwise the render regions (64 layers) around the

@@ -92,3 +92,24 @@ def test_the_far_shader_takes_the_light_levels_of_water_as_the_light_does():
     src = (Path(__file__).resolve().parents[2] / "shaders" / "far.frag").read_text()
     levels = float(re.search(r"#define WATER_LEVELS ([0-9.]+)", src).group(1))
     assert levels == R.attenuation[R.id("water")]
+
+
+def test_a_world_smaller_than_the_view_goes_on_in_far_terrain(tmp_path):
+    """render --far on a world of 3 x 3 chunks at view distance 8: far tiles leave out
+    only the chunks the file has, not the whole view square (the demo's beach beyond
+    its chunks was a gap down to the sea plane, its edge a line in the sand)."""
+    from voxel_addon.cli.render import _whole
+    from voxel_addon.far import grid
+    from voxel_addon.world import World
+    with World.create(tmp_path / "w.sqlite", seed=1, generator="flat") as w:
+        w.generate_area([(x, y) for x in (-1, 0, 1) for y in (-1, 0, 1)])
+        wf = w.file
+        assert _whole(wf, 8.0, 8.0, 8) == 1
+        assert _whole(wf, 8.0, 8.0, 0) == 0
+        assert _whole(wf, 40.0, 8.0, 8) == 0      # (its own chunk is the edge)
+        assert _whole(wf, 200.0, 8.0, 8) == 0     # (none: far tiles everywhere)
+
+    def covered(near):  # is column (40, 8), just beyond the chunks, in a far tile?
+        return any(x0 <= 40 < x1 and y0 <= 8 < y1
+                   for x0, y0, x1, y1 in (grid.rect(k) for k, _ in grid.select(8.0, 8.0, 32, near)))
+    assert covered(1) and not covered(8)

@@ -21,7 +21,10 @@
 // Vertex animation (§5.3.1): 1 = wave the top (plants), 2 = all (leaves), 3 = water surface.
 vec3 wave(vec3 p, uint anim, vec3 n) {
     float ph = time * 1.7 + p.x * 0.7 + p.y * 0.5;
-    if (anim == 3u) return n.z > 0.5 ? p + vec3(0.0, 0.0, 0.05 * sin(ph) - 0.05) : p;
+    // (water: none on a chunk's border, where far terrain's flat water meets the
+    // chunks at the top face: a dip there let a grazing ray pass between the two)
+    if (anim == 3u) return n.z > 0.5 && all(notEqual(fract(p.xy / 16.0), vec2(0.0)))
+        ? p + vec3(0.0, 0.0, 0.05 * sin(ph) - 0.05) : p;
     // X/# planes list the top corners 2 and 3 (meshing's corner order)
     if (anim == 1u && (gl_VertexID & 3) < 2) return p;
     return p + vec3(0.06 * sin(ph), 0.05 * cos(ph * 1.3), 0.0);

@@ -22,6 +22,8 @@ def decode(m):
     y = m.origin[1] + ky * m.spacing + 0.5
     nx = ((w1 & 255).astype(np.uint8).view(np.int8)) / 127.0
     ny = (((w1 >> 8) & 255).astype(np.uint8).view(np.int8)) / 127.0
+    up = kind == mesh.WATER  # (its word 1 holds its floor's colour and depth instead)
+    nx, ny = np.where(up, 0.0, nx), np.where(up, 0.0, ny)
     return np.stack([x, y, z], -1), kx, ky, kind, nx, ny
 
 

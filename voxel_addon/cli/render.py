@@ -1,6 +1,7 @@
 """render: one frame of a world (or a reference scene) through the viewport pipeline to PNG."""
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from ..core.errors import VoxelError
@@ -84,7 +85,7 @@ def run(args):
             if s.far:
                 from ..far import ring
                 far_meshes = ring(world.file, world.generator, cam_args[0], cam_args[1],
-                                  s.far, s.distance)
+                                  s.far, _whole(world.file, cam_args[0], cam_args[1], s.distance))
             sea = source.sea_level(world.generator)
         finally:
             world.close()
@@ -111,3 +112,17 @@ def run(args):
     r.release()
     ctx.release()
 
+
+def _whole(wf, x: float, y: float, distance: int) -> int:
+    """The radius of the chunk square around (x, y) that the file has whole, up to the
+    view distance: far tiles leave out only that square, so a world smaller than the
+    view goes on in far terrain (the demo's beach beyond its 9 x 9 chunks was a gap
+    down to the sea plane, its edge a line in the sand)."""
+    keys = set(wf.chunk_keys())
+    cx, cy = math.floor(x) // 16, math.floor(y) // 16
+    for d in range(distance + 1):
+        ring = [(cx + i, cy + j) for i in range(-d, d + 1) for j in range(-d, d + 1)
+                if max(abs(i), abs(j)) == d]
+        if any(k not in keys for k in ring):
+            return max(d - 1, 0)
+    return distance

@@ -232,3 +232,17 @@ def test_numpy_lazy_operands_change_nothing(gen, monkeypatch):
     eager, _ = run()
     for x, y in zip(lazy, eager):
         assert np.array_equal(x, y), f"{(x != y).sum()} voxels differ"
+
+
+def test_the_same_program_is_the_same_source():
+    """A second generator of the same program (another world, seed or scene) writes the
+    very text of the first, so opencl.build and pocl's disk cache find its build (node
+    ids, which named the variables, come from one counter per process)."""
+    from voxel_addon.generation import make_generator
+    from voxel_addon.generation.clsource import source
+    from voxel_addon.generation.lower import prune
+    a, b = (make_generator("overworld", s, None, "numpy") for s in (1, 2))
+    assert source(a.units) == source(b.units)
+    want = a.surface_wants()
+    assert source(prune(a.units, want), 1) == source(prune(b.units, want), 1)
+    assert source(make_generator("overworld", 1, None, "numpy", 1).units) != source(a.units)

@@ -196,3 +196,30 @@ def test_the_default_is_numpy_on_a_cpu_device_and_named_backends_hold(cl_device)
     assert opencl.on_cpu()  # CI's device is pocl
     assert solve.pick(None) == "numpy"
     assert solve.pick("opencl") == "opencl" and solve.pick("numpy") == "numpy"
+
+
+def test_one_work_group_build_per_kernel_whatever_the_area(cl_device, tmp_path, monkeypatch):
+    """pocl compiles a kernel's work-group function per local size at its first launch;
+    left to choose, it picked one per area shape (~1 s CPU per new shape on a fresh
+    install). Two shapes in a fresh process and kernel cache: one function per kernel."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from voxel_addon import opencl
+    from voxel_addon.light import cl as lcl
+    code = ("import numpy as np\nfrom voxel_addon.light import cl\n"
+            "for w, h in ((18, 18), (50, 34)):\n"
+            "    b = np.zeros((w, h, 48), np.uint16, order='F'); b[:, :, :20] = 1\n"
+            "    cl.solve_slab(b)\n")
+    root = Path(__file__).resolve().parents[2]
+    env = dict(os.environ, PYTHONPATH=str(root), POCL_CACHE_DIR=str(tmp_path / "pocl"),
+               PYOPENCL_CACHE_DIR=str(tmp_path / "pyopencl"))
+    subprocess.run([sys.executable, "-c", code], env=env, check=True, timeout=300)
+    built = {}
+    for so in (tmp_path / "pocl").rglob("light_*.so"):
+        built.setdefault(so.parent.parent.name, []).append(so.parent.name)
+    assert len(built) == 5 and all(len(v) == 1 for v in built.values()), built
+    monkeypatch.setattr(opencl, "on_cpu", lambda: False)
+    assert lcl._local() is None  # a GPU: its driver chooses (and builds once anyway)

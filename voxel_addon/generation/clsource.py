@@ -12,6 +12,8 @@ above their own top, and are written as explicit 8-lane code (`_GenV`, README).
 """
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
 from .. import resources
@@ -503,8 +505,22 @@ ROW_SPAN = 0.9  # perlin3's x over a row spans less than this (cells): perlin3_8
 
 
 def source(units, size=C.SIZE) -> str:
+    """The OpenCL C of UNITS: the same text for the same program, whichever process or
+    generator object made it (`_renumber`)."""
     g, gv, free = _Gen(units, size), _GenV(units), _GenV(units, size)
     free.free = True  # lanes that are not a row of 8 voxels: g3 and 2D units
-    return resources.kernel("gen.cl") + "\n".join(
+    return resources.kernel("gen.cl") + _renumber("\n".join(
         ((gv if u.kind == "3d" else free) if vectorizable(u) else g).kernel(i, u)
-        for i, u in enumerate(units))
+        for i, u in enumerate(units)))
+
+
+_VAR = re.compile(r"\bv(\d+)\b")
+
+
+def _renumber(text: str) -> str:
+    """Variables v<node id> renamed v0, v1, ... in order of appearance. Node ids come
+    from one counter per process (lang.E), so the same program made twice (a second
+    generator, world or scene) had other names: another source, which opencl.build and
+    pocl's disk cache missed, so pocl compiled it all again (seconds per generator)."""
+    names: dict[str, str] = {}
+    return _VAR.sub(lambda m: names.setdefault(m.group(1), f"v{len(names)}"), text)

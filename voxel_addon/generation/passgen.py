@@ -74,9 +74,9 @@ class PassGenerator(Generator):
             i += step
 
     def warm_opencl(self, keys) -> list:
-        """generate(keys) on OpenCL whatever the default, with this generator's own
-        kernel objects: pocl compiles a kernel's work-group code again for every new
-        kernel object (~5 s), so a warm-up (world.build.warm) must run these ones."""
+        """generate(keys) on OpenCL whatever the default (world.build.warm). Another
+        generator of the same program shares the build (clsource.source writes the same
+        text; the ~5 s recompiles once blamed on new kernel objects were new sources)."""
         flat, _ = self._run([(int(a), int(b)) for a, b in keys], (), "opencl")
         return [np.asarray(f).reshape(C.SHAPE, order="F") for f in flat]
 

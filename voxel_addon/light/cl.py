@@ -56,6 +56,15 @@ def reach(em: np.ndarray) -> np.ndarray:
     return r
 
 
+def _local():
+    """The launches' work-group size: (1, 1) on a CPU device, else the driver's choice.
+    pocl compiles a kernel's work-group function per local size at its first launch,
+    and left to choose it picked one from the global size: ~5 new functions per area
+    shape (~1 s CPU cold). An item here is a whole line in explicit vectors, nothing
+    for its work-group vectorizer: as fast, with one function per kernel."""
+    return (1, 1) if opencl.on_cpu() else None
+
+
 def solve_slab(blocks: np.ndarray) -> np.ndarray:
     """(W, H, Z) uint16 F-order slab -> packed light, same shape, F-order."""
     import pyopencl as cl
@@ -79,8 +88,9 @@ def solve_slab(blocks: np.ndarray) -> np.ndarray:
     info = np.empty((3, h, w4), np.int32)
     ibuf = cl.Buffer(ctx, mf.READ_WRITE, info.nbytes)
     dims = (np.int32(h), np.int32(z), np.int32(sx))
+    loc = _local()
     nb = (groups + BLOCK - 1) // BLOCK
-    k_start(q, (nb, h), None, b, tab, cost, lanes, ibuf, *dims)
+    k_start(q, (nb, h), loc, b, tab, cost, lanes, ibuf, *dims)
     cl.enqueue_copy(q, info, ibuf)
     lo = info[0]
     hi = np.minimum(np.maximum(info[1], reach(info[2])), z)
@@ -104,7 +114,7 @@ def solve_slab(blocks: np.ndarray) -> np.ndarray:
         kern, size, extra = sweeps[k % 3]
         init = (np.int32(k == 0),) if kern is k_z else ()
         cl.enqueue_fill_buffer(q, fbuf, np.int32(0), 0, 4)
-        kern(q, size, None, lanes, cost, *extra, dz, dy, dx, fbuf, *init, *dims)
+        kern(q, size, loc, lanes, cost, *extra, dz, dy, dx, fbuf, *init, *dims)
         cl.enqueue_copy(q, flag, fbuf)
         quiet = 0 if flag[0] else quiet + 1
         if quiet >= 2 and k >= 2:
@@ -112,6 +122,6 @@ def solve_slab(blocks: np.ndarray) -> np.ndarray:
     STATS["sweeps"] = k + 1
     out = np.empty((z, h, w4), np.uint16)
     obuf = cl.Buffer(ctx, mf.WRITE_ONLY, out.nbytes)
-    k_pack(q, (h, z), None, lanes, obuf, *dims)
+    k_pack(q, (h, z), loc, lanes, obuf, *dims)
     cl.enqueue_copy(q, out, obuf)
     return out[:, :, :w].T

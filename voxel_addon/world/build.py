@@ -40,7 +40,7 @@ def warm(world, opened: bool = False) -> bool:
     WORLD wants (its generator's chunks, then meshing: the order the stream needs
     them), on a 3x3 of chunks at the origin; generation runs NumPy until its kernels
     are built (opencl.ready), meshing until the end (opencl.warm). Once per generator
-    (each has its own kernel objects: another world's would compile again); False
+    (another world of the same generator and version reuses the build: cheap); False
     when nothing was started (no device, warmed already, another warm-up running).
     Cold, on 2 quiet cores: ~3.3 s for the generator, ~0.6 s meshing. Then, with
     OpenCL already the default (opencl.warm's `later`) and once the world's streams

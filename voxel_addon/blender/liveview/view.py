@@ -268,7 +268,7 @@ class LiveView:
         # everything the picture depends on (Blender's objects are mixed in by depth
         # on every redraw): the same again, and the kept frame is the frame
         look = (tuple(view), tuple(map(tuple, rv3d.window_matrix)), (vw, vh), astuple(s), hours,
-                vv.sky, pane.gen)
+                vv.sky, pane.gen, draft)
         k = pane.kept.get(key)
         reused, calls, t_sub, comp_cpu = False, 0, 0.0, 0.0
         if self.reuse and k is not None and k.look == look:
@@ -288,8 +288,11 @@ class LiveView:
             if self.finish:
                 pane.dev.finish()
                 pc = time.process_time()
-            # kept only once the view rests: a frame while moving or loading is the last
-            k = pane.kept_for(key, (vw, vh)) if self.reuse and not busy else None
+            # kept unless moving (each frame then is the last): while chunks stream in,
+            # Blender redraws the view now and then with none new (every 1-2 s of a
+            # fresh install's kernel build), and a draft on llvmpipe is 150-300 ms of
+            # the GIL the NumPy workers want; kept, such a redraw takes ~10 ms
+            k = pane.kept_for(key, (vw, vh)) if self.reuse and not moving else None
             composite.composite(pane.dev, f, host_vp, vv.sky, k, (vw, vh))
             if self.finish:
                 pane.dev.finish()
@@ -389,6 +392,9 @@ class LiveView:
         if self._nothing_new():
             return POLL_S  # (the timer stays on)
         self._timer_on = False
+        f = self.feed  # (VOXEL_TRACE: what asked for this redraw)
+        trace.mark("redraw", news=self._news, queued=f.stream.queued if f else None,
+                   held=len(f.chunks) if f else None)
         redraw()
         return None
 

@@ -288,11 +288,15 @@ class LiveView:
             if self.finish:
                 pane.dev.finish()
                 pc = time.process_time()
-            # kept unless moving (each frame then is the last): while chunks stream in,
-            # Blender redraws the view now and then with none new (every 1-2 s of a
-            # fresh install's kernel build), and a draft on llvmpipe is 150-300 ms of
-            # the GIL the NumPy workers want; kept, such a redraw takes ~10 ms
-            k = pane.kept_for(key, (vw, vh)) if self.reuse and not moving else None
+            # kept once the view rests, and while chunks stream in by a frame that took
+            # in none (each other frame then is the last): Blender redraws the view now
+            # and then with no new chunk (every 1-2 s of a fresh install's kernel
+            # build), a draft on llvmpipe is 150-470 ms of the GIL the NumPy workers
+            # want, and a kept one ~10 ms; not by the frames that bring chunks: keeping
+            # compiles two more shaders (0.2-1.2 s each on a fresh lavapipe), not to be
+            # paid before the first terrain
+            keep = not moving and len(feed.chunks) == had and (not loading or had > 0)
+            k = pane.kept_for(key, (vw, vh)) if self.reuse and keep else None
             composite.composite(pane.dev, f, host_vp, vv.sky, k, (vw, vh))
             if self.finish:
                 pane.dev.finish()

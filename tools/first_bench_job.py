@@ -46,6 +46,7 @@ def run(world: str, distance: int):
         R["opened_first_s"] = wait
     yield wait or 0.5
     t0, m0, c0 = time.perf_counter(), time.monotonic(), time.process_time()
+    th0 = threads_cpu()
     vv.show = True
     first = None
     while True:
@@ -64,6 +65,9 @@ def run(world: str, distance: int):
         yield 0.02
     R["first_s"], R["whole_s"], R["chunks"] = first, time.perf_counter() - t0, s["wanted"]
     R["whole_cpu_s"] = time.process_time() - c0  # every thread's (llvmpipe's too)
+    th1 = threads_cpu()  # per thread name: pocl's compiler and llvmpipe have their own
+    R["threads_cpu_s"] = {k: round(v - th0.get(k, 0.0), 3) for k, v in sorted(th1.items())
+                          if v - th0.get(k, 0.0) > 0.005}
     R["load"] = os.getloadavg()[0]
     R["frames"] = [[round(f.ms), f.drawn, f.quality] for f in LIVE.frames]  # (diagnosis)
     while opencl.warming():
@@ -76,6 +80,27 @@ def run(world: str, distance: int):
     import gpu
     R["backend"] = gpu.platform.backend_type_get()
     vv.show = False
+
+
+def threads_cpu() -> dict:
+    """{thread name: CPU seconds} of this process's threads (Linux /proc; {} elsewhere):
+    where the CPU between Show and the whole view went (the trace sees only ours)."""
+    import os
+    out: dict = {}
+    tick = os.sysconf("SC_CLK_TCK") if hasattr(os, "sysconf") else 100
+    try:
+        tasks = os.listdir("/proc/self/task")
+    except OSError:
+        return out
+    for t in tasks:
+        try:
+            stat = Path(f"/proc/self/task/{t}/stat").read_text()
+        except OSError:
+            continue
+        name = "main" if t == str(os.getpid()) else stat[stat.index("(") + 1:stat.rindex(")")]
+        f = stat[stat.rindex(")") + 2:].split()
+        out[name] = out.get(name, 0.0) + (int(f[11]) + int(f[12])) / tick
+    return out
 
 
 if __name__ == "__main__":

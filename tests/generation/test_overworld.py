@@ -16,6 +16,24 @@ def _keys(seed, n):
     return [tuple(int(v) for v in rng.integers(-4000, 4000, 2)) for _ in range(n)]
 
 
+@pytest.mark.parametrize("version", [1, 2])
+def test_many_noise_calls_are_calls(version):
+    """A chunk program's kernels with many calls of a big noise function call gen.cl's
+    never-inlined twin (pocl compiles each inlined copy at a fresh install's first
+    launch: seconds, issue 28); the hot per-voxel kernels and the far surface's
+    program inline them. test_backends_identical checks the values."""
+    import re
+    from voxel_addon.generation.clsource import source
+    g = make_generator("overworld", 7, None, "numpy", version)
+    kernels = re.split(r"(?=__kernel void )", source(g.units))[1:]
+    calls = [set(re.findall(r"\b(\w+)_c\(", k)) for k in kernels]
+    assert {"perlin2", "voronoi2"} <= calls[0]  # the biomes: 26 perlin2, 4 voronoi2
+    if version == 2:
+        assert "perlin3_8" in calls[5]  # the surface caves: 24 perlin3_8 at 8 corners
+    assert not any(calls[i] for i, u in enumerate(g.units) if u.kind == "3d")
+    assert "_c(" not in source(g.units, 1, inline=True).split("// ---- generated passes")[1]
+
+
 @pytest.mark.parametrize("seed,version", [(0, None), (7, None), (-3, None), (2**40 + 5, None),
                                           (7, 1), (-3, 1)])
 def test_backends_identical(cl_device, seed, version):

@@ -19,7 +19,10 @@ class Runner:
     def __init__(self, units, size=C.SIZE):
         import pyopencl as cl
         self.units, self.size = units, int(size)
-        self.src = source(units, self.size)
+        # chunks' programs call their big noise functions (a fresh install builds them
+        # on the way to its first picture); the far surface's (1-column domains, built
+        # in the background, run on 16384-column batches) inlines them: clsource.called
+        self.src = source(units, self.size, inline=self.size != C.SIZE)
         self.ctx, self.queue, _ = opencl.context()
         prog = opencl.build(self.src, OPTIONS)
         self.kernels = [cl.Kernel(prog, f"unit{i}") for i in range(len(units))]

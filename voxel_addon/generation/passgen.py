@@ -56,6 +56,11 @@ class PassGenerator(Generator):
         pass
 
     def _run(self, keys, want=(), backend="numpy"):
+        from ..core import trace
+        with trace.span("generate", backend=backend, n=len(keys)):  # (VOXEL_TRACE)
+            return self._run_on(keys, want, backend)
+
+    def _run_on(self, keys, want, backend):
         if backend == "opencl":
             if self._runner is None:
                 from .cl import Runner

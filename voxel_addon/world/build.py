@@ -42,7 +42,8 @@ def warm(world, opened: bool = False) -> bool:
     are built (opencl.ready), meshing until the end (opencl.warm). Once per generator
     (another world of the same generator and version reuses the build: cheap); False
     when nothing was started (no device, warmed already, another warm-up running).
-    Cold, on 2 quiet cores: ~3.3 s for the generator, ~0.6 s meshing. Then, with
+    Cold, on 2 quiet cores: ~3.3 s for the generator (before clsource.called cut its
+    first launches' CPU ~3x), ~0.6 s meshing. Then, with
     OpenCL already the default (opencl.warm's `later`) and once the world's streams
     have made all they want (one pocl queue: the stream's kernels would wait behind
     it), the far surface's program (the generator's 2D passes, its own kernel

@@ -268,7 +268,7 @@ class LiveView:
         # everything the picture depends on (Blender's objects are mixed in by depth
         # on every redraw): the same again, and the kept frame is the frame
         look = (tuple(view), tuple(map(tuple, rv3d.window_matrix)), (vw, vh), astuple(s), hours,
-                vv.sky, pane.gen)
+                vv.sky, pane.gen, draft)
         k = pane.kept.get(key)
         reused, calls, t_sub, comp_cpu = False, 0, 0.0, 0.0
         if self.reuse and k is not None and k.look == look:
@@ -288,8 +288,15 @@ class LiveView:
             if self.finish:
                 pane.dev.finish()
                 pc = time.process_time()
-            # kept only once the view rests: a frame while moving or loading is the last
-            k = pane.kept_for(key, (vw, vh)) if self.reuse and not busy else None
+            # kept once the view rests, and while chunks stream in by a frame that took
+            # in none (each other frame then is the last): Blender redraws the view now
+            # and then with no new chunk (every 1-2 s of a fresh install's kernel
+            # build), a draft on llvmpipe is 150-470 ms of the GIL the NumPy workers
+            # want, and a kept one ~10 ms; not by the frames that bring chunks: keeping
+            # compiles two more shaders (0.2-1.2 s each on a fresh lavapipe), not to be
+            # paid before the first terrain
+            keep = not moving and len(feed.chunks) == had and (not loading or had > 0)
+            k = pane.kept_for(key, (vw, vh)) if self.reuse and keep else None
             composite.composite(pane.dev, f, host_vp, vv.sky, k, (vw, vh))
             if self.finish:
                 pane.dev.finish()
@@ -389,6 +396,9 @@ class LiveView:
         if self._nothing_new():
             return POLL_S  # (the timer stays on)
         self._timer_on = False
+        f = self.feed  # (VOXEL_TRACE: what asked for this redraw)
+        trace.mark("redraw", news=self._news, queued=f.stream.queued if f else None,
+                   held=len(f.chunks) if f else None)
         redraw()
         return None
 

@@ -99,7 +99,7 @@ def zero_tail(blob) -> int:
     RLE block of 0 that ends it) say it in their last block; 0 for any other shape.
     Trust it only of a blob that decoded to the size it declares: the decoder read
     the same headers, and one frame that is all there (as here) it decodes whole or
-    refuses (tests/storage/test_codecs.py). The block-id check skips those zeros."""
+    refuses (tests/storage/test_bombs.py). The block-id check skips those zeros."""
     n = len(blob)
     if n < 16:
         return 0

@@ -187,7 +187,7 @@ def test_the_first_id_past_the_table_is_a_damaged_chunk(world_path, identity):
         ids = np.zeros(chunk.VOLUME, "<u2")
         ids[777] = top
         db.execute("UPDATE chunks SET codec='zstd', blocks=? WHERE cx=? AND cy=0",
-                   (codecs.encode_u16("zstd", ids.tobytes()), cx))
+                   (codecs.encode("zstd", ids.tobytes()), cx))
     db.commit()
     db.close()
     wf = WorldFile(world_path, readonly=True)
@@ -196,6 +196,48 @@ def test_the_first_id_past_the_table_is_a_damaged_chunk(world_path, identity):
         assert wf.read_chunk((0, 0))[0].max() == wf.registry_ids[n - 1]
         with pytest.raises(CorruptChunk, match="missing from block_types"):
             wf.read_chunk((1, 0))
+    finally:
+        wf.close()
+
+
+def _rle_end(frame: bytes, zeros: int, byte: int = 0) -> bytes:
+    """`frame` (one compressed block) with its block made not last and an RLE block
+    of `zeros` x `byte` after it, under encode()'s header declaring SIZE bytes."""
+    fhd = frame[4]
+    start = 5 + (fhd >> 5 & 1 ^ 1) + ((fhd >> 5 & 1), 2, 4, 8)[fhd >> 6]
+    h = int.from_bytes(frame[start:start + 3], "little")
+    assert fhd & 7 == 0 and h & 7 == 5 and start + 3 + (h >> 3) == len(frame)  # one block
+    return b"".join((frame[:4], b"\xa0", SIZE.to_bytes(4, "little"),
+                     (h & ~1).to_bytes(3, "little"), frame[start + 3:],
+                     (3 | zeros << 3).to_bytes(3, "little"), bytes([byte])))
+
+
+@pytest.mark.parametrize("how", ["ids under the zeros", "zeros of another byte"])
+def test_an_rle_end_hides_no_ids(world_path, how):
+    """The block-id check skips the zeros a frame ends with (codecs.zero_tail): a
+    frame that claims such an end over ids past the table, or ends with another
+    byte (0x0505 ids), is still a damaged chunk, in one line."""
+    with World.create(world_path, seed=1, generator="flat", loader=False) as w:
+        w.generate_area([(0, 0)])
+    ids = np.zeros(chunk.VOLUME, "<u2")
+    ids[:5000] = 1
+    zeros = 8192
+    if how == "ids under the zeros":  # the first block already holds all SIZE bytes
+        ids[-100] = 60000
+        blob = _rle_end(zstandard.ZstdCompressor().compress(ids.tobytes()), zeros)
+    else:
+        blob = _rle_end(zstandard.ZstdCompressor().compress(ids[:-zeros // 2].tobytes()),
+                        zeros, 5)
+    assert codecs.zero_tail(blob) == (zeros if how == "ids under the zeros" else 0)
+    db = sqlite3.connect(world_path)
+    db.execute("UPDATE chunks SET codec='zstd', blocks=? WHERE cx=0 AND cy=0", (blob,))
+    db.commit()
+    db.close()
+    wf = WorldFile(world_path, readonly=True)
+    try:
+        with pytest.raises(CorruptChunk) as e:
+            wf.read_chunk((0, 0))
+        assert "\n" not in str(e.value)
     finally:
         wf.close()
 

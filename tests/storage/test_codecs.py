@@ -1,9 +1,11 @@
-"""Chunk blobs (issue 29): block ids end their zstd frame with the air above the
-terrain as one RLE block (a memset when decoded), still one plain frame that any
-zstd reader reads; decode_u16 writes into a new array; reads in one transaction."""
+"""Chunk blobs (issue 29): a chunk array's zstd frame ends with the zeros above the
+terrain (the air) as one RLE block (a memset when decoded), still one plain frame
+that any zstd reader reads, and says so in its shape (zero_tail); decode_u16 writes
+into a new array; reads in one transaction."""
 from __future__ import annotations
 
 import sqlite3
+import zlib
 
 import numpy as np
 import pytest
@@ -16,6 +18,11 @@ from voxel_addon.world import World
 SIZE = chunk.VOLUME * 2
 
 
+def plain(raw) -> bytes:
+    """The frame the compressor writes by itself (what encode wrote before)."""
+    return zstandard.ZstdCompressor(level=3).compress(raw)
+
+
 def terrain(top: int, seed: int = 0) -> bytes:
     """Linear-order ids: varied below value index `top`, zeros (air) from there."""
     a = np.zeros(chunk.VOLUME, "<u2")
@@ -26,7 +33,7 @@ def terrain(top: int, seed: int = 0) -> bytes:
 @pytest.mark.parametrize("top", [70 * 256, 70 * 256 + 5, 1023, 1024, 1, chunk.VOLUME - 1])
 def test_trailing_air_is_one_rle_block_of_a_plain_frame(top):
     raw = terrain(top)
-    blob = codecs.encode_u16("zstd", raw)
+    blob = codecs.encode("zstd", raw)
     # any zstd reader, told nothing: one frame declaring its size
     assert zstandard.ZstdDecompressor().decompress(blob) == raw
     assert zstandard.frame_content_size(blob) == SIZE
@@ -37,16 +44,33 @@ def test_trailing_air_is_one_rle_block_of_a_plain_frame(top):
     if zeros:  # the last block: RLE (type 1), last, of `zeros` bytes of 0
         assert blob[-4:] == (1 | 1 << 1 | zeros << 3).to_bytes(3, "little") + b"\0"
     else:
-        assert blob == codecs.encode("zstd", raw)
-    assert len(blob) <= len(codecs.encode("zstd", raw)) + 16
+        assert blob == plain(raw)
+    assert codecs.zero_tail(blob) == zeros  # what the block-id check may skip
+    assert codecs.zero_tail(memoryview(blob)) == zeros
+    assert len(blob) <= len(plain(raw)) + 16
 
 
-@pytest.mark.parametrize("raw", [bytes(SIZE), np.full(chunk.VOLUME, 3, "<u2").tobytes()])
-def test_uniform_chunks_stay_plain(raw):
-    blob = codecs.encode_u16("zstd", raw)
-    assert blob == codecs.encode("zstd", raw)
-    assert codecs.decode_u16("zstd", blob, chunk.VOLUME).tobytes() == raw
-    assert codecs.encode_u16("zlib", raw) == codecs.encode("zlib", raw)
+LIGHT = np.where(np.arange(chunk.VOLUME) < 60 * 256, 0, 0xF000).astype("<u2").tobytes()
+
+
+@pytest.mark.parametrize("raw", [bytes(SIZE), np.full(chunk.VOLUME, 3, "<u2").tobytes(),
+                                 LIGHT, terrain(9000)[:-2], b"\0" * 100])
+def test_what_ends_in_no_zero_slab_stays_plain(raw):
+    """Uniform chunks, light (daylight on top), sizes not of whole slabs (far tiles)."""
+    blob = codecs.encode("zstd", raw)
+    assert blob == plain(raw) and codecs.zero_tail(blob) == 0
+    assert codecs.decode("zstd", blob, len(raw)) == raw
+    assert zlib.decompress(codecs.encode("zlib", raw)) == raw
+
+
+def test_zero_tail_reads_only_that_shape():
+    blob = codecs.encode("zstd", terrain(9000))
+    assert codecs.zero_tail(blob) == SIZE - 18 * 1024
+    for bad in (blob[:-1] + b"\1",  # an RLE block of another byte
+                blob[:4] + b"\xa4" + blob[5:],  # a checksum: not the header encode writes
+                blob + b"\0",  # more after the last block
+                blob[:9], b""):
+        assert codecs.zero_tail(bad) == 0
 
 
 def test_decode_u16_refuses_what_decode_refuses():
@@ -55,9 +79,9 @@ def test_decode_u16_refuses_what_decode_refuses():
         assert codecs.decode_u16(codec, codecs.encode(codec, raw), chunk.VOLUME).tobytes() == raw
         for bad in (raw[:-2], raw + b"\0\0"):
             with pytest.raises(ValueError):
-                codecs.decode_u16(codec, codecs.encode_u16(codec, bad), chunk.VOLUME)
+                codecs.decode_u16(codec, codecs.encode(codec, bad), chunk.VOLUME)
     # a frame declaring the right size that holds less; one without a declared size
-    full = codecs.encode_u16("zstd", raw)
+    full = codecs.encode("zstd", raw)
     with pytest.raises(ValueError):
         codecs.decode_u16("zstd", full[:-4], chunk.VOLUME)
     undeclared = zstandard.ZstdCompressor(write_content_size=False).compress(raw)

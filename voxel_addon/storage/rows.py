@@ -23,7 +23,7 @@ class Encoder:
         else:
             ids = blocks
         lblob = None if light is None else codecs.encode(codec, _linear(light))
-        return (int(key[0]), int(key[1]), codec, codecs.encode_u16(codec, _linear(ids)),
+        return (int(key[0]), int(key[1]), codec, codecs.encode(codec, _linear(ids)),
                 self.data(data), lblob)
 
     def data(self, data):

@@ -164,11 +164,24 @@ class Geometry:
                  for q, n, k, r in b.rows[p]]
             self._rows.append(np.array(t, np.int64).reshape(-1, 4).T if t else None)
         self._last: dict = {}
+        self._culled: dict = {}
 
     # ------------------------------------------------------------------ frames
-    def cull(self, mvp: np.ndarray) -> np.ndarray:
-        """(chunk, region) boxes: whether each may intersect the clip volume."""
-        return camera.visible_boxes(mvp, self._boxes)
+    def cull(self, mvp: np.ndarray, keep: bool = False) -> np.ndarray:
+        """(chunk, region) boxes: whether each may intersect the clip volume (read
+        only). keep: the answers of the last few matrices are kept until the shown
+        chunks change (a still view's redraws, the shadow map's light while the sun
+        rests)."""
+        if not keep:
+            return camera.visible_boxes(mvp, self._boxes)
+        k = np.asarray(mvp, np.float64).tobytes()
+        c = self._culled
+        v = c.get(k)
+        if v is None:
+            if len(c) >= 4:
+                c.clear()
+            v = c[k] = camera.visible_boxes(mvp, self._boxes)
+        return v
 
     def seen(self, name: str, vis: np.ndarray) -> bool:
         """Whether pass name has quads in a visible region."""

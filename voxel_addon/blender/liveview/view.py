@@ -259,7 +259,7 @@ class LiveView:
         # draft while moving and while chunks stream in: a full frame holds the GIL for
         # seconds on software GL and starves the stream's worker thread
         draft = vv.quality == "draft" or (vv.quality == "auto" and busy)
-        s = settings_of(vv, draft)
+        s = settings_of(vv, draft, world=feed.world)
         if cam.ortho:
             # distance fog needs an eye; an orthographic view's is arbitrary (it moves with
             # the zoom), and a side view would show the far half of the area washed out

@@ -128,3 +128,46 @@ def test_batches_draw_every_visible_region_once(gl):
     assert checked > 1000 and 0 < culled < checked
     geo.release()
     dev.close()
+
+
+def test_batches_are_the_runs_of_visible_rows(gl):
+    """Geometry.batches against a plain loop over its rows: for random visibility
+    masks, one draw per maximal run of visible rows of one batch, in order."""
+    from voxel_addon import meshing
+    from voxel_addon.core import chunk
+    from voxel_addon.core.blocks import REGISTRY as R
+    from voxel_addon.render.device.mgl import MglDevice
+    from voxel_addon.render.geometry import PASSES, Geometry
+    rng = np.random.default_rng(3)
+    b = chunk.empty(width=16 * 5 + 2, depth=16 * 5 + 2)
+    b[:, :, :30] = R.id("stone")
+    b[:, :, 30:120][rng.random((82, 82, 90)) < 0.003] = R.id("stone")
+    b[rng.random(b.shape) < 0.0005] = R.id("water")
+    dev = MglDevice(gl)
+    geo = Geometry(dev)
+    geo.set_chunks(meshing.build_chunks(b, (-2, -2), backend="numpy"))
+    geo.commit()
+    n = geo.cull(np.eye(4)).size
+    runs = 0
+    for share in (0.0, 0.1, 0.5, 0.9, 1.0):
+        vis = rng.random(n) < share
+        got = geo.batches(vis, PASSES)
+        for p, name in enumerate(PASSES):
+            want, prev = [], None
+            t = geo._rows[p]
+            for j, (bi, q, c, box) in enumerate(zip(*t.tolist()) if t is not None else ()):
+                if not vis[box]:
+                    prev = None
+                    continue
+                b = geo._list[bi]
+                if prev == bi:
+                    m, f, k, o = want[-1]
+                    want[-1] = (m, f, q + c - f, o)
+                else:
+                    want.append((b.meshes[p], q, c, b.origin))
+                prev = bi
+            runs += len(want)
+            assert (got[name] or []) == want, (name, share)
+    assert runs > 50
+    geo.release()
+    dev.close()

@@ -24,9 +24,19 @@ unsaved: dict[str, object] = {}  # worlds whose save and rescue both failed (ret
 POLL_S = 1.0  # seconds between looks for other processes' writes
 
 
+_keys: dict = {}  # (path, blend file, working folder) -> _key (asked on every redraw)
+
+
 def _key(path: str) -> str:
     import bpy
-    return os.path.realpath(bpy.path.abspath(path))
+    # realpath stats every folder of the path: ~0.1 ms, twice per viewport redraw
+    k = (path, bpy.data.filepath, os.getcwd())
+    v = _keys.get(k)
+    if v is None:
+        if len(_keys) > 64:
+            _keys.clear()
+        v = _keys[k] = os.path.realpath(bpy.path.abspath(path))
+    return v
 
 
 def world(path: str, *, create_seed: int | None = None, generator: str | None = None):

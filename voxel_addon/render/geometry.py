@@ -158,17 +158,40 @@ class Geometry:
         hi = lo + [16.0, 16.0, h]
         # 0.5 slack for waving: vertices move by < 0.1 blocks
         self._boxes = camera.boxes(lo.reshape(-1, 3) - 0.5, hi.reshape(-1, 3) + 0.5)
-        self._rows = []
+        self._rows, self._runs = [], []
         for p in range(len(PASSES)):
             t = [(i, q, n, index[k] * nreg + r) for i, b in enumerate(self._list)
                  for q, n, k, r in b.rows[p]]
             self._rows.append(np.array(t, np.int64).reshape(-1, 4).T if t else None)
+            if not t:
+                self._runs.append(None)
+                continue
+            bi = self._rows[-1][0]
+            # per row: whether the row before / after it is the same batch's (a run of
+            # visible rows within a batch is one draw); the batches' buffers and origins
+            nb = np.ones(len(bi) + 1, bool)
+            nb[1:-1] = bi[1:] != bi[:-1]
+            self._runs.append((~nb[:-1], ~nb[1:], [b.meshes[p] for b in self._list],
+                               [b.origin for b in self._list]))
         self._last: dict = {}
+        self._culled: dict = {}
 
     # ------------------------------------------------------------------ frames
-    def cull(self, mvp: np.ndarray) -> np.ndarray:
-        """(chunk, region) boxes: whether each may intersect the clip volume."""
-        return camera.visible_boxes(mvp, self._boxes)
+    def cull(self, mvp: np.ndarray, keep: bool = False) -> np.ndarray:
+        """(chunk, region) boxes: whether each may intersect the clip volume (read
+        only). keep: the answers of the last few matrices are kept until the shown
+        chunks change (a still view's redraws, the shadow map's light while the sun
+        rests)."""
+        if not keep:
+            return camera.visible_boxes(mvp, self._boxes)
+        k = np.asarray(mvp, np.float64).tobytes()
+        c = self._culled
+        v = c.get(k)
+        if v is None:
+            if len(c) >= 4:
+                c.clear()
+            v = c[k] = camera.visible_boxes(mvp, self._boxes)
+        return v
 
     def seen(self, name: str, vis: np.ndarray) -> bool:
         """Whether pass name has quads in a visible region."""
@@ -190,13 +213,17 @@ class Geometry:
                 out[name] = None
                 continue
             bi, q, n, box = t
+            same_prev, same_next, meshes, origins = self._runs[p]
             v = vis[box]
-            same = np.r_[False, bi[1:] == bi[:-1]]            # the row before is the batch's
-            starts = np.flatnonzero(v & ~(same & np.r_[False, v[:-1]]))
-            ends = np.flatnonzero(v & ~(np.r_[same[1:], False] & np.r_[v[1:], False]))
-            first, end = q[starts], q[ends] + n[ends]
-            out[name] = [(self._list[i].meshes[p], int(f), int(e - f), self._list[i].origin)
-                         for i, f, e in zip(bi[starts].tolist(), first.tolist(), end.tolist())] \
+            vb = np.zeros(len(v) + 1, bool)  # v shifted: vb[:-1] the row before, vb[1:] v
+            vb[1:] = v
+            starts = np.flatnonzero(v & ~(same_prev & vb[:-1]))
+            vb[:-1] = v                      # vb[1:] now the row after (last: False)
+            vb[-1] = False
+            ends = np.flatnonzero(v & ~(same_next & vb[1:]))
+            first = q[starts]
+            out[name] = [(meshes[i], f, c, origins[i]) for i, f, c in
+                         zip(bi[starts].tolist(), first.tolist(), (q[ends] + n[ends] - first).tolist())] \
                 or None
         self._last[slot] = (tuple(names), vis.copy(), out)
         return out

@@ -283,7 +283,7 @@ class Renderer:
             vp, inv_vp = draw_cam.matrices()
         shaded = s.debug in graph.SHADED
         shadows = bool(s.shadows and (shaded or s.debug == "light") and sp["light_dir"][2] > 0.02)
-        vis = geo.cull(cull_vp)
+        vis = geo.cull(cull_vp, keep=True)
         view = dict(geo.batches(vis, PASSES))  # (a copy: the geometry caches its own)
         models = bool(self.models.chunks)
         if models:
@@ -323,7 +323,7 @@ class Renderer:
                                                s.shadow_fade, s.shadow_size)
             F.set(shadow_vp=light_vp, shadow_mat=shadow.BIAS @ light_vp, shadow_texel=texel,
                   shadow_bias=bias)
-            cast = geo.batches(geo.cull(light_vp), [n for n in G.shadow.names if n in PASSES],
+            cast = geo.batches(geo.cull(light_vp, keep=True), [n for n in G.shadow.names if n in PASSES],
                                "shadow")
             if models:
                 cast = {**cast, **self.models.batches(G.shadow.names, light_vp)}

@@ -55,6 +55,7 @@ class GpuDevice(Device):
         self.software = any(k in r for k in SOFTWARE)
         self._progs: dict = {}
         self._ubo = None
+        self._ubo_data = b""   # the bytes in _ubo
         self._ibo, self._ibo_q = None, 0
         self._fs = None          # a 3-vertex batch: the fullscreen triangle
         self._prog = None
@@ -184,12 +185,15 @@ class GpuDevice(Device):
         self._frames += 1
         while self._retired and self._retired[0][0] <= self._frames - RETIRE:
             self._retired.pop(0)
+        if self._ubo is not None and data == self._ubo_data:
+            return  # a still view's frame again: the block holds these bytes
         f = np.frombuffer(data, np.float32)
         buf = gpu.types.Buffer("FLOAT", f.size, f.copy())
         if self._ubo is None:
             self._ubo = gpu.types.GPUUniformBuf(buf)
         else:
             self._ubo.update(buf)
+        self._ubo_data = bytes(data)
 
     def release(self, *objs):
         """Blender frees its GPU objects when nothing refers to them any more (in the

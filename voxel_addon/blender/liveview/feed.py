@@ -19,6 +19,7 @@ class Feed:
         self.wanted = 0          # chunks the stream means to show
         self.far = 0             # far distance (chunks; 0: no far ring)
         self.tiles: dict = {}    # far tile key -> far.mesh.FarMesh (.version)
+        self.gen = 0             # bumped whenever chunks or tiles change (Pane.sync)
         self.far_wanted = 0      # tiles the far builder means to show
         self._far = None         # the far.Builder
         self._far_at = None      # the view chunk it was last given
@@ -40,6 +41,7 @@ class Feed:
             self._far = None
             self.tiles.clear()
             self.far_wanted = 0
+            self.gen += 1
 
     def _update_far(self, budget) -> bool:
         b = self._far
@@ -55,6 +57,8 @@ class Feed:
             self.tiles[m.key] = m
         for k in gone:
             self.tiles.pop(k, None)
+        if ready or gone:
+            self.gen += 1
         if b.error is not None:
             raise b.error
         self.far_wanted, done = b.counts
@@ -72,6 +76,8 @@ class Feed:
             self.chunks[p.key] = packed(p)
         for k in gone:
             self.chunks.pop(k, None)
+        if ready or gone:
+            self.gen += 1
         if self.stream.error is not None:
             raise self.stream.error
         self.wanted = self.stream.counts[0]
@@ -82,6 +88,7 @@ class Feed:
         self.set_far(0)
         self.stream.close()
         self.chunks.clear()
+        self.gen += 1
 
 
 def packed(p):

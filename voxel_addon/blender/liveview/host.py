@@ -10,6 +10,7 @@ from ...core.errors import VoxelError
 
 _started = False
 _device = None
+_drawable = False  # the backend was found drawable: a process keeps its GPU backend
 
 
 def gpu_ready() -> bool:
@@ -60,11 +61,16 @@ def backend() -> str:
 
 
 def problem() -> str | None:
-    """Why the live view cannot draw here, as one sentence, or None."""
+    """Why the live view cannot draw here, as one sentence, or None (asked on every
+    redraw: once it was None it stays None)."""
+    global _drawable
+    if _drawable:
+        return None
     if not gpu_ready():
         return "the viewport needs Blender's window (no GPU in background mode)"
     if backend() not in ("OPENGL", "VULKAN", "METAL"):
         return f"the voxel view cannot draw on the {backend()} backend"
+    _drawable = True
     return None
 
 

@@ -16,11 +16,12 @@ def effects() -> list[str]:
     return [e for e in EFFECTS if e not in MSAA_ONLY]
 
 
-def settings_of(vv, draft: bool = False, render: bool = False):
+def settings_of(vv, draft: bool = False, render: bool = False, world=None):
     """render.Settings from scene.voxel_view; draft drops the expensive passes. A
     render (Render Voxel View, Render Animation) keeps the CLI's shadow map: the
     viewport's cheaper one is for redraws. (MSAA: Blender's gpu module has no
-    multisampled textures, so frames in Blender are never multisampled.)"""
+    multisampled textures, so frames in Blender are never multisampled.) world: the
+    scene's open World when the caller holds it (a redraw: no look-up by path)."""
     from ...render.settings import Settings
     s = Settings(distance=vv.distance, far=vv.far, light_radius=min(8, vv.distance), msaa=1)
     for e in effects():
@@ -28,7 +29,7 @@ def settings_of(vv, draft: bool = False, render: bool = False):
     s.transparency = vv.transparency
     s.debug = vv.debug_view or "none"
     s.exposure, s.haze, s.cloud_cover = vv.exposure, vv.haze, vv.cloud_cover
-    s.sea_level = sea_level(vv.id_data)
+    s.sea_level = sea_level(vv.id_data, world)
     if render:
         return s
     # the map covers ~100 blocks up to the shadow fade: at 1024 a texel is still a tenth
@@ -43,14 +44,14 @@ def settings_of(vv, draft: bool = False, render: bool = False):
     return s
 
 
-def sea_level(scene) -> int:
+def sea_level(scene, world=None) -> int:
     """The open world's water level (render.source.sea_level: the sea beyond the
     shown area), -1 without one."""
     from .. import session
     from ...core.errors import VoxelError
     from ...render import source
     try:
-        return source.sea_level(session.world(scene.voxel.path).generator)
+        return source.sea_level((session.world(scene.voxel.path) if world is None else world).generator)
     except (VoxelError, AttributeError, OSError):
         return -1
 

@@ -30,7 +30,6 @@ from __future__ import annotations
 import time
 import traceback
 from collections import deque
-from dataclasses import astuple
 from typing import NamedTuple
 
 import numpy as np
@@ -80,17 +79,24 @@ class Pane:
         self.feed = None
         self.kept: dict = {}     # region pointer -> composite.Kept
         self.gen = 0             # bumped whenever the uploaded chunks change
+        self.fed = None          # (feed, feed.gen, palette) at the last sync
 
     def sync(self, feed) -> int:
         """Upload what changed in the feed; returns the number of chunks drawn."""
         r = self.r
+        colors = getattr(feed.world, "colors", None)
+        colors = colors() if colors is not None else None  # (cached by the world)
+        fed = (feed, feed.gen, colors)
+        last = self.fed
+        if last is not None and last[0] is feed and last[1] == feed.gen and last[2] is colors:
+            return len(self.versions)  # nothing new (a still view): no walk over every chunk
+        self.fed = fed
         if self.feed is not feed:  # another world or distance: nothing of ours stays
             self.feed = feed
             self.versions = {k: None for k in self.versions}
             self.far_versions = {k: None for k in self.far_versions}
-        colors = getattr(feed.world, "colors", None)
         if colors is not None:
-            r.set_palette(colors())  # (cached by the world; compared here)
+            r.set_palette(colors)  # (compared there)
         gone = [k for k in self.versions if k not in feed.chunks]
         new = [p for k, p in feed.chunks.items() if self.versions.get(k) != p.version]
         if gone or new:
@@ -137,10 +143,11 @@ class Pane:
 
 
 class _Region:
-    __slots__ = ("view", "changed", "quality")
+    __slots__ = ("view", "changed", "quality", "cam")
 
     def __init__(self):
         self.view, self.changed, self.quality = None, 0.0, "full"
+        self.cam = (None, None)  # (matrices and far, render.Camera): a still view's again
 
 
 class LiveView:
@@ -222,7 +229,7 @@ class LiveView:
         wins = frozenset(w.as_pointer() for w in context.window_manager.windows)
         if wins != self.windows:
             self._prune(context, wins)
-        view = [tuple(r) for r in rv3d.view_matrix]
+        view = tuple(map(tuple, rv3d.view_matrix))
         key = region.as_pointer()
         st = self.regions.setdefault(key, _Region())
         now = time.perf_counter()
@@ -231,7 +238,11 @@ class LiveView:
                 self.lead = key  # the region being navigated leads the stream
             st.view, st.changed = view, now
         moving = now - st.changed < STILL_S
-        cam = view_camera(rv3d.view_matrix, rv3d.window_matrix, vv.distance * 16 * 1.5 + 256.0)
+        win_m = tuple(map(tuple, rv3d.window_matrix))
+        ck = (view, win_m, vv.distance)
+        if st.cam[0] != ck:  # (a linear solve and a dataclass: reused while the view rests)
+            st.cam = (ck, view_camera(view, win_m, vv.distance * 16 * 1.5 + 256.0))
+        cam = st.cam[1]
         feed = self._feed_for(scene)
         # the stream follows one region (quad view: the one last navigated): the eye of a
         # perspective view, the pivot of an orthographic one (its eye is arbitrary)
@@ -248,14 +259,13 @@ class LiveView:
         # draft while moving and while chunks stream in: a full frame holds the GIL for
         # seconds on software GL and starves the stream's worker thread
         draft = vv.quality == "draft" or (vv.quality == "auto" and busy)
-        s = settings_of(vv, draft)
+        s = settings_of(vv, draft, world=feed.world)
         if cam.ortho:
             # distance fog needs an eye; an orthographic view's is arbitrary (it moves with
             # the zoom), and a side view would show the far half of the area washed out
             s.fog = False
         else:
             s.fov = min(150.0, max(10.0, cam.fov))
-        host_vp = np.array(rv3d.perspective_matrix, np.float64)
         hours = hours_of(scene)
         pane = self.panes.get(window.as_pointer())
         if pane is None:
@@ -267,8 +277,8 @@ class LiveView:
         vw, vh = gpu.state.viewport_get()[2:]
         # everything the picture depends on (Blender's objects are mixed in by depth
         # on every redraw): the same again, and the kept frame is the frame
-        look = (tuple(view), tuple(map(tuple, rv3d.window_matrix)), (vw, vh), astuple(s), hours,
-                vv.sky, pane.gen, draft)
+        look = (view, win_m, (vw, vh), tuple(vars(s).values()), hours, vv.sky, pane.gen,
+                draft)
         k = pane.kept.get(key)
         reused, calls, t_sub, comp_cpu = False, 0, 0.0, 0.0
         if self.reuse and k is not None and k.look == look:
@@ -278,6 +288,7 @@ class LiveView:
             reused, draft = True, k.quality == "draft"
         else:
             pane.r.s = s
+            host_vp = np.array(rv3d.perspective_matrix, np.float64)
             scale = DRAFT_SCALE if draft else 1.0
             size = (max(8, int(vw * scale)), max(8, int(vh * scale)))
             c1 = time.thread_time()

@@ -48,7 +48,7 @@ class _LocalPalette:
     (those past the previous chunk's) in the order met, so states, colours and report
     lines join in one-process order. Biomes stay chunk-local (`biomes`, reset per
     chunk): the columns hold them as bytes, and a task (of a modded save) may meet
-    more than 256 biomes where a chunk does not."""
+    more than 256 biomes where a chunk does not (one that does: `low`, `high`)."""
 
     def __init__(self, known=None):
         from types import SimpleNamespace
@@ -95,6 +95,15 @@ class _LocalPalette:
 
     def biome(self, name) -> int:
         return self.biomes.setdefault(name, len(self.biomes))
+
+    # columns are bytes: a chunk naming more than 256 biomes (hostile) is numbered in
+    # two passes, low bytes then high ones, so that each name keeps its own number
+    # (the writer maps them to the world's, which stops at 255 as in one process)
+    def low(self, name) -> int:
+        return self.biome(name) & 255
+
+    def high(self, name) -> int:
+        return self.biomes[name] >> 8
 
 
 def _meet(name: str, props):
@@ -167,7 +176,10 @@ def read(item, shared):
             # (convert already wrote the world values: _LocalPalette.settle)
             data = (shared["encoder"].data(data), pal.remap)
         pal.biomes = {}
-        cols = mcstate.columns(ch, blocks, shared["y_min"], pal.biome)
+        cols = mcstate.columns(ch, blocks, shared["y_min"], pal.low)
+        if cols is not None and len(pal.biomes) > 256:  # a hostile chunk: the high bytes
+            cols = cols | mcstate.columns(ch, blocks, shared["y_min"], pal.high).astype(
+                np.uint16) << 8
         # this chunk's voxels per block name: what the task's counts grew by
         now = [v[2] for v in counts.values()]
         before += [0] * (len(now) - len(before))

@@ -279,3 +279,29 @@ def test_a_chunk_naming_more_than_255_biomes(tmp_path):
     col = np.frombuffer(zlib.decompress(want[0][2]), np.uint8)
     assert len(json.loads(meta(one, "mc_biome_names"))) == 255
     assert (col == 0).any() and (col > 200).any() and (col < 10).any()
+
+
+def test_workers_reading_the_files_meet_external_and_broken_chunks(tmp_path):
+    """A local cluster's workers read the region files themselves (the writer does not
+    read a chunk's sectors to plan): a chunk stored in an .mcc file and one whose
+    length does not fit its sectors are reported as the one-process import does."""
+    from tests.cluster.test_cluster import chunks
+    save = tmp_path / "save"
+    f = mc.write_region(save / "region", {(x, 0): mc.chunk_nbt(x, 0, STONE) for x in range(5)},
+                        external={(1, 0)}) / "r.0.0.mca"
+    raw = bytearray(f.read_bytes())
+    at = int.from_bytes(raw[12:15], "big") * 4096   # chunk (3, 0): its length, too long
+    raw[at:at + 4] = (1 << 30).to_bytes(4, "big")
+    f.write_bytes(bytes(raw))
+    one, two = tmp_path / "one.sqlite", tmp_path / "two.sqlite"
+    with World.create(one, seed=0, generator="empty", loader=False) as w:
+        rep1 = minecraft.import_world(w, save)
+
+    class Near(cluster.Serial):
+        local = True   # as --workers: the workers get the files' paths
+    rep2 = minecraft.Report()
+    with World.create(two, seed=0, generator="empty", loader=False) as w:
+        imports.run(w, Near(), save, report=rep2)
+    assert (rep2.chunks, rep2.external, len(rep2.damaged)) == (3, 1, 1)
+    assert rep2.lines() == rep1.lines() and rep2.damaged == rep1.damaged
+    assert chunks(two) == chunks(one)

@@ -143,7 +143,7 @@ def read(item, shared):
     chunk's bytes itself from shared["files"][name], the region's path."""
     from ..formats import anvil, mcstate, minecraft, nbt
     from ..formats.budget import Budget, Exceeded
-    from ..formats.region import MAX_NBT, Region, RegionError, unpack
+    from ..formats.region import MAX_NBT, External, Region, RegionError, unpack
     chunks, known = item
     out, regions = [], {}
     pal = _LocalPalette(known)
@@ -158,6 +158,9 @@ def read(item, shared):
             ch = anvil.read(unpack(name, cx, cz, kind, body, b), b)
         except Exceeded as e:  # nbt.Hostile too: refuses the import, as in one process
             out.append((("hostile", f"{where}: {e}; import refused"), b.spent(), where))
+            continue
+        except External:   # as the writer settles it when it reads the file itself
+            out.append((("external",), b.spent(), where))
             continue
         except (RegionError, anvil.ChunkError, nbt.NbtError) as e:
             msg = str(e)
@@ -227,13 +230,18 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
             return False
         return key in have if not replace else i < start
 
-    # each chunk: sent to a worker, or settled here (a place the file cannot give)
+    # a local cluster's workers read the region files themselves: the chunks' bytes
+    # then pass through neither this process nor the scheduler
+    near = getattr(pool, "local", False)
+    # each chunk: sent to a worker, or settled here (a place the file cannot give;
+    # workers that read the file themselves find those too, as they read it)
     plan, local = [], {}
     for i, (reg, cx, cz) in enumerate(todo):
         if skip(i, minecraft.to_key(cx, cz)):
             continue
         try:
-            reg.raw(cx, cz)
+            if not near:
+                reg.raw(cx, cz)
         except External:
             local[i] = (("external",), (0, 0), None)
             continue
@@ -254,25 +262,23 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
     report.y_min = y_min if y_min is not None else (
         (-64 if version >= anvil.V_NO_LEVEL else 0) if version is not None else 0)
     shared = {"y_min": report.y_min, "encoder": f.encoder()}
-    # a local cluster's workers read the region files themselves: the chunks' bytes
-    # then pass through neither this process (read once here, to plan) nor the scheduler
-    near = getattr(pool, "local", False)
     if near:
         regs = {id(t[0]): t[0] for t in todo}.values()
         shared["files"] = {r.path.name: str(r.path.resolve()) for r in regs}
     # a chunk is quick here (~2 ms): bigger tasks. Each task costs the writer's process
     # ~4 ms of Dask's own work (submit, scheduler, gather, release): 128 chunks a task
     # took 0.14 s less of it than 64 for 4096 chunks
-    step = task_size(len(plan), pool.size, most=128)
+    size = pool.size  # asked once: each ask is a round trip to the scheduler (~1.5 ms here)
+    step = task_size(len(plan), size, most=128)
     # the first window of tasks goes out before any result is settled (no `known` yet:
     # the writer encodes their data blobs itself), so it is made of smaller tasks
     small = max(1, min(step, 64) // 4)
-    first = 4 * pool.size * small
+    first = 4 * size * small
 
     def tasks():  # the bytes are copied as tasks go out, not all at once
         j = 0
         while j < len(plan):
-            n = small if j < first else tail(len(plan) - j, step, pool.size)
+            n = small if j < first else tail(len(plan) - j, step, size)
             part = plan[j:j + n]
             if near:
                 chunks = tuple((i, (reg.path.name, cx, cz, None, None)) for i, reg, cx, cz in part)

@@ -359,6 +359,7 @@ class _Writer:
         self.world, self.report, self.sig, self.budget = world, report, sig, budget
         self.replace, self.since, self.old = False, None, 0
         self.progress, self.total, self.done = progress, total, 0
+        from ..core.blocks import REGISTRY
         from ..formats import mcstate
         self.palette = colors.parse(world.file.meta)
         self.states = mcstate.States(world.file)
@@ -370,6 +371,11 @@ class _Writer:
         # the task in hand (its `local` list, _ok): each local state's world value and
         # block id (as lists and as `arrays`), each of its block names' report line
         self.task, self.wv, self.bids, self.refs, self.arrays = None, [0], [0], [], None
+        # that task's map with the defaults zeroed (and its bytes) while no block of the
+        # task's states is still undecided (`open`): the chunks after need no settle;
+        # `sent`: what `known` last got from this task; each biome list's world values
+        self.zeroed, self.open, self.sent, self.globs = None, True, None, {}
+        self.color = REGISTRY.id("color")
 
     def settle(self, got) -> None:
         r, (nbytes, tags), where = got
@@ -403,7 +409,7 @@ class _Writer:
         rep = self.report
         if local is not self.task:   # the first chunk of the next task
             self.task, self.wv, self.bids, self.refs = local, [0], [0], []
-            self.arrays = None
+            self.arrays = self.zeroed = self.sent = None
         refs = self.refs
         if len(refs) < nnames:
             blocks = rep.blocks
@@ -428,24 +434,40 @@ class _Writer:
                 else:
                     wv.append(st)
             self.arrays = np.array(wv, np.uint16), np.array(bids, np.uint16)
+            self.zeroed = None
         remap, ids = self.arrays
-        if voxels is not None:   # each block's default state is stored as 0
+        if voxels is None:
+            zb = None
+        elif self.zeroed is not None and not self.open:
+            remap, zb = self.zeroed   # every block of the task's states has its default
+        else:                         # each block's default state is stored as 0
             dflt = self.states.settle(ids, remap, voxels[:len(remap)])
             remap = np.where(remap == dflt[ids], 0, remap).astype(np.uint16)
+            self.open = not self.states.legacy and bool(
+                ((dflt[ids] == 0) & (ids != 0) & (ids != self.color)).any())   # as States.settle
+            zb = remap.tobytes()
+            self.zeroed = remap, zb
         # a value changes once at most: to 0, when its block's default is decided
-        self.known.update(zip([e[0] for e in local[:nloc]], remap[1:].tolist()))
+        if zb is None or self.sent != (nloc, zb):
+            self.known.update(zip([e[0] for e in local[:nloc]], remap[1:].tolist()))
+            self.sent = None if zb is None else (nloc, zb)
         if isinstance(data, tuple):  # encoded by the worker with what was known then
             blob, theirs = data
             if len(theirs) != len(remap):
                 raise RuntimeError(f"{key}: a worker numbered block states otherwise")
-            changed = (theirs != remap) & (voxels[:len(remap)] > 0)
-            if changed.any():
-                blob = self._redefault(key, row, blob, theirs, remap, ids, changed)
+            if theirs.tobytes() != zb:   # (most chunks: the same map)
+                changed = (theirs != remap) & (voxels[:len(remap)] > 0)
+                if changed.any():
+                    blob = self._redefault(key, row, blob, theirs, remap, ids, changed)
         else:
             blob = None if data is None else self.enc.data(remap[data])
         self.batch.append(row[:4] + (blob,) + row[5:])
-        if cols is not None:
-            glob = np.array([self.states.biome(n) for n in bnames], np.uint8)
+        if cols is not None:   # a world biome's index never changes once given
+            names = tuple(bnames)
+            glob = self.globs.get(names)
+            if glob is None:
+                glob = self.globs[names] = np.array([self.states.biome(n) for n in names],
+                                                    np.uint8)
             self.biomes.append((key, glob[cols]))
 
     def _redefault(self, key, row, blob, theirs, remap, ids, changed):

@@ -155,6 +155,16 @@ def session(args, say=_say):
         stack.close()
 
 
+def warm(args) -> None:
+    """Call first in a command (after its argument checks, before its heavy imports):
+    for `--workers`, the server the workers are forked from starts now, so its import
+    of Dask and NumPy runs on another core while this process imports the rest (the
+    session would start it anyway, later). Starts nothing else, changes no file."""
+    if getattr(args, "workers", None) is not None and not getattr(args, "scheduler", None) \
+            and 1 <= args.workers <= 512:
+        _forkserver()
+
+
 def _forkserver() -> None:
     """Start the server the local cluster's workers are forked from now, before this
     process imports Dask (~0.3 s): its own import of Dask and NumPy runs meanwhile on

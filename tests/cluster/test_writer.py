@@ -244,3 +244,64 @@ def test_the_last_tasks_are_smaller():
         end = sum(sizes[big[-1] + 1:]) if big else n
         assert 2 * workers * step - step < end <= 2 * workers * step, (n, workers, sizes)
         assert all(s <= step // 4 for s in sizes[len(big):])
+
+
+def test_a_chunk_naming_more_than_255_biomes(tmp_path):
+    """A hostile chunk whose biome palette names 300 biomes: workers number biomes per
+    chunk (bytes), the world keeps at most 255 (names past them read as entry 0);
+    the columns come out as one process makes them, also for the names past 256 in
+    the chunk (not wrapped to others) and for a later chunk reusing some of them."""
+    names = [f"minecraft:b{i}" for i in range(300)]
+    cells = np.arange(64) % 16 + 240
+    # the columns' tops (cells 48-63): names the world keeps (1-253 with plains first)
+    # and names past its 255 (254-299)
+    cells[48:] = [250, 251, 252, 253, 254, 256, 260, 270, 280, 290, 299, 0, 1, 2, 3, 4]
+    secs = {0: np.full((16, 16, 16), "minecraft:stone", object)}
+    later = {0: (["minecraft:b0", "minecraft:b3", "minecraft:b290"], np.arange(64) % 3)}
+    save = tmp_path / "save"
+    mc.write_region(save / "region", {
+        (0, 0): mc.chunk_nbt(0, 0, secs, biomes={0: (names, cells)}),
+        (1, 0): mc.chunk_nbt(1, 0, secs, biomes=later),
+        (2, 0): mc.chunk_nbt(2, 0, secs, biomes={0: (names[::-1], cells)})})
+    one, two = tmp_path / "one.sqlite", tmp_path / "two.sqlite"
+    with World.create(one, seed=0, generator="empty", loader=False) as w:
+        minecraft.import_world(w, save)
+    with World.create(two, seed=0, generator="empty", loader=False) as w:
+        imports.run(w, cluster.Serial(), save)
+    from tests.cluster.test_cluster import meta
+    assert meta(two, "mc_biome_names") == meta(one, "mc_biome_names")
+    got, want = biomes(two), biomes(one)
+    assert len(want) == 3 and got == want
+    # the oracle itself: one process gave some columns 0 (past the world's 255) and
+    # others their own entries above 200 (names met before the cap)
+    import json
+    import zlib
+    col = np.frombuffer(zlib.decompress(want[0][2]), np.uint8)
+    assert len(json.loads(meta(one, "mc_biome_names"))) == 255
+    assert (col == 0).any() and (col > 200).any() and (col < 10).any()
+
+
+def test_workers_reading_the_files_meet_external_and_broken_chunks(tmp_path):
+    """A local cluster's workers read the region files themselves (the writer does not
+    read a chunk's sectors to plan): a chunk stored in an .mcc file and one whose
+    length does not fit its sectors are reported as the one-process import does."""
+    from tests.cluster.test_cluster import chunks
+    save = tmp_path / "save"
+    f = mc.write_region(save / "region", {(x, 0): mc.chunk_nbt(x, 0, STONE) for x in range(5)},
+                        external={(1, 0)}) / "r.0.0.mca"
+    raw = bytearray(f.read_bytes())
+    at = int.from_bytes(raw[12:15], "big") * 4096   # chunk (3, 0): its length, too long
+    raw[at:at + 4] = (1 << 30).to_bytes(4, "big")
+    f.write_bytes(bytes(raw))
+    one, two = tmp_path / "one.sqlite", tmp_path / "two.sqlite"
+    with World.create(one, seed=0, generator="empty", loader=False) as w:
+        rep1 = minecraft.import_world(w, save)
+
+    class Near(cluster.Serial):
+        local = True   # as --workers: the workers get the files' paths
+    rep2 = minecraft.Report()
+    with World.create(two, seed=0, generator="empty", loader=False) as w:
+        imports.run(w, Near(), save, report=rep2)
+    assert (rep2.chunks, rep2.external, len(rep2.damaged)) == (3, 1, 1)
+    assert rep2.lines() == rep1.lines() and rep2.damaged == rep1.damaged
+    assert chunks(two) == chunks(one)

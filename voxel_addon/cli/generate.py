@@ -25,8 +25,6 @@ def add_parser(sub):
 
 
 def run(args):
-    from ..world import World
-    from ..generation import DEFAULT
     if not 0 <= args.radius <= 256:
         raise VoxelError(f"--radius must be between 0 and 256 (got {args.radius})")
     if not args.world.exists():
@@ -35,6 +33,9 @@ def run(args):
         if not args.world.parent.is_dir():
             raise VoxelError(f"folder {args.world.parent} does not exist")
     cluster.check_writable(args)
+    cluster.warm(args)   # before the imports below (~0.2 s)
+    from ..world import World
+    from ..generation import DEFAULT
     # the cluster first: an unreachable one leaves no file created or changed
     with cluster.session(args) as pool, \
             Writing(args.world, "generation", "generating into") as w:

@@ -64,6 +64,7 @@ def run(args):
         scene = magica.read_file(src)  # a bad file is refused before the world opens
         del scene
     else:
+        cluster.warm(args)   # before the imports below
         from ..formats import minecraft
         minecraft.regions_of(src)
         if args.resources:

@@ -46,10 +46,11 @@ def run(world, pool, keys, backend=None, progress=None) -> tuple[int, int]:
     f, gen = world.file, world.generator
     have = set(f.chunk_keys())
     todo = [k for k in keys if k not in have]
-    step = task_size(len(todo), pool.size)
+    size = pool.size  # asked once: each ask is a round trip to the scheduler
+    step = task_size(len(todo), size)
     tasks, i = [], 0
     while i < len(todo):
-        n = tail(len(todo) - i, step, pool.size)
+        n = tail(len(todo) - i, step, size)
         tasks.append(tuple(todo[i:i + n]))
         i += n
     shared = {"generator": spec(gen, backend), "encoder": f.encoder()}

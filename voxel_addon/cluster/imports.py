@@ -48,7 +48,7 @@ class _LocalPalette:
     (those past the previous chunk's) in the order met, so states, colours and report
     lines join in one-process order. Biomes stay chunk-local (`biomes`, reset per
     chunk): the columns hold them as bytes, and a task (of a modded save) may meet
-    more than 256 biomes where a chunk does not."""
+    more than 256 biomes where a chunk does not (one that does: `low`, `high`)."""
 
     def __init__(self, known=None):
         from types import SimpleNamespace
@@ -96,6 +96,15 @@ class _LocalPalette:
     def biome(self, name) -> int:
         return self.biomes.setdefault(name, len(self.biomes))
 
+    # columns are bytes: a chunk naming more than 256 biomes (hostile) is numbered in
+    # two passes, low bytes then high ones, so that each name keeps its own number
+    # (the writer maps them to the world's, which stops at 255 as in one process)
+    def low(self, name) -> int:
+        return self.biome(name) & 255
+
+    def high(self, name) -> int:
+        return self.biomes[name] >> 8
+
 
 def _meet(name: str, props):
     """A block state's (state key, rgb or None, block id, block, how): the same in
@@ -134,7 +143,7 @@ def read(item, shared):
     chunk's bytes itself from shared["files"][name], the region's path."""
     from ..formats import anvil, mcstate, minecraft, nbt
     from ..formats.budget import Budget, Exceeded
-    from ..formats.region import MAX_NBT, Region, RegionError, unpack
+    from ..formats.region import MAX_NBT, External, Region, RegionError, unpack
     chunks, known = item
     out, regions = [], {}
     pal = _LocalPalette(known)
@@ -149,6 +158,9 @@ def read(item, shared):
             ch = anvil.read(unpack(name, cx, cz, kind, body, b), b)
         except Exceeded as e:  # nbt.Hostile too: refuses the import, as in one process
             out.append((("hostile", f"{where}: {e}; import refused"), b.spent(), where))
+            continue
+        except External:   # as the writer settles it when it reads the file itself
+            out.append((("external",), b.spent(), where))
             continue
         except (RegionError, anvil.ChunkError, nbt.NbtError) as e:
             msg = str(e)
@@ -167,7 +179,10 @@ def read(item, shared):
             # (convert already wrote the world values: _LocalPalette.settle)
             data = (shared["encoder"].data(data), pal.remap)
         pal.biomes = {}
-        cols = mcstate.columns(ch, blocks, shared["y_min"], pal.biome)
+        cols = mcstate.columns(ch, blocks, shared["y_min"], pal.low)
+        if cols is not None and len(pal.biomes) > 256:  # a hostile chunk: the high bytes
+            cols = cols | mcstate.columns(ch, blocks, shared["y_min"], pal.high).astype(
+                np.uint16) << 8
         # this chunk's voxels per block name: what the task's counts grew by
         now = [v[2] for v in counts.values()]
         before += [0] * (len(now) - len(before))
@@ -215,13 +230,18 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
             return False
         return key in have if not replace else i < start
 
-    # each chunk: sent to a worker, or settled here (a place the file cannot give)
+    # a local cluster's workers read the region files themselves: the chunks' bytes
+    # then pass through neither this process nor the scheduler
+    near = getattr(pool, "local", False)
+    # each chunk: sent to a worker, or settled here (a place the file cannot give;
+    # workers that read the file themselves find those too, as they read it)
     plan, local = [], {}
     for i, (reg, cx, cz) in enumerate(todo):
         if skip(i, minecraft.to_key(cx, cz)):
             continue
         try:
-            reg.raw(cx, cz)
+            if not near:
+                reg.raw(cx, cz)
         except External:
             local[i] = (("external",), (0, 0), None)
             continue
@@ -242,25 +262,23 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
     report.y_min = y_min if y_min is not None else (
         (-64 if version >= anvil.V_NO_LEVEL else 0) if version is not None else 0)
     shared = {"y_min": report.y_min, "encoder": f.encoder()}
-    # a local cluster's workers read the region files themselves: the chunks' bytes
-    # then pass through neither this process (read once here, to plan) nor the scheduler
-    near = getattr(pool, "local", False)
     if near:
         regs = {id(t[0]): t[0] for t in todo}.values()
         shared["files"] = {r.path.name: str(r.path.resolve()) for r in regs}
     # a chunk is quick here (~2 ms): bigger tasks. Each task costs the writer's process
     # ~4 ms of Dask's own work (submit, scheduler, gather, release): 128 chunks a task
     # took 0.14 s less of it than 64 for 4096 chunks
-    step = task_size(len(plan), pool.size, most=128)
+    size = pool.size  # asked once: each ask is a round trip to the scheduler (~1.5 ms here)
+    step = task_size(len(plan), size, most=128)
     # the first window of tasks goes out before any result is settled (no `known` yet:
     # the writer encodes their data blobs itself), so it is made of smaller tasks
     small = max(1, min(step, 64) // 4)
-    first = 4 * pool.size * small
+    first = 4 * size * small
 
     def tasks():  # the bytes are copied as tasks go out, not all at once
         j = 0
         while j < len(plan):
-            n = small if j < first else tail(len(plan) - j, step, pool.size)
+            n = small if j < first else tail(len(plan) - j, step, size)
             part = plan[j:j + n]
             if near:
                 chunks = tuple((i, (reg.path.name, cx, cz, None, None)) for i, reg, cx, cz in part)
@@ -341,6 +359,7 @@ class _Writer:
         self.world, self.report, self.sig, self.budget = world, report, sig, budget
         self.replace, self.since, self.old = False, None, 0
         self.progress, self.total, self.done = progress, total, 0
+        from ..core.blocks import REGISTRY
         from ..formats import mcstate
         self.palette = colors.parse(world.file.meta)
         self.states = mcstate.States(world.file)
@@ -352,6 +371,11 @@ class _Writer:
         # the task in hand (its `local` list, _ok): each local state's world value and
         # block id (as lists and as `arrays`), each of its block names' report line
         self.task, self.wv, self.bids, self.refs, self.arrays = None, [0], [0], [], None
+        # that task's map with the defaults zeroed (and its bytes) while no block of the
+        # task's states is still undecided (`open`): the chunks after need no settle;
+        # `sent`: what `known` last got from this task; each biome list's world values
+        self.zeroed, self.open, self.sent, self.globs = None, True, None, {}
+        self.color = REGISTRY.id("color")
 
     def settle(self, got) -> None:
         r, (nbytes, tags), where = got
@@ -385,7 +409,7 @@ class _Writer:
         rep = self.report
         if local is not self.task:   # the first chunk of the next task
             self.task, self.wv, self.bids, self.refs = local, [0], [0], []
-            self.arrays = None
+            self.arrays = self.zeroed = self.sent = None
         refs = self.refs
         if len(refs) < nnames:
             blocks = rep.blocks
@@ -410,24 +434,40 @@ class _Writer:
                 else:
                     wv.append(st)
             self.arrays = np.array(wv, np.uint16), np.array(bids, np.uint16)
+            self.zeroed = None
         remap, ids = self.arrays
-        if voxels is not None:   # each block's default state is stored as 0
+        if voxels is None:
+            zb = None
+        elif self.zeroed is not None and not self.open:
+            remap, zb = self.zeroed   # every block of the task's states has its default
+        else:                         # each block's default state is stored as 0
             dflt = self.states.settle(ids, remap, voxels[:len(remap)])
             remap = np.where(remap == dflt[ids], 0, remap).astype(np.uint16)
+            self.open = not self.states.legacy and bool(
+                ((dflt[ids] == 0) & (ids != 0) & (ids != self.color)).any())   # as States.settle
+            zb = remap.tobytes()
+            self.zeroed = remap, zb
         # a value changes once at most: to 0, when its block's default is decided
-        self.known.update(zip([e[0] for e in local[:nloc]], remap[1:].tolist()))
+        if zb is None or self.sent != (nloc, zb):
+            self.known.update(zip([e[0] for e in local[:nloc]], remap[1:].tolist()))
+            self.sent = None if zb is None else (nloc, zb)
         if isinstance(data, tuple):  # encoded by the worker with what was known then
             blob, theirs = data
             if len(theirs) != len(remap):
                 raise RuntimeError(f"{key}: a worker numbered block states otherwise")
-            changed = (theirs != remap) & (voxels[:len(remap)] > 0)
-            if changed.any():
-                blob = self._redefault(key, row, blob, theirs, remap, ids, changed)
+            if theirs.tobytes() != zb:   # (most chunks: the same map)
+                changed = (theirs != remap) & (voxels[:len(remap)] > 0)
+                if changed.any():
+                    blob = self._redefault(key, row, blob, theirs, remap, ids, changed)
         else:
             blob = None if data is None else self.enc.data(remap[data])
         self.batch.append(row[:4] + (blob,) + row[5:])
-        if cols is not None:
-            glob = np.array([self.states.biome(n) for n in bnames], np.uint8)
+        if cols is not None:   # a world biome's index never changes once given
+            names = tuple(bnames)
+            glob = self.globs.get(names)
+            if glob is None:
+                glob = self.globs[names] = np.array([self.states.biome(n) for n in names],
+                                                    np.uint8)
             self.biomes.append((key, glob[cols]))
 
     def _redefault(self, key, row, blob, theirs, remap, ids, changed):

@@ -26,19 +26,10 @@ R: dict = {}
 
 def run(world):
     import gpu
-    import voxel_addon
     from voxel_addon.blender.liveview import LIVE
-    voxel_addon.register()
+    _, vv = V.aim(world, 16)
     R.update(backend=gpu.platform.backend_type_get(), renderer=gpu.platform.renderer_get(),
              blender=bpy.app.version_string)
-    sc = bpy.context.scene
-    sp = V.area().spaces.active
-    sp.overlay.show_overlays = False
-    sp.clip_end = 2000.0
-    vv = sc.voxel_view
-    sc.voxel.path = world
-    vv.distance, vv.hours = 16, 12.0
-    V.look(30)
     r = next(r for r in V.area().regions if r.type == "WINDOW")
     R["region"] = [r.width, r.height]
     t0 = time.perf_counter()
@@ -74,6 +65,7 @@ def run(world):
     yield 0.3
     V.region_draw_ms(10)  # (Blender's viewport anti-aliasing adds samples until it converges)
     R["blender_region_ms"] = V.region_draw_ms(3)
+    import voxel_addon
     voxel_addon.unregister()
 
 

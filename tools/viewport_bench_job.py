@@ -136,18 +136,25 @@ def still(sc, vv):
     R["blender_cpu_ms"] = region_draw_cpu_ms(3)
 
 
-def run():
+def aim(world, distance):
+    """The add-on registered, the view on WORLD at DISTANCE, noon, overlays off, looking
+    along yaw 30 (Show not ticked yet); returns (scene, its voxel_view)."""
     import voxel_addon
-    from voxel_addon.blender.liveview import LIVE
     voxel_addon.register()
     sc = bpy.context.scene
     sp = area().spaces.active
     sp.overlay.show_overlays = False
     sp.clip_end = 2000.0
     vv = sc.voxel_view
-    sc.voxel.path = WORLD
-    vv.distance, vv.hours = 8, 12.0
+    sc.voxel.path = world
+    vv.distance, vv.hours = distance, 12.0
     look(30)
+    return sc, vv
+
+
+def run():
+    from voxel_addon.blender.liveview import LIVE
+    sc, vv = aim(WORLD, 8)
     r = next(r for r in area().regions if r.type == "WINDOW")
     R["region"] = [r.width, r.height]
     vv.show = True

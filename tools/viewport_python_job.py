@@ -56,19 +56,9 @@ def _took(n):
 
 
 def job(world, n, parts):
-    import bpy
     import viewport_bench_job as V
-    import voxel_addon
     from voxel_addon.blender.liveview import LIVE
-    voxel_addon.register()
-    sc = bpy.context.scene
-    sp = V.area().spaces.active
-    sp.overlay.show_overlays = False
-    sp.clip_end = 2000.0
-    vv = sc.voxel_view
-    sc.voxel.path = world
-    vv.distance, vv.hours = 16, 12.0
-    V.look(30)
+    _, vv = V.aim(world, 16)
     vv.show = True
     yield from V.all_drawn(900)
     R["chunks"] = LIVE.stats["wanted"]
@@ -101,6 +91,7 @@ def job(world, n, parts):
     R["still_parts"] = _took(n)
     for k in ("full", "draft", "orbit", "still"):
         R[f"{k}_ms"] = statistics.median(R[f"{k}_python"])
+    import voxel_addon
     voxel_addon.unregister()
 
 

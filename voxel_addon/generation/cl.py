@@ -79,13 +79,18 @@ class Runner:
             k.set_args(*args)
             cl.enqueue_nd_range_kernel(q, k, (size,), (local,))
             return
-        per = max(1, SMALL_GRID // local)
+        b = self._buf(f"layers{i}", lay.nbytes)
+        cl.enqueue_copy(q, b, lay)
+        # pieces as sub-buffers of one upload (one blocking write per unit, as before);
+        # a sub-buffer starts at a multiple of the device's base address alignment
+        step = max(1, opencl.context()[2].mem_base_addr_align // 8 // lay.itemsize)
+        per = max(step, SMALL_GRID // local // step * step)
         for j in range(0, len(lay), per):
-            part = lay[j:j + per]
-            args[at] = b = self._buf(f"layers{i}.{j // per}", part.nbytes)
-            cl.enqueue_copy(q, b, part)
+            m = min(per, len(lay) - j)
+            args[at] = b if m == len(lay) else b.get_sub_region(j * lay.itemsize,
+                                                                 m * lay.itemsize)
             k.set_args(*args)
-            cl.enqueue_nd_range_kernel(q, k, (len(part) * local,), (local,))
+            cl.enqueue_nd_range_kernel(q, k, (m * local,), (local,))
 
     def _levels(self, u, fields, n, tops):
         """(chunk, level) pairs of a lattice unit: the levels below each chunk's top."""

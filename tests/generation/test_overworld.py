@@ -46,6 +46,31 @@ def test_backends_identical(cl_device, seed, version):
         assert np.array_equal(x, y), f"seed {seed} chunk {k}: {(x != y).sum()} voxels differ"
 
 
+def test_wide_launches_go_in_small_grid_pieces(cl_device, monkeypatch):
+    """A layer-indexed unit wider than pocl's small grid launches in pieces
+    (generation/cl.Runner._launch: a stream batch of 30+ chunks compiled another
+    work-group variant of each, issue 28); the pieces make NumPy's values."""
+    import pyopencl as cl
+    from voxel_addon.generation import cl as gcl
+    keys = _keys(5, 4) + [(0, 0)]
+    a = make_generator("overworld", 5, None, "numpy").generate(keys)
+    real, sizes = cl.enqueue_nd_range_kernel, []
+
+    def spy(q, k, size, local, *args, **kw):
+        sizes.append(size[0])
+        return real(q, k, size, local, *args, **kw)
+    monkeypatch.setattr(cl, "enqueue_nd_range_kernel", spy)
+    g = make_generator("overworld", 5, None, "opencl")
+    g.generate(keys)  # the kernels' first launches outside the count
+    whole = len(sizes)
+    sizes.clear()
+    monkeypatch.setattr(gcl, "SMALL_GRID", 5000)
+    b = g.generate(keys)
+    assert len(sizes) > whole, (len(sizes), whole)  # some units went in pieces
+    for k, x, y in zip(keys, a, b):
+        assert np.array_equal(x, y), f"chunk {k}: {(x != y).sum()} voxels differ"
+
+
 def test_params_change_the_world_and_still_agree(cl_device):
     p = {"sea_level": 70, "caves": 0, "trees": 2.0}
     keys = _keys(11, 6)

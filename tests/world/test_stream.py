@@ -260,3 +260,36 @@ def test_reload_meshes_with_a_one_voxel_ring_equal_one_shot(world_path, monkeypa
     assert not solves  # every batch only meshed (the light came from the file)
     area, meshes = one_shot(world_path, 8, 8, 2)
     check_equal(got, area, meshes)
+
+
+def test_past_the_first_chunks_the_stream_waits_for_every_kernel(world_path, monkeypatch):
+    """While a warm-up runs (here one that has built the generator's kernels and not
+    meshing's), the stream makes only the chunks next to the view (stream.FIRST: the
+    first picture, NumPy); the rest once every kernel is built (issue 28: OpenCL
+    generation with NumPy meshing cost more CPU and a later whole view). The payloads
+    are the one-shot path's."""
+    import threading
+    from voxel_addon import opencl
+    from voxel_addon.world import stream
+    hold = threading.Event()
+    t = threading.Thread(target=hold.wait, daemon=True)
+    t.start()
+    monkeypatch.setattr(opencl, "_warm", {**dict.fromkeys(opencl._warm), "thread": t,
+                                          "ready": {"generation": time.monotonic()}})
+    try:
+        with World.create(world_path, seed=SEED) as w:
+            with Stream(w, 3) as s:
+                s.set_view(8.0, 8.0)
+                got, end = {}, time.monotonic() + 3.0
+                while time.monotonic() < end:
+                    got.update((p.key, p) for p in s.drain(0.004)[0])
+                    time.sleep(0.01)
+                assert got and max(max(abs(x), abs(y)) for x, y in got) < stream.FIRST + 1
+                hold.set()
+                t.join()
+                got.update(collect(s))
+    finally:
+        hold.set()
+    assert len(got) == 49
+    area, meshes = one_shot(world_path, 8.0, 8.0, 3)
+    check_equal(got, area, meshes)

@@ -12,6 +12,8 @@ from .clsource import (LAYER, LOCAL2D, OPTIONS, VLANES, VLOCAL, _Gen, _pad, g3_r
                        vectorizable)
 from .lower import lattice_dims, levels
 
+SMALL_GRID = 65535  # work items: pocl's small-grid work-group variant (Runner._launch)
+
 
 class Runner:
     """A compiled program; the OpenCL twin of execute.Runner (the same calls)."""
@@ -64,6 +66,31 @@ class Runner:
                 return zmax
             tops[u.top] = zmax
         return tops[u.top]
+
+    def _launch(self, i, k, args, size, local, lay, at):
+        """Kernel K over SIZE work items; a layer-indexed unit (LAY: one entry per
+        work-group, its buffer at args[AT]) in pieces of at most SMALL_GRID items:
+        pocl compiles another work-group variant for a wider grid (~0.4-0.5 s of the
+        first 30-chunk batch's CPU, issue 28), and the warm-up's 3 x 3 chunks compile
+        only this one. A group reads only its own layers entry: same values."""
+        import pyopencl as cl
+        q = self.queue
+        if lay is None:
+            k.set_args(*args)
+            cl.enqueue_nd_range_kernel(q, k, (size,), (local,))
+            return
+        b = self._buf(f"layers{i}", lay.nbytes)
+        cl.enqueue_copy(q, b, lay)
+        # pieces as sub-buffers of one upload (one blocking write per unit, as before);
+        # a sub-buffer starts at a multiple of the device's base address alignment
+        step = max(1, opencl.context()[2].mem_base_addr_align // 8 // lay.itemsize)
+        per = max(step, SMALL_GRID // local // step * step)
+        for j in range(0, len(lay), per):
+            m = min(per, len(lay) - j)
+            args[at] = b if m == len(lay) else b.get_sub_region(j * lay.itemsize,
+                                                                 m * lay.itemsize)
+            k.set_args(*args)
+            cl.enqueue_nd_range_kernel(q, k, (m * local,), (local,))
 
     def _levels(self, u, fields, n, tops):
         """(chunk, level) pairs of a lattice unit: the levels below each chunk's top."""
@@ -120,10 +147,8 @@ class Runner:
                 pts = LAYER if u.kind == "gc" else g3_row(u.cell)
                 local = pts if u.kind == "gc" or not self._vec[i] else pts // VLANES
                 size = len(lay) * local
-                blay = self._buf(f"layers{i}", lay.nbytes)
-                if len(lay):
-                    cl.enqueue_copy(q, blay, lay)
-                args.append(blay)
+                at = len(args)  # the layers' buffer: _launch fills it per piece
+                args.append(None)
                 for name in u.outs:
                     fields[name] = (self._buf(f"f_{name}", 4 * n * nk * pts), None)
                     args.append(fields[name][0])
@@ -135,25 +160,22 @@ class Runner:
                     args.append(fields[name][0])
                 if self._vec[i]:  # _GenV.kernel_2d: 8 items per work-item
                     size = _pad(n * (_pad(w * w, VLANES) // VLANES), LOCAL2D)
-                local = LOCAL2D
+                local, lay, at = LOCAL2D, None, None
             else:
                 lay = self._layers(u, fields, n, tops)
                 prev = blocks
                 blocks = self._buf(f"blocks{nb}", 2 * n * C.VOLUME)
                 nb ^= 1
                 cl.enqueue_fill_buffer(q, blocks, np.uint16(0), 0, 2 * n * C.VOLUME)
-                blay = self._buf(f"layers{i}", lay.nbytes)
-                if len(lay):
-                    cl.enqueue_copy(q, blay, lay)
-                args += [blay, blocks, prev if prev is not None else self._buf("dummy", 2)]
+                at = len(args)
+                args += [None, blocks, prev if prev is not None else self._buf("dummy", 2)]
                 local = VLOCAL if self._vec[i] else LAYER
                 size = len(lay) * local
             args += [fields[name][0] for name in self._reads[i]]
             if size == 0:
                 continue
-            k.set_args(*args)
             t0 = time.perf_counter()
-            cl.enqueue_nd_range_kernel(q, k, (size,), (local,))
+            self._launch(i, k, args, size, local, lay, at)
             if self.timings is not None:
                 q.finish()
                 key = f"unit{i} {u.kind} {'+'.join(u.outs) or 'blocks'}"

@@ -292,11 +292,14 @@ class Stream:
             far = u > 0
             u[far] *= 1.5 - 0.5 * (vx[far] * d[0] + vy[far] * d[1]) / u[far]  # behind: x2
         i = int(np.argmin(u))
-        if u[i] >= FIRST and self.backends is None and opencl.warming("generation"):
+        if u[i] >= FIRST and self.backends is None and opencl.warming():
             # the OpenCL kernels still build: NumPy made the first picture (the chunks
             # next to the view); more NumPy now takes the CPU from the build (one NumPy
             # worker during the warm-up: the build took 2x longer, the whole view came
-            # later; niced to 19 it made few chunks and held the GIL from the others)
+            # later; niced to 19 it made few chunks and held the GIL from the others).
+            # Meshing's too: batches with OpenCL generation but NumPy meshing while
+            # meshing's kernels built cost ~1 s more CPU and the whole view came later
+            # (issue 28, blender/README)
             return None
         t = max(1, self.tile // (4 if u[i] < FIRST else 2)) if u[i] < NEAR else self.tile
         r = self.distance

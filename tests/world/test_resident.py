@@ -176,3 +176,57 @@ def test_save_encodes_packed_chunks_as_their_arrays(tmp_path, monkeypatch):
         for k in lit:
             c = w.chunks[k]
             assert np.array_equal(c.blocks, want[k][0]) and np.array_equal(c.light, want[k][1]), k
+
+
+def test_batch_copies_blocks_outside_the_lock_and_drops_a_torn_copy(tmp_path, monkeypatch):
+    """A batch's snapshot copies blocks without the world's lock (issue 29: the other
+    worker waited on it): a block written during the copy, in place, by another
+    thread, leaves no light or mesh made from the torn copy on its 3x3; the other
+    chunks' are made."""
+    import threading
+    with World.create(tmp_path / "w.sqlite", seed=7, backend="numpy") as w:
+        w.load(build.keys_of(-2, -2, 3, 3))
+        real, hit = C.Chunk.blocks_into, []
+
+        def racing(c, *a, **kw):
+            if c.key == (0, 0) and not hit:
+                def writer():  # (needs the lock: held by the copy, it would wait 5 s)
+                    hit.append(w.set_block(3, 3, 250, "stone"))
+                t = threading.Thread(target=writer)
+                t.start()
+                t.join(5)
+                assert hit, "the snapshot held the world's lock while copying"
+            return real(c, *a, **kw)
+        monkeypatch.setattr(C.Chunk, "blocks_into", racing)
+        got = {p.key for p in build.light_and_mesh(w, -1, -1, 2, 2,
+                                                    backends_=("numpy", "numpy"))}
+        assert hit and got == set()  # every chunk of the 3x3 around (0, 0)
+        monkeypatch.setattr(C.Chunk, "blocks_into", real)
+        got = {p.key for p in build.light_and_mesh(w, -1, -1, 2, 2,
+                                                    backends_=("numpy", "numpy"))}
+        assert got == set(build.keys_of(-1, -1, 2, 2))
+
+
+def test_compact_packs_light_outside_the_lock_and_keeps_light_set_meanwhile(tmp_path,
+                                                                             monkeypatch):
+    """build.compact (a stream batch's) packs light without the world's lock; light
+    set meanwhile (an edit) is the one kept, never the stale pack."""
+    with World.create(tmp_path / "w.sqlite", seed=7, backend="numpy") as w:
+        build.light_and_mesh(w, -1, -1, 2, 2, backends_=("numpy", "numpy"))
+        keys = build.keys_of(-1, -1, 2, 2)
+        old = {k: w.chunks[k].light for k in keys}
+        new = C.empty()
+        new[:] = 7
+        real = C.pack
+
+        def racing(a):
+            if a is old[(0, 0)]:  # an edit sets (0, 0)'s light while it is packed
+                w.chunks[(0, 0)].light = new
+            return real(a)
+        monkeypatch.setattr(C, "pack", racing)
+        build.compact(w, keys)
+        monkeypatch.setattr(C, "pack", real)
+        for k in keys:
+            c = w.chunks[k]
+            assert c._light is None and c._lpack is not None, k
+            assert np.array_equal(c.light, new if k == (0, 0) else old[k]), k

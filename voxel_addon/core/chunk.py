@@ -241,6 +241,20 @@ class Chunk:
             return
         self._light, self._lpack = value, None
 
+    def hot_light(self) -> np.ndarray | None:
+        """The light array compact() would pack (None: none, or packed already):
+        pack it outside the world's lock and hand the result to light_packed()."""
+        return self._light
+
+    def light_packed(self, a: np.ndarray, p: "Packed") -> bool:
+        """Keep P (pack(a), a from hot_light()) in place of the light array when it
+        is still A (call with the world's lock held: light arrays are replaced, never
+        written in place once handed out); whether it did."""
+        if self._light is not a:
+            return False
+        self._lpack, self._light = p, None
+        return True
+
     def compact(self) -> None:
         """Pack the light, and the blocks when cold (not read or set for HOT_S
         seconds). Call with the world's lock held."""

@@ -112,24 +112,26 @@ def snapshot(world, cx0: int, cy0: int, cx1: int, cy1: int, data: bool = False,
     out = C.empty(width=s * (cx1 - cx0) - 2 * o, depth=s * (cy1 - cy0) - 2 * o)
     w, h = out.shape[:2]
     small = None
-    ticks = {}
+    keys = keys_of(cx0, cy0, cx1, cy1)
     with world.locked():
-        for k in keys_of(cx0, cy0, cx1, cy1):
-            ticks[k] = world.bver.get(k, 0)
-            c = world.chunks.get(k)
-            if c is None:
-                continue
-            x, y = (k[0] - cx0) * s - o, (k[1] - cy0) * s - o  # chunk origin in `out`
-            xa, ya = max(x, 0), max(y, 0)
-            xs, ys = slice(xa - x, min(x + s, w) - x), slice(ya - y, min(y + s, h) - y)
-            win = (slice(xa, x + xs.stop), slice(ya, y + ys.stop))
-            whole = xs == _ALL16 and ys == _ALL16
-            # a cold chunk decodes into the window and stays packed (issue 29)
-            c.blocks_into(out[win], _ALL if whole else xs, _ALL if whole else ys, 0, C.HEIGHT)
-            if data and c.data is not None:
-                if small is None:
-                    small = np.zeros_like(out)
-                small[win] = c.data[xs, ys]
+        ticks = {k: world.bver.get(k, 0) for k in keys}
+        got = [(k, c, c.data) for k in keys for c in (world.chunks.get(k),) if c is not None]
+    # copied outside the lock (issue 29: a batch's copy held it ~5 ms, the other
+    # worker waiting): a block write after the ticks above changes its chunk's tick,
+    # so store() drops what a torn copy made; packed blocks are never changed, and a
+    # pack racing the copy leaves the same values
+    for k, c, d in got:
+        x, y = (k[0] - cx0) * s - o, (k[1] - cy0) * s - o  # chunk origin in `out`
+        xa, ya = max(x, 0), max(y, 0)
+        xs, ys = slice(xa - x, min(x + s, w) - x), slice(ya - y, min(y + s, h) - y)
+        win = (slice(xa, x + xs.stop), slice(ya, y + ys.stop))
+        whole = xs == _ALL16 and ys == _ALL16
+        # a cold chunk decodes into the window and stays packed (issue 29)
+        c.blocks_into(out[win], _ALL if whole else xs, _ALL if whole else ys, 0, C.HEIGHT)
+        if data and d is not None:
+            if small is None:
+                small = np.zeros_like(out)
+            small[win] = d[xs, ys]
     return (out, ticks, small) if data else (out, ticks)
 
 
@@ -198,6 +200,21 @@ def pack_loaded(world, keys) -> int:
     done = [(c, a, C.pack(a)) for c, a in todo]
     with world.locked():
         return sum(c.packed(a, p) for c, a, p in done)
+
+
+def compact(world, keys) -> None:
+    """Chunk.compact() of the chunks of KEYS, their light packed outside the world's
+    lock (issue 29: LZ4 of a batch's light held it ~3 ms, the other worker waiting)."""
+    with world.locked():
+        todo = [(c, a) for c in map(world.chunks.get, keys) if c is not None
+                for a in (c.hot_light(),) if a is not None]
+    done = [(c, a, C.pack(a)) for c, a in todo]
+    with world.locked():
+        for c, a, p in done:
+            c.light_packed(a, p)  # (light set meanwhile: packed by this compact())
+        for c in map(world.chunks.get, keys):
+            if c is not None:
+                c.compact()
 
 
 def store(world, cx0, cy0, cx1, cy1, lit, meshes, ticks) -> list[Payload]:

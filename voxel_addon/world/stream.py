@@ -324,11 +324,8 @@ class Stream:
                 self.first_backends = backends
         from ..core import trace
         # compact now: _maintain's sweep over all chunks is throttled
-        with trace.span("batch.compact"), world.locked():
-            for p in done:
-                c = world.chunks.get(p.key)
-                if c is not None:
-                    c.compact()
+        with trace.span("batch.compact"):
+            build.compact(world, [p.key for p in done])
         self.offer(done)
 
     def _maintain(self, cx, cy) -> None:

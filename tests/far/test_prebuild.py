@@ -75,3 +75,24 @@ def test_the_world_warm_up_starts_the_far_build_at_once(fresh, tmp_path, monkeyp
             gate.set()
             opencl._warm["thread"].join(120)
     assert not build.prebuild(object())  # a generator without a far surface
+
+
+def test_far_tiles_alone_ask_for_a_redraw(tmp_path):
+    """Feed.far_news: far tiles made while the near stream has nothing new are worth a
+    redraw of their own (the ring's last ones, or FAR_NEWS of them); drained: none."""
+    from voxel_addon.blender.liveview import feed as F
+    from voxel_addon.world import World
+    with World.create(tmp_path / "w.sqlite", seed=7) as w:
+        f = F.Feed(str(tmp_path / "w.sqlite"), w, 2)
+        try:
+            assert not f.far_news()  # no far ring
+            f.set_far(8)
+            f._at = (8.0, 8.0)
+            f._far.set_view(8.0, 8.0, 8, 2)
+            assert f._far.wait_ready(120)
+            w_, r = f._far.counts
+            assert 0 < w_ < F.FAR_NEWS and r == w_ and f.far_news()  # the ring's last
+            f._update_far(1e9)
+            assert not f.far_news()  # taken in
+        finally:
+            f.close()

@@ -43,6 +43,7 @@ class PassGenerator(Generator):
         # work-group build in front of (or behind) the near view's kernels
         self._surf_building = self._surf_held = False
         self._surf_built = threading.Condition(self._surf_lock)
+        self._surf_run: dict = {}  # backend -> the lock its runner runs under
 
     def program(self):
         raise NotImplementedError
@@ -196,6 +197,10 @@ class PassGenerator(Generator):
                 else:
                     from .execute import Runner
                 run = self._surf[be] = Runner(units, 1)
+            # each runner alone (its kernel objects and buffers are not re-entrant),
+            # but a NumPy far tile need not wait for warm_surface's first OpenCL launch
+            lock = self._surf_run.setdefault(be, threading.Lock())
+        with lock:
             step = self.surface_batch[be]
             parts = [run.at(xy[i:i + step], self.seed32, self.perm, want)
                      for i in range(0, len(xy), step)]

@@ -71,6 +71,8 @@ def run(out: Path, world: str, far: int):
     R["far_triangles"] = pane.r.far.triangles
     R["far_gpu_mb"] = pane.r.far.nbytes / 2 ** 20
     R["blender"] = bpy.app.version_string
+    import gpu
+    R["backend"] = gpu.platform.backend_type_get()
     if os.environ.get("VOXEL_BENCH_FRAMES", "1") == "0":  # the cold horizon alone
         vv.show = False
         return

@@ -163,6 +163,10 @@ def _gui_cold(ctx, world, far):
     import shutil
     from . import gui
     copy, cache = ctx.tmp / f"farcold{far}.sqlite", ctx.tmp / f"farcold{far}_kernels"
+    # cold means cold: no kernels, and no WAL of an earlier run (its far tiles) beside
+    shutil.rmtree(cache, ignore_errors=True)
+    for extra in ("-wal", "-shm"):
+        copy.with_name(copy.name + extra).unlink(missing_ok=True)
     shutil.copy(world, copy)
     out = ctx.tmp / f"farcold{far}.json"
     ctx.say(f"Blender GUI: Show with far {far}, empty kernel cache")

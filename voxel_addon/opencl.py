@@ -187,12 +187,16 @@ def program(name: str, options: tuple[str, ...] = ()):
 
 
 @lru_cache(maxsize=16)
-def build(source: str, options: tuple[str, ...] = ()):
-    """Build generated source (e.g. a compiled generator program) once per process."""
+def build(source: str, options: tuple[str, ...] = (), alone: bool = False):
+    """Build generated source (e.g. a compiled generator program) once per process.
+    ALONE: without the lock that serialises builds (a background build nothing on
+    the way to the first picture waits for, e.g. the far surface's: the near view's
+    kernels must not queue behind its seconds; pocl builds programs concurrently)."""
     import pyopencl as cl
+    from contextlib import nullcontext
     from .core import trace
     ctx, _, _ = context()
-    with _lock, trace.span("cl.build", chars=len(source)):
+    with nullcontext() if alone else _lock, trace.span("cl.build", chars=len(source)):
         return cl.Program(ctx, source).build(options=list(options))
 
 

@@ -130,6 +130,7 @@ def _gui(ctx):
                        capture_output=True, text=True)
     if r.returncode:
         raise RuntimeError(r.stderr[-2000:])
+    yield from _gui_cold(ctx, world, 64 if ctx.quick else 128)
     for far in ((64,) if ctx.quick else (128, 256)):
         copy = ctx.tmp / f"fargui{far}.sqlite"
         shutil.copy(world, copy)
@@ -153,6 +154,37 @@ def _gui(ctx):
                    f"every redraw, GPU finished (fastest of 5 interleaved); {what}")
             yield (f"far_gui_frame_{q}_ms_far{far}", b, "ms", f"the same with far {far}")
             yield (f"far_gui_frame_{q}_ratio{far}", b / a, "x", "far on / off (target <= 1.3)")
+
+
+def _gui_cold(ctx, world, far):
+    """Show to horizon as a fresh install meets it (issue 28: far 128 <= 6 s): an empty
+    kernel cache (pocl's and pyopencl's), the same file; the far tiles alone (every
+    one drawn) and with every chunk, wall and process CPU; no frame rows."""
+    import shutil
+    from . import gui
+    copy, cache = ctx.tmp / f"farcold{far}.sqlite", ctx.tmp / f"farcold{far}_kernels"
+    # cold means cold: no kernels, and no WAL of an earlier run (its far tiles) beside
+    shutil.rmtree(cache, ignore_errors=True)
+    for extra in ("-wal", "-shm"):
+        copy.with_name(copy.name + extra).unlink(missing_ok=True)
+    shutil.copy(world, copy)
+    out = ctx.tmp / f"farcold{far}.json"
+    ctx.say(f"Blender GUI: Show with far {far}, empty kernel cache")
+    env = {"POCL_CACHE_DIR": str(cache / "pocl"), "PYOPENCL_CACHE_DIR": str(cache / "pyopencl"),
+           "VOXEL_TRACE": "1", "VOXEL_BENCH_FRAMES": "0"}
+    R = gui.run_job("far", [out, copy, far], out, ctx.tmp / f"farcold{far}.log",
+                    timeout=1800, simulate=False, gpu="opengl", env=env)
+    if not R.get("ok"):
+        raise RuntimeError(R.get("error"))
+    what = f"Blender {R['blender']} {R['backend']}, distance 16, load {R['load']:.1f}"
+    yield (f"far_gui_cold_far_drawn{far}_s", R["far_s"], "s",
+           f"fresh install (empty kernel cache): tick Show (far {far}) -> every far tile drawn "
+           f"({R['tiles']}; the first after {R['first_far_s']:.1f} s); {what}; goal 6 s")
+    yield (f"far_gui_cold_far_drawn{far}_cpu_s", R["far_cpu_s"], "s",
+           "the same, process CPU (every thread: pocl's builds, llvmpipe's drawing)")
+    yield (f"far_gui_cold_horizon{far}_s", R["horizon_s"], "s",
+           f"the same -> every far tile and every chunk drawn ({R['near_s']:.1f} s to the "
+           f"chunks; process CPU {R['horizon_cpu_s']:.1f} s)")
 
 
 def run(ctx):

@@ -114,6 +114,12 @@ class Builder:
         with self._lock:
             return len(self._wanted), sum(1 for k in self._wanted if k in self._emitted)
 
+    @property
+    def queued(self) -> int:
+        """Meshes made and not drained yet."""
+        with self._lock:
+            return len(self._ready)
+
     def wait_ready(self, timeout: float = 120.0) -> bool:
         end = time.monotonic() + timeout
         while time.monotonic() < end:
@@ -189,8 +195,14 @@ class Builder:
         return None if got is None else got[0]
 
     def _do(self, key) -> None:
+        from ..core import trace
+        with trace.span("far.tile", key=key) as kw:
+            self._do_tile(key, kw)
+
+    def _do_tile(self, key, kw) -> None:
         t0 = time.perf_counter()
         a = None if key in self._stale else self.store.tile(key, grid.N)
+        kw["built"] = a is None
         if a is None:
             if self._gen_lock is None:
                 a, n = tiles.build(key, self.store, self.generator, self._read_chunk)

@@ -26,7 +26,8 @@ class Runner:
         # in the background, run on 16384-column batches) inlines them: clsource.called
         self.src = source(units, self.size, inline=self.size != C.SIZE)
         self.ctx, self.queue, _ = opencl.context()
-        prog = opencl.build(self.src, OPTIONS)
+        # the far surface's builds alone (world.build.warm starts it as a world opens)
+        prog = opencl.build(self.src, OPTIONS, alone=self.size != C.SIZE)
         self.kernels = [cl.Kernel(prog, f"unit{i}") for i in range(len(units))]
         self.gen = _Gen(units, self.size)
         # fields each unit reads: walking the expression graph per batch cost ~5 % of

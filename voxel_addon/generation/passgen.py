@@ -37,6 +37,13 @@ class PassGenerator(Generator):
         self._runner = None
         self._surf = None
         self._surf_lock = threading.Lock()
+        # prebuild_surface: its build runs (_surf_building), and until warm_surface
+        # launched the kernels once (_surf_held) surface() runs NumPy's twin: pocl's one
+        # in-order queue would put the far batches and their first launch's
+        # work-group build in front of (or behind) the near view's kernels
+        self._surf_building = self._surf_held = False
+        self._surf_built = threading.Condition(self._surf_lock)
+        self._surf_run: dict = {}  # backend -> the lock its runner runs under
 
     def program(self):
         raise NotImplementedError
@@ -132,7 +139,39 @@ class PassGenerator(Generator):
         # a whole batch: pocl's work-group code for a small grid was not reused for a
         # batch's (the first far batch after a 64-column warm-up still took ~1.1 s)
         n = self.surface_batch["opencl"]
-        return self._surface(np.stack([np.arange(n), np.zeros(n, np.int64)], 1), "opencl") is not None
+        try:
+            return self._surface(np.stack([np.arange(n), np.zeros(n, np.int64)], 1),
+                                 "opencl") is not None
+        finally:
+            self._surf_held = False  # launched (or failed: surface() then raises it)
+
+    def prebuild_surface(self) -> bool:
+        """Build surface()'s OpenCL program and kernel objects now, launching nothing
+        (world.build.warm, as a world opens: the build takes no queue and no build
+        lock, so the near view's kernels never wait behind it); surface() calls asked
+        for no backend run NumPy (the same values) until warm_surface has launched it
+        once (world.build.warm's later part, when the streams have all they want).
+        False when there is nothing to build (no far surface, no device, built
+        already)."""
+        want = self.surface_wants()
+        if self.surface_fields[0] not in want or not opencl.available():
+            return False
+        with self._surf_lock:
+            if self._surf_building or (self._surf or {}).get("opencl") is not None:
+                return False
+            self._surf_building = self._surf_held = True
+        try:
+            from ..core import trace
+            from .cl import Runner
+            with trace.span("far.prebuild"):
+                run = Runner(prune(self.units, want), 1)
+            with self._surf_lock:
+                self._surf = {**(self._surf or {}), "opencl": run}
+        finally:
+            with self._surf_lock:
+                self._surf_building = False
+                self._surf_built.notify_all()
+        return True
 
     def _surface(self, xy, backend):
         want = self.surface_wants()
@@ -144,6 +183,13 @@ class PassGenerator(Generator):
             if self._surf is None:
                 self._surf = {}
             run = self._surf.get(be)
+            if be == "opencl" and backend is None and self._surf_held:
+                be = "numpy"  # built in the background, not launched yet: NumPy's twin
+                run = self._surf.get(be)
+            elif run is None and be == "opencl" and self._surf_building:
+                # asked for OpenCL by name (warm_surface): that build, not another
+                self._surf_built.wait_for(lambda: not self._surf_building)
+                run = self._surf.get(be)
             if run is None:
                 units = prune(self.units, want)
                 if be == "opencl":
@@ -151,6 +197,10 @@ class PassGenerator(Generator):
                 else:
                     from .execute import Runner
                 run = self._surf[be] = Runner(units, 1)
+            # each runner alone (its kernel objects and buffers are not re-entrant),
+            # but a NumPy far tile need not wait for warm_surface's first OpenCL launch
+            lock = self._surf_run.setdefault(be, threading.Lock())
+        with lock:
             step = self.surface_batch[be]
             parts = [run.at(xy[i:i + step], self.seed32, self.perm, want)
                      for i in range(0, len(xy), step)]

@@ -86,7 +86,31 @@ def warm(world, opened: bool = False) -> bool:
     started = opencl.warm(job, later=later if surface is not None else None)
     if started:
         _warmed.add(g)
+        prebuild(g)
     return started
+
+
+def prebuild(g) -> bool:
+    """Build the far surface's OpenCL program now, in a thread of its own at a lower
+    priority (it takes leftover CPU): a separate program whose build takes neither the
+    queue nor the build lock, so the near view's kernels do not wait for it, and the
+    far ring's tiles run on it seconds after a world opens instead of after the
+    streams have all they want (issue 28: far 128 to the horizon). Surface calls run
+    NumPy meanwhile. False when the generator has no far surface."""
+    fn = getattr(g, "prebuild_surface", None)
+    if fn is None:
+        return False
+    from .. import opencl
+
+    def run():
+        opencl._yield_cpu()
+        try:
+            fn()
+        except Exception:  # noqa: BLE001 - surface() builds it (and raises) when used
+            pass
+
+    threading.Thread(target=run, daemon=True, name="voxel-far-prebuild").start()
+    return True
 
 
 LATER_WAIT_S = 60.0  # the far prebuild waits at most this long for busy streams

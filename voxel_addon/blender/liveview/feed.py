@@ -5,6 +5,10 @@ from __future__ import annotations
 
 import math
 
+# far tiles made that are worth a redraw while the near stream has nothing new (a
+# frame holds the GIL ~0.3 s on llvmpipe: the ring of far 128, 208 tiles, in ~4)
+FAR_NEWS = 48
+
 
 class Feed:
     def __init__(self, path, world, distance):
@@ -63,6 +67,16 @@ class Feed:
             raise b.error
         self.far_wanted, done = b.counts
         return done < self.far_wanted or bool(ready)
+
+    def far_news(self) -> bool:
+        """Far tiles worth a redraw of their own: FAR_NEWS made, or the ring's last
+        ones (the view's redraws otherwise wait for new chunks: far tiles made while
+        the near stream waits, e.g. for a fresh install's kernels, would wait too)."""
+        b = self._far
+        if b is None or not b.queued:
+            return False
+        w, r = b.counts
+        return b.queued >= FAR_NEWS or r >= w
 
     def update(self, at, direction, budget) -> bool:
         """Take in what is ready within budget seconds (at: (x, y) of the view point, or

@@ -383,7 +383,7 @@ class LiveView:
             return False
         if any(len(p.versions) < len(f.chunks) for p in self.panes.values()):
             return False  # a window has not drawn all we hold yet
-        return not f.stream.queued
+        return not f.stream.queued and not f.far_news()
 
     def _panel_redraw(self) -> None:
         import bpy

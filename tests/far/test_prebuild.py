@@ -1,0 +1,98 @@
+"""The far surface's OpenCL program built in the background as a world opens (issue 28:
+far 128 to the horizon cold): far tiles run on NumPy's twin meanwhile (the same
+values), the build takes neither the build lock nor the queue, and the world's
+warm-up starts it at once, not after the stream's kernels and streams."""
+from __future__ import annotations
+
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from voxel_addon import opencl
+from voxel_addon.generation import make_generator
+
+XY = [(x * 37 - 500, 11 * x - 90) for x in range(60)]
+
+
+@pytest.fixture
+def fresh(monkeypatch, cl_device):
+    """A process that has not warmed up yet (warm runs once per process)."""
+    monkeypatch.setattr(opencl, "_warm", dict.fromkeys(opencl._warm))
+
+
+def test_numpy_while_the_far_program_builds_then_its_kernels(fresh):
+    g = make_generator("overworld", 7)  # no backend asked: OpenCL once built
+    assert g.backend_used == "opencl"
+    g._surf_building = g._surf_held = True  # as while prebuild_surface's build runs
+    during = g.surface(XY)
+    assert "opencl" not in g._surf and "numpy" in g._surf  # no build of its own
+    g._surf_building = g._surf_held = False
+    assert g.prebuild_surface()
+    run = g._surf["opencl"]
+    assert not g.prebuild_surface()  # built: nothing more to do
+    held = g.surface(XY)  # built, not launched yet (the near view's kernels first)
+    assert g._surf["opencl"] is run and g._surf_held
+    assert g.warm_surface() and not g._surf_held  # launched once: OpenCL from now on
+    after = g.surface(XY)
+    assert g._surf["opencl"] is run  # the prebuild's kernel objects
+    ref = make_generator("overworld", 7, None, "numpy").surface(XY)
+    for k in ref:
+        for got in (during, held, after):
+            assert np.array_equal(got[k], ref[k]), k
+
+
+def test_the_far_program_builds_while_another_build_holds_the_lock(fresh):
+    """Another build (the near view's kernels) holding opencl's build lock does not
+    hold the far program back, nor does the far build hold the lock."""
+    opencl.build.cache_clear()  # (a program built earlier in this process: no build)
+    g = make_generator("overworld", 11)
+    done = []
+    with opencl._lock:
+        t = threading.Thread(target=lambda: done.append(g.prebuild_surface()), daemon=True)
+        t.start()
+        t.join(60)
+        assert done == [True]
+
+
+def test_the_world_warm_up_starts_the_far_build_at_once(fresh, tmp_path, monkeypatch):
+    """build.warm: the far program is built while the warm-up's own job (the near
+    view's kernels) still runs, in a thread of its own; far tiles use it then."""
+    from voxel_addon.world import World, build
+    gate = threading.Event()
+    with World.create(tmp_path / "w.sqlite", seed=7) as w:
+        g = w.generator
+        monkeypatch.setattr(g, "warm_opencl", lambda keys: gate.wait(120) and [])
+        monkeypatch.setattr(g, "warm_surface", lambda: True)
+        try:
+            assert build.warm(w)
+            end = time.monotonic() + 60
+            while (g._surf or {}).get("opencl") is None and time.monotonic() < end:
+                time.sleep(0.05)
+            assert opencl.warming() and (g._surf or {}).get("opencl") is not None
+        finally:
+            gate.set()
+            opencl._warm["thread"].join(120)
+    assert not build.prebuild(object())  # a generator without a far surface
+
+
+def test_far_tiles_alone_ask_for_a_redraw(tmp_path):
+    """Feed.far_news: far tiles made while the near stream has nothing new are worth a
+    redraw of their own (the ring's last ones, or FAR_NEWS of them); drained: none."""
+    from voxel_addon.blender.liveview import feed as F
+    from voxel_addon.world import World
+    with World.create(tmp_path / "w.sqlite", seed=7) as w:
+        f = F.Feed(str(tmp_path / "w.sqlite"), w, 2)
+        try:
+            assert not f.far_news()  # no far ring
+            f.set_far(8)
+            f._at = (8.0, 8.0)
+            f._far.set_view(8.0, 8.0, 8, 2)
+            assert f._far.wait_ready(120)
+            w_, r = f._far.counts
+            assert 0 < w_ < F.FAR_NEWS and r == w_ and f.far_news()  # the ring's last
+            f._update_far(1e9)
+            assert not f.far_news()  # taken in
+        finally:
+            f.close()

@@ -195,6 +195,7 @@ def run():
         R[f"max_upload_{key}_ms"] = max(f[4] for f in LIVE.frames)
         R[f"frames16_{key}"] = len(LIVE.frames)
         R["chunks16"] = LIVE.stats["wanted"]
+    import voxel_addon
     voxel_addon.unregister()
 
 

@@ -149,11 +149,11 @@ def kill_after_first_commit(proc, path, total, sig=signal.SIGKILL, timeout=120):
         assert proc.poll() is None, f"ended before a commit: {proc.communicate()}"
         assert time.monotonic() < end, "no commit within the timeout"
         time.sleep(0.005)
-    assert proc.poll() is None and n < total, "the job ended before it could be killed"
-    os.killpg(proc.pid, sig)  # Ctrl-C on a terminal reaches the whole group too
+    if n < total and proc.poll() is None:
+        os.killpg(proc.pid, sig)  # Ctrl-C on a terminal reaches the whole group too
     out, err = proc.communicate(timeout=60)
     if proc.returncode == 0 and count(path) == total:
-        return None  # the job ended between the count and the signal (a loaded machine)
+        return None  # it ended before the signal: this process was not scheduled in time
     if sig == signal.SIGINT:  # a clean stop: one line, no worker's traceback, none left
         assert proc.returncode == 130 and err.strip().splitlines()[-1] == "interrupted", err
         assert "Traceback" not in err, err
@@ -262,17 +262,16 @@ def test_local_workers_import_equal_one_process(ref, tmp_path):
 
 def test_local_workers_interrupted_then_resumed(ref, tmp_path):
     w = tmp_path / "gen.sqlite"
-    args = ("generate", "--world", w, "--radius", 3, "--backend", "numpy", "--workers", 2)
+    args = ("generate", "--world", w, "--radius", R, "--backend", "numpy", "--workers", 2)
 
     def start():
         shutil.copy(ref["base"], w)
         return cli(*args, env={"VOXEL_COMMIT": "2"}, wait=False)
-    kept = interrupted(start, w, 49, signal.SIGINT)
+    kept = interrupted(start, w, (2 * R + 1) ** 2, signal.SIGINT)
     r = cli(*args)
     assert r.returncode == 0, r.stderr
-    assert computed(r.stderr, "computed") == 49 - kept
-    want = [c for c in chunks(ref["gen"]) if max(abs(c[0]), abs(c[1])) <= 3]  # centre 0 0
-    assert len(want) == 49 and chunks(w) == want
+    assert computed(r.stderr, "computed") == (2 * R + 1) ** 2 - kept
+    assert chunks(w) == chunks(ref["gen"])
 
 
 # ---- refused, with nothing changed ----------------------------------------------

@@ -242,7 +242,7 @@ def test_culling_draws_the_frame_of_drawing_everything(gl):
     for cull in (True, False):
         r = renderer(gl, b, waving=False)
         if not cull:
-            r.geo.cull = lambda vp, g=r.geo: _np.ones(g._boxes.shape[1], bool)
+            r.geo.cull = lambda vp, g=r.geo, **kw: _np.ones(g._boxes.shape[1], bool)
         imgs.append(r.render(Camera(80, 80, 72, 45, -30), 12.0, SIZE))
         stats.append((r.stats["triangles"], r.stats["shadow_triangles"], r.stats["draw_calls"]))
         r.release()

@@ -16,6 +16,16 @@ from voxel_addon.generation import make_generator
 XY = [(x * 37 - 500, 11 * x - 90) for x in range(60)]
 
 
+def _within(seconds, fn, *args):
+    """fn(*args) in a thread, failing if it has not returned after `seconds`."""
+    out = []
+    t = threading.Thread(target=lambda: out.append(fn(*args)), daemon=True)
+    t.start()
+    t.join(seconds)
+    assert out, f"{fn.__name__} still running after {seconds} s"
+    return out[0]
+
+
 @pytest.fixture
 def fresh(monkeypatch, cl_device):
     """A process that has not warmed up yet (warm runs once per process)."""
@@ -26,7 +36,7 @@ def test_numpy_while_the_far_program_builds_then_its_kernels(fresh):
     g = make_generator("overworld", 7)  # no backend asked: OpenCL once built
     assert g.backend_used == "opencl"
     g._surf_building = g._surf_held = True  # as while prebuild_surface's build runs
-    during = g.surface(XY)
+    during = _within(60, g.surface, XY)  # a surface that waited for the build: a failure, not a hang
     assert "opencl" not in g._surf and "numpy" in g._surf  # no build of its own
     g._surf_building = g._surf_held = False
     assert g.prebuild_surface()

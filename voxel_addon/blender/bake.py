@@ -23,162 +23,17 @@ Linear) or, for light="vertex", from colour attributes.
 """
 from __future__ import annotations
 
-import math
 import threading
 
 import bpy
 import numpy as np
 
 from . import compat
-
-GROUP = "Voxel Shade"
-
-
-# ---------------------------------------------------------------- images
-
-def image(name: str, kind: str = "color") -> bpy.types.Image:
-    """The packed 16×16 image of texture `name` (kind "color" or "glow": rgb × mask)."""
-    from .. import textures
-    key = f"voxel_{name}" if kind == "color" else f"voxel_{name}_glow"
-    img = bpy.data.images.get(key)
-    if img is not None:
-        return img
-    rgba, glow = textures.image(name)
-    px = rgba.astype(np.float32) / 255.0
-    if kind == "glow":
-        px[..., :3] *= (glow.astype(np.float32) / 255.0)[..., None]
-        px[..., 3] = 1.0
-    img = bpy.data.images.new(key, textures.SIZE, textures.SIZE, alpha=True)
-    img.pixels.foreach_set(px[::-1].ravel())  # Blender rows start at the bottom
-    img.file_format = "PNG"
-    img.pack()
-    return img
-
-
-def sprite(name: str, rgba: np.ndarray) -> bpy.types.Image:
-    """The packed image of a Minecraft sprite (bake.Bake.images: the player's pack)."""
-    key = f"voxel_mc_{name}"
-    img = bpy.data.images.get(key)
-    if img is None:
-        h, w = rgba.shape[:2]
-        img = bpy.data.images.new(key, w, h, alpha=True)
-        img.pixels.foreach_set((rgba.astype(np.float32) / 255.0)[::-1].ravel())
-        img.file_format = "PNG"
-        img.pack()
-    return img
-
-
-# ---------------------------------------------------------------- node helpers
-
-def _node(tree, kind, x, y, **props):
-    n = tree.nodes.new(kind)
-    n.location = (x, y)
-    for k, v in props.items():
-        setattr(n, k, v)
-    return n
-
-
-def _math(tree, op, a, b=None, x=0, y=0):
-    n = _node(tree, "ShaderNodeMath", x, y, operation=op)
-    for i, v in enumerate((a, b)):
-        if v is None:
-            continue
-        if isinstance(v, (int, float)):
-            n.inputs[i].default_value = v
-        else:
-            tree.links.new(v, n.inputs[i])
-    return n.outputs[0]
-
-
-def _ramp(tree, fac, keys, x, y):
-    """A Color Ramp over hours/24 through (hours, rgb) keys, eased like daytime.at."""
-    n = _node(tree, "ShaderNodeValToRGB", x, y)
-    cr = n.color_ramp
-    cr.interpolation = "EASE"
-    keys = list(keys) + [(24.0, keys[0][1])]
-    while len(cr.elements) < len(keys):
-        cr.elements.new(0.5)
-    for e, (h, rgb) in zip(cr.elements, keys):
-        e.position = h / 24.0
-        e.color = (*rgb, 1.0)
-    tree.links.new(fac, n.inputs[0])
-    return n.outputs[0]
-
-
-def shade_group() -> bpy.types.ShaderNodeTree:
-    """The shared node group: light factor (eq. 4.1) from its Light (block RGB) and
-    Daylight inputs (colour attributes or the light atlas) and its internal "Hours"
-    value (0..24)."""
-    from ..light import daytime
-    g = bpy.data.node_groups.get(GROUP)
-    if g is not None:
-        return g
-    g = bpy.data.node_groups.new(GROUP, "ShaderNodeTree")
-    g.interface.new_socket("Shade", in_out="OUTPUT", socket_type="NodeSocketColor")
-    g.interface.new_socket("Light", in_out="INPUT", socket_type="NodeSocketColor")
-    g.interface.new_socket("Daylight", in_out="INPUT", socket_type="NodeSocketColor")
-    out = _node(g, "NodeGroupOutput", 1400, 0)
-    gin = _node(g, "NodeGroupInput", 250, 400)
-    hours = _node(g, "ShaderNodeValue", -1000, 0, name="Hours", label="Hours")
-    hours.outputs[0].default_value = 12.0
-    h = hours.outputs[0]
-    fac = _math(g, "DIVIDE", h, 24.0, -800, 200)
-    amb = _ramp(g, fac, [(k[0], k[1]) for k in daytime.KEYS], -600, 400)
-    direct = _ramp(g, fac, [(k[0], k[2]) for k in daytime.KEYS], -600, 150)
-    u = _ramp(g, fac, [(k[0], (k[3],) * 3) for k in daytime.KEYS], -600, -100)
-    # light direction: the sun (daytime.sun_direction), or the moon below the horizon
-    a = _math(g, "MULTIPLY", _math(g, "SUBTRACT", h, 6.0, -800, -300), math.pi / 12, -650, -300)
-    t = math.radians(daytime.TILT)
-    sz = _math(g, "MULTIPLY", _math(g, "SINE", a, None, -500, -420), math.cos(t), -350, -420)
-    sy = _math(g, "MULTIPLY", _math(g, "SINE", a, None, -500, -520), -math.sin(t), -350, -520)
-    sx = _math(g, "COSINE", a, None, -350, -320)
-    sun = _node(g, "ShaderNodeCombineXYZ", -200, -400)
-    for i, s in enumerate((sx, sy, sz)):
-        g.links.new(s, sun.inputs[i])
-    sign = _math(g, "SIGN", sz, None, -200, -560)
-    ldir = _node(g, "ShaderNodeVectorMath", -50, -400, operation="SCALE")
-    g.links.new(sun.outputs[0], ldir.inputs[0])
-    g.links.new(sign, ldir.inputs["Scale"])
-    geo = _node(g, "ShaderNodeNewGeometry", -200, -150)
-    dot = _node(g, "ShaderNodeVectorMath", 100, -300, operation="DOT_PRODUCT")
-    g.links.new(geo.outputs["Normal"], dot.inputs[0])
-    g.links.new(ldir.outputs[0], dot.inputs[1])
-    ndl = _math(g, "MAXIMUM", dot.outputs["Value"], 0.0, 250, -300)
-    # light.shade (eq. 4.1) with white albedo: light*(1 - u*day) + day*(ambient + ndl*direct)
-    lit_rgb, day_rgb = gin.outputs["Light"], gin.outputs["Daylight"]
-
-    def mix(op, a, b, x, y, fac=1.0):
-        n = _node(g, "ShaderNodeMix", x, y, data_type="RGBA", blend_type=op)
-        n.inputs["Factor"].default_value = fac
-        for sock, v in ((n.inputs[6], a), (n.inputs[7], b)):
-            if isinstance(v, tuple):
-                sock.default_value = v
-            else:
-                g.links.new(v, sock)
-        return n.outputs[2]
-
-    ndl_rgb = _node(g, "ShaderNodeCombineColor", 400, -300)
-    for i in range(3):
-        g.links.new(ndl, ndl_rgb.inputs[i])
-    sky = mix("ADD", amb, mix("MULTIPLY", direct, ndl_rgb.outputs[0], 550, 0), 700, 300)
-    dayterm = mix("MULTIPLY", day_rgb, sky, 1000, 400)
-    keep = mix("SUBTRACT", (1, 1, 1, 1), mix("MULTIPLY", u, day_rgb, 550, -150),
-               700, -100)
-    art = mix("MULTIPLY", lit_rgb, keep, 1000, 100)
-    total = mix("ADD", dayterm, art, 1200, 200)
-    g.links.new(total, out.inputs[0])
-    return g
-
-
-def set_hours(hours: float) -> None:
-    """Time of day for every baked material (style "blender")."""
-    shade_group().nodes["Hours"].outputs[0].default_value = float(hours) % 24.0
-
+from .nodes import GROUP, gltf_group, image, linear, node, op, set_hours, shade_group, sprite
 
 # ---------------------------------------------------------------- materials
 
 LIGHT_UV = "LightUV"
-GLTF_GROUP = "glTF Material Output"  # the glTF exporter reads Occlusion from this group
 
 
 def light_images(bk, style: str, hours: float = 12.0):
@@ -207,21 +62,6 @@ def light_images(bk, style: str, hours: float = 12.0):
     return img
 
 
-def gltf_group() -> bpy.types.ShaderNodeTree:
-    """The node group Blender's glTF exporter (and importer) uses for the occlusion map."""
-    g = bpy.data.node_groups.get(GLTF_GROUP)
-    if g is None:
-        g = bpy.data.node_groups.new(GLTF_GROUP, "ShaderNodeTree")
-        s = g.interface.new_socket("Occlusion", in_out="INPUT", socket_type="NodeSocketFloat")
-        s.default_value = 1.0
-    return g
-
-
-def _linear(c: float) -> float:
-    """sRGB 0..1 -> linear (node colours are scene-linear)."""
-    return c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4
-
-
 def material(spec, style: str, light=None, images=None) -> bpy.types.Material:
     """The material of `spec`; `light` is the bake's light atlas image (light_images)
     or None when light travels in colour attributes; `images` the bake's sprites."""
@@ -233,66 +73,66 @@ def material(spec, style: str, light=None, images=None) -> bpy.types.Material:
     m["voxel_key"] = key
     t = compat.node_tree(m)
     t.nodes.clear()
-    out = _node(t, "ShaderNodeOutputMaterial", 900, 0)
-    bsdf = _node(t, "ShaderNodeBsdfPrincipled", 500, 0)
+    out = node(t, "ShaderNodeOutputMaterial", 900, 0)
+    bsdf = node(t, "ShaderNodeBsdfPrincipled", 500, 0)
     t.links.new(bsdf.outputs[0], out.inputs["Surface"])
     bsdf.inputs["Roughness"].default_value = 0.9
-    uv = _node(t, "ShaderNodeUVMap", -700, 0, uv_map="UVMap")
+    uv = node(t, "ShaderNodeUVMap", -700, 0, uv_map="UVMap")
     img = sprite(spec.image, images[spec.image]) if spec.image \
         else image(spec.texture)
-    tex = _node(t, "ShaderNodeTexImage", -450, 100, image=img,
+    tex = node(t, "ShaderNodeTexImage", -450, 100, image=img,
                 interpolation="Closest", extension="REPEAT")
     t.links.new(uv.outputs[0], tex.inputs[0])
     colour = tex.outputs["Color"]
     if spec.tint is not None:  # a coloured voxel: its colour times the neutral tile
-        mul = _node(t, "ShaderNodeMix", -150, 300, data_type="RGBA", blend_type="MULTIPLY")
+        mul = node(t, "ShaderNodeMix", -150, 300, data_type="RGBA", blend_type="MULTIPLY")
         mul.inputs["Factor"].default_value = 1.0
         t.links.new(colour, mul.inputs[6])
-        mul.inputs[7].default_value = (*(_linear(c) for c in spec.tint), 1.0)
+        mul.inputs[7].default_value = (*(linear(c) for c in spec.tint), 1.0)
         colour = mul.outputs[2]
     if light is not None:
-        luv = _node(t, "ShaderNodeUVMap", -700, -350, uv_map=LIGHT_UV)
-        ltex = _node(t, "ShaderNodeTexImage", -450, -350, image=light,
+        luv = node(t, "ShaderNodeUVMap", -700, -350, uv_map=LIGHT_UV)
+        ltex = node(t, "ShaderNodeTexImage", -450, -350, image=light,
                      interpolation="Linear", extension="EXTEND")
         t.links.new(luv.outputs[0], ltex.inputs[0])
     if style == "gltf":
         if light is None:
-            attr = _node(t, "ShaderNodeVertexColor", -450, -200, layer_name="shade")
-            mul = _node(t, "ShaderNodeMix", 100, 200, data_type="RGBA", blend_type="MULTIPLY")
+            attr = node(t, "ShaderNodeVertexColor", -450, -200, layer_name="shade")
+            mul = node(t, "ShaderNodeMix", 100, 200, data_type="RGBA", blend_type="MULTIPLY")
             mul.inputs["Factor"].default_value = 1.0
             t.links.new(colour, mul.inputs[6])
             t.links.new(attr.outputs["Color"], mul.inputs[7])
             t.links.new(mul.outputs[2], bsdf.inputs["Base Color"])
         else:
             t.links.new(colour, bsdf.inputs["Base Color"])
-            sep = _node(t, "ShaderNodeSeparateColor", -150, -350)
+            sep = node(t, "ShaderNodeSeparateColor", -150, -350)
             t.links.new(ltex.outputs["Color"], sep.inputs[0])
-            grp = _node(t, "ShaderNodeGroup", 500, -450, node_tree=gltf_group())
+            grp = node(t, "ShaderNodeGroup", 500, -450, node_tree=gltf_group())
             t.links.new(sep.outputs[0], grp.inputs["Occlusion"])
     else:
         t.links.new(colour, bsdf.inputs["Base Color"])
-        grp = _node(t, "ShaderNodeGroup", -150, -250, node_tree=shade_group())
+        grp = node(t, "ShaderNodeGroup", -150, -250, node_tree=shade_group())
         if light is None:
             for i, name in enumerate(("light", "daylight")):
-                attr = _node(t, "ShaderNodeVertexColor", -450, -250 - 150 * i, layer_name=name)
+                attr = node(t, "ShaderNodeVertexColor", -450, -250 - 150 * i, layer_name=name)
                 t.links.new(attr.outputs["Color"], grp.inputs[i])
         else:
             t.links.new(ltex.outputs["Color"], grp.inputs["Light"])
             t.links.new(ltex.outputs["Alpha"], grp.inputs["Daylight"])
-        emi = _node(t, "ShaderNodeMix", 100, -200, data_type="RGBA", blend_type="MULTIPLY")
+        emi = node(t, "ShaderNodeMix", 100, -200, data_type="RGBA", blend_type="MULTIPLY")
         emi.inputs["Factor"].default_value = 1.0
         t.links.new(colour, emi.inputs[6])
         t.links.new(grp.outputs[0], emi.inputs[7])
         glow_sock = emi.outputs[2]
     if spec.glow > 0:
-        gtex = _node(t, "ShaderNodeTexImage", -450, -650, image=image(spec.texture, "glow"),
+        gtex = node(t, "ShaderNodeTexImage", -450, -650, image=image(spec.texture, "glow"),
                      interpolation="Closest", extension="REPEAT")
         t.links.new(uv.outputs[0], gtex.inputs[0])
         if style == "gltf":
             t.links.new(gtex.outputs["Color"], bsdf.inputs["Emission Color"])
             bsdf.inputs["Emission Strength"].default_value = spec.glow
         else:
-            add = _node(t, "ShaderNodeMix", 300, -350, data_type="RGBA", blend_type="ADD")
+            add = node(t, "ShaderNodeMix", 300, -350, data_type="RGBA", blend_type="ADD")
             add.inputs["Factor"].default_value = spec.glow
             t.links.new(glow_sock, add.inputs[6])
             t.links.new(gtex.outputs["Color"], add.inputs[7])
@@ -303,7 +143,7 @@ def material(spec, style: str, light=None, images=None) -> bpy.types.Material:
     if style == "gltf":  # export_glb writes alphaMode (see bake.glb: no exporter warning)
         m["voxel_alpha"] = {"alpha_test": "MASK", "blend": "BLEND"}.get(spec.render, "OPAQUE")
     elif spec.render == "alpha_test":
-        rnd = _math(t, "ROUND", tex.outputs["Alpha"], None, 200, -600)
+        rnd = op(t, "ROUND", tex.outputs["Alpha"], None, 200, -600)
         t.links.new(rnd, bsdf.inputs["Alpha"])
     elif spec.render == "blend":
         t.links.new(tex.outputs["Alpha"], bsdf.inputs["Alpha"])
@@ -431,11 +271,11 @@ def far_material(water: bool, style: str) -> bpy.types.Material:
     m = bpy.data.materials.new(name)
     t = compat.node_tree(m)
     t.nodes.clear()
-    out = _node(t, "ShaderNodeOutputMaterial", 600, 0)
-    bsdf = _node(t, "ShaderNodeBsdfPrincipled", 300, 0)
+    out = node(t, "ShaderNodeOutputMaterial", 600, 0)
+    bsdf = node(t, "ShaderNodeBsdfPrincipled", 300, 0)
     t.links.new(bsdf.outputs[0], out.inputs["Surface"])
     bsdf.inputs["Roughness"].default_value = 0.9
-    attr = _node(t, "ShaderNodeVertexColor", 0, 0, layer_name="far")
+    attr = node(t, "ShaderNodeVertexColor", 0, 0, layer_name="far")
     t.links.new(attr.outputs["Color"], bsdf.inputs["Base Color"])
     if water:
         bsdf.inputs["Alpha"].default_value = 0.7

@@ -53,3 +53,23 @@ def test_a_deleted_world_sends_the_stroke_to_the_rescue_file(bpy, addon):  # noq
     assert not session.is_open(path)                # let go: nothing more goes to it
     with pytest.raises(RuntimeError, match="does not exist"):
         bpy.ops.voxel.edit(location=(7, 4, 100), block="glass")
+
+
+def test_a_world_path_through_a_changed_symlink_finds_the_new_world(bpy, tmp_path, monkeypatch):
+    """The session remembers a path's resolution (it is asked on every redraw), but
+    not past KEY_S: a symlink pointed at another world while Blender runs is seen."""
+    from voxel_addon.world import World
+    for name, seed in (("a", 3), ("b", 4)):
+        World.create(tmp_path / f"{name}.sqlite", seed=seed).close()
+    link = tmp_path / "current.sqlite"
+    link.symlink_to(tmp_path / "a.sqlite")
+    monkeypatch.setattr(session, "KEY_S", 0.05)
+    try:
+        assert session.world(str(link)).seed == 3
+        link.unlink()
+        link.symlink_to(tmp_path / "b.sqlite")
+        import time
+        time.sleep(0.1)
+        assert session.world(str(link)).seed == 4
+    finally:
+        session.close_all()

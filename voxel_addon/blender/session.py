@@ -18,25 +18,28 @@ nothing changed) and redraws the viewports when it took in their chunks.
 from __future__ import annotations
 
 import os
+import time
 
 _worlds: dict[str, object] = {}
 unsaved: dict[str, object] = {}  # worlds whose save and rescue both failed (retried on close)
 POLL_S = 1.0  # seconds between looks for other processes' writes
 
 
-_keys: dict = {}  # (path, blend file, working folder) -> _key (asked on every redraw)
+_keys: dict = {}  # (path, blend file, working folder) -> (_key, when) (asked on every redraw)
+KEY_S = 1.0  # a symlink or folder changed meanwhile is seen within this
 
 
 def _key(path: str) -> str:
     import bpy
     # realpath stats every folder of the path: ~0.1 ms, twice per viewport redraw
     k = (path, bpy.data.filepath, os.getcwd())
+    now = time.monotonic()
     v = _keys.get(k)
-    if v is None:
+    if v is None or now - v[1] > KEY_S:
         if len(_keys) > 64:
             _keys.clear()
-        v = _keys[k] = os.path.realpath(bpy.path.abspath(path))
-    return v
+        v = _keys[k] = (os.path.realpath(bpy.path.abspath(path)), now)
+    return v[0]
 
 
 def world(path: str, *, create_seed: int | None = None, generator: str | None = None):

@@ -18,7 +18,7 @@ import numpy as np
 
 from .. import resources
 from ..core import chunk as C
-from .lower import Unit, expand, lattice_dims, lazy_blocks, nodes
+from .lower import Unit, expand, lattice_dims, lazy_blocks, nodes, right_nest
 
 # No fast-math, no mad: IEEE results identical to NumPy's (see gpu/noise.h).
 OPTIONS = ("-cl-fp32-correctly-rounded-divide-sqrt",)
@@ -131,11 +131,16 @@ class _Gen:
         """C statements for roots. An expensive operand that nothing else needs (of &,
         | or select) is computed inside an `if` only when it decides the result: the
         big kernels run scalar on pocl anyway (see README), so a branch costs little
-        and e.g. cave noise is skipped outside cave regions. Same values, fewer ops."""
-        order = nodes(roots)
-        lazy, owner = lazy_blocks(order, roots, LAZY_COST)
+        and e.g. cave noise is skipped outside cave regions. Same values, fewer ops.
+        Chains of & and | are nested to the right first (lower.right_nest); DONE gets
+        the given roots' names too."""
+        nested = right_nest(roots)
+        order = nodes(nested)
+        lazy, owner = lazy_blocks(order, nested, LAZY_COST)
         out = []
         self._emit([e for e in order if e.id not in owner], lazy, owner, unit, done, out, 1)
+        for r, n in zip(roots, nested):
+            done[r.id] = done[n.id]
         return out
 
     def _emit(self, seq, lazy, owner, unit, done, out, depth):

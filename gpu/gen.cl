@@ -47,5 +47,8 @@ VX_CALLED vf8 perlin2_8_c(vf8 x, vf8 y, __constant const int* perm, uint s) {
 VX_CALLED vf8 perlin3_8_c(vf8 x, vf8 y, vf8 z, __constant const int* perm, uint s) {
     return perlin3_8(x, y, z, perm, s);
 }
+VX_CALLED vf8x3 voronoi2_8_c(vf8 x, vf8 y, int metric, uint s) {
+    return voronoi2_8(x, y, metric, s);
+}
 
 // ---- generated passes ----

@@ -30,6 +30,7 @@ VX_INLINE vu8 vx_hash3_8(vi8 x, vi8 y, vi8 z, uint s) {
                    + as_uint8(z) * 0xcb1ab31fu + s);
 }
 VX_INLINE vf8 vx_unit8(vu8 h) { return convert_float8(h >> 8) * 0x1p-24f; }
+VX_INLINE vu8 vx_next8(vu8 h) { return vx_mix8(h + 0x68e31da4u); }
 
 VX_INLINE vi8 vx_ifloor8(vf8 v) { vi8 i = convert_int8(v); return i + (v < convert_float8(i)); }
 VX_INLINE vf8 vx_fade8(vf8 t) { return t * t * t * (t * (t * 6.0f - 15.0f) + 10.0f); }
@@ -68,6 +69,28 @@ VX_INLINE vf8 perlin2_8(vf8 x, vf8 y, __constant const int* perm, uint s) {
                     vx_grad2_8(VX_GATHER8(vi8, perm, B), x1, y)),
         vx_lerp8(u, vx_grad2_8(VX_GATHER8(vi8, perm, A + 1), x, y1),
                     vx_grad2_8(VX_GATHER8(vi8, perm, B + 1), x1, y1)));
+}
+
+// voronoi2 (noise.h) 8 lanes at a time, op for op: (F1, F2, value) as three vectors
+typedef struct { vf8 x, y, z; } vf8x3;
+#define VX_VORO2_CELL8(dx, dy) { \
+    vu8 h = vx_hash2_8(ix + (dx), iy + (dy), s); vf8 px = vx_unit8(h); h = vx_next8(h); \
+    vf8 py = vx_unit8(h); h = vx_next8(h); \
+    vf8 ex = ((float)(dx) + px) - x, ey = ((float)(dy) + py) - y; \
+    vf8 a = ex * ex, b = ey * ey; vf8 d = metric ? a * a + b * b : a + b; \
+    vi8 lt = d < f1; f2 = select(vx_fmin8(f2, d), f1, lt); \
+    val = select(val, vx_unit8(h), lt); f1 = select(f1, d, lt); }
+#define VX_VORO2_ROW8(dy) VX_VORO2_CELL8(-1, dy) VX_VORO2_CELL8(0, dy) VX_VORO2_CELL8(1, dy)
+
+VX_INLINE vf8x3 voronoi2_8(vf8 x, vf8 y, int metric, uint s) {
+    vi8 ix = vx_ifloor8(x), iy = vx_ifloor8(y);
+    x = x - convert_float8(ix); y = y - convert_float8(iy);
+    vf8 f1 = (vf8)1e9f, f2 = (vf8)1e9f, val = (vf8)0.0f;
+    VX_VORO2_ROW8(-1) VX_VORO2_ROW8(0) VX_VORO2_ROW8(1)
+    if (metric) { f1 = sqrt(sqrt(f1)); f2 = sqrt(sqrt(f2)); }
+    else { f1 = sqrt(f1); f2 = sqrt(f2); }
+    vf8x3 r = {f1, f2, val};
+    return r;
 }
 
 VX_INLINE vf8 perlin3_8(vf8 x, vf8 y, vf8 z, __constant const int* perm, uint s) {

@@ -21,6 +21,7 @@
 //@ sampler sampler2D palette        // the world's colours, 256 a row (`color` blocks)
 //@ sampler gdepth2D opaque_depth   if PEEL
 //@ sampler gdepth2D prev_depth     if PEEL
+//@ sampler gsampler2D opaque_normal if defined(PEEL) && PEEL == 1  // a: the water mark (far water)
 //@ out 0 vec4 out_accum            if OIT  // sum of w * premultiplied colour, sum of w * alpha
 //@ out 1 vec4 out_reveal           if OIT  // r: sum of -log(1 - alpha)
 //@ out 0 vec4 out_albedo           if !defined(OIT) && !defined(SHADOW)
@@ -113,10 +114,17 @@ void main() {
     float glow = texelFetch(glow_tex, ivec3(gi, int(g_layer)), 0).r;  // (mask x block glow)
 #endif
 #if defined(PEEL) && PEEL == 1
-    if (glow > 0.999 && water_fx) {  // water (blocktex.py's mark), the nearest layer
+    if (glow > 0.999) {  // water (blocktex.py's mark), the nearest layer
         float d = FETCH(opaque_depth, pc, gl_SampleID).r;
         vec2 uv = gl_FragCoord.xy / vec2(textureSize(opaque_depth MS_ARG));
-        c = water_body(c, d < 1.0 ? distance(g_world, scene_pos(uv, d)) : 64.0);
+        float s = d < 1.0 ? distance(g_world, scene_pos(uv, d)) : 64.0;
+        // Far water right behind it (the only water in the opaque layer): the chunks'
+        // edge, where far.frag keeps a far pixel a twentieth of a block inside (else a
+        // crack). The far water there is this water, coloured over its own floor; taken
+        // as this water's floor at depth 0 it was a shallow, lighter pixel: a dotted
+        // trace along the near/far seam in deep water, seen from high up (issue 28).
+        if (s < 0.5 && FETCH(opaque_normal, pc, gl_SampleID).a > 0.999) discard;
+        if (water_fx) c = water_body(c, s);
     }
 #endif
 #ifdef DEBUG_AGG
@@ -124,7 +132,7 @@ void main() {
     glow = 0.0;
 #endif
 #ifdef OIT
-    oit(shade_surface(c, g_world, n, glow));
+    oit(shade_surface(c, g_world, n, glow, 1.0));
 #else
     out_albedo = c;
     out_normal = vec4(n * 0.5 + 0.5, glow);

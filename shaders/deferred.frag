@@ -92,7 +92,9 @@ void main() {
         }
 #endif
         if (f.depth < 1.0) {
-            acc += shade_surface(albedo, p, normalize(n), glow);
+            // (a chunk's surface, or far terrain's: include/lightvol.glsl's spare)
+            float spare = far_split > 0.0 && f.depth >= far_split ? 0.0 : 1.0;
+            acc += shade_surface(albedo, p, normalize(n), glow, spare);
             dmin = min(dmin, eye_dist(p));
             nsum += n;
             hits++;

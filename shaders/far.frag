@@ -28,16 +28,36 @@ float under_water(float d) {
     return pow(max(15.0 - WATER_LEVELS * n, 0.0) / 15.0, 2.2);
 }
 
+// Whether world point p lies on a chunk that is drawn (tested a twentieth of a block
+// further from the eye: a far pixel on the chunks' edge, its position interpolated a
+// little inside, was dropped though the chunks' face ends there: a crack along the
+// seam, the far floor seen without its water).
+bool on_chunks(vec2 p) {
+    vec2 at = p + 0.05 * normalize(p - cam_pos.xy + vec2(1e-6, 0.0));
+    ivec2 c = ivec2(floor(at / 16.0) - near_box.xy);
+    return all(greaterThanEqual(c, ivec2(0))) && all(lessThan(c, ivec2(near_box.zw)))
+        && texelFetch(near_mask, c, 0).r > 0.5;
+}
+
 void main() {
     if (distance(f_world.xy, cam_pos.xy) > fog_end) discard;
-    // (tested a twentieth of a block further from the eye: a far pixel on the chunks'
-    // edge, its position interpolated a little inside, was dropped though the chunks'
-    // face ends there: a crack along the seam, the far floor seen without its water)
-    vec2 at = f_world.xy + 0.05 * normalize(f_world.xy - cam_pos.xy + vec2(1e-6, 0.0));
-    ivec2 c = ivec2(floor(at / 16.0) - near_box.xy);
-    if (all(greaterThanEqual(c, ivec2(0))) && all(lessThan(c, ivec2(near_box.zw)))
-            && texelFetch(near_mask, c, 0).r > 0.5)
-        discard;
+#if SAMPLES > 1
+    // Under MSAA the fragment runs once per pixel, for all its samples. Dropped by its
+    // centre, a pixel on the edge lost its samples outside the chunks (nothing drew
+    // there: the far floor without its water, a dark dot). Dropped per sample, an edge
+    // pixel was half near water over its (dark, deep) floor and half far water: the
+    // water layer, composited over the pixel's mean opaque colour, darkened it (a
+    // dotted line). So a pixel with any sample off the chunks keeps all of them: the
+    // near water over far water there gives way to it (block.frag), the pixel is far
+    // water as a whole, and the near chunks' opaque surfaces are in front anyway
+    // (the near half of the depth range).
+    bool off = false;
+    for (int i = 0; i < SAMPLES; i++)
+        off = off || !on_chunks(interpolateAtSample(f_world, i).xy);
+    if (!off) discard;
+#else
+    if (on_chunks(f_world.xy)) discard;
+#endif
     vec3 albedo = f_albedo;
     if (f_water < 0.5 && f_under.y > 0.0) {  // ground under water: seen through near water
         float d = f_under.x / f_under.y - f_world.z;

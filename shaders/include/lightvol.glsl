@@ -4,9 +4,9 @@
 // as the packed SPEC §3 uint16 in a 16-bit unorm (exact). A layer is one chunk, so a
 // changed chunk is one layer's upload (or one draw where a device cannot write part of
 // a texture). Outside the resident box [vol_lo, vol_hi) the light is open daylight.
-// light_volume(p, n) is light.glsl's light_sample for this volume (the reference and
-// the equation 4.1 shading are light.glsl's), with each of the four voxel columns'
-// addresses worked out once for its two voxels.
+// light_volume(p, n, spare) is light.glsl's light_sample for this volume (the
+// reference and the equation 4.1 shading are light.glsl's), with each of the four
+// voxel columns' addresses worked out once for its two voxels.
 #include "include/frame.glsl"
 #include "include/light.glsl"
 //@ sampler sampler2DArray light_vol
@@ -24,8 +24,9 @@ uint light_voxel(ivec2 t, int layer, int z) {
 }
 
 // World point p on a face with unit normal n -> vec4 (R, G, B, D) in 0..1: offset half
-// a voxel along n, then trilinear between the 8 nearest voxel centres.
-vec4 light_volume(vec3 p, vec3 n) {
+// a voxel along n, then trilinear between the 8 nearest voxel centres. spare: how far
+// (blocks) outside the resident box p still counts as inside it (see below).
+vec4 light_volume(vec3 p, vec3 n, float spare) {
     vec3 q = p + 0.5 * n - 0.5;
     vec3 b = floor(q);
     vec3 f = q - b;
@@ -33,9 +34,18 @@ vec4 light_volume(vec3 p, vec3 n) {
     vec4 acc = vec4(0.0);
     // a point inside the box takes its columns from the box: the last half voxel by
     // its edge does not blend in open daylight (by a chunks' edge under water, the
-    // floor's last half block lit as dry land: a bright line along the far seam)
-    ivec2 pc = ivec2(floor(p.xy));
-    bool inside = all(greaterThanEqual(pc, vol_lo)) && all(lessThan(pc, vol_hi));
+    // floor's last half block lit as dry land: a bright line along the far seam).
+    // With `spare` blocks to spare for the chunks' own surfaces (deferred.frag: a
+    // block; not far terrain's, which starts at the edge and is lit as open land): a
+    // position read back from the depth buffer lies off the surface (a few hundredths
+    // along the view ray; under MSAA each sample's depth is read back on the pixel
+    // centre's ray, up to half a pixel away), and the floor's last column under deep
+    // water came back a hair outside, lit as dry land: bright dots along the chunks'
+    // edge, seen through the water from high up (issue 28). (The box holds the
+    // camera's chunk, so a chunk's surface seen just outside it is rare; its edge
+    // column's light suits it better than open daylight anyway.)
+    bool inside = all(greaterThanEqual(p.xy, vec2(vol_lo) - spare))
+               && all(lessThan(p.xy, vec2(vol_hi) + spare));
     for (int k = 0; k < 4; k++) {
         ivec2 d = ivec2(k & 1, k >> 1);
         ivec2 v = i0.xy + d;

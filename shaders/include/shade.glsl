@@ -49,9 +49,10 @@ float shadow_at(vec3 p, vec3 n) {
 // Eq. 4.1 (light.glsl) with the direct term dimmed by the shadow map and the clouds.
 // The light volume's levels step evenly on screen, as the textures' values do: their
 // linear light is level^2.2 (so a scene looks as it did before the tone curve).
-// `day` returns the point's linear daylight level (how much sky it sees).
-vec3 shade_light_day(vec3 albedo, vec3 p, vec3 n, float glow, out float day) {
-    vec4 l = light_volume(p, n);
+// `day` returns the point's linear daylight level (how much sky it sees); `spare`:
+// light_volume's (include/lightvol.glsl).
+vec3 shade_light_day(vec3 albedo, vec3 p, vec3 n, float glow, float spare, out float day) {
+    vec4 l = light_volume(p, n, spare);
     // the shown area's outer wall (closed by Renderer.set_area, or include/walls.glsl)
     // looks out of the lit volume: lit as a cliff open to the sky (its faces' positions
     // come back from the depth buffer within a few hundredths of a block)
@@ -67,7 +68,7 @@ vec3 shade_light_day(vec3 albedo, vec3 p, vec3 n, float glow, out float day) {
 
 vec3 shade_light(vec3 albedo, vec3 p, vec3 n, float glow) {
     float day;
-    return shade_light_day(albedo, p, n, glow, day);
+    return shade_light_day(albedo, p, n, glow, 0.0, day);
 }
 
 // The horizontal distance past which surfaces fade into what is behind them (the sky,
@@ -79,8 +80,9 @@ float edge_fade(vec3 p) {
 }
 
 // Premultiplied colour of world point p on a surface with unit normal n; albedo.a is
-// its opacity (or MSAA coverage).
-vec4 shade_surface(vec4 albedo, vec3 p, vec3 n, float glow) {
+// its opacity (or MSAA coverage); spare: light_volume's (1 for the chunks' surfaces,
+// 0 for far terrain's).
+vec4 shade_surface(vec4 albedo, vec3 p, vec3 n, float glow, float spare) {
 #if DEBUG == 1 || DEBUG == 5
     return vec4(albedo.rgb, 1.0) * albedo.a;
 #elif DEBUG == 2
@@ -93,9 +95,9 @@ vec4 shade_surface(vec4 albedo, vec3 p, vec3 n, float glow) {
     if (water) glow = 0.0;
     float day;
 #if DEBUG == 4
-    vec3 c = shade_light_day(vec3(1.0), p, n, glow, day);
+    vec3 c = shade_light_day(vec3(1.0), p, n, glow, spare, day);
 #else
-    vec3 c = shade_light_day(srgb_decode(albedo.rgb), p, n, glow, day);
+    vec3 c = shade_light_day(srgb_decode(albedo.rgb), p, n, glow, spare, day);
 #endif
     vec4 o = vec4(c * albedo.a, albedo.a);
 #if (defined(LAYER) || defined(OIT)) && DEBUG == 0

@@ -246,3 +246,24 @@ def test_the_same_program_is_the_same_source():
     want = a.surface_wants()
     assert source(prune(a.units, want), 1) == source(prune(b.units, want), 1)
     assert source(make_generator("overworld", 1, None, "numpy", 1).units) != source(a.units)
+
+
+def test_and_chains_nest_to_the_right_and_the_first_test_guards_the_rest():
+    """lower.right_nest: ((a & b) & c) | d becomes (a & (b & c)) | d, so lazy_blocks can
+    put b & c behind a (each of b, c alone is too cheap to be lazy: issue 29's plants
+    pass ran its cactus tests on every voxel); a chain node with another user stays."""
+    x = L.E("x", (), "i")
+    a, b, c, d = (x > 1), (x < 9), (L.E("rand2", (x, x), "f", 3) < 0.5), (x == 4)
+    nested, = lower.right_nest([((a & b) & c) | d])
+    assert nested.op == "or" and nested.a[1] is d
+    left = nested.a[0]
+    assert left.op == "and" and left.a[0] is a
+    assert left.a[1].op == "and" and left.a[1].a == (b, c)
+    # a cost bound (9) over c alone (8) and under b & c: lazy only once nested
+    e = ((a & b) & c) | d
+    assert not lower.lazy_blocks(lower.nodes([e]), [e], 9)[0]
+    lazy, _ = lower.lazy_blocks(lower.nodes([nested]), [nested], 9)
+    assert 1 in lazy.get(left.id, {})  # b & c behind a
+    shared = a & b
+    kept = lower.right_nest([shared & c, shared | d])
+    assert kept[0].a[0] is shared  # (shared has another user: not taken apart)

@@ -24,7 +24,7 @@ def sample_gl(dev, vol, pts, nrm):
         //@ out 0 vec4 color
         void main() {{
             int i = int(gl_FragCoord.x);
-            color = light_volume(pts[i], nrm[i]);
+            color = light_volume(pts[i], nrm[i], 0.0);  // (no spare: the reference)
         }}"""
     vert = """//@ in vec2 pos
         void main() { gl_Position = vec4(pos, 0.0, 1.0); }"""

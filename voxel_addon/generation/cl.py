@@ -33,7 +33,7 @@ class Runner:
         # fields each unit reads: walking the expression graph per batch cost ~5 % of
         # a batch's time in Python (the GIL the stream's light solve wants)
         self._reads = [self.gen.reads(u) for u in units]
-        self._vec = [vectorizable(u) for u in units]
+        self._vec = [vectorizable(u, self.size) for u in units]
         self._perm = {}
         self._bufs = {}
         self.timings = None  # set to a dict to collect seconds per unit (serialises the queue)

@@ -18,7 +18,7 @@ import numpy as np
 
 from .. import resources
 from ..core import chunk as C
-from .lower import Unit, expand, lattice_dims, lazy_blocks, nodes
+from .lower import Unit, expand, lattice_dims, lazy_blocks, nodes, right_nest
 
 # No fast-math, no mad: IEEE results identical to NumPy's (see gpu/noise.h).
 OPTIONS = ("-cl-fp32-correctly-rounded-divide-sqrt",)
@@ -131,11 +131,16 @@ class _Gen:
         """C statements for roots. An expensive operand that nothing else needs (of &,
         | or select) is computed inside an `if` only when it decides the result: the
         big kernels run scalar on pocl anyway (see README), so a branch costs little
-        and e.g. cave noise is skipped outside cave regions. Same values, fewer ops."""
-        order = nodes(roots)
-        lazy, owner = lazy_blocks(order, roots, LAZY_COST)
+        and e.g. cave noise is skipped outside cave regions. Same values, fewer ops.
+        Chains of & and | are nested to the right first (lower.right_nest); DONE gets
+        the given roots' names too."""
+        nested = right_nest(roots)
+        order = nodes(nested)
+        lazy, owner = lazy_blocks(order, nested, LAZY_COST)
         out = []
         self._emit([e for e in order if e.id not in owner], lazy, owner, unit, done, out, 1)
+        for r, n in zip(roots, nested):
+            done[r.id] = done[n.id]
         return out
 
     def _emit(self, seq, lazy, owner, unit, done, out, depth):
@@ -278,7 +283,8 @@ def gindex(op, k, a):
 # ops the 8-lane 3D kernels implement; a unit using others stays scalar
 _VEC_OPS = set(_BIN) | {"const", "x", "y", "z", "neg", "not", "min", "max", "abs", "floor",
                         "sqrt", "int", "float", "fdiv", "fmod", "select", "perlin2",
-                        "perlin3", "rand2", "rand3", "irand2", "read", "prev", "cread"}
+                        "perlin3", "rand2", "rand3", "irand2", "read", "prev", "cread",
+                        "voronoi2", "get"}
 VLANES = 8
 VECTOR = True  # False: every unit scalar (for comparisons)
 VLOCAL = LAYER // VLANES  # a 3D work-group: one z layer, one row of 8 voxels per item
@@ -293,17 +299,21 @@ def _constant(e):
     return float(e.k) if e.op == "const" and e.t in ("f", "i") else None
 
 
-def vectorizable(u: Unit) -> bool:
-    """8-lane code: 3D units, lattice samples and 2D units with coarse nodes (those
-    written out by expand: its ops must all have 8-lane forms)."""
+def vectorizable(u: Unit, size: int = C.SIZE) -> bool:
+    """8-lane code: 3D units, lattice samples, 2D units with coarse nodes (written out
+    by expand) and, in chunk programs (SIZE: a chunk's columns), every 2D unit whose
+    ops all have 8-lane forms. Those ran scalar before (issue 29): the height map's 26
+    perlin2 as never-inlined calls, which keep pocl's work-group vectorizer off, and
+    the trees' hashes. The far surface's 1-column domains stay scalar (8 lanes would
+    compute one column 8 times)."""
     if not VECTOR or u.kind not in ("3d", "g3", "2d"):
         return False
     roots = u.roots()
     if u.kind == "2d":
-        if not any(e.op == "coarse" for e in nodes(roots)):
+        if size < C.SIZE and not any(e.op == "coarse" for e in nodes(roots)):
             return False
         roots = expand(roots)
-    return all(e.op in _VEC_OPS and e.t != "f3" for e in nodes(roots))
+    return all(e.op in _VEC_OPS and (e.t != "f3" or e.op == "voronoi2") for e in nodes(roots))
 
 
 class _GenV(_Gen):
@@ -311,7 +321,7 @@ class _GenV(_Gen):
     vectorizer gives up on the big generated kernels (README), explicit vectors need
     none. Bools are 0/-1 lanes; numbers as in the scalar code, op for op."""
     vec = True
-    ct = {"f": "vf8", "i": "vi8", "b": "vi8"}
+    ct = {"f": "vf8", "i": "vi8", "b": "vi8", "f3": "vf8x3"}
     free = False  # True for g3 kernels (lanes are any 8 lattice points)
 
     def expr(self, e, a, unit):
@@ -339,6 +349,10 @@ class _GenV(_Gen):
             return f"select({a[2]}, {a[1]}, {a[0]})"
         if op == "perlin2":
             return f"perlin2_8({a[0]}, {a[1]}, perm, s{k})"
+        if op == "voronoi2":
+            return f"voronoi2_8({a[0]}, {a[1]}, {k[1]}, s{k[0]})"
+        if op == "get":
+            return f"{a[0]}.{'xyz'[k]}"
         if op == "perlin3":
             sp = [self.span(x) for x in e.a]
             row = sp[0] is not None and sp[0][0] < ROW_SPAN and sp[1] == sp[2] == (0.0, 0)
@@ -513,7 +527,7 @@ def source(units, size=C.SIZE, inline: bool = False) -> str:
     free.free = True  # lanes that are not a row of 8 voxels: g3 and 2D units
     most = (10 ** 9,) * 2 if inline else CALLS_INLINED
     return resources.kernel("gen.cl") + _renumber("\n".join(
-        called(((gv if u.kind == "3d" else free) if vectorizable(u) else g).kernel(i, u),
+        called(((gv if u.kind == "3d" else free) if vectorizable(u, size) else g).kernel(i, u),
                most[u.kind == "3d"])
         for i, u in enumerate(units)))
 
@@ -524,7 +538,7 @@ def source(units, size=C.SIZE, inline: bool = False) -> str:
 # (seconds on a fresh install, issue 28), while a call costs a few instructions next
 # to a noise body's ~100. The hot per-voxel kernels (3 calls) stay inlined.
 CALLS_INLINED = (2, 4)
-_CALLED = re.compile(r"\b(perlin2|perlin3|voronoi2|voronoi3|perlin2_8|perlin3_8)\(")
+_CALLED = re.compile(r"\b(perlin2|perlin3|voronoi2|voronoi3|perlin2_8|perlin3_8|voronoi2_8)\(")
 
 
 def called(text: str, most: int) -> str:

@@ -268,6 +268,31 @@ def prune(units: list[Unit], want) -> list[Unit]:
     return halos([Unit("2d", dict(u.outs)) for u in reversed(keep)])
 
 
+def right_nest(roots):
+    """Chains of boolean & (|) nested to the right: ((a & b) & c) becomes a & (b & c),
+    where the inner node has no other user. Bitwise & and | of booleans are associative,
+    so the values are the same; but lazy_blocks weighs each right operand alone, and a
+    left-nested chain of cheap tests (`air & (z > gz) & (read(top) == sand) & ...`) was
+    computed whole on every voxel, where nested the first test decides whether the
+    rest runs at all (issue 29: the plants pass, most of its voxels not air)."""
+    users: dict = {}
+    order = nodes(roots)
+    for e in order:
+        for a in e.a:
+            users[a.id] = users.get(a.id, 0) + 1
+    rootids = {r.id for r in roots}
+
+    def fn(e, a):
+        if e.op not in ("and", "or") or e.t != "b":
+            return None
+        left = e.a[0]
+        if left.op != e.op or left.t != "b" or users.get(left.id) != 1 or left.id in rootids:
+            return None
+        x, y = a[0].a  # the rewritten left node: (x op y)
+        return E(e.op, (x, E(e.op, (y, a[1]), "b")), "b", e.k)
+    return _rebuild(roots, fn)
+
+
 def lazy_blocks(order, roots, min_cost):
     """Operands worth computing lazily (cl.py: inside an `if`; execute.py: on the
     voxels that need them): {node id: {slot: [exclusive nodes in order]}}

@@ -194,18 +194,20 @@ class FarRing:
         out |= np.hypot(dx, dy) > reach
         return [self._order[i] for i in np.flatnonzero(~out)]
 
-    def draw(self, target, tiles, fvp, stats=None, draft: bool = False) -> None:
+    def draw(self, target, tiles, fvp, stats=None, draft: bool = False,
+             samples: int = 1) -> None:
         """The tiles into the G-buffer target (after the chunks: depth tested, kept);
-        draft: at half their resolution (coarse())."""
+        draft: at half their resolution (coarse()); samples: the target's (MSAA: the
+        chunks' edge is tested per sample)."""
         if not tiles:
             return
         dev = self.dev
-        if self.prog is None:
-            self.prog = dev.program("far.vert", "far.frag")
+        if self.prog is None or self.prog[0] != samples:
+            self.prog = (samples, dev.program("far.vert", "far.frag", {"SAMPLES": samples}))
         if self._mask is None:
             self.set_near(())
         with dev.begin(target, DEPTH, False):
-            dev.use(self.prog, {"near_mask": self._mask},
+            dev.use(self.prog[1], {"near_mask": self._mask},
                     {"far_vp": fvp, "near_box": self._box})
             part = int(draft)
             for t in tiles:

@@ -99,7 +99,8 @@ def build(dev, T, sw: Switches, blocks, vol, walls, sprites=None) -> Graph:
         G.transparency = Peel(
             [GeometryPass(dev, p.target, [(n, block({**g, **x, "PEEL": i + 1})) for n, x in blend],
                           State("less", True, False), opaque_depth=T.g.depth,
-                          prev_depth=T.peel[i - 1].depth if i else T.g.depth, **tex)
+                          prev_depth=T.peel[i - 1].depth if i else T.g.depth,
+                          **({"opaque_normal": T.g.normal} if i == 0 else {}), **tex)
              for i, p in enumerate(T.peel[:sw.layers])],
             [Pass(dev, f, layer, clear=True, ssr_color=T.opaque, ssr_front=T.front, **gbuf(p))
              for f, p in zip(T.layer_fb[:sw.layers], T.peel)])

@@ -360,7 +360,8 @@ class Renderer:
             G.shadow.draw(f.cast, stats, shadow=True)  # blend casts none (§5.4.1)
         G.g.draw(f.view, stats)
         if f.far is not None:  # after the chunks: far pixels behind them fail the depth test
-            self.far.draw(f.targets.g.target, f.far[0], f.far[1], stats, self.s.far_draft)
+            self.far.draw(f.targets.g.target, f.far[0], f.far[1], stats, self.s.far_draft,
+                          f.targets.samples)
         G.transparency.geometry(f.view, stats)
         G.shade.run()
         G.transparency.shade(f.view, stats)

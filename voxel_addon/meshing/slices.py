@@ -51,7 +51,7 @@ def patch(old: ChunkMesh, P, cells, before=None, origin=(0, 0)) -> ChunkMesh | N
     slices, shapes = _affected(W, cells, before, rh)
     if not slices and not shapes:
         return old
-    gone: list = []     # old quads meshed again, by index
+    olds: dict = {}     # per slice: its old quads from the first changed row on
     seeds: dict = {}
     if slices:
         # a quad's (direction, slice, region) as one index into a table of the
@@ -61,7 +61,7 @@ def patch(old: ChunkMesh, P, cells, before=None, origin=(0, 0)) -> ChunkMesh | N
         nr = 256 // rh
         code = (f * 256 + s) * nr + q["z"] // rh
         lut = np.zeros(12 * 256 * nr, np.int8)
-        for c, row in slices.items():
+        for c, (row, _) in slices.items():
             d, rest = divmod(c, 65536)
             sl, r = divmod(rest, 256)
             i = (d * 256 + sl) * nr
@@ -83,17 +83,19 @@ def patch(old: ChunkMesh, P, cells, before=None, origin=(0, 0)) -> ChunkMesh | N
                 v0, rows, u, cols, sc = x, wd, z % rh, ht, (fh * 256 + y) * 256 + z // rh
             else:   # its slice code as _affected makes it (a z slice: region 0)
                 v0, rows, u, cols, sc = y, ht, x, wd, (fh * 256 + z) * 256
-            if v0 + rows >= fr:
-                gone.append(j)
+            if v0 + rows >= fr:     # open after the row above the first changed one
+                olds.setdefault(sc, []).append((u, cols, b, v0, v0 + rows - 1, j))
                 if v0 < fr:
                     seeds.setdefault(sc, []).append((u, cols, b, v0))
+    new, stops = _quads(W, slices, seeds, olds, shapes, rh)
+    if any(t[6] == _COLOR for t in new):
+        return None
+    # the old quads the greedy closed again: those closed before the row it stopped at
+    gone = sorted(o[5] for c, os_ in olds.items() for o in os_ if o[4] < stops[c])
     if shapes:
         cell = (q["x"].astype(np.int64) * 16 + q["y"]) * 256 + q["z"]
         planes = np.flatnonzero((q["face"] >= 6) & np.isin(cell, list(shapes)))
         gone = sorted(set(gone).union(planes.tolist()))
-    new = _quads(W, slices, seeds, shapes, rh)
-    if any(t[6] == _COLOR for t in new):
-        return None
     return _merge(old, q, gone, new, rh)
 
 
@@ -101,7 +103,7 @@ _COLOR = REGISTRY.id("color")
 
 
 def _affected(W, cells, before, rh):
-    """{code: first changed row} of the (direction, slice, region) sets to mesh again
+    """{code: (first, last) changed row} of the (direction, slice, region) sets to mesh again
     (code = (direction * 256 + slice) * 256 + region, 0 for z slices) and the cells
     (as patch's `cell`) whose X/# planes to redo. With `before` (the old block of
     each cell) a slice whose face keys stay the same is left as it is. A face of c
@@ -119,7 +121,7 @@ def _affected(W, cells, before, rh):
         return a if (wz if d >= 4 else ws)[a] and not opq[b] and not (same[a] and a == b) \
             else 0
 
-    slices, shapes = {}, set()     # slice code -> its first changed row
+    slices, shapes = {}, set()     # slice code -> its first and last changed rows
     for v in cells:
         x, y, z = v
         around = [v, (x - 1, y, z), (x + 1, y, z), (x, y - 1, z), (x, y + 1, z),
@@ -138,28 +140,33 @@ def _affected(W, cells, before, rh):
                         was is None or key(old[i], old[j], d) != key(new[i], new[j], d)):
                     code = (d * 256 + c[a]) * 256 + (c[2] // rh if a < 2 else 0)
                     row = c[0] if a == 1 else c[1]
-                    slices[code] = min(row, slices.get(code, row))
+                    lo, hi = slices.get(code, (row, row))
+                    slices[code] = (min(lo, row), max(hi, row))
     return slices, shapes
 
 
-def _quads(W, slices, seeds, shapes, rh):
+def _quads(W, slices, seeds, olds, shapes, rh):
     """Quads (x, y, z, face, w, h, block) of the slices from their first changed row on
     (`seeds`: the rects open there) and of the shape cells, from the window W
-    (18, 18, 256) of the new blocks. The x/y slices (rows of one region's rh layers)
+    (18, 18, 256) of the new blocks, and per slice the row its greedy stopped at
+    (`olds`: its old quads from the first changed row on, as patch keeps them). The x/y slices (rows of one region's rh layers)
     and z slices (16 x 16) go through one array of U = max(rh, 16) columns: a z
     slice's columns past 16 hold air (no key), and its keys come from the second
     half of the table (NumPy's fixed cost per call outweighs these tiny arrays)."""
-    meta = []     # (d, s, region start, first row, seeds)
+    meta = []     # (d, s, region start, first row, seeds, last row, olds, code)
     for code in sorted(slices):
         d, rest = divmod(code, 65536)
         s, r = divmod(rest, 256)
-        meta.append((d, s, r * rh, slices[code], sorted(seeds.get(code, ()))))
+        v1, v2 = slices[code]
+        meta.append((d, s, r * rh, v1, sorted(seeds.get(code, ())), v2,
+                     olds.get(code, ()), code))
     out: list = []
+    stops: dict = {}
     if meta:
         U = max(rh, 16)
         A = np.zeros((len(meta), 16, U), np.intp)
         B = np.zeros_like(A)                    # outside the world: air
-        for i, (d, s, z0, _, _) in enumerate(meta):
+        for i, (d, s, z0, *_) in enumerate(meta):
             n = s + 1 + (1 if d & 1 else -1)
             if d < 2:
                 A[i, :, :rh], B[i, :, :rh] = W[s + 1, 1:17, z0:z0 + rh], W[n, 1:17, z0:z0 + rh]
@@ -176,14 +183,14 @@ def _quads(W, slices, seeds, shapes, rh):
         A += B
         K = np.zeros((len(meta), 16, U + 1), np.uint16)  # a zero column ends each row
         K[:, :, :U] = _T_ALL[A]
-        _rects(K, meta, out)
+        _rects(K, meta, out, stops)
     for c in sorted(shapes):
         rest, z = divmod(c, 256)
         x, y = divmod(rest, 16)
         b = int(W[x + 1, y + 1, z])
         faces = (6, 7) if _X[b] else (8, 9, 10, 11) if _HASH[b] else ()
         out += [(x, y, z, f, 1, 1, b) for f in faces]
-    return out
+    return out, stops
 
 
 def _table(want):
@@ -199,7 +206,7 @@ _NF = len(FLAGS)
 _T_ALL = np.concatenate([_table(_WANT_SIDE), _table(_WANT_Z)])
 
 
-def _rects(K, meta, out):
+def _rects(K, meta, out, stops):
     """Greedy rects of every slice of K (n, 16, U + 1; last column zero) appended to
     `out` as quads."""
     n, V, U1 = K.shape
@@ -216,8 +223,8 @@ def _rects(K, meta, out):
     rows = [[[] for _ in range(V)] for _ in range(n)]
     for r, c, e, k in zip(row.tolist(), u0.tolist(), u1.tolist(), key.tolist()):
         rows[r // V][r % V].append((c, e, k))
-    for (d, s, z0, v1, opn), rs in zip(meta, rows):
-        got = greedy_rows(rs, v1, opn)
+    for (d, s, z0, v1, opn, v2, old, code), rs in zip(meta, rows):
+        got, stops[code] = greedy_rows(rs, v1, opn, v2, old)
         if d < 2:
             out += [(s, v0, z0 + u, d, nr, nc, k) for v0, u, nr, nc, k in got]
         elif d < 4:
@@ -226,14 +233,20 @@ def _rects(K, meta, out):
             out += [(u, v0, s, d, nc, nr, k) for v0, u, nr, nc, k in got]
 
 
-def greedy_rows(rows, start=0, opn=()):
+def greedy_rows(rows, start=0, opn=(), last=None, old=()):
     """Mikola's greedy row by row (as gpu/mesh_greedy.cl `span`) on one slice given as
     per row a list of segments (u0, u1, key): maximal runs of one non-zero key, by u0.
     An open rectangle continues while its whole width in the next row has its key (lies
     in one segment of that key); the cells no continuing rectangle covers start maximal
     runs. Returns (first row, first column, rows, columns, key) per rectangle. `start`,
     `opn`: go on from row `start` with these rectangles open (u, w, key, first row;
-    by u), as the rows above left them."""
+    by u), as the rows above left them.
+
+    `last`, `old`: the rows after `last` are those the old rectangles `old` (u, w,
+    key, first row, last row, ...) were made of: from there, once the open ones
+    equal the old ones open at that row, everything after comes out as before, so
+    stop. Then returns (rectangles, v): those closed before row v, the old ones
+    closed before v to be replaced by them (v = len(rows): all)."""
     out = []
     V = len(rows)
     for v in range(start, V + 1):
@@ -263,7 +276,10 @@ def greedy_rows(rows, start=0, opn=()):
                 i += 1
             if cur < b:
                 opn.append((cur, b - cur, k, v))
-    return out
+        if last is not None and v >= last and \
+                opn == sorted(o[:4] for o in old if o[3] <= v <= o[4]):
+            return out, v
+    return out if last is None else (out, V)
 
 
 def _merge(old, q, gone, new, rh):

@@ -115,16 +115,28 @@ class _Beyond(Exception):
     """_sparse with `part` reached the arrays' side faces."""
 
 
+@lru_cache(maxsize=1)
+def _lists():
+    """model.tables()' cost and emission as Python lists (_sparse reads them per voxel)."""
+    cost_t, _, _, emis, _, _ = model.tables()
+    return cost_t.tolist(), emis.tolist()
+
+
 def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False):
     """The box path's relight (removal, then a brightest-first refill) in plain Python
     on the voxels it touches, for an edit whose light barely moves (leaves or water on
     top: the daylight of the column below p changes); None (nothing written) once it
     has written SPARSE_BUDGET lanes or, with `part` (see update), read a voxel on the
-    arrays' side faces (the voxels it reads are those whose neighbours it visits)."""
-    cost_t, _, _, emis, _, _ = model.tables()
+    arrays' side faces (the voxels it reads are those whose neighbours it visits).
+    Its per-voxel reads are dict hits inlined in the loops (calls cost more here)."""
+    cost_l, emis_l = _lists()
     w, h, zs = blocks.shape
+    OPAQUE = model.OPAQUE_COST
+    bitem, litem = blocks.item, light.item
     cur: dict = {}  # voxel -> its four lanes as now (read from `light` on first use)
+    was: dict = {}  # voxel -> its packed light as read
     costs: dict = {}
+    nbs: dict = {}  # voxel -> its neighbours in the arrays
     days: dict = {}  # column -> its column-pass daylight (blocks as they are now)
 
     def get(v):
@@ -132,14 +144,12 @@ def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False):
         if lv is None:
             if part and not (0 < v[0] < w - 1 and 0 < v[1] < h - 1):
                 raise _Beyond
-            pv = int(light[v])
+            pv = was[v] = litem(v)
             lv = cur[v] = [pv & 15, pv >> 4 & 15, pv >> 8 & 15, pv >> 12]
         return lv
 
     def cost(v):
-        c = costs.get(v)
-        if c is None:
-            c = costs[v] = int(cost_t[blocks[v]])
+        c = costs[v] = cost_l[bitem(v)]
         return c
 
     def near(v):
@@ -157,15 +167,16 @@ def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False):
             out.append((i, j, k - 1))
         if k < zs - 1:
             out.append((i, j, k + 1))
+        nbs[v] = out
         return out
 
     def start(v, c):
         if c < 3:
-            return int(emis[blocks[v]][c])
+            return emis_l[bitem(v)][c]
         col = days.get(v[:2])
         if col is None:
             i, j = v[:2]
-            col = days[v[:2]] = _column_days(blocks, i, j, zs - 1, int(blocks[i, j, -1]))[0]
+            col = days[v[:2]] = _column_days(blocks, i, j, zs - 1, bitem(i, j, zs - 1))[0]
         return int(col[v[2]])
 
     p = (x, y, z)
@@ -177,8 +188,8 @@ def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False):
             lq = get(q)
             lq[3] = max(lq[3], int(now[q[2]]))
         lp = get(p)
-        e = [int(a) for a in emis[blocks[p]]] + [int(now[z])]
-        lp[:] = e if cost(p) == model.OPAQUE_COST else [max(a, b) for a, b in zip(lp, e)]
+        e = emis_l[bitem(p)] + [int(now[z])]
+        lp[:] = e if (costs.get(p) or cost(p)) == OPAQUE else [max(a, b) for a, b in zip(lp, e)]
         seeds += [(q, 3) for q in column] + [(p, c) for c in range(4)]
     else:  # removal from the changed lanes, as _remove does
         stack = []
@@ -190,9 +201,9 @@ def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False):
             lq[c] = 0
         while stack:
             q, c, val = stack.pop()
-            for n in near(q):
-                ln = get(n)
-                if 0 < ln[c] < val and cost(n) != model.OPAQUE_COST:
+            for n in nbs.get(q) or near(q):
+                ln = cur.get(n) or get(n)
+                if 0 < ln[c] < val and (costs.get(n) or cost(n)) != OPAQUE:
                     writes += 1
                     if writes > SPARSE_BUDGET:
                         return None
@@ -202,17 +213,17 @@ def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False):
                     gone.append((n, c))
         for q, c in gone:
             get(q)[c] = start(q, c)
-        seeds += gone + [(n, c) for q, c in gone for n in near(q)]
+        seeds += gone + [(n, c) for q, c in gone for n in (nbs.get(q) or near(q))]
     buckets: list = [[] for _ in range(model.MAX + 1)]
     for q, c in seeds:
-        buckets[get(q)[c]].append((q, c))
+        buckets[(cur.get(q) or get(q))[c]].append((q, c))
     for val in range(model.MAX, 1, -1):
         for q, c in buckets[val]:
             if cur[q][c] != val:
                 continue  # raised since: done at its new value
-            for n in near(q):
-                nv = val - cost(n)
-                ln = get(n)
+            for n in nbs.get(q) or near(q):
+                nv = val - (costs.get(n) or cost(n))
+                ln = cur.get(n) or get(n)
                 if nv > ln[c]:
                     writes += 1
                     if writes > SPARSE_BUDGET:
@@ -223,7 +234,7 @@ def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False):
     moved = False
     for v, lv in cur.items():
         pv = lv[0] | lv[1] << 4 | lv[2] << 8 | lv[3] << 12
-        if pv != light[v]:
+        if pv != was[v]:
             light[v] = pv
             moved = True
             lo = [min(a, b) for a, b in zip(lo, v)]

@@ -35,16 +35,44 @@ R = model.MAX - 1  # reach of a change
 
 def _column_days(blocks: np.ndarray, x: int, y: int, z: int, old: int) -> np.ndarray:
     """Column-pass daylight of column (x, y) at layers 0..z with the block at z as it
-    is now (row 0) and as `old` (row 1): (2, z + 1)."""
+    is now (row 0) and as `old` (row 1): (2, z + 1). Walked down in Python from the
+    column's highest block below z to the first opaque voxel or the first 0 (below
+    both it stays 0): a few layers at the surface, where NumPy's calls over the
+    whole column cost more."""
     _, att, opaque, _, _, _ = model.tables()
+    att_l, opaque_l = _day_lists()
     above = blocks[x, y, z + 1:]
-    carry = 0 if opaque[above].any() else max(model.MAX - int(att[above].sum()), 0)
-    col = np.empty((2, z + 1), blocks.dtype)
-    col[:] = blocks[x, y, z::-1]  # from z down
-    col[1, 0] = old
-    a = np.cumsum(att[col], axis=1, dtype=np.int16)
-    blocked = np.maximum.accumulate(opaque[col], axis=1).astype(bool)
-    return np.where(blocked, 0, np.clip(carry - a, 0, model.MAX))[:, ::-1]
+    carry = model.MAX if not above.any() else \
+        0 if opaque[above].any() else max(model.MAX - int(att[above].sum()), 0)
+    out = np.zeros((2, z + 1), np.int16)
+    item = blocks.item
+    below = np.flatnonzero(blocks[x, y, :z])
+    t = int(below[-1]) if below.size else -1    # air from t + 1 up to z: the carry stays
+    for r, b in enumerate((item(x, y, z), old)):
+        if opaque_l[b]:
+            continue
+        c = carry - att_l[b]
+        if c <= 0:
+            continue
+        out[r, t + 1:z + 1] = c
+        k = t
+        while k >= 0:
+            b = item(x, y, k)
+            if opaque_l[b]:
+                break
+            c -= att_l[b]
+            if c <= 0:
+                break
+            out[r, k] = c
+            k -= 1
+    return out
+
+
+@lru_cache(maxsize=1)
+def _day_lists():
+    """model.tables()' attenuation and opacity as Python lists (_column_days)."""
+    _, att, opaque, _, _, _ = model.tables()
+    return att.tolist(), opaque.tolist()
 
 
 @lru_cache(maxsize=1)

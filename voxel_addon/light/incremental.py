@@ -106,24 +106,24 @@ def _local(blocks, light, x, y, z, now, zc, brighter):
       everything lit through n;
     - the column below p: rising start values there must not exceed the old light
       (brighter edits); a darker edit must not change it at all."""
-    cost_t, _, _, emis, _, _ = model.tables()
     w, h, zs = blocks.shape
     if zc < z and not (brighter and (now[zc:z] <= (light[x, y, zc:z] >> 12)).all()):
         return None
-    new = int(blocks[x, y, z])
+    new = blocks.item(x, y, z)
     nb = [q for q in ((x - 1, y, z), (x + 1, y, z), (x, y - 1, z), (x, y + 1, z),
                       (x, y, z - 1), (x, y, z + 1))
           if 0 <= q[0] < w and 0 <= q[1] < h and 0 <= q[2] < zs]
-    lp = int(light[x, y, z])
+    cost_l, emis_l = _lists()
+    lp = light.item(x, y, z)
     was = [(lp >> k) & 15 for k in SHIFTS]
-    c = int(cost_t[new])
-    e = [int(v) for v in emis[new]]
+    c = cost_l[new]
+    e = emis_l[new]
     if c == model.OPAQUE_COST:
         val = e + [0]
     else:
         val = e + [int(now[z])]
         for q in nb:
-            lq = int(light[q])
+            lq = light.item(q)
             val = [max(a, ((lq >> k) & 15) - c) for a, k in zip(val, SHIFTS)]
     spreads = False
     for k, (a, b) in enumerate(zip(val, was)):
@@ -274,27 +274,28 @@ def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False):
 
 def _raises(blocks, light, nb, k, v):
     """Whether p at value v of component k raises one of its neighbours `nb`."""
-    cost_t = model.tables()[0]
+    cost_l = _lists()[0]
     sh = SHIFTS[k]
-    return any(v - int(cost_t[blocks[q]]) > (int(light[q]) >> sh) & 15 for q in nb)
+    return any(v - cost_l[blocks.item(q)] > (light.item(q) >> sh) & 15 for q in nb)
 
 
 def _kept(blocks, light, p, nb, k, v):
     """Whether every neighbour of p that may owe component k to p's old value v has
     another support (see _local)."""
-    cost_t, _, _, emis, _, _ = model.tables()
+    cost_l, emis_l = _lists()
     w, h, zs = blocks.shape
     sh = SHIFTS[k]
     for q in nb:
-        cq = int(cost_t[blocks[q]])
-        lq = (int(light[q]) >> sh) & 15
+        bq = blocks.item(q)
+        cq = cost_l[bq]
+        lq = (light.item(q) >> sh) & 15
         if cq == model.OPAQUE_COST or lq != v - cq or lq == 0:
             continue  # opaque, lit better elsewhere, or dark anyway
-        if k < 3 and emis[blocks[q]][k] >= lq:
+        if k < 3 and emis_l[bq][k] >= lq:
             continue
         i, j, l = q
         if not any(0 <= m[0] < w and 0 <= m[1] < h and 0 <= m[2] < zs and m != p
-                   and ((int(light[m]) >> sh) & 15) - cq >= lq
+                   and ((light.item(m) >> sh) & 15) - cq >= lq
                    for m in ((i - 1, j, l), (i + 1, j, l), (i, j - 1, l), (i, j + 1, l),
                              (i, j, l - 1), (i, j, l + 1))):
             return False
@@ -322,14 +323,16 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
     now, before = _column_days(blocks, x, y, z, old)
     diff = np.flatnonzero(now != before)
     zc = int(diff[0]) if diff.size else z
-    brighter = (cost_t[new] <= cost_t[old] and (emis[new] >= emis[old]).all()
-                and (now >= before).all())
+    cost_l, emis_l = _lists()
+    en, eo = emis_l[new], emis_l[old]
+    brighter = (cost_l[new] <= cost_l[old] and all(a >= b for a, b in zip(en, eo))
+                and bool((now >= before).all()))
     box = _local(blocks, light, x, y, z, now, zc, brighter)
     if isinstance(box, tuple):
         STATS["local"] += 1
         return box
     pval = box  # p's exact new light when only its rising components must flood
-    if max(emis[new].max(), emis[old].max()) <= SPARSE_EMISSION:
+    if max(en + eo) <= SPARSE_EMISSION:
         try:
             box = _sparse(blocks, light, x, y, z, old, now, zc, brighter, part)
         except _Beyond:

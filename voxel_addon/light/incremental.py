@@ -40,7 +40,7 @@ def _column_days(blocks: np.ndarray, x: int, y: int, z: int, old: int) -> np.nda
     both it stays 0): a few layers at the surface, where NumPy's calls over the
     whole column cost more."""
     _, att, opaque, _, _, _ = model.tables()
-    att_l, opaque_l = _day_lists()
+    _, att_l, opaque_l, _ = model.lists()
     above = blocks[x, y, z + 1:]
     carry = model.MAX if not above.any() else \
         0 if opaque[above].any() else max(model.MAX - int(att[above].sum()), 0)
@@ -66,13 +66,6 @@ def _column_days(blocks: np.ndarray, x: int, y: int, z: int, old: int) -> np.nda
             out[r, k] = c
             k -= 1
     return out
-
-
-@lru_cache(maxsize=1)
-def _day_lists():
-    """model.tables()' attenuation and opacity as Python lists (_column_days)."""
-    _, att, opaque, _, _, _ = model.tables()
-    return att.tolist(), opaque.tolist()
 
 
 @lru_cache(maxsize=1)
@@ -113,7 +106,7 @@ def _local(blocks, light, x, y, z, now, zc, brighter):
     nb = [q for q in ((x - 1, y, z), (x + 1, y, z), (x, y - 1, z), (x, y + 1, z),
                       (x, y, z - 1), (x, y, z + 1))
           if 0 <= q[0] < w and 0 <= q[1] < h and 0 <= q[2] < zs]
-    cost_l, emis_l = _lists()
+    cost_l, _, _, emis_l = model.lists()
     lp = light.item(x, y, z)
     was = [(lp >> k) & 15 for k in SHIFTS]
     c = cost_l[new]
@@ -143,13 +136,6 @@ class _Beyond(Exception):
     """_sparse with `part` reached the arrays' side faces."""
 
 
-@lru_cache(maxsize=1)
-def _lists():
-    """model.tables()' cost and emission as Python lists (_sparse reads them per voxel)."""
-    cost_t, _, _, emis, _, _ = model.tables()
-    return cost_t.tolist(), emis.tolist()
-
-
 def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False):
     """The box path's relight (removal, then a brightest-first refill) in plain Python
     on the voxels it touches, for an edit whose light barely moves (leaves or water on
@@ -157,7 +143,7 @@ def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False):
     has written SPARSE_BUDGET lanes or, with `part` (see update), read a voxel on the
     arrays' side faces (the voxels it reads are those whose neighbours it visits).
     Its per-voxel reads are dict hits inlined in the loops (calls cost more here)."""
-    cost_l, emis_l = _lists()
+    cost_l, _, _, emis_l = model.lists()
     w, h, zs = blocks.shape
     OPAQUE = model.OPAQUE_COST
     bitem, litem = blocks.item, light.item
@@ -274,7 +260,7 @@ def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False):
 
 def _raises(blocks, light, nb, k, v):
     """Whether p at value v of component k raises one of its neighbours `nb`."""
-    cost_l = _lists()[0]
+    cost_l = model.lists()[0]
     sh = SHIFTS[k]
     return any(v - cost_l[blocks.item(q)] > (light.item(q) >> sh) & 15 for q in nb)
 
@@ -282,7 +268,7 @@ def _raises(blocks, light, nb, k, v):
 def _kept(blocks, light, p, nb, k, v):
     """Whether every neighbour of p that may owe component k to p's old value v has
     another support (see _local)."""
-    cost_l, emis_l = _lists()
+    cost_l, _, _, emis_l = model.lists()
     w, h, zs = blocks.shape
     sh = SHIFTS[k]
     for q in nb:
@@ -323,7 +309,7 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
     now, before = _column_days(blocks, x, y, z, old)
     diff = np.flatnonzero(now != before)
     zc = int(diff[0]) if diff.size else z
-    cost_l, emis_l = _lists()
+    cost_l, _, _, emis_l = model.lists()
     en, eo = emis_l[new], emis_l[old]
     brighter = (cost_l[new] <= cost_l[old] and all(a >= b for a, b in zip(en, eo))
                 and bool((now >= before).all()))

@@ -315,10 +315,10 @@ def _merge(old, q, gone, new, rh):
         else:
             pos += [a0] * (j - i)
         i = j
-    ft, sd = REGISTRY.face_texture, _SIDE_L
+    ft, sd = _FT_L, _SIDE_L
     recs, verts = [], []
     for s, _, (x, y, z, f, w, h, b) in new:
-        layer = int(ft[b, sd[f]])
+        layer = ft[b][sd[f]]
         recs.append((x, y, z, f, w, h, b, layer, 0))
         pq = x | y << 5 | (z - z // rh * rh) << 10 | f << 17 | layer << 21 | _BITS_L[b] \
             | (_INSET_L[b] if f >= 8 else 0)
@@ -367,6 +367,7 @@ def _merge(old, q, gone, new, rh):
 
 _PASS_L = PASS_OF.tolist()
 _SIDE_L = SIDE.tolist()
+_FT_L = REGISTRY.face_texture.tolist()
 _LOW7 = np.uint64((1 << 56) - 1)
 _BITS_L, _INSET_L = (t.tolist() for t in (_BLOCK_BITS, _INSET_BITS))
 _PA_L, _PB_L, _PC_L = (t.tolist() for t in (_PA, _PB, _PC))

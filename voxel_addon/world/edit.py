@@ -461,6 +461,8 @@ def _relight(world, blocks, lit, steps, near, win, sight=None, part=False) -> se
 
 def _same(a, b) -> bool:
     # colours live beside the packed vertices: a recoloured voxel changes only them
+    if a is b:
+        return True     # meshing.patch found nothing to change
     return a is not None and np.array_equal(a.vertices, b.vertices) and \
         np.array_equal(a.ranges, b.ranges) and (a.colors is None) == (b.colors is None) \
         and (a.colors is None or np.array_equal(a.colors, b.colors))

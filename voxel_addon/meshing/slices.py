@@ -164,18 +164,21 @@ def _quads(W, slices, seeds, olds, shapes, rh):
     stops: dict = {}
     if meta:
         U = max(rh, 16)
-        A = np.zeros((len(meta), 16, U), np.intp)
+        # rows from each slice's first changed one (those above stay air: no keys)
+        A = np.zeros((len(meta), 16, U), np.int32)
         B = np.zeros_like(A)                    # outside the world: air
-        for i, (d, s, z0, *_) in enumerate(meta):
+        for i, (d, s, z0, v, *_) in enumerate(meta):
             n = s + 1 + (1 if d & 1 else -1)
             if d < 2:
-                A[i, :, :rh], B[i, :, :rh] = W[s + 1, 1:17, z0:z0 + rh], W[n, 1:17, z0:z0 + rh]
+                A[i, v:, :rh] = W[s + 1, 1 + v:17, z0:z0 + rh]
+                B[i, v:, :rh] = W[n, 1 + v:17, z0:z0 + rh]
             elif d < 4:
-                A[i, :, :rh], B[i, :, :rh] = W[1:17, s + 1, z0:z0 + rh], W[1:17, n, z0:z0 + rh]
+                A[i, v:, :rh] = W[1 + v:17, s + 1, z0:z0 + rh]
+                B[i, v:, :rh] = W[1 + v:17, n, z0:z0 + rh]
             else:
-                A[i, :, :16] = W[1:17, 1:17, s].T            # rows y, columns x
+                A[i, v:, :16] = W[1:17, 1 + v:17, s].T            # rows y, columns x
                 if 0 <= n - 1 < 256:
-                    B[i, :, :16] = W[1:17, 1:17, n - 1].T
+                    B[i, v:, :16] = W[1:17, 1 + v:17, n - 1].T
         flat = sum(m[0] >= 4 for m in meta)     # z slices sort last
         if flat:
             A[len(meta) - flat:] += _NF
@@ -207,8 +210,8 @@ _T_ALL = np.concatenate([_table(_WANT_SIDE), _table(_WANT_Z)])
 
 
 def _rects(K, meta, out, stops):
-    """Greedy rects of every slice of K (n, 16, U + 1; last column zero) appended to
-    `out` as quads."""
+    """Greedy rects of every slice of K (n, 16, U + 1; last column zero; rows above a
+    slice's first changed row zero) appended to `out` as quads."""
     n, V, U1 = K.shape
     F = K.ravel()
     ch = np.flatnonzero(F[1:] != F[:-1]) + 1       # segments: runs of one key
@@ -217,8 +220,6 @@ def _rects(K, meta, out, stops):
     live = np.flatnonzero(key)
     a0, a1, key = ch[live], ch[live + 1], key[live]
     row, u0 = np.divmod(a0, U1)
-    late = row % V >= np.array([m[3] for m in meta])[row // V]   # rows from the first changed
-    row, u0, a1, key = row[late], u0[late], a1[late], key[late]
     u1 = a1 - row * U1
     rows = [[[] for _ in range(V)] for _ in range(n)]
     for r, c, e, k in zip(row.tolist(), u0.tolist(), u1.tolist(), key.tolist()):

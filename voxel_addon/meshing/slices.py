@@ -149,10 +149,11 @@ def _quads(W, slices, seeds, olds, shapes, rh):
     """Quads (x, y, z, face, w, h, block) of the slices from their first changed row on
     (`seeds`: the rects open there) and of the shape cells, from the window W
     (18, 18, 256) of the new blocks, and per slice the row its greedy stopped at
-    (`olds`: its old quads from the first changed row on, as patch keeps them). The x/y slices (rows of one region's rh layers)
-    and z slices (16 x 16) go through one array of U = max(rh, 16) columns: a z
-    slice's columns past 16 hold air (no key), and its keys come from the second
-    half of the table (NumPy's fixed cost per call outweighs these tiny arrays)."""
+    (`olds`: its old quads from the first changed row on, as patch keeps them). The
+    x/y slices (rows of one region's rh layers) and z slices (16 x 16) go through one
+    array of U = max(rh, 16) columns: a z slice's columns past 16 hold air (no key),
+    and its keys come from the second half of the table (NumPy's fixed cost per call
+    outweighs these tiny arrays)."""
     meta = []     # (d, s, region start, first row, seeds, last row, olds, code)
     for code in sorted(slices):
         d, rest = divmod(code, 65536)

@@ -122,11 +122,12 @@ def _affected(W, cells, before, rh):
             else 0
 
     slices, shapes = {}, set()     # slice code -> its first and last changed rows
+    item = W.item
     for v in cells:
         x, y, z = v
         around = [v, (x - 1, y, z), (x + 1, y, z), (x, y - 1, z), (x, y + 1, z),
                   (x, y, z - 1), (x, y, z + 1)]    # v, then per direction d: around[d + 1]
-        new = [int(W[i + 1, j + 1, k]) if -1 <= i <= 16 and -1 <= j <= 16 and 0 <= k < 256
+        new = [item(i + 1, j + 1, k) if -1 <= i <= 16 and -1 <= j <= 16 and 0 <= k < 256
                else 0 for i, j, k in around]
         old = new if was is None else [was.get(c, b) for c, b in zip(around, new)]
         inv = 0 <= x < 16 and 0 <= y < 16

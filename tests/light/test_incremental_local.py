@@ -185,3 +185,30 @@ def test_part_window_relights_exactly_or_says_it_cannot():
             assert not outside.any(), (x, y, z, new)
         done[got is None] += 1
     assert min(done.values()) >= 5, done
+
+
+def test_column_days_equals_the_column_pass():
+    """incremental._column_days (walked down in Python from the highest block below
+    z, air runs at once) against the column pass written with NumPy over the whole
+    column: water, leaves and glass under and over z, caves of air below the
+    surface, opaque voxels at z or just under it, z at the floor and the top."""
+    from voxel_addon.light import model
+    _, att, opaque, _, _, _ = model.tables()
+    ids = [0, 0, 0, STONE, R.id("water"), R.id("leaves"), R.id("glass"), R.id("dirt")]
+    rng = np.random.default_rng(11)
+    for i in range(300):
+        b = np.zeros((1, 1, 256), np.uint16, order="F")
+        top = int(rng.integers(1, 256))
+        b[0, 0, :top] = rng.choice(ids, top)
+        if i % 3 == 0:
+            b[0, 0, int(rng.integers(0, 256)):] = 0     # open above
+        z = (0, 255)[i % 2] if i < 4 else int(rng.integers(0, 256))
+        old = int(rng.choice(ids))
+        col = np.stack([b[0, 0, :z + 1], b[0, 0, :z + 1]])
+        col[1, z] = old
+        above = b[0, 0, z + 1:]
+        carry = 0 if opaque[above].any() else max(model.MAX - int(att[above].sum()), 0)
+        a = np.cumsum(att[col[:, ::-1]], axis=1, dtype=np.int16)[:, ::-1]
+        blocked = np.maximum.accumulate(opaque[col[:, ::-1]], axis=1)[:, ::-1].astype(bool)
+        want = np.where(blocked, 0, np.clip(carry - a, 0, model.MAX))
+        assert np.array_equal(incremental._column_days(b, 0, 0, z, old), want), (i, z)

@@ -35,16 +35,37 @@ R = model.MAX - 1  # reach of a change
 
 def _column_days(blocks: np.ndarray, x: int, y: int, z: int, old: int) -> np.ndarray:
     """Column-pass daylight of column (x, y) at layers 0..z with the block at z as it
-    is now (row 0) and as `old` (row 1): (2, z + 1)."""
+    is now (row 0) and as `old` (row 1): (2, z + 1). Walked down in Python from the
+    column's highest block below z to the first opaque voxel or the first 0 (below
+    both it stays 0): a few layers at the surface, where NumPy's calls over the
+    whole column cost more."""
     _, att, opaque, _, _, _ = model.tables()
+    _, att_l, opaque_l, _ = model.lists()
     above = blocks[x, y, z + 1:]
-    carry = 0 if opaque[above].any() else max(model.MAX - int(att[above].sum()), 0)
-    col = np.empty((2, z + 1), blocks.dtype)
-    col[:] = blocks[x, y, z::-1]  # from z down
-    col[1, 0] = old
-    a = np.cumsum(att[col], axis=1, dtype=np.int16)
-    blocked = np.maximum.accumulate(opaque[col], axis=1).astype(bool)
-    return np.where(blocked, 0, np.clip(carry - a, 0, model.MAX))[:, ::-1]
+    carry = model.MAX if not above.any() else \
+        0 if opaque[above].any() else max(model.MAX - int(att[above].sum()), 0)
+    out = np.zeros((2, z + 1), np.int16)
+    item = blocks.item
+    below = np.flatnonzero(blocks[x, y, :z])
+    t = int(below[-1]) if below.size else -1    # air from t + 1 up to z: the carry stays
+    for r, b in enumerate((item(x, y, z), old)):
+        if opaque_l[b]:
+            continue
+        c = carry - att_l[b]
+        if c <= 0:
+            continue
+        out[r, t + 1:z + 1] = c
+        k = t
+        while k >= 0:
+            b = item(x, y, k)
+            if opaque_l[b]:
+                break
+            c -= att_l[b]
+            if c <= 0:
+                break
+            out[r, k] = c
+            k -= 1
+    return out
 
 
 @lru_cache(maxsize=1)
@@ -78,24 +99,24 @@ def _local(blocks, light, x, y, z, now, zc, brighter):
       everything lit through n;
     - the column below p: rising start values there must not exceed the old light
       (brighter edits); a darker edit must not change it at all."""
-    cost_t, _, _, emis, _, _ = model.tables()
     w, h, zs = blocks.shape
     if zc < z and not (brighter and (now[zc:z] <= (light[x, y, zc:z] >> 12)).all()):
         return None
-    new = int(blocks[x, y, z])
+    new = blocks.item(x, y, z)
     nb = [q for q in ((x - 1, y, z), (x + 1, y, z), (x, y - 1, z), (x, y + 1, z),
                       (x, y, z - 1), (x, y, z + 1))
           if 0 <= q[0] < w and 0 <= q[1] < h and 0 <= q[2] < zs]
-    lp = int(light[x, y, z])
+    cost_l, _, _, emis_l = model.lists()
+    lp = light.item(x, y, z)
     was = [(lp >> k) & 15 for k in SHIFTS]
-    c = int(cost_t[new])
-    e = [int(v) for v in emis[new]]
+    c = cost_l[new]
+    e = emis_l[new]
     if c == model.OPAQUE_COST:
         val = e + [0]
     else:
         val = e + [int(now[z])]
         for q in nb:
-            lq = int(light[q])
+            lq = light.item(q)
             val = [max(a, ((lq >> k) & 15) - c) for a, k in zip(val, SHIFTS)]
     spreads = False
     for k, (a, b) in enumerate(zip(val, was)):
@@ -120,11 +141,16 @@ def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False):
     on the voxels it touches, for an edit whose light barely moves (leaves or water on
     top: the daylight of the column below p changes); None (nothing written) once it
     has written SPARSE_BUDGET lanes or, with `part` (see update), read a voxel on the
-    arrays' side faces (the voxels it reads are those whose neighbours it visits)."""
-    cost_t, _, _, emis, _, _ = model.tables()
+    arrays' side faces (the voxels it reads are those whose neighbours it visits).
+    Its per-voxel reads are dict hits inlined in the loops (calls cost more here)."""
+    cost_l, _, _, emis_l = model.lists()
     w, h, zs = blocks.shape
+    OPAQUE = model.OPAQUE_COST
+    bitem, litem = blocks.item, light.item
     cur: dict = {}  # voxel -> its four lanes as now (read from `light` on first use)
+    was: dict = {}  # voxel -> its packed light as read
     costs: dict = {}
+    nbs: dict = {}  # voxel -> its neighbours in the arrays
     days: dict = {}  # column -> its column-pass daylight (blocks as they are now)
 
     def get(v):
@@ -132,14 +158,12 @@ def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False):
         if lv is None:
             if part and not (0 < v[0] < w - 1 and 0 < v[1] < h - 1):
                 raise _Beyond
-            pv = int(light[v])
+            pv = was[v] = litem(v)
             lv = cur[v] = [pv & 15, pv >> 4 & 15, pv >> 8 & 15, pv >> 12]
         return lv
 
     def cost(v):
-        c = costs.get(v)
-        if c is None:
-            c = costs[v] = int(cost_t[blocks[v]])
+        c = costs[v] = cost_l[bitem(v)]
         return c
 
     def near(v):
@@ -157,15 +181,16 @@ def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False):
             out.append((i, j, k - 1))
         if k < zs - 1:
             out.append((i, j, k + 1))
+        nbs[v] = out
         return out
 
     def start(v, c):
         if c < 3:
-            return int(emis[blocks[v]][c])
+            return emis_l[bitem(v)][c]
         col = days.get(v[:2])
         if col is None:
             i, j = v[:2]
-            col = days[v[:2]] = _column_days(blocks, i, j, zs - 1, int(blocks[i, j, -1]))[0]
+            col = days[v[:2]] = _column_days(blocks, i, j, zs - 1, bitem(i, j, zs - 1))[0]
         return int(col[v[2]])
 
     p = (x, y, z)
@@ -177,8 +202,8 @@ def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False):
             lq = get(q)
             lq[3] = max(lq[3], int(now[q[2]]))
         lp = get(p)
-        e = [int(a) for a in emis[blocks[p]]] + [int(now[z])]
-        lp[:] = e if cost(p) == model.OPAQUE_COST else [max(a, b) for a, b in zip(lp, e)]
+        e = emis_l[bitem(p)] + [int(now[z])]
+        lp[:] = e if (costs.get(p) or cost(p)) == OPAQUE else [max(a, b) for a, b in zip(lp, e)]
         seeds += [(q, 3) for q in column] + [(p, c) for c in range(4)]
     else:  # removal from the changed lanes, as _remove does
         stack = []
@@ -190,9 +215,9 @@ def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False):
             lq[c] = 0
         while stack:
             q, c, val = stack.pop()
-            for n in near(q):
-                ln = get(n)
-                if 0 < ln[c] < val and cost(n) != model.OPAQUE_COST:
+            for n in nbs.get(q) or near(q):
+                ln = cur.get(n) or get(n)
+                if 0 < ln[c] < val and (costs.get(n) or cost(n)) != OPAQUE:
                     writes += 1
                     if writes > SPARSE_BUDGET:
                         return None
@@ -202,17 +227,17 @@ def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False):
                     gone.append((n, c))
         for q, c in gone:
             get(q)[c] = start(q, c)
-        seeds += gone + [(n, c) for q, c in gone for n in near(q)]
+        seeds += gone + [(n, c) for q, c in gone for n in (nbs.get(q) or near(q))]
     buckets: list = [[] for _ in range(model.MAX + 1)]
     for q, c in seeds:
-        buckets[get(q)[c]].append((q, c))
+        buckets[(cur.get(q) or get(q))[c]].append((q, c))
     for val in range(model.MAX, 1, -1):
         for q, c in buckets[val]:
             if cur[q][c] != val:
                 continue  # raised since: done at its new value
-            for n in near(q):
-                nv = val - cost(n)
-                ln = get(n)
+            for n in nbs.get(q) or near(q):
+                nv = val - (costs.get(n) or cost(n))
+                ln = cur.get(n) or get(n)
                 if nv > ln[c]:
                     writes += 1
                     if writes > SPARSE_BUDGET:
@@ -223,7 +248,7 @@ def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False):
     moved = False
     for v, lv in cur.items():
         pv = lv[0] | lv[1] << 4 | lv[2] << 8 | lv[3] << 12
-        if pv != light[v]:
+        if pv != was[v]:
             light[v] = pv
             moved = True
             lo = [min(a, b) for a, b in zip(lo, v)]
@@ -235,27 +260,28 @@ def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False):
 
 def _raises(blocks, light, nb, k, v):
     """Whether p at value v of component k raises one of its neighbours `nb`."""
-    cost_t = model.tables()[0]
+    cost_l = model.lists()[0]
     sh = SHIFTS[k]
-    return any(v - int(cost_t[blocks[q]]) > (int(light[q]) >> sh) & 15 for q in nb)
+    return any(v - cost_l[blocks.item(q)] > (light.item(q) >> sh) & 15 for q in nb)
 
 
 def _kept(blocks, light, p, nb, k, v):
     """Whether every neighbour of p that may owe component k to p's old value v has
     another support (see _local)."""
-    cost_t, _, _, emis, _, _ = model.tables()
+    cost_l, _, _, emis_l = model.lists()
     w, h, zs = blocks.shape
     sh = SHIFTS[k]
     for q in nb:
-        cq = int(cost_t[blocks[q]])
-        lq = (int(light[q]) >> sh) & 15
+        bq = blocks.item(q)
+        cq = cost_l[bq]
+        lq = (light.item(q) >> sh) & 15
         if cq == model.OPAQUE_COST or lq != v - cq or lq == 0:
             continue  # opaque, lit better elsewhere, or dark anyway
-        if k < 3 and emis[blocks[q]][k] >= lq:
+        if k < 3 and emis_l[bq][k] >= lq:
             continue
         i, j, l = q
         if not any(0 <= m[0] < w and 0 <= m[1] < h and 0 <= m[2] < zs and m != p
-                   and ((int(light[m]) >> sh) & 15) - cq >= lq
+                   and ((light.item(m) >> sh) & 15) - cq >= lq
                    for m in ((i - 1, j, l), (i + 1, j, l), (i, j - 1, l), (i, j + 1, l),
                              (i, j, l - 1), (i, j, l + 1))):
             return False
@@ -283,14 +309,16 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
     now, before = _column_days(blocks, x, y, z, old)
     diff = np.flatnonzero(now != before)
     zc = int(diff[0]) if diff.size else z
-    brighter = (cost_t[new] <= cost_t[old] and (emis[new] >= emis[old]).all()
-                and (now >= before).all())
+    cost_l, _, _, emis_l = model.lists()
+    en, eo = emis_l[new], emis_l[old]
+    brighter = (cost_l[new] <= cost_l[old] and all(a >= b for a, b in zip(en, eo))
+                and bool((now >= before).all()))
     box = _local(blocks, light, x, y, z, now, zc, brighter)
     if isinstance(box, tuple):
         STATS["local"] += 1
         return box
     pval = box  # p's exact new light when only its rising components must flood
-    if max(emis[new].max(), emis[old].max()) <= SPARSE_EMISSION:
+    if max(en + eo) <= SPARSE_EMISSION:
         try:
             box = _sparse(blocks, light, x, y, z, old, now, zc, brighter, part)
         except _Beyond:

@@ -59,6 +59,14 @@ def tables():
     return cost, att, opaque, emis, packed, air
 
 
+@lru_cache(maxsize=1)
+def lists():
+    """tables()' cost, attenuation, opacity and emission as Python lists: an edit reads
+    them for a handful of voxels, where NumPy's scalar indexing costs more."""
+    cost, att, opaque, emis, _, _ = tables()
+    return cost.tolist(), att.tolist(), opaque.tolist(), emis.tolist()
+
+
 def pack(lanes: np.ndarray) -> np.ndarray:
     """[..., 4] uint8 R,G,B,D -> packed uint16."""
     l16 = lanes.astype(np.uint16)

@@ -10,6 +10,8 @@ on the old ones (tested against both backends).
 """
 from __future__ import annotations
 
+from bisect import bisect_right
+
 import numpy as np
 
 from ..core.blocks import REGISTRY
@@ -49,19 +51,17 @@ def patch(old: ChunkMesh, P, cells, before=None, origin=(0, 0)) -> ChunkMesh | N
     slices, shapes = _affected(W, cells, before, rh)
     if not slices and not shapes:
         return old
-    n = len(q)
-    keep = np.ones(n, bool)
+    olds: dict = {}     # per slice: its old quads from the first changed row on
     seeds: dict = {}
     if slices:
         # a quad's (direction, slice, region) as one index into a table of the
         # slices' first changed rows (+1; 0: not meshed again), built per call
         f = q["face"].astype(np.intp)
         s = np.choose(_AXC[f], (q["x"], q["y"], q["z"]))
-        reg = q["z"] // rh
         nr = 256 // rh
-        code = (f * 256 + s) * nr + reg
+        code = (f * 256 + s) * nr + q["z"] // rh
         lut = np.zeros(12 * 256 * nr, np.int8)
-        for c, row in slices.items():
+        for c, (row, _) in slices.items():
             d, rest = divmod(c, 65536)
             sl, r = divmod(rest, 256)
             i = (d * 256 + sl) * nr
@@ -71,41 +71,39 @@ def patch(old: ChunkMesh, P, cells, before=None, origin=(0, 0)) -> ChunkMesh | N
                 lut[i:i + nr] = row + 1
         first = lut[code]
         hit = np.flatnonzero(first)
-        if hit.size:
-            # rows above a slice's first changed row run as before: rects that end
-            # above it stay, those open at it seed the greedy there
-            # (gpu/mesh_greedy.cl's state)
-            h = q[hit]
-            fh = h["face"].astype(np.intp)
-            a = _AX[fh]
-            x, y = h["x"].astype(np.int64), h["y"].astype(np.int64)
-            wd, ht = h["w"].astype(np.int64), h["h"].astype(np.int64)
-            v0 = np.where(a == 1, x, y)
-            rows = np.where(a == 2, ht, wd)
-            fr = first[hit].astype(np.int64) - 1
-            gone = v0 + rows >= fr
-            keep[hit[gone]] = False
-            # their slice codes as _affected makes them (a z slice: region 0)
-            ch = (fh * 256 + s[hit]) * 256 + np.where(a < 2, reg[hit], 0)
-            for j in np.flatnonzero(gone & (v0 < fr)).tolist():
-                u, cols_ = (int(x[j]), int(wd[j])) if a[j] == 2 else \
-                    (int(h["z"][j]) % rh, int(ht[j]))
-                seeds.setdefault(int(ch[j]), []).append((u, cols_, int(h["block"][j]),
-                                                         int(v0[j])))
-    if shapes:
-        cell = (q["x"].astype(np.int64) * 16 + q["y"]) * 256 + q["z"]
-        keep &= (q["face"] < 6) | ~np.isin(cell, list(shapes))
-    new = _quads(W, slices, seeds, shapes, rh)
+        # rows above a slice's first changed row run as before: rects that end
+        # above it stay, those open at it seed the greedy there
+        # (gpu/mesh_greedy.cl's state); a few dozen quads: plain Python
+        for j, (x, y, z, fh, wd, ht, b, _, _), fr in zip(hit.tolist(), q[hit].tolist(),
+                                                       first[hit].tolist()):
+            fr -= 1
+            if fh < 2:
+                v0, rows, u, cols, sc = y, wd, z % rh, ht, (fh * 256 + x) * 256 + z // rh
+            elif fh < 4:
+                v0, rows, u, cols, sc = x, wd, z % rh, ht, (fh * 256 + y) * 256 + z // rh
+            else:   # its slice code as _affected makes it (a z slice: region 0)
+                v0, rows, u, cols, sc = y, ht, x, wd, (fh * 256 + z) * 256
+            if v0 + rows >= fr:     # open after the row above the first changed one
+                olds.setdefault(sc, []).append((u, cols, b, v0, v0 + rows - 1, j))
+                if v0 < fr:
+                    seeds.setdefault(sc, []).append((u, cols, b, v0))
+    new, stops = _quads(W, slices, seeds, olds, shapes, rh)
     if any(t[6] == _COLOR for t in new):
         return None
-    return _merge(old, q, keep, new, rh)
+    # the old quads the greedy closed again: those closed before the row it stopped at
+    gone = sorted(o[5] for c, os_ in olds.items() for o in os_ if o[4] < stops[c])
+    if shapes:
+        cell = (q["x"].astype(np.int64) * 16 + q["y"]) * 256 + q["z"]
+        planes = np.flatnonzero((q["face"] >= 6) & np.isin(cell, list(shapes)))
+        gone = sorted(set(gone).union(planes.tolist()))
+    return _merge(old, q, gone, new, rh)
 
 
 _COLOR = REGISTRY.id("color")
 
 
 def _affected(W, cells, before, rh):
-    """{code: first changed row} of the (direction, slice, region) sets to mesh again
+    """{code: (first, last) changed row} of the (direction, slice, region) sets to mesh again
     (code = (direction * 256 + slice) * 256 + region, 0 for z slices) and the cells
     (as patch's `cell`) whose X/# planes to redo. With `before` (the old block of
     each cell) a slice whose face keys stay the same is left as it is. A face of c
@@ -123,12 +121,13 @@ def _affected(W, cells, before, rh):
         return a if (wz if d >= 4 else ws)[a] and not opq[b] and not (same[a] and a == b) \
             else 0
 
-    slices, shapes = {}, set()     # slice code -> its first changed row
+    slices, shapes = {}, set()     # slice code -> its first and last changed rows
+    item = W.item
     for v in cells:
         x, y, z = v
         around = [v, (x - 1, y, z), (x + 1, y, z), (x, y - 1, z), (x, y + 1, z),
                   (x, y, z - 1), (x, y, z + 1)]    # v, then per direction d: around[d + 1]
-        new = [int(W[i + 1, j + 1, k]) if -1 <= i <= 16 and -1 <= j <= 16 and 0 <= k < 256
+        new = [item(i + 1, j + 1, k) if -1 <= i <= 16 and -1 <= j <= 16 and 0 <= k < 256
                else 0 for i, j, k in around]
         old = new if was is None else [was.get(c, b) for c, b in zip(around, new)]
         inv = 0 <= x < 16 and 0 <= y < 16
@@ -142,47 +141,61 @@ def _affected(W, cells, before, rh):
                         was is None or key(old[i], old[j], d) != key(new[i], new[j], d)):
                     code = (d * 256 + c[a]) * 256 + (c[2] // rh if a < 2 else 0)
                     row = c[0] if a == 1 else c[1]
-                    slices[code] = min(row, slices.get(code, row))
+                    lo, hi = slices.get(code, (row, row))
+                    slices[code] = (min(lo, row), max(hi, row))
     return slices, shapes
 
 
-def _quads(W, slices, seeds, shapes, rh):
+def _quads(W, slices, seeds, olds, shapes, rh):
     """Quads (x, y, z, face, w, h, block) of the slices from their first changed row on
     (`seeds`: the rects open there) and of the shape cells, from the window W
-    (18, 18, 256) of the new blocks."""
-    side, flat = [], []     # (d, s, region start, first row, seeds): x/y and z slices
+    (18, 18, 256) of the new blocks, and per slice the row its greedy stopped at
+    (`olds`: its old quads from the first changed row on, as patch keeps them). The
+    x/y slices (rows of one region's rh layers) and z slices (16 x 16) go through one
+    array of U = max(rh, 16) columns: a z slice's columns past 16 hold air (no key),
+    and its keys come from the second half of the table (NumPy's fixed cost per call
+    outweighs these tiny arrays)."""
+    meta = []     # (d, s, region start, first row, seeds, last row, olds, code)
     for code in sorted(slices):
         d, rest = divmod(code, 65536)
         s, r = divmod(rest, 256)
-        (side if d < 4 else flat).append((d, s, r * rh, slices[code],
-                                          sorted(seeds.get(code, ()))))
+        v1, v2 = slices[code]
+        meta.append((d, s, r * rh, v1, sorted(seeds.get(code, ())), v2,
+                     olds.get(code, ()), code))
     out: list = []
-    if side:
-        A = np.empty((len(side), 16, rh), W.dtype)
-        B = np.empty_like(A)
-        for i, (d, s, z0, _, _) in enumerate(side):
+    stops: dict = {}
+    if meta:
+        U = max(rh, 16)
+        # rows from each slice's first changed one (those above stay air: no keys)
+        A = np.zeros((len(meta), 16, U), np.int32)
+        B = np.zeros_like(A)                    # outside the world: air
+        for i, (d, s, z0, v, *_) in enumerate(meta):
             n = s + 1 + (1 if d & 1 else -1)
             if d < 2:
-                A[i], B[i] = W[s + 1, 1:17, z0:z0 + rh], W[n, 1:17, z0:z0 + rh]
+                A[i, v:, :rh] = W[s + 1, 1 + v:17, z0:z0 + rh]
+                B[i, v:, :rh] = W[n, 1 + v:17, z0:z0 + rh]
+            elif d < 4:
+                A[i, v:, :rh] = W[1 + v:17, s + 1, z0:z0 + rh]
+                B[i, v:, :rh] = W[1 + v:17, n, z0:z0 + rh]
             else:
-                A[i], B[i] = W[1:17, s + 1, z0:z0 + rh], W[1:17, n, z0:z0 + rh]
-        _rects(_keys(A, B, _T_SIDE), side, out)
-    if flat:
-        A = np.empty((len(flat), 16, 16), W.dtype)
-        B = np.zeros_like(A)                    # outside the world: air
-        for i, (d, z, *_) in enumerate(flat):
-            A[i] = W[1:17, 1:17, z].T            # rows y, columns x
-            n = z + (1 if d & 1 else -1)
-            if 0 <= n < 256:
-                B[i] = W[1:17, 1:17, n].T
-        _rects(_keys(A, B, _T_Z), flat, out)
+                A[i, v:, :16] = W[1:17, 1 + v:17, s].T            # rows y, columns x
+                if 0 <= n - 1 < 256:
+                    B[i, v:, :16] = W[1:17, 1 + v:17, n - 1].T
+        flat = sum(m[0] >= 4 for m in meta)     # z slices sort last
+        if flat:
+            A[len(meta) - flat:] += _NF
+        A *= _NF
+        A += B
+        K = np.zeros((len(meta), 16, U + 1), np.uint16)  # a zero column ends each row
+        K[:, :, :U] = _T_ALL[A]
+        _rects(K, meta, out, stops)
     for c in sorted(shapes):
         rest, z = divmod(c, 256)
         x, y = divmod(rest, 16)
         b = int(W[x + 1, y + 1, z])
         faces = (6, 7) if _X[b] else (8, 9, 10, 11) if _HASH[b] else ()
         out += [(x, y, z, f, 1, 1, b) for f in faces]
-    return out
+    return out, stops
 
 
 def _table(want):
@@ -193,21 +206,14 @@ def _table(want):
     return np.where(want[a] & ~hide, a, 0).astype(np.uint16).ravel()
 
 
-_T_SIDE, _T_Z = _table(_WANT_SIDE), _table(_WANT_Z)
+_NF = len(FLAGS)
+# side keys at a * NF + b, z keys at (NF + a) * NF + b (a z slice's A is offset by NF)
+_T_ALL = np.concatenate([_table(_WANT_SIDE), _table(_WANT_Z)])
 
 
-def _keys(A, B, table):
-    """Face keys (block id where the face of A toward B is drawn, else 0), with a
-    zero column after each row (segments end there)."""
-    n, V, U = A.shape
-    K = np.zeros((n, V, U + 1), np.uint16)
-    K[:, :, :U] = table[A.astype(np.intp) * len(FLAGS) + B]
-    return K
-
-
-def _rects(K, meta, out):
-    """Greedy rects of every slice of K (n, 16, U + 1; last column zero) appended to
-    `out` as quads."""
+def _rects(K, meta, out, stops):
+    """Greedy rects of every slice of K (n, 16, U + 1; last column zero; rows above a
+    slice's first changed row zero) appended to `out` as quads."""
     n, V, U1 = K.shape
     F = K.ravel()
     ch = np.flatnonzero(F[1:] != F[:-1]) + 1       # segments: runs of one key
@@ -216,14 +222,12 @@ def _rects(K, meta, out):
     live = np.flatnonzero(key)
     a0, a1, key = ch[live], ch[live + 1], key[live]
     row, u0 = np.divmod(a0, U1)
-    late = row % V >= np.array([m[3] for m in meta])[row // V]   # rows from the first changed
-    row, u0, a1, key = row[late], u0[late], a1[late], key[late]
     u1 = a1 - row * U1
     rows = [[[] for _ in range(V)] for _ in range(n)]
     for r, c, e, k in zip(row.tolist(), u0.tolist(), u1.tolist(), key.tolist()):
         rows[r // V][r % V].append((c, e, k))
-    for (d, s, z0, v1, opn), rs in zip(meta, rows):
-        got = greedy_rows(rs, v1, opn)
+    for (d, s, z0, v1, opn, v2, old, code), rs in zip(meta, rows):
+        got, stops[code] = greedy_rows(rs, v1, opn, v2, old)
         if d < 2:
             out += [(s, v0, z0 + u, d, nr, nc, k) for v0, u, nr, nc, k in got]
         elif d < 4:
@@ -232,14 +236,20 @@ def _rects(K, meta, out):
             out += [(u, v0, s, d, nc, nr, k) for v0, u, nr, nc, k in got]
 
 
-def greedy_rows(rows, start=0, opn=()):
+def greedy_rows(rows, start=0, opn=(), last=None, old=()):
     """Mikola's greedy row by row (as gpu/mesh_greedy.cl `span`) on one slice given as
     per row a list of segments (u0, u1, key): maximal runs of one non-zero key, by u0.
     An open rectangle continues while its whole width in the next row has its key (lies
     in one segment of that key); the cells no continuing rectangle covers start maximal
     runs. Returns (first row, first column, rows, columns, key) per rectangle. `start`,
     `opn`: go on from row `start` with these rectangles open (u, w, key, first row;
-    by u), as the rows above left them."""
+    by u), as the rows above left them.
+
+    `last`, `old`: the rows after `last` are those the old rectangles `old` (u, w,
+    key, first row, last row, ...) were made of: from there, once the open ones
+    equal the old ones open at that row, everything after comes out as before, so
+    stop. Then returns (rectangles, v): those closed before row v, the old ones
+    closed before v to be replaced by them (v = len(rows): all)."""
     out = []
     V = len(rows)
     for v in range(start, V + 1):
@@ -269,79 +279,98 @@ def greedy_rows(rows, start=0, opn=()):
                 i += 1
             if cur < b:
                 opn.append((cur, b - cur, k, v))
-    return out
+        if last is not None and v >= last and \
+                opn == sorted(o[:4] for o in old if o[3] <= v <= o[4]):
+            return out, v
+    return out if last is None else (out, V)
 
 
-def _merge(old, q, keep, new, rh):
-    """The kept old quads (q: old.quads, contiguous) and vertices with the `new` ones
-    (x, y, z, face, w, h, block) put in their places in build_chunks' order: (region,
-    pass) as `ranges` has them, then (face, z, y, x)."""
-    n_old, nn = len(q), len(new)
-    counts = old.ranges[..., 1].ravel() // 4        # quads per (region, pass) slot
-    ends = np.cumsum(counts)
-    c = np.array(new, np.int64).reshape(nn, 7).T
-    x, y, z, f, w, h, b = c
-    reg = z // rh
-    slot = reg * _NPASS + PASS_OF[b]
+def _merge(old, q, gone, new, rh):
+    """The old quads (q: old.quads, contiguous) and vertices but those at the sorted
+    indices `gone`, with the `new` ones (x, y, z, face, w, h, block) put in their
+    places in build_chunks' order: (region, pass) as `ranges` has them, then (face, z,
+    y, x). A stroke's few quads: plain Python around two concatenations of runs
+    (NumPy's calls on such tiny arrays cost more than their work)."""
+    counts = (old.ranges[..., 1].ravel() // 4).tolist()  # quads per (region, pass) slot
+    ends, e = [], 0
+    for c in counts:
+        e += c
+        ends.append(e)
     # (face, z, y, x) is the little-endian value of a QUAD's first 7 bytes (x, y, z
-    # u2, face u1): old quads are sorted by it within their slot
-    low = (((f << 16 | z) << 16 | y) << 16 | x).astype(np.uint64)
-    o = np.lexsort((low, slot))
-    x, y, z, f, w, h, b, reg, slot, low = (v[o] for v in (x, y, z, f, w, h, b, reg, slot, low))
-    raw = np.ndarray((n_old,), "<u8", q, 0, (q.itemsize,)) if n_old else \
-        np.zeros(0, np.uint64)
+    # u2, face u1): old quads are sorted by it within their slot; keys are unique
+    po = _PASS_L
+    new = sorted(((z // rh) * _NPASS + po[b], ((f << 16 | z) << 16 | y) << 16 | x, t)
+                 for t in new for x, y, z, f, _, _, b in (t,))
+    n_old = len(q)
+    raw = np.ndarray((n_old,), "<u8", q, 0, (q.itemsize,)) if n_old else None
     # each new quad goes before the first old quad of its slot with a larger key
-    # (keys are unique), and so after the kept ones before that
-    pos = np.empty(nn, np.int64)
-    sl = slot.tolist()
-    i = 0
+    pos = []
+    i, nn = 0, len(new)
     while i < nn:
-        j, s = i + 1, sl[i]
-        while j < nn and sl[j] == s:
+        s = new[i][0]
+        j = i + 1
+        while j < nn and new[j][0] == s:
             j += 1
-        a0 = int(ends[s] - counts[s])
-        pos[i:j] = a0 + np.searchsorted(raw[a0:ends[s]] & _LOW7, low[i:j])
+        a0 = ends[s] - counts[s]
+        if ends[s] > a0:
+            keys = np.array([t[1] for t in new[i:j]], np.uint64)
+            pos += (np.searchsorted(raw[a0:ends[s]] & _LOW7, keys) + a0).tolist()
+        else:
+            pos += [a0] * (j - i)
         i = j
-    gone = np.flatnonzero(~keep)
-    at = pos - np.searchsorted(gone, pos) + np.arange(nn)
-    idx = np.empty(n_old - len(gone) + nn, np.intp)
-    mask = np.ones(len(idx), bool)
-    mask[at] = False
-    idx[mask] = np.flatnonzero(keep)
-    idx[at] = np.arange(n_old, n_old + nn)
-    nq = np.zeros(nn, q.dtype)
-    for name, v in zip(("x", "y", "z", "face", "w", "h", "block"), (x, y, z, f, w, h, b)):
-        nq[name] = v
-    nq["layer"] = layer = REGISTRY.face_texture[b, SIDE[f]]
-    quads = _take_records(q, nq, idx)
-    verts = _verts(f, x, y, z - reg * rh, w, h, b, layer)
-    vertices = np.take(np.concatenate([old.vertices.reshape(-1, 4), verts]), idx, 0).ravel()
-    n = len(counts)
-    counts = counts + np.bincount(slot, minlength=n) - \
-        np.bincount(np.searchsorted(ends, gone, "right"), minlength=n)
-    ranges = np.empty((n, 2), np.int32)
-    ranges[:, 1] = counts * 4
-    ranges[:, 0] = (np.cumsum(counts) - counts) * 4
-    return ChunkMesh(vertices, ranges.reshape(256 // rh, _NPASS, 2), rh, quads, None)
-
-
-def _verts(f, x, y, z, w, h, b, layer):
-    """_pack for a few quads (int64 columns already inside their region): fewer,
-    two-dimensional table lookups."""
-    pq = x | y << 5 | z << 10 | f << 17 | layer.astype(np.int64) << 21 | _BITS[b] \
-        | (f >= 8) * _INSET[b]
-    return (pq[:, None] + _PA64[f] * w[:, None] + _PB64[f] * h[:, None] + _PC64[f]) \
-        .astype(np.uint32)
-
-
-_LOW7 = np.uint64((1 << 56) - 1)
-_BITS, _INSET = (t.astype(np.int64) for t in (_BLOCK_BITS, _INSET_BITS))
-_PA64, _PB64, _PC64 = (t.astype(np.int64) for t in (_PA, _PB, _PC))
-
-
-def _take_records(q, nq, idx):
-    """concatenate([q, nq])[idx] for record arrays, done on their bytes (record copies
-    and fancy indexing of records are several times slower)."""
+    ft, sd = _FT_L, _SIDE_L
+    recs, verts = [], []
+    for s, _, (x, y, z, f, w, h, b) in new:
+        layer = ft[b][sd[f]]
+        recs.append((x, y, z, f, w, h, b, layer, 0))
+        pq = x | y << 5 | (z - z // rh * rh) << 10 | f << 17 | layer << 21 | _BITS_L[b] \
+            | (_INSET_L[b] if f >= 8 else 0)
+        pa, pb, pc = _PA_L[f], _PB_L[f], _PC_L[f]
+        verts += [(pq + pa[k] * w + pb[k] * h + pc[k]) & 0xFFFFFFFF for k in range(4)]
+        counts[s] += 1
+    for g in gone:
+        counts[bisect_right(ends, g)] -= 1
+    # runs of kept old quads and of new ones, in order
     n = q.dtype.itemsize
-    raw = np.concatenate([q.view(np.uint8).reshape(-1, n), nq.view(np.uint8).reshape(-1, n)])
-    return np.take(raw, idx, 0).view(q.dtype).ravel()
+    Q = q.view(np.uint8).reshape(-1, n)
+    V = old.vertices.reshape(-1, 4)
+    NQ = np.array(recs, q.dtype).view(np.uint8).reshape(-1, n)
+    NV = np.array(verts, np.uint32).reshape(-1, 4)
+    qs, vs = [], []
+    at, gi, ng, i = 0, 0, len(gone), 0
+    while at < n_old or i < nn:
+        # old quads from `at` up to the next new one's place or the next gone one
+        stop = pos[i] if i < nn else n_old
+        while at < stop:
+            g = gone[gi] if gi < ng else n_old
+            if g == at:
+                at += 1
+                gi += 1
+                continue
+            e = min(g, stop)
+            qs.append(Q[at:e])
+            vs.append(V[at:e])
+            at = e
+        if i < nn:
+            j = i + 1
+            while j < nn and pos[j] == pos[i]:
+                j += 1
+            qs.append(NQ[i:j])
+            vs.append(NV[i:j])
+            i = j
+    quads = np.concatenate(qs).view(q.dtype).ravel() if qs else q[:0].copy()
+    vertices = np.concatenate(vs).ravel() if vs else old.vertices[:0].copy()
+    ranges, e = [], 0
+    for c in counts:
+        ranges.append((e * 4, c * 4))
+        e += c
+    return ChunkMesh(vertices, np.array(ranges, np.int32).reshape(256 // rh, _NPASS, 2), rh,
+                     quads, None)
+
+
+_PASS_L = PASS_OF.tolist()
+_SIDE_L = SIDE.tolist()
+_FT_L = REGISTRY.face_texture.tolist()
+_LOW7 = np.uint64((1 << 56) - 1)
+_BITS_L, _INSET_L = (t.tolist() for t in (_BLOCK_BITS, _INSET_BITS))
+_PA_L, _PB_L, _PC_L = (t.tolist() for t in (_PA, _PB, _PC))

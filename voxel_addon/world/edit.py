@@ -155,18 +155,22 @@ def _light_layers(world, items, sight=None):
     column's lowest stroke voxel (daylight is 0 there before and after), as the light
     sees it (SIGHT: a world's resource stack, world/models.py)."""
     from ..light import incremental, model
-    opaque = model.tables()[2]
     low: dict = {}
     for x, y, z, _, _ in items:
         low[(x, y)] = min(z, low.get((x, y), z))
     z0, z1 = C.HEIGHT, 0
     for (x, y), z in low.items():
         c = world.chunks[C.key_of(x, y)]
+        if sight is None:   # a few layers down at the surface: walked in Python
+            opaque, item, k = model.lists()[2], c.blocks.item, z - 1
+            while k > 0 and not opaque[item(x & 15, y & 15, k)]:
+                k -= 1
+            z0 = min(z0, max(k, 0))
+            continue
         col = c.blocks[x & 15, y & 15, :z]
-        if sight is not None:
-            col = np.where(sight.opened(col, None if c.data is None
-                                        else c.data[x & 15, y & 15, :z]), 0, col)
-        below = np.flatnonzero(opaque[col])
+        col = np.where(sight.opened(col, None if c.data is None
+                                    else c.data[x & 15, y & 15, :z]), 0, col)
+        below = np.flatnonzero(model.tables()[2][col])
         z0 = min(z0, int(below[-1]) if below.size else 0)
     z1 = max(z for _, _, z, _, _ in items) + incremental.R + 2
     return max(z0 - incremental.R - 1, 0), min(z1, C.HEIGHT)
@@ -203,9 +207,9 @@ def _part(world, items, win) -> _Window | None:
         return None
     from ..light import incremental, model
     x, y, z, b, _ = items[0]
-    emis = model.tables()[3]
-    old = world.chunks[C.key_of(x, y)].blocks[x & 15, y & 15, z]
-    if max(emis[b].max(), emis[old].max()) > incremental.SPARSE_EMISSION:
+    emis = model.lists()[3]
+    old = world.chunks[C.key_of(x, y)].blocks.item(x & 15, y & 15, z)
+    if max(emis[b] + emis[old]) > incremental.SPARSE_EMISSION:
         return None
     return _Window(x - PART, y - PART, x + PART + 1, y + PART + 1, win.remesh)
 
@@ -457,6 +461,8 @@ def _relight(world, blocks, lit, steps, near, win, sight=None, part=False) -> se
 
 def _same(a, b) -> bool:
     # colours live beside the packed vertices: a recoloured voxel changes only them
+    if a is b:
+        return True     # meshing.patch found nothing to change
     return a is not None and np.array_equal(a.vertices, b.vertices) and \
         np.array_equal(a.ranges, b.ranges) and (a.colors is None) == (b.colors is None) \
         and (a.colors is None or np.array_equal(a.colors, b.colors))

@@ -151,7 +151,8 @@ def snapshot(world, cx0: int, cy0: int, cx1: int, cy1: int, data: bool = False,
         win = (slice(xa, x + xs.stop), slice(ya, y + ys.stop))
         whole = xs == _ALL16 and ys == _ALL16
         # a cold chunk decodes into the window and stays packed (issue 29)
-        c.blocks_into(out[win], _ALL if whole else xs, _ALL if whole else ys, 0, C.HEIGHT)
+        c.blocks_into(out[win], _ALL if whole else xs, _ALL if whole else ys, 0, C.HEIGHT,
+                      zeroed=True)
         if data and d is not None:
             if small is None:
                 small = np.zeros_like(out)

@@ -506,6 +506,15 @@ def pack(a: np.ndarray) -> Packed:
         return p
     f = a if a.flags.f_contiguous else np.asfortranarray(a)
     S, body = Packed.SECTION, []
+    if a.shape[2] % S == 0:
+        # whole sections: which hold one value, from each one's min and max at once
+        # (issue 29: LZ4 and its check on every section of air or daylight cost
+        # more than the terrain's own; a stream packs every chunk's blocks and light)
+        secs = f.reshape(-1, order="F").reshape(a.shape[2] // S, -1)
+        first, same = secs[:, 0], secs.min(1) == secs.max(1)
+        p.body = tuple(first[i] if same[i] else _lz4.compress(secs[i], store_size=False)
+                       for i in range(len(secs)))
+        return p
     for z in range(0, a.shape[2], S):
         sec = f[:, :, z:z + S].reshape(-1, order="F")
         c = _lz4.compress(sec, store_size=False)

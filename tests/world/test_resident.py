@@ -73,7 +73,8 @@ def test_reloaded_chunks_keep_the_files_frames(tmp_path, monkeypatch):
         stored = {k: w.file.read_chunk(k, light=True) for k in rows}
         got = build.light_and_mesh(w, 0, 0, 1, 1, backends_=("numpy", "numpy"))
         assert [p.key for p in got] == [(0, 0)]
-        assert np.array_equal(got[0].light, stored[(0, 0)][2])
+        c = w.chunks[(0, 0)]  # light as read (to the payload), its frame kept by compact
+        assert got[0].light is c._light and np.array_equal(got[0].light, stored[(0, 0)][2])
         assert _cold(w) and packs == []
         for k, (b, light) in rows.items():
             c = w.chunks[k]
@@ -94,6 +95,12 @@ def test_reloaded_chunks_keep_the_files_frames(tmp_path, monkeypatch):
                                             -1, -1, 2, 2))
         w.load([(2, 2)])  # not a batch: the same
         assert type(w.chunks[(2, 2)]._lpack.body) is bytes and packs == []
+        # light read for writing is packed again, its stored frame dropped
+        w.load([(2, 1)], hot=True)
+        c = w.chunks[(2, 1)]
+        c.light[1, 2, 3] = 7
+        c.compact()
+        assert len(packs) == 1 and c.light[1, 2, 3] == 7
 
 
 def test_reloaded_batch_packs_its_light_once(tmp_path, monkeypatch):

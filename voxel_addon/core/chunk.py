@@ -85,7 +85,7 @@ class Chunk:
     """
 
     __slots__ = ("key", "_blocks", "_bpack", "_bhot", "data", "large", "_light", "_lpack",
-                 "mesh", "dirty", "last_use", "__weakref__")
+                 "_lsame", "mesh", "dirty", "last_use", "__weakref__")
 
     def __init__(self, key, blocks=None, data=None, hot: bool = False):
         self.key = tuple(key)
@@ -108,6 +108,7 @@ class Chunk:
         self.data = data
         self.large: dict[int, object] = {}
         self._light = self._lpack = None  # final light (see .light), filled by the world layer
+        self._lsame = False  # _lpack holds _light's values and nothing may write into it
         self.mesh = None   # its mesh with the neighbour ring, likewise
         self.dirty = False
         self.last_use = time.monotonic()
@@ -197,6 +198,7 @@ class Chunk:
         if a is None and self._lpack is not None:
             # _lpack stays: a compact() racing this read then still finds the light
             a = self._light = self._lpack.unpack()
+        self._lsame = False  # (the caller may write into it)
         return a
 
     @property
@@ -242,15 +244,23 @@ class Chunk:
 
     @light.setter
     def light(self, value) -> None:
+        self._lsame = False
         if isinstance(value, Packed):
             self._light, self._lpack = None, value
             return
         self._light, self._lpack = value, None
 
+    def light_read(self, a: np.ndarray, p: "Packed") -> None:
+        """Light read from a file: the array A (hot: a stream batch hands it to its
+        payloads) and P, the stored frame it was decoded from, kept when compact()
+        comes (issue 29: no pack), unless something read A through .light meanwhile."""
+        self._light, self._lpack, self._lsame = a, p, True
+
     def hot_light(self) -> np.ndarray | None:
-        """The light array compact() would pack (None: none, or packed already):
-        pack it outside the world's lock and hand the result to light_packed()."""
-        return self._light
+        """The light array compact() would pack (None: none, packed already, or its
+        packed twin kept: light_read): pack it outside the world's lock and hand the
+        result to light_packed()."""
+        return None if self._lsame else self._light
 
     def light_packed(self, a: np.ndarray, p: "Packed") -> bool:
         """Keep P (pack(a), a from hot_light()) in place of the light array when it
@@ -258,7 +268,7 @@ class Chunk:
         written in place once handed out); whether it did."""
         if self._light is not a:
             return False
-        self._lpack, self._light = p, None
+        self._lpack, self._light, self._lsame = p, None, False
         return True
 
     def compact(self) -> None:
@@ -266,7 +276,8 @@ class Chunk:
         seconds). Call with the world's lock held."""
         a = self._light
         if a is not None:
-            self._lpack, self._light = pack(a), None
+            self._lpack, self._light = self._lpack if self._lsame else pack(a), None
+            self._lsame = False
         b = self._blocks
         if b is not None and b.shape == SHAPE and time.monotonic() - self._bhot > HOT_S:
             self._bpack, self._blocks = pack(b), None

@@ -360,9 +360,10 @@ class WorldFile:
         """{key: fetch(key)} of `keys` read at one instant (one read transaction),
         a damaged chunk's CorruptChunk in place of its tuple; decoded outside the
         file's lock, so other threads' reads and writes wait only for the SQL.
-        PACKED: blocks and light that need no mapping come as core.chunk.Packed
-        frames of the stored blobs (checked by a decode into this thread's scratch,
-        not kept): what a world keeps in memory, with no array made and packed."""
+        PACKED: blocks that need no mapping come as a core.chunk.Packed frame of
+        the stored blob (checked by a decode into this thread's scratch, not kept):
+        what a world keeps in memory, with no array made and packed; light as
+        (array, its frame) (Chunk.light_read)."""
         with self.reading():
             rows = [(k, self.db.execute(self._fetch_sql, tuple(k)).fetchone()) for k in keys]
         out = {}
@@ -417,16 +418,14 @@ class WorldFile:
     def _decode_light(codec, blob, packed: bool = False):
         if blob is None:
             return None
-        frame = packed and codecs.framed(codec, blob, 2 * C.VOLUME)
         try:
-            got = codecs.decode_u16(codec, blob, C.VOLUME, out=_flat_scratch() if frame
-                                    else None)
+            got = codecs.decode_u16(codec, blob, C.VOLUME).reshape(C.SHAPE, order="F")
         except (ValueError, VoxelError):  # derived data: recomputed, never a failure
             return None
-        if frame:
+        if packed and codecs.framed(codec, blob, 2 * C.VOLUME):
             n = C.VOLUME - (codecs.zero_tail(blob) >> 1)
-            return C.Packed.frame(blob, C.SHAPE, np.uint16, -(-n // _LAYER))
-        return got.reshape(C.SHAPE, order="F")
+            return got, C.Packed.frame(blob, C.SHAPE, np.uint16, -(-n // _LAYER))
+        return got
 
     def version(self, key) -> int:
         """The stored version of chunk `key` (0: never written since versions exist)."""

@@ -336,7 +336,10 @@ class World(Saving):
             got = found.get(key)
             if got is not None:
                 c = found[key] = Chunk(key, got[0], got[1], hot=hot)
-                c.light = got[2]
+                if isinstance(got[2], tuple):  # (array, its stored frame)
+                    c.light_read(*got[2])
+                else:
+                    c.light = got[2]
                 if not hot:
                     c.compact()
         if to_make:

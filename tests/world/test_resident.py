@@ -46,10 +46,69 @@ def test_edit_on_cold_chunks_changes_exactly_one_voxel(tmp_path, monkeypatch):
             assert np.array_equal(w.chunks[k].light, want[i:i + C.SIZE, j:j + C.SIZE]), k
 
 
+def _arrays_read(monkeypatch):
+    """Chunks read from the file as arrays (a file whose block numbering is not the
+    registry's), not as the file's frames (Packed.frame)."""
+    from voxel_addon.storage.worldfile import WorldFile
+    real = WorldFile.fetch_many
+    monkeypatch.setattr(WorldFile, "fetch_many", lambda f, keys, packed=False: real(f, keys))
+
+
+def test_reloaded_chunks_keep_the_files_frames(tmp_path, monkeypatch):
+    """Chunks read from the file (issue 29) keep its zstd frames as their packed
+    blocks and light, byte for byte: no array made and packed; a batch over them
+    decodes its window and hands out light equal to the stored arrays, leaves them
+    as they were, and what they decode to is what the file holds (with any window,
+    whole or a few columns over some layers)."""
+    path = tmp_path / "w.sqlite"
+    with World.create(path, seed=7, backend="numpy") as w:
+        build.light_and_mesh(w, -1, -1, 3, 3, backends_=("numpy", "numpy"))
+    packs = []
+    real = C.pack
+    monkeypatch.setattr(C, "pack", lambda a: packs.append(id(a)) or real(a))
+    with World.open(path) as w:
+        rows = {k: w.file.query("SELECT c.blocks, l.light FROM chunks c JOIN light l "
+                                "USING (cx, cy) WHERE cx=? AND cy=?", k)[0]
+                for k in build.keys_of(-1, -1, 2, 2)}
+        stored = {k: w.file.read_chunk(k, light=True) for k in rows}
+        got = build.light_and_mesh(w, 0, 0, 1, 1, backends_=("numpy", "numpy"))
+        assert [p.key for p in got] == [(0, 0)]
+        c = w.chunks[(0, 0)]  # light as read (to the payload), its frame kept by compact
+        assert got[0].light is c._light and np.array_equal(got[0].light, stored[(0, 0)][2])
+        assert _cold(w) and packs == []
+        for k, (b, light) in rows.items():
+            c = w.chunks[k]
+            assert c._bpack.body == b and c._lpack.body == light, k
+            assert np.array_equal(c.blocks_copy(), stored[k][0]), k
+            assert np.array_equal(c.light_out(), stored[k][2]), k
+            top = c.air_from()  # (the frame's zero tail: whole 2 KiB slabs, 4 layers)
+            assert 0 < top < C.HEIGHT and stored[k][0][:, :, top - 4:top].any() and \
+                not stored[k][0][:, :, top:].any(), k
+            win = np.full((5, 3, 40), 9, np.uint16, order="F")
+            c.blocks_into(win, slice(2, 7), slice(10, 13), top - 20, top + 20)
+            assert np.array_equal(win, stored[k][0][2:7, 10:13, top - 20:top + 20]), k
+            c.light_into(win, slice(2, 7), slice(10, 13), top - 20, top + 20)
+            assert np.array_equal(win, stored[k][2][2:7, 10:13, top - 20:top + 20]), k
+        # a snapshot's window (zeroed: the air is not written) holds them
+        snap, _ = build.snapshot(w, -1, -1, 2, 2)
+        assert np.array_equal(snap, C.paste(((k, v[0]) for k, v in stored.items()),
+                                            -1, -1, 2, 2))
+        w.load([(2, 2)])  # not a batch: the same
+        assert type(w.chunks[(2, 2)]._lpack.body) is bytes and packs == []
+        # light read for writing is packed again, its stored frame dropped
+        w.load([(2, 1)], hot=True)
+        c = w.chunks[(2, 1)]
+        c.light[1, 2, 3] = 7
+        c.compact()
+        assert len(packs) == 1 and c.light[1, 2, 3] == 7
+
+
 def test_reloaded_batch_packs_its_light_once(tmp_path, monkeypatch):
-    """A stream's batch of chunks read from the file (issue 29): their stored light
-    goes to the payloads as read (not packed on load and rebuilt for the payload)
-    and is packed once, by the compact after; a plain load packs it at once."""
+    """A stream's batch of chunks read from the file as arrays (issue 29): their
+    stored light goes to the payloads as read (not packed on load and rebuilt for
+    the payload) and is packed once, by the compact after; a plain load packs it
+    at once."""
+    _arrays_read(monkeypatch)
     path = tmp_path / "w.sqlite"
     with World.create(path, seed=7, backend="numpy") as w:
         build.light_and_mesh(w, -1, -1, 3, 3, backends_=("numpy", "numpy"))
@@ -69,21 +128,31 @@ def test_reloaded_batch_packs_its_light_once(tmp_path, monkeypatch):
 
 
 def test_reloaded_batch_packs_blocks_once_and_decodes_none(tmp_path, monkeypatch):
-    """A stream's batch of chunks read from the file (issue 29): their blocks stay
-    as read until the batch's snapshot copied them, then each is packed once (not
-    packed on load and decoded for the snapshot); payloads equal those of a batch
-    over chunks loaded the plain way (born packed), and everything ends packed."""
+    """A stream's batch of chunks read from the file as arrays (issue 29): their
+    blocks stay as read until the batch's snapshot copied them, then each is packed
+    once (not packed on load and decoded for the snapshot); payloads equal those of
+    a batch over chunks loaded the plain way (born packed) and of one over chunks
+    that keep the file's frames, and everything ends packed."""
     path = tmp_path / "w.sqlite"
     with World.create(path, seed=7, backend="numpy") as w:
         build.light_and_mesh(w, -2, -2, 3, 3, backends_=("numpy", "numpy"))
         w.chunks[(0, 1)].set(3, 4, 200, REGISTRY.id("stone"))  # an edited chunk saved
         build.light_and_mesh(w, -1, 0, 2, 3, backends_=("numpy", "numpy"))
     nb = ("numpy", "numpy")
+    with World.open(path) as w:  # the file's frames
+        framed = {p.key: p for p in build.light_and_mesh(w, -1, -1, 2, 2, backends_=nb)}
+    _arrays_read(monkeypatch)
     with World.open(path) as w:  # the old path: packed on load, decoded by the batch
         w.load(build.keys_of(-2, -2, 3, 3))
         want = {p.key: p for p in build.light_and_mesh(w, -1, -1, 2, 2, backends_=nb,
                                                        load=False)}
         blocks = {k: c.blocks_copy() for k, c in w.chunks.items()}
+    assert sorted(framed) == sorted(want)
+    for k, p in framed.items():
+        q = want[k]
+        assert np.array_equal(p.light, q.light) and \
+            np.array_equal(p.mesh.vertices, q.mesh.vertices) and \
+            np.array_equal(p.mesh.ranges, q.mesh.ranges), k
     packs, decodes = [], []
     real, unpack, into = C.pack, C.Packed.unpack, C.Packed.into
     monkeypatch.setattr(C, "pack", lambda a: packs.append(id(a)) or real(a))
@@ -120,9 +189,10 @@ def test_reloaded_batch_packs_blocks_once_and_decodes_none(tmp_path, monkeypatch
             assert np.array_equal(w.chunks[k].blocks_copy(), blocks[k]), k
 
 
-def test_hot_loaded_blocks_read_for_writing_stay_arrays(tmp_path):
+def test_hot_loaded_blocks_read_for_writing_stay_arrays(tmp_path, monkeypatch):
     """Blocks of a hot load that something read through .blocks (which may write
     into them) are not swapped for the pack made from them meanwhile."""
+    _arrays_read(monkeypatch)
     path = tmp_path / "w.sqlite"
     with World.create(path, seed=7, backend="numpy") as w:
         w.load([(0, 0)])
@@ -230,3 +300,30 @@ def test_compact_packs_light_outside_the_lock_and_keeps_light_set_meanwhile(tmp_
             c = w.chunks[k]
             assert c._light is None and c._lpack is not None, k
             assert np.array_equal(c.light, new if k == (0, 0) else old[k]), k
+
+
+def test_zeroed_snapshot_windows_hold_the_blocks_however_kept():
+    """blocks_into(zeroed=True) (a snapshot's fresh window: its air is not written)
+    gives the blocks of a chunk kept as an array, LZ4 sections (one of them a
+    uniform non-air section) or the file's frame, and writes nothing else."""
+    from voxel_addon.storage import codecs
+    a = C.empty()
+    a[:, :, :40] = REGISTRY.id("stone")
+    a[3, 4, 95] = a[0, 15, 36] = REGISTRY.id("dirt")  # (95: a hot array counts by 32)
+    blob = codecs.encode("zstd", C.to_linear(a))
+    top = (C.VOLUME - (codecs.zero_tail(blob) >> 1)) // (C.SIZE * C.SIZE)
+    assert top == 96
+    kept = {"array": C.Chunk((0, 0), a.copy(order="F"), hot=True),
+            "lz4": C.Chunk((0, 0), a.copy(order="F")),
+            "frame": C.Chunk((0, 0), C.Packed.frame(blob, C.SHAPE, np.uint16, top))}
+    assert kept["lz4"]._bpack.body[0] == REGISTRY.id("stone")  # a uniform section
+    for name, c in kept.items():
+        out = C.empty(width=20, depth=20)
+        c.blocks_into(out[2:18, 2:18], slice(None), slice(None), 0, C.HEIGHT, zeroed=True)
+        want = np.zeros_like(out)
+        want[2:18, 2:18] = a
+        assert np.array_equal(out, want), name
+        out = C.empty(width=5)
+        c.blocks_into(out[:, 1:4], slice(1, 6), slice(2, 5), 0, C.HEIGHT, zeroed=True)
+        assert np.array_equal(out[:, 1:4], a[1:6, 2:5]), name
+        assert not out[:, :1].any() and not out[:, 4:].any(), name

@@ -85,11 +85,12 @@ class Chunk:
     """
 
     __slots__ = ("key", "_blocks", "_bpack", "_bhot", "data", "large", "_light", "_lpack",
-                 "mesh", "dirty", "last_use", "__weakref__")
+                 "_lsame", "mesh", "dirty", "last_use", "__weakref__")
 
     def __init__(self, key, blocks=None, data=None, hot: bool = False):
         self.key = tuple(key)
-        if hot and getattr(blocks, "shape", None) == SHAPE and blocks.dtype == np.uint16:
+        if hot and isinstance(blocks, np.ndarray) and blocks.shape == SHAPE and \
+                blocks.dtype == np.uint16:
             # a stream batch's load: kept as read (no other reference: the file's
             # decode) until its snapshot copied it, then packed once (unread():
             # packing then decoding every reloaded chunk was ~1/3 of a reload)
@@ -107,6 +108,7 @@ class Chunk:
         self.data = data
         self.large: dict[int, object] = {}
         self._light = self._lpack = None  # final light (see .light), filled by the world layer
+        self._lsame = False  # _lpack holds _light's values and nothing may write into it
         self.mesh = None   # its mesh with the neighbour ring, likewise
         self.dirty = False
         self.last_use = time.monotonic()
@@ -146,15 +148,20 @@ class Chunk:
         return self._bpack.unpack() if a is None else a.copy(order="F")
 
     def blocks_into(self, out: np.ndarray, xs: slice, ys: slice, z0: int, z1: int,
-                    keep: bool = False) -> None:
+                    keep: bool = False, zeroed: bool = False) -> None:
         """out[...] = blocks[xs, ys, z0:z1] leaving cold blocks cold (a batch's
         snapshot reads each chunk once), or with `keep` rebuilt and kept hot as a
-        read of .blocks (an edit reads its neighbours' windows several times)."""
+        read of .blocks (an edit reads its neighbours' windows several times).
+        ZEROED: out holds 0 already, so the air above the terrain is not written
+        (issue 29: ~60 % of a chunk; the snapshot's copy was its largest cost)."""
         a = self.blocks if keep else self._blocks
-        if a is not None:
-            out[...] = a[xs, ys, z0:z1]
-        else:
-            self._bpack.into(out, xs, ys, z0, z1)
+        if a is None:
+            self._bpack.into(out, xs, ys, z0, z1, zeroed)
+            return
+        if zeroed:
+            z1 = max(z0, min(z1, self.air_from(z0)))
+            out = out[:, :, :z1 - z0]
+        out[...] = a[xs, ys, z0:z1]
 
     def air_from(self, z0: int = 0) -> int:
         """A layer >= z0 from which the blocks are air up to the world's top (an edit's
@@ -191,6 +198,7 @@ class Chunk:
         if a is None and self._lpack is not None:
             # _lpack stays: a compact() racing this read then still finds the light
             a = self._light = self._lpack.unpack()
+        self._lsame = False  # (the caller may write into it)
         return a
 
     @property
@@ -236,15 +244,23 @@ class Chunk:
 
     @light.setter
     def light(self, value) -> None:
+        self._lsame = False
         if isinstance(value, Packed):
             self._light, self._lpack = None, value
             return
         self._light, self._lpack = value, None
 
+    def light_read(self, a: np.ndarray, p: "Packed") -> None:
+        """Light read from a file: the array A (hot: a stream batch hands it to its
+        payloads) and P, the stored frame it was decoded from, kept when compact()
+        comes (issue 29: no pack), unless something read A through .light meanwhile."""
+        self._light, self._lpack, self._lsame = a, p, True
+
     def hot_light(self) -> np.ndarray | None:
-        """The light array compact() would pack (None: none, or packed already):
-        pack it outside the world's lock and hand the result to light_packed()."""
-        return self._light
+        """The light array compact() would pack (None: none, packed already, or its
+        packed twin kept: light_read): pack it outside the world's lock and hand the
+        result to light_packed()."""
+        return None if self._lsame else self._light
 
     def light_packed(self, a: np.ndarray, p: "Packed") -> bool:
         """Keep P (pack(a), a from hot_light()) in place of the light array when it
@@ -252,7 +268,7 @@ class Chunk:
         written in place once handed out); whether it did."""
         if self._light is not a:
             return False
-        self._lpack, self._light = p, None
+        self._lpack, self._light, self._lsame = p, None, False
         return True
 
     def compact(self) -> None:
@@ -260,7 +276,8 @@ class Chunk:
         seconds). Call with the world's lock held."""
         a = self._light
         if a is not None:
-            self._lpack, self._light = pack(a), None
+            self._lpack, self._light = self._lpack if self._lsame else pack(a), None
+            self._lsame = False
         b = self._blocks
         if b is not None and b.shape == SHAPE and time.monotonic() - self._bhot > HOT_S:
             self._bpack, self._blocks = pack(b), None
@@ -329,10 +346,23 @@ class Packed:
     Sections keep every decode a small allocation (a fresh 128 KB buffer costs page
     faults: ~80 us in a big process) and let a window (an edit's: a few columns
     over some layers) decode only the sections it reads. Without the lz4 package
-    the array itself is kept."""
+    the array itself is kept. A chunk read from a world file keeps the file's zstd
+    frame instead (Packed.frame: no repacking, and ~1-2 KB where LZ4 took 2.7-3.9)."""
 
-    __slots__ = ("shape", "dtype", "body")
+    __slots__ = ("shape", "dtype", "body", "top")
     SECTION = 32
+
+    @classmethod
+    def frame(cls, blob: bytes, shape, dtype, top: int) -> "Packed":
+        """The values as one zstd frame of their bytes in linear (Fortran) order, as
+        a world file stores them (issue 29: a reloaded chunk's blocks and light were
+        decoded into a fresh array, then LZ4-packed: ~40 and ~25 us a chunk, and the
+        array's page faults). The caller checked that it decodes to exactly the
+        array (the file's reader, which decoded it once). TOP: the layer from which
+        every value is 0 (the frame's zero tail), or shape[2]."""
+        p = cls()
+        p.shape, p.dtype, p.body, p.top = tuple(shape), np.dtype(dtype), bytes(blob), int(top)
+        return p
 
     @classmethod
     def uniform(cls, shape, dtype, value=0) -> "Packed":
@@ -341,6 +371,8 @@ class Packed:
     @property
     def nbytes(self) -> int:
         b = self.body
+        if isinstance(b, bytes):
+            return len(b)
         return b.nbytes if isinstance(b, np.ndarray) else \
             sum(len(x) if isinstance(x, bytes) else x.nbytes for x in b)
 
@@ -356,6 +388,9 @@ class Packed:
             return out
         if out is None:
             out = np.empty(self.shape, self.dtype, order="F")
+        if isinstance(self.body, bytes):
+            _unframe(self.body, out)
+            return out
         # section by section into the flat array: no joined copy of the decoded
         # runs (a fresh 128 KB for each: page faults; a save unpacks every chunk)
         flat = out.reshape(-1, order="F")
@@ -376,16 +411,26 @@ class Packed:
         b = self.body
         if isinstance(b, np.ndarray):
             return None
+        if isinstance(b, bytes):
+            return self.top
         i = len(b)
         while i and type(b[i - 1]) is not bytes and not b[i - 1]:
             i -= 1
         return min(i * self.SECTION, self.shape[2])
 
-    def into(self, out, xs: slice, ys: slice, z0: int, z1: int) -> None:
-        """out[...] = unpack()[xs, ys, z0:z1], decoding only the sections it reads."""
+    def into(self, out, xs: slice, ys: slice, z0: int, z1: int, zeroed: bool = False) -> None:
+        """out[...] = unpack()[xs, ys, z0:z1], decoding only the sections it reads;
+        ZEROED: out holds 0 already (sections of 0 are not written)."""
         b = self.body
         if isinstance(b, np.ndarray):
             out[...] = b[xs, ys, z0:z1]
+            return
+        if isinstance(b, bytes):  # the whole frame into this thread's one buffer
+            if zeroed:
+                z1 = max(z0, min(z1, self.top))
+                out = out[:, :, :z1 - z0]
+            if z1 > z0:
+                out[...] = _unframe(b, scratch(self.shape, self.dtype))[xs, ys, z0:z1]
             return
         S = self.SECTION
         # part of the columns: an edit's windows, which read the same sections of
@@ -402,6 +447,9 @@ class Packed:
                 while j < last and not isinstance(b[j], bytes) and b[j] == v:
                     j += 1
             za, ze = max(z0, i * S), min(z1, j * S)
+            if zeroed and v.ndim == 0 and not v:
+                i = j
+                continue
             out[:, :, za - z0:ze - z0] = v if v.ndim == 0 else v[xs, ys, za - i * S:ze - i * S]
             i = j
 
@@ -429,6 +477,31 @@ class Packed:
         return got
 
 
+def _unframe(blob: bytes, out: np.ndarray) -> np.ndarray:
+    """Decode a zstd frame (Packed.frame's) into OUT (Fortran order) in place."""
+    d = getattr(_memo, "zstd", None)
+    if d is None:
+        import zstandard  # lazily: only chunks read from a zstd world file get here
+        d = _memo.zstd = zstandard.ZstdDecompressor()
+    n = d.stream_reader(blob).readinto(out.reshape(-1, order="F"))
+    if n != out.nbytes:  # checked when read from the file: never expected
+        raise VoxelError(f"a packed chunk array decoded to {n} bytes, expected {out.nbytes}")
+    return out
+
+
+def scratch(shape, dtype) -> np.ndarray:
+    """This thread's one scratch array of SHAPE and DTYPE (a fresh 128 KB each time
+    costs page faults), valid until the thread's next call."""
+    k = (shape, dtype)
+    b = getattr(_memo, "bufs", None)
+    if b is None:
+        b = _memo.bufs = {}
+    a = b.get(k)
+    if a is None:
+        a = b[k] = np.empty(shape, dtype, order="F")
+    return a
+
+
 _ALL = slice(None)
 MEMO = 32  # decoded runs of sections a thread remembers for windows
 _memo = threading.local()
@@ -438,12 +511,21 @@ def pack(a: np.ndarray) -> Packed:
     """A (w, h, z) array -> Packed (its values, shape and dtype exactly; block ids
     need no narrowing: LZ4 takes their zero high bytes to nearly nothing)."""
     p = Packed()
-    p.shape, p.dtype = a.shape, a.dtype
+    p.shape, p.dtype, p.top = a.shape, a.dtype, None
     if _lz4 is None or not a.size:
         p.body = np.array(a, order="F")
         return p
     f = a if a.flags.f_contiguous else np.asfortranarray(a)
     S, body = Packed.SECTION, []
+    if a.shape[2] % S == 0:
+        # whole sections: which hold one value, from each one's min and max at once
+        # (issue 29: LZ4 and its check on every section of air or daylight cost
+        # more than the terrain's own; a stream packs every chunk's blocks and light)
+        secs = f.reshape(-1, order="F").reshape(a.shape[2] // S, -1)
+        first, same = secs[:, 0], secs.min(1) == secs.max(1)
+        p.body = tuple(first[i] if same[i] else _lz4.compress(secs[i], store_size=False)
+                       for i in range(len(secs)))
+        return p
     for z in range(0, a.shape[2], S):
         sec = f[:, :, z:z + S].reshape(-1, order="F")
         c = _lz4.compress(sec, store_size=False)

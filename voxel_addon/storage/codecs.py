@@ -114,23 +114,39 @@ _HEAD = _MAGIC + b"\xa0"  # single segment, a 4-byte content size, no checksum
 _FIRST, _LAST = struct.Struct("<5s4xI"), struct.Struct("<I")
 
 
-def decode_u16(codec: str, blob, count: int) -> np.ndarray:
-    """decode() of `count` little-endian uint16 values into a new writable array (no
-    copy of the decoded bytes: zstd writes into the array)."""
-    if codec == "zstd" and _zstd is not None and LITTLE and \
-            isinstance(blob, (bytes, bytearray, memoryview)):
-        size = 2 * count
-        try:
-            declared = _zstd.frame_content_size(blob)
-            if declared == size:  # zstd stops at the size the frame declares
-                out = np.empty(count, np.uint16)
-                n = _zstd_pair()[1].stream_reader(blob).readinto(out)
-                if n != size:
-                    raise ValueError(f"decoded {n} bytes, expected {size}")
-                return out
+def decode_u16(codec: str, blob, count: int, out: np.ndarray | None = None) -> np.ndarray:
+    """decode() of `count` little-endian uint16 values into a new writable array, or
+    into OUT (a flat uint16 array of `count`: a reader's scratch); no copy of the
+    decoded bytes where zstd writes into the array."""
+    if framed(codec, blob, 2 * count):
+        if out is None:
+            out = np.empty(count, np.uint16)
+        try:  # zstd stops at the size the frame declares
+            n = _zstd_pair()[1].stream_reader(blob).readinto(out)
         except _zstd.ZstdError as e:
             raise ValueError(str(e)) from None
-    return np.frombuffer(decode(codec, blob, 2 * count), "<u2").astype(np.uint16)
+        if n != 2 * count:
+            raise ValueError(f"decoded {n} bytes, expected {2 * count}")
+        return out
+    got = np.frombuffer(decode(codec, blob, 2 * count), "<u2")
+    if out is None:
+        return got.astype(np.uint16)
+    out[...] = got
+    return out
+
+
+def framed(codec: str, blob, size: int) -> bool:
+    """Whether BLOB is a zstd frame declaring `size` bytes that this machine's
+    arrays can take as is (zstd installed, little-endian): what decode_u16 writes
+    straight into an array, and what a chunk may keep in memory as read
+    (core.chunk.Packed.frame) once it decoded."""
+    if codec != "zstd" or _zstd is None or not LITTLE or \
+            not isinstance(blob, (bytes, bytearray, memoryview)):
+        return False
+    try:
+        return _zstd.frame_content_size(blob) == size
+    except _zstd.ZstdError:
+        return False
 
 
 LITTLE = sys.byteorder == "little"

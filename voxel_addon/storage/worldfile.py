@@ -85,6 +85,13 @@ def _open_error(path: Path, e: sqlite3.DatabaseError) -> VoxelError:
 
 _ZYX = (C.HEIGHT, C.SIZE, C.SIZE)  # linear order as C order: .T is the chunk's shape
 _MAX = np.maximum.reduce  # ndarray.max() without its Python wrapper (a read's 5 %)
+_LAYER = C.SIZE * C.SIZE
+
+
+def _flat_scratch() -> np.ndarray:
+    """This thread's scratch chunk array, flat (a frame kept as read decodes here
+    only to be checked: no fresh 128 KB, no page faults)."""
+    return C.scratch(C.SHAPE, np.dtype(np.uint16)).reshape(-1, order="F")
 
 
 class CorruptChunk(VoxelError):
@@ -349,30 +356,38 @@ class WorldFile:
             row = self.db.execute(self._fetch_sql, tuple(key)).fetchone()
         return self._fetched(key, row)
 
-    def fetch_many(self, keys) -> dict:
+    def fetch_many(self, keys, packed: bool = False) -> dict:
         """{key: fetch(key)} of `keys` read at one instant (one read transaction),
         a damaged chunk's CorruptChunk in place of its tuple; decoded outside the
-        file's lock, so other threads' reads and writes wait only for the SQL."""
+        file's lock, so other threads' reads and writes wait only for the SQL.
+        PACKED: blocks that need no mapping come as a core.chunk.Packed frame of
+        the stored blob (checked by a decode into this thread's scratch, not kept):
+        what a world keeps in memory, with no array made and packed; light as
+        (array, its frame) (Chunk.light_read)."""
         with self.reading():
             rows = [(k, self.db.execute(self._fetch_sql, tuple(k)).fetchone()) for k in keys]
         out = {}
         for k, row in rows:
             try:
-                out[k] = self._fetched(k, row)
+                out[k] = self._fetched(k, row, packed)
             except CorruptChunk as e:
                 out[k] = e
         return out
 
-    def _fetched(self, key, row):
+    def _fetched(self, key, row, packed: bool = False):
         v, codec, blob, dblob, lcodec, lblob = row
         if codec is None:
             return None, None, None, v
-        blocks, data = self._decode(key, codec, blob, dblob)
-        return blocks, data, self._decode_light(lcodec, lblob), v
+        blocks, data = self._decode(key, codec, blob, dblob, packed)
+        return blocks, data, self._decode_light(lcodec, lblob, packed), v
 
-    def _decode(self, key, codec, blob, dblob):
+    def _decode(self, key, codec, blob, dblob, packed: bool = False):
+        # PACKED: keep the frame as read (what it decodes to is the chunk's blocks as
+        # is: the file's ids are the registry's); decoded only to check it
+        frame = packed and self._identity and codecs.framed(codec, blob, 2 * C.VOLUME)
         try:  # decoded into new arrays: linear order is the (16, 16, 256) F order
-            blocks = codecs.decode_u16(codec, blob, C.VOLUME)
+            blocks = codecs.decode_u16(codec, blob, C.VOLUME, out=_flat_scratch() if frame
+                                       else None)
             data = None if dblob is None else \
                 codecs.decode_u16(codec, dblob, C.VOLUME).reshape(C.SHAPE, order="F")
         except ValueError as e:
@@ -391,6 +406,8 @@ class WorldFile:
         if not ok:
             raise CorruptChunk(f"chunk ({key[0]}, {key[1]}) in {self.path} has block ids "
                                "missing from block_types; it was left untouched")
+        if frame:
+            return C.Packed.frame(blob, C.SHAPE, np.uint16, -(-n // _LAYER)), data
         return blocks.reshape(_ZYX).T, data  # (16, 16, 256) in F order: a view
 
     def decode_row(self, row):
@@ -398,13 +415,17 @@ class WorldFile:
         return self._decode((row[0], row[1]), row[2], row[3], row[4])
 
     @staticmethod
-    def _decode_light(codec, blob):
+    def _decode_light(codec, blob, packed: bool = False):
         if blob is None:
             return None
         try:
-            return codecs.decode_u16(codec, blob, C.VOLUME).reshape(C.SHAPE, order="F")
+            got = codecs.decode_u16(codec, blob, C.VOLUME).reshape(C.SHAPE, order="F")
         except (ValueError, VoxelError):  # derived data: recomputed, never a failure
             return None
+        if packed and codecs.framed(codec, blob, 2 * C.VOLUME):
+            n = C.VOLUME - (codecs.zero_tail(blob) >> 1)
+            return got, C.Packed.frame(blob, C.SHAPE, np.uint16, -(-n // _LAYER))
+        return got
 
     def version(self, key) -> int:
         """The stored version of chunk `key` (0: never written since versions exist)."""

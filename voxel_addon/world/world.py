@@ -260,7 +260,9 @@ class World(Saving):
         hands the light on (a stream's batch: its payloads) and compacts the chunks
         after, so light read from the file stays an array (packed here, it would be
         rebuilt for the payload at once); blocks read from the file too, until the
-        batch packs them (build.pack_loaded) or compact() finds them.
+        batch packs them (build.pack_loaded) or compact() finds them. (Only where the
+        file's numbering is not the registry's: otherwise chunks keep the file's
+        zstd frames as read, Packed.frame, and there is nothing to pack.)
 
         Reading happens outside the lock, so another thread may load, edit and evict
         the same chunk meanwhile; the eviction counter catches that and the stale
@@ -319,7 +321,7 @@ class World(Saving):
             vers[key] = None
         # the batch read at one instant (a snapshot made meanwhile: load()'s eviction
         # count sees it)
-        for key, got in (self.file.fetch_many(read) if read else {}).items():
+        for key, got in (self.file.fetch_many(read, packed=True) if read else {}).items():
             if isinstance(got, CorruptChunk):
                 bad.append((key, str(got)))
                 continue
@@ -334,7 +336,10 @@ class World(Saving):
             got = found.get(key)
             if got is not None:
                 c = found[key] = Chunk(key, got[0], got[1], hot=hot)
-                c.light = got[2]
+                if isinstance(got[2], tuple):  # (array, its stored frame)
+                    c.light_read(*got[2])
+                else:
+                    c.light = got[2]
                 if not hot:
                     c.compact()
         if to_make:

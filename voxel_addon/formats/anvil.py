@@ -42,6 +42,10 @@ class Section(NamedTuple):
     props: list | None = None   # each palette entry's properties ({str: str}), or None
     biomes: tuple | None = None  # 1.18+: (names, packed longs or None): cells() unpacks them
     key: bytes | None = None     # the palette's bytes (chunkscan): equal keys, equal palettes
+    # read(packed=True), a 4-bit section (most): its 2048 bytes as stored (little-endian
+    # longs, two indices a byte, z not flipped) and each palette entry's voxels; indices None
+    nib: np.ndarray | None = None
+    counts: np.ndarray | None = None
 
 
 class Chunk(NamedTuple):
@@ -51,16 +55,18 @@ class Chunk(NamedTuple):
     biomes: np.ndarray | None = None  # 1.13–1.17: Level.Biomes (256 per column or 1024 cells)
 
 
-def read(payload: bytes, budget=None, fast: bool = True) -> Chunk:
+def read(payload: bytes, budget=None, fast: bool = True, packed: bool = False) -> Chunk:
     """The sections of a chunk's NBT; `budget` (a budget.Budget) is charged its tags.
-    `fast`: try chunkscan first (False: the general reader only, the tests' oracle)."""
+    `fast`: try chunkscan first (False: the general reader only, the tests' oracle).
+    `packed`: the fast path leaves 4-bit sections packed (Section.nib and counts:
+    formats/minecraft.convert looks their bytes up, no 4096 indices made)."""
     limit = CHUNK_TAGS if budget is None else min(CHUNK_TAGS, max(budget.tags, 0))
     payload = payload if isinstance(payload, bytes) else bytes(payload)
     sections = None
     if fast:
         try:   # a well-formed 1.18+ chunk: one pass, nothing else built
             version, status, found, tags = chunkscan.scan(payload, limit)
-            sections = _fast(found)
+            sections = _fast(found, packed)
         except chunkscan.Bail:
             pass
     if sections is not None:
@@ -117,13 +123,41 @@ def read(payload: bytes, budget=None, fast: bool = True) -> Chunk:
     return Chunk(version, status, sections, None if old is None else old.astype(np.int32))
 
 
-def _fast(found):
-    """chunkscan's sections unpacked, or None when an index lies outside its palette
-    (the general path then reports it)."""
-    rows = [[y, p.names, data, p, bio] for y, p, data, bio in found]
+def _fast(found, packed=False):
+    """chunkscan's sections unpacked (4-bit ones left packed with `packed`), or None
+    when an index lies outside its palette (the general path then reports it)."""
+    rows = [[y, p.names, data, p, bio, None, None] for y, p, data, bio in found]
+    if packed:
+        four = [r for r in rows if r[2] is not None and bits_for(len(r[1])) == 4]
+        if four and not _count(four):
+            return None
     if not _unpack_all(rows):
         return None
-    return [Section(y, names, idx, p.props, bio, p.key) for y, names, idx, p, bio in rows]
+    return [Section(y, names, idx, p.props, bio, p.key, nib, n)
+            for y, names, idx, p, bio, nib, n in rows]
+
+
+_OFF = np.arange(64, dtype=np.intp)[:, None] * 256
+
+
+def _count(rows) -> bool:
+    """4-bit sections' bytes and voxels per palette entry (rows' nib and counts, their
+    longs dropped), one histogram of (section, byte) for all; whether every index
+    lies inside its palette."""
+    n = len(rows)
+    u8 = np.concatenate([r[2] for r in rows], dtype="<i8").view(np.uint8).reshape(n, 2048)
+    if n > len(_OFF):
+        off = np.arange(n, dtype=np.intp)[:, None] * 256
+    else:
+        off = _OFF[:n]
+    h = np.bincount((u8 + off).ravel(), minlength=n * 256).reshape(n, 16, 16)
+    per = h.sum(axis=1) + h.sum(axis=2)      # [section, nibble]: low ones + high ones
+    for r, u, c in zip(rows, u8, per):
+        k = len(r[1])
+        if k < 16 and c[k:].any():
+            return False
+        r[2], r[5], r[6] = None, u, c[:k]
+    return True
 
 
 def _section(s, version):
@@ -206,6 +240,11 @@ def _unpack_all(found) -> bool:
 
 _PACKED = np.dtype(">i8")
 _NIBBLES = np.array([[b & 15, b >> 4] for b in range(256)], np.intp)   # a byte's two indices
+
+
+def nibbles(nib: np.ndarray) -> np.ndarray:
+    """A packed 4-bit section's (Section.nib) 4096 indices in Section's order."""
+    return _NIBBLES.take(nib.reshape(16, 16, 8)[:, ::-1], axis=0).reshape(4096)
 
 
 def _flip(idx: np.ndarray) -> np.ndarray:

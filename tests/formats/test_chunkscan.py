@@ -125,7 +125,7 @@ def test_deep_and_flooded_chunks_are_refused_as_before():
 
 def test_the_palette_memos_stay_bounded():
     """A flood of distinct block and biome palettes (each chunk its own) cannot grow
-    the memos past their bounds."""
+    the memos (palettes, sections) past their bounds, and each chunk reads as its own."""
     import struct
 
     def doc(i):
@@ -143,6 +143,7 @@ def test_the_palette_memos_stay_bounded():
         assert ch.sections[0].biomes[0] == [f"minecraft:b{i}"]
         assert len(chunkscan._MEMO) <= chunkscan._MEMO_MAX
         assert len(chunkscan._BIOMES) <= chunkscan._MEMO_MAX
+        assert len(chunkscan._SECS) <= chunkscan._MEMO_MAX
         assert chunkscan._held[0] <= chunkscan._HELD_MAX
 
 

@@ -138,6 +138,7 @@ def _fast(found, packed=False):
 
 
 _OFF = np.arange(64, dtype=np.intp)[:, None] * 256
+_NIB = np.arange(16)
 
 
 def _count(rows) -> bool:
@@ -152,10 +153,10 @@ def _count(rows) -> bool:
         off = _OFF[:n]
     h = np.bincount((u8 + off).ravel(), minlength=n * 256).reshape(n, 16, 16)
     per = h.sum(axis=1) + h.sum(axis=2)      # [section, nibble]: low ones + high ones
-    for r, u, c in zip(rows, u8, per):
-        k = len(r[1])
-        if k < 16 and c[k:].any():
-            return False
+    ks = [len(r[1]) for r in rows]
+    if min(ks) < 16 and (per * (_NIB >= np.array(ks)[:, None])).any():
+        return False
+    for r, u, c, k in zip(rows, u8, per, ks):
         r[2], r[5], r[6] = None, u, c[:k]
     return True
 

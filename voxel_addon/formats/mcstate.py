@@ -129,7 +129,8 @@ class States:
         if self.legacy:
             return self.dflt
         new = (self.dflt[ids] == 0) & (ids != 0) & (ids != _COLOR)
-        if new.any():
+        # (most chunks: only blocks too rare here to decide, such as ores, are new)
+        if new.any() and np.bincount(ids[new], counts[new]).max() >= SETTLE:
             tally: dict = {}
             total: dict = {}
             for b, v, n in zip(ids[new].tolist(), vals[new].tolist(), counts[new].tolist()):

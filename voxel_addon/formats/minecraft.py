@@ -195,25 +195,26 @@ def convert(ch: anvil.Chunk, y_min: int, pal: _Palettes):
     gives the data stored as 0 per block id (its default state, mcstate.States)."""
     blocks, data, dropped = C.empty(), None, 0
     counts = pal.report.blocks
-    keyed = pal.keyed   # a palette's bytes -> what `of` gives its entries
+    keyed = pal.keyed   # a palette's bytes -> its entries' ids, values and report rows
     ids_l, vals_l, n_l, secs, four = [], [], [], [], []
     for s in ch.sections:
         start = len(ids_l)
         got = keyed.get(s.key) if s.key is not None else None
         if got is None:
             got = [pal.of(name, p) for name, p in zip(s.palette, s.props or [None] * len(s.palette))]
+            got = ([g[0] for g in got], [g[1] for g in got], [counts[n] for n in s.palette])
             if s.key is not None:
                 keyed[s.key] = got
+        ids, vals, rows = got
         if s.indices is None and s.nib is None and len(s.palette) == 1:   # often all air
-            counts[s.palette[0]][2] += 4096
-            ids_l.append(got[0][0])
-            vals_l.append(got[0][1])
+            rows[0][2] += 4096
+            ids_l.append(ids[0])
+            vals_l.append(vals[0])
             n_l.append(4096)
             secs.append((s, start, start + 1, None))
             continue
-        for bid, d in got:
-            ids_l.append(bid)
-            vals_l.append(d)
+        ids_l += ids
+        vals_l += vals
         if s.counts is not None:
             n = s.counts
         elif s.indices is not None:
@@ -221,9 +222,8 @@ def convert(ch: anvil.Chunk, y_min: int, pal: _Palettes):
         else:
             n = np.array([4096] + [0] * (len(s.palette) - 1))
         nl = n.tolist()
-        for name, k in zip(s.palette, nl):
-            if k:
-                counts[name][2] += k
+        for row, k in zip(rows, nl):
+            row[2] += k
         n_l += nl
         secs.append((s, start, len(ids_l), n))
     if not secs:

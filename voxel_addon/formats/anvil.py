@@ -42,8 +42,10 @@ class Section(NamedTuple):
     props: list | None = None   # each palette entry's properties ({str: str}), or None
     biomes: tuple | None = None  # 1.18+: (names, packed longs or None): cells() unpacks them
     key: bytes | None = None     # the palette's bytes (chunkscan): equal keys, equal palettes
-    # read(packed=True), a 4-bit section (most): its 2048 bytes as stored (little-endian
-    # longs, two indices a byte, z not flipped) and each palette entry's voxels; indices None
+    # read(packed=True), a 4-bit section (most): its 2048 bytes (little-endian longs, two
+    # indices a byte) as (16, 16, 8) intp, z-flipped as indices, plus 256 * its place
+    # among the chunk's 4-bit sections (Chunk.nibs holds them all); each palette
+    # entry's voxels; indices None
     nib: np.ndarray | None = None
     counts: np.ndarray | None = None
 
@@ -53,6 +55,7 @@ class Chunk(NamedTuple):
     status: str
     sections: list
     biomes: np.ndarray | None = None  # 1.13–1.17: Level.Biomes (256 per column or 1024 cells)
+    nibs: np.ndarray | None = None    # read(packed=True): every Section.nib, (n, 16, 16, 8)
 
 
 def read(payload: bytes, budget=None, fast: bool = True, packed: bool = False) -> Chunk:
@@ -66,13 +69,13 @@ def read(payload: bytes, budget=None, fast: bool = True, packed: bool = False) -
     if fast:
         try:   # a well-formed 1.18+ chunk: one pass, nothing else built
             version, status, found, tags = chunkscan.scan(payload, limit)
-            sections = _fast(found, packed)
+            sections, nibs = _fast(found, packed)
         except chunkscan.Bail:
             pass
     if sections is not None:
         if budget is not None:
             budget.spend_tags(tags)
-        return Chunk(version, status, sections)
+        return Chunk(version, status, sections, None, nibs)
     try:
         root, tags = nbt.read(payload, KEEP, limit)
     except nbt.TooMany:
@@ -124,41 +127,43 @@ def read(payload: bytes, budget=None, fast: bool = True, packed: bool = False) -
 
 
 def _fast(found, packed=False):
-    """chunkscan's sections unpacked (4-bit ones left packed with `packed`), or None
-    when an index lies outside its palette (the general path then reports it)."""
+    """(chunkscan's sections unpacked (4-bit ones left packed with `packed`), Chunk.nibs),
+    or (None, None) when an index lies outside its palette (the general path then
+    reports it)."""
     rows = [[y, p.names, data, p, bio, None, None] for y, p, data, bio in found]
+    nibs = None
     if packed:
         four = [r for r in rows if r[2] is not None and bits_for(len(r[1])) == 4]
-        if four and not _count(four):
-            return None
+        if four:
+            nibs = _count(four)
+            if nibs is None:
+                return None, None
     if not _unpack_all(rows):
-        return None
+        return None, None
     return [Section(y, names, idx, p.props, bio, p.key, nib, n)
-            for y, names, idx, p, bio, nib, n in rows]
+            for y, names, idx, p, bio, nib, n in rows], nibs
 
 
-_OFF = np.arange(64, dtype=np.intp)[:, None] * 256
+_OFF = np.arange(64, dtype=np.intp)[:, None, None, None] * 256
 _NIB = np.arange(16)
 
 
-def _count(rows) -> bool:
-    """4-bit sections' bytes and voxels per palette entry (rows' nib and counts, their
-    longs dropped), one histogram of (section, byte) for all; whether every index
-    lies inside its palette."""
+def _count(rows):
+    """4-bit sections' bytes, z-flipped and offset by 256 * their place (rows' nib; all
+    of them returned), and voxels per palette entry (counts), their longs dropped: one
+    histogram of those values for all; None when an index lies outside its palette."""
     n = len(rows)
-    u8 = np.concatenate([r[2] for r in rows], dtype="<i8").view(np.uint8).reshape(n, 2048)
-    if n > len(_OFF):
-        off = np.arange(n, dtype=np.intp)[:, None] * 256
-    else:
-        off = _OFF[:n]
-    h = np.bincount((u8 + off).ravel(), minlength=n * 256).reshape(n, 16, 16)
+    u8 = np.concatenate([r[2] for r in rows], dtype="<i8").view(np.uint8)
+    off = _OFF[:n] if n <= len(_OFF) else np.arange(n, dtype=np.intp)[:, None, None, None] * 256
+    at = u8.reshape(n, 16, 16, 8)[:, :, ::-1] + off
+    h = np.bincount(at.reshape(-1), minlength=n * 256).reshape(n, 16, 16)
     per = h.sum(axis=1) + h.sum(axis=2)      # [section, nibble]: low ones + high ones
     ks = [len(r[1]) for r in rows]
     if min(ks) < 16 and (per * (_NIB >= np.array(ks)[:, None])).any():
-        return False
-    for r, u, c, k in zip(rows, u8, per, ks):
-        r[2], r[5], r[6] = None, u, c[:k]
-    return True
+        return None
+    for r, a, c, k in zip(rows, at, per, ks):
+        r[2], r[5], r[6] = None, a, c[:k]
+    return at
 
 
 def _section(s, version):
@@ -245,7 +250,7 @@ _NIBBLES = np.array([[b & 15, b >> 4] for b in range(256)], np.intp)   # a byte'
 
 def nibbles(nib: np.ndarray) -> np.ndarray:
     """A packed 4-bit section's (Section.nib) 4096 indices in Section's order."""
-    return _NIBBLES.take(nib.reshape(16, 16, 8)[:, ::-1], axis=0).reshape(4096)
+    return _NIBBLES.take(nib & 255, axis=0).reshape(4096)
 
 
 def _flip(idx: np.ndarray) -> np.ndarray:

@@ -196,7 +196,7 @@ def convert(ch: anvil.Chunk, y_min: int, pal: _Palettes):
     blocks, data, dropped = C.empty(), None, 0
     counts = pal.report.blocks
     keyed = pal.keyed   # a palette's bytes -> its entries' ids, values and report rows
-    ids_l, vals_l, n_l, secs, four = [], [], [], [], []
+    ids_l, vals_l, n_l, secs, four, packed = [], [], [], [], [], []
     for s in ch.sections:
         start = len(ids_l)
         got = keyed.get(s.key) if s.key is not None else None
@@ -215,6 +215,8 @@ def convert(ch: anvil.Chunk, y_min: int, pal: _Palettes):
             continue
         ids_l += ids
         vals_l += vals
+        if s.nib is not None:
+            packed.append((s, start, len(ids_l)))
         if s.counts is not None:
             n = s.counts
         elif s.indices is not None:
@@ -265,37 +267,33 @@ def convert(ch: anvil.Chunk, y_min: int, pal: _Palettes):
             cut = idx.reshape(16, 4096 // 16)[outside].ravel()
             dropped += int((ids != 0)[cut].sum())
     if four:
-        data = _four(four, y_min, blocks, data, ids_a, vals_a, vall, keyed)
+        data = _four(four, packed, ch.nibs, y_min, blocks, data, ids_a, vals_a, vall, keyed)
     return blocks, data, dropped
 
 
-def _four(four, y_min, blocks, data, ids_a, vals_a, vall, keyed):
-    """The packed 4-bit sections (whole inside the world's height) of a chunk: two
-    voxels a byte, so each byte looks up its two block ids (data values) as one
-    32-bit word (a table of 256 per section, the ids' cached by palette), all sections
-    in one take; written into the layers (x fastest, z-flipped rows, as anvil._flip)."""
+def _four(four, packed, nibs, y_min, blocks, data, ids_a, vals_a, vall, keyed):
+    """The packed 4-bit sections (`packed`; `four`: those whole inside the world's
+    height) of a chunk: two voxels a byte, so each byte looks up its two block ids
+    (data values) as one 32-bit word, in a table of 256 per section (the ids' kept
+    by palette) at 256 * the section's place (Section.nib): all sections in one take,
+    written into the layers (x fastest, z-flipped rows, as anvil._flip)."""
     n = len(four)
-    if n == 1:
-        at = four[0][0].nib.reshape(1, 16, 16, 8)[:, :, ::-1]
-    else:   # section k's bytes index its own table: k * 256 + byte
-        off = _OFF[:n] if n <= len(_OFF) else np.arange(n, dtype=np.intp) * 256
-        at = np.stack([s.nib for s, _, _ in four]).reshape(n, 16, 16, 8)[:, :, ::-1] \
-            + off[:, None, None, None]
+    at = nibs if n == len(packed) else np.stack([s.nib for s, _, _ in four])
     memo = keyed.get(None)   # (palette bytes, values) -> their table; bounded
     if memo is None or len(memo) > PAIRS:
         memo = keyed[None] = {}
-    tabs = [_table(memo, s.key, ids_a[i:j]) for s, i, j in four]
+    tabs = [_table(memo, s.key, ids_a[i:j]) for s, i, j in packed]
     ys = [s.y for s, _, _ in four]
     run = ys == list(range(ys[0], ys[0] + n))   # consecutive: straight into the layers
     z0 = 16 * ys[0] - y_min
     out = blocks.T[z0:z0 + 16 * n].view(np.uint32).reshape(n, 16, 16, 8) if run else None
-    got = (tabs[0] if n == 1 else np.concatenate(tabs)).take(at, out=out, mode="clip")
+    got = (tabs[0] if len(tabs) == 1 else np.concatenate(tabs)).take(at, out=out, mode="clip")
     if not run:
         _place(got, ys, y_min, blocks)
     if any(any(vall[i:j]) for _, i, j in four):
         if data is None:
             data = C.empty()
-        tab = np.concatenate([_table(memo, s.key, vals_a[i:j], vall[i:j]) for s, i, j in four])
+        tab = np.concatenate([_table(memo, s.key, vals_a[i:j], vall[i:j]) for s, i, j in packed])
         out = data.T[z0:z0 + 16 * n].view(np.uint32).reshape(n, 16, 16, 8) if run else None
         got = tab.take(at, out=out, mode="clip")
         if not run:
@@ -307,9 +305,6 @@ def _place(words, ys, y_min, arr):
     for w, y in zip(words, ys):
         z0 = 16 * y - y_min
         arr.T[z0:z0 + 16].view(np.uint32)[...] = w.reshape(16, 16, 8)
-
-
-_OFF = np.arange(64, dtype=np.intp) * 256
 
 
 def _table(memo, key, vals, vl=None):

@@ -130,18 +130,29 @@ def _fast(found, packed=False):
     """(chunkscan's sections unpacked (4-bit ones left packed with `packed`), Chunk.nibs),
     or (None, None) when an index lies outside its palette (the general path then
     reports it)."""
-    rows = [[y, p.names, data, p, bio, None, None] for y, p, data, bio in found]
+    out, rows = [], []
+    for f in found:
+        if f[2] is None:   # no longs: its Section once, kept with chunkscan's (memo) row
+            if len(f) == 4:
+                y, p, _, bio = f
+                f.append(Section(y, p.names, None, p.props, bio, p.key))
+            out.append(f[4])
+        else:
+            y, p, data, bio = f
+            r = [y, p.names, data, p, bio, None, None]
+            rows.append(r)
+            out.append(r)
     nibs = None
     if packed:
-        four = [r for r in rows if r[2] is not None and bits_for(len(r[1])) == 4]
+        four = [r for r in rows if bits_for(len(r[1])) == 4]
         if four:
             nibs = _count(four)
             if nibs is None:
                 return None, None
     if not _unpack_all(rows):
         return None, None
-    return [Section(y, names, idx, p.props, bio, p.key, nib, n)
-            for y, names, idx, p, bio, nib, n in rows], nibs
+    return [r if type(r) is Section else Section(r[0], r[1], r[2], r[3].props, r[4], r[3].key,
+                                                 r[5], r[6]) for r in out], nibs
 
 
 _OFF = np.arange(64, dtype=np.intp)[:, None, None, None] * 256

@@ -164,9 +164,9 @@ def _count(rows):
     of them returned), and voxels per palette entry (counts), their longs dropped: one
     histogram of those values for all; None when an index lies outside its palette."""
     n = len(rows)
-    u8 = np.concatenate([r[2] for r in rows], dtype="<i8").view(np.uint8)
+    u8 = np.concatenate([r[2] for r in rows], dtype=_PACKED).view(np.uint8)   # as stored
     off = _OFF[:n] if n <= len(_OFF) else np.arange(n, dtype=np.intp)[:, None, None, None] * 256
-    at = u8.reshape(n, 16, 16, 8)[:, :, ::-1] + off
+    at = u8.reshape(n, 16, 16, 8)[:, :, ::-1, ::-1] + off   # z flipped, each long's bytes low first
     h = np.bincount(at.reshape(-1), minlength=n * 256).reshape(n, 16, 16)
     per = h.sum(axis=1) + h.sum(axis=2)      # [section, nibble]: low ones + high ones
     ks = [len(r[1]) for r in rows]

@@ -196,3 +196,16 @@ def test_packed_sections_convert_as_unpacked(docs, tmp_path):
             assert n == n2 and b.flags.f_contiguous and (b == b2).all()
             assert (d is None) == (d2 is None) and (d is None or (d == d2).all())
         assert got[1:] == want[1:]
+
+
+def test_convert_keeps_a_bounded_number_of_byte_tables(docs, tmp_path, monkeypatch):
+    from voxel_addon.formats import minecraft
+    from voxel_addon.world import World
+    monkeypatch.setattr(minecraft, "PAIRS", 3)
+    with World.create(tmp_path / "w.sqlite", seed=0, generator="empty", loader=False) as w:
+        pal = minecraft._Palettes(w, minecraft.Report())
+        for doc in docs[:3] + [_mixed_chunk()]:
+            ch = anvil.read(doc, None, packed=True)
+            minecraft.convert(ch, -64, pal)
+            # cleared past PAIRS before a chunk adds its own (ids and values: 2 a section)
+            assert len(pal.keyed[None]) <= 3 + 1 + 2 * len(ch.sections)

@@ -39,7 +39,7 @@ from .budget import Budget, Exceeded
 from .region import MAX_NBT, External, Region, RegionError, decompress
 
 BATCH = 32
-PAIRS = 4096   # 4-bit sections' lookup tables (1 KiB each) convert keeps
+PAIRS = 1024   # 4-bit sections' lookup tables (1 KiB each) convert keeps
 GROUP = 16   # chunks a helper task inflates
 AHEAD_MAX = 1 << 20   # bytes of one chunk's NBT inflated ahead (real ones: tens of KB)
 LAYOUTS = ("dimensions/minecraft/overworld/region", "region")  # 26.1 first, then older

@@ -125,7 +125,7 @@ def test_deep_and_flooded_chunks_are_refused_as_before():
 
 def test_the_palette_memos_stay_bounded():
     """A flood of distinct block and biome palettes (each chunk its own) cannot grow
-    the memos past their bounds."""
+    the memos (palettes, sections) past their bounds, and each chunk reads as its own."""
     import struct
 
     def doc(i):
@@ -143,4 +143,69 @@ def test_the_palette_memos_stay_bounded():
         assert ch.sections[0].biomes[0] == [f"minecraft:b{i}"]
         assert len(chunkscan._MEMO) <= chunkscan._MEMO_MAX
         assert len(chunkscan._BIOMES) <= chunkscan._MEMO_MAX
+        assert len(chunkscan._SECS) <= chunkscan._MEMO_MAX
         assert chunkscan._held[0] <= chunkscan._HELD_MAX
+
+
+def _mixed_chunk():
+    """4-bit sections apart (a 5-bit one and a missing one between), one 4-bit section
+    of a single entry, states with properties: what read(packed=True) leaves packed."""
+    rng = np.random.default_rng(5)
+    names = np.array(["minecraft:stone", "minecraft:oak_stairs[facing=east,half=top]",
+                      "minecraft:water[level=0]", "minecraft:white_wool", "minecraft:air",
+                      "minecraft:oak_leaves[distance=3]"], object)
+    wide = np.array([f"minecraft:{w}_wool" for w in ("red", "blue", "lime", "gray", "pink",
+                     "cyan", "black", "brown", "green", "orange", "purple", "yellow",
+                     "magenta", "light_blue", "light_gray", "white", "stone")], object)
+    secs = {-4: names[rng.integers(0, 6, (16, 16, 16))], -3: wide[rng.integers(0, 17, (16, 16, 16))],
+            -1: names[rng.integers(0, 3, (16, 16, 16))], 0: names[np.zeros((16, 16, 16), int)],
+            2: names[rng.integers(2, 6, (16, 16, 16))]}
+    return mc.chunk_nbt(1, 2, secs)
+
+
+def _converted(doc, packed, y_min, tmp):
+    from voxel_addon.formats import minecraft
+    from voxel_addon.world import World
+    try:
+        ch = anvil.read(doc, None, packed=packed)
+    except (anvil.ChunkError, nbt.NbtError, Exceeded) as e:
+        return type(e), str(e)
+    path = tmp / f"w{int(packed)}.sqlite"
+    for p in (path, path.with_name(path.name + "-wal"), path.with_name(path.name + "-shm")):
+        p.unlink(missing_ok=True)
+    with World.create(path, seed=0, generator="empty", loader=False) as w:
+        rep = minecraft.Report()
+        pal = minecraft._Palettes(w, rep)
+        out = [minecraft.convert(ch, y_min, pal) for _ in range(2)]   # again: memos
+        return out, rep.blocks, dict(pal.states.defaults), list(pal.states.list)
+
+
+def test_packed_sections_convert_as_unpacked(docs, tmp_path):
+    """read(packed=True) (4-bit sections looked up by their bytes in convert) gives
+    the blocks, data, dropped voxels, report counts and states of the unpacked path,
+    also where the height cuts sections and for damaged chunks (or their error)."""
+    rng = np.random.default_rng(17)
+    cases = [(d, y) for d in docs + [_mixed_chunk()] for y in (-64, -56, 0, -200)]
+    cases += [(mutate(rng, d, 3), -64) for d in (docs[0], docs[3]) for _ in range(40)]
+    for doc, y_min in cases:
+        got, want = _converted(doc, True, y_min, tmp_path), _converted(doc, False, y_min, tmp_path)
+        if isinstance(want, tuple) and isinstance(want[0], type):
+            assert got == want
+            continue
+        for (b, d, n), (b2, d2, n2) in zip(got[0], want[0]):
+            assert n == n2 and b.flags.f_contiguous and (b == b2).all()
+            assert (d is None) == (d2 is None) and (d is None or (d == d2).all())
+        assert got[1:] == want[1:]
+
+
+def test_convert_keeps_a_bounded_number_of_byte_tables(docs, tmp_path, monkeypatch):
+    from voxel_addon.formats import minecraft
+    from voxel_addon.world import World
+    monkeypatch.setattr(minecraft, "PAIRS", 3)
+    with World.create(tmp_path / "w.sqlite", seed=0, generator="empty", loader=False) as w:
+        pal = minecraft._Palettes(w, minecraft.Report())
+        for doc in docs[:3] + [_mixed_chunk()]:
+            ch = anvil.read(doc, None, packed=True)
+            minecraft.convert(ch, -64, pal)
+            # cleared past PAIRS before a chunk adds its own (ids and values: 2 a section)
+            assert len(pal.keyed[None]) <= 3 + 1 + 2 * len(ch.sections)

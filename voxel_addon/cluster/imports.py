@@ -155,7 +155,7 @@ def read(item, shared):
             if kind is None:
                 reg = regions.get(name) or regions.setdefault(name, Region(shared["files"][name]))
                 kind, body = reg.raw(cx, cz)
-            ch = anvil.read(unpack(name, cx, cz, kind, body, b), b)
+            ch = anvil.read(unpack(name, cx, cz, kind, body, b), b, packed=True)
         except Exceeded as e:  # nbt.Hostile too: refuses the import, as in one process
             out.append((("hostile", f"{where}: {e}; import refused"), b.spent(), where))
             continue

@@ -42,6 +42,12 @@ class Section(NamedTuple):
     props: list | None = None   # each palette entry's properties ({str: str}), or None
     biomes: tuple | None = None  # 1.18+: (names, packed longs or None): cells() unpacks them
     key: bytes | None = None     # the palette's bytes (chunkscan): equal keys, equal palettes
+    # read(packed=True), a 4-bit section (most): its 2048 bytes (little-endian longs, two
+    # indices a byte) as (16, 16, 8) intp, z-flipped as indices, plus 256 * its place
+    # among the chunk's 4-bit sections (Chunk.nibs holds them all); each palette
+    # entry's voxels; indices None
+    nib: np.ndarray | None = None
+    counts: np.ndarray | None = None
 
 
 class Chunk(NamedTuple):
@@ -49,24 +55,27 @@ class Chunk(NamedTuple):
     status: str
     sections: list
     biomes: np.ndarray | None = None  # 1.13–1.17: Level.Biomes (256 per column or 1024 cells)
+    nibs: np.ndarray | None = None    # read(packed=True): every Section.nib, (n, 16, 16, 8)
 
 
-def read(payload: bytes, budget=None, fast: bool = True) -> Chunk:
+def read(payload: bytes, budget=None, fast: bool = True, packed: bool = False) -> Chunk:
     """The sections of a chunk's NBT; `budget` (a budget.Budget) is charged its tags.
-    `fast`: try chunkscan first (False: the general reader only, the tests' oracle)."""
+    `fast`: try chunkscan first (False: the general reader only, the tests' oracle).
+    `packed`: the fast path leaves 4-bit sections packed (Section.nib and counts:
+    formats/minecraft.convert looks their bytes up, no 4096 indices made)."""
     limit = CHUNK_TAGS if budget is None else min(CHUNK_TAGS, max(budget.tags, 0))
     payload = payload if isinstance(payload, bytes) else bytes(payload)
     sections = None
     if fast:
         try:   # a well-formed 1.18+ chunk: one pass, nothing else built
             version, status, found, tags = chunkscan.scan(payload, limit)
-            sections = _fast(found)
+            sections, nibs = _fast(found, packed)
         except chunkscan.Bail:
             pass
     if sections is not None:
         if budget is not None:
             budget.spend_tags(tags)
-        return Chunk(version, status, sections)
+        return Chunk(version, status, sections, None, nibs)
     try:
         root, tags = nbt.read(payload, KEEP, limit)
     except nbt.TooMany:
@@ -117,13 +126,55 @@ def read(payload: bytes, budget=None, fast: bool = True) -> Chunk:
     return Chunk(version, status, sections, None if old is None else old.astype(np.int32))
 
 
-def _fast(found):
-    """chunkscan's sections unpacked, or None when an index lies outside its palette
-    (the general path then reports it)."""
-    rows = [[y, p.names, data, p, bio] for y, p, data, bio in found]
+def _fast(found, packed=False):
+    """(chunkscan's sections unpacked (4-bit ones left packed with `packed`), Chunk.nibs),
+    or (None, None) when an index lies outside its palette (the general path then
+    reports it)."""
+    out, rows = [], []
+    for f in found:
+        if f[2] is None:   # no longs: its Section once, kept with chunkscan's (memo) row
+            if len(f) == 4:
+                y, p, _, bio = f
+                f.append(Section(y, p.names, None, p.props, bio, p.key))
+            out.append(f[4])
+        else:
+            y, p, data, bio = f
+            r = [y, p.names, data, p, bio, None, None]
+            rows.append(r)
+            out.append(r)
+    nibs = None
+    if packed:
+        four = [r for r in rows if bits_for(len(r[1])) == 4]
+        if four:
+            nibs = _count(four)
+            if nibs is None:
+                return None, None
     if not _unpack_all(rows):
+        return None, None
+    return [r if type(r) is Section else Section(r[0], r[1], r[2], r[3].props, r[4], r[3].key,
+                                                 r[5], r[6]) for r in out], nibs
+
+
+_OFF = np.arange(64, dtype=np.intp)[:, None, None, None] * 256
+_NIB = np.arange(16)
+
+
+def _count(rows):
+    """4-bit sections' bytes, z-flipped and offset by 256 * their place (rows' nib; all
+    of them returned), and voxels per palette entry (counts), their longs dropped: one
+    histogram of those values for all; None when an index lies outside its palette."""
+    n = len(rows)
+    u8 = np.concatenate([r[2] for r in rows], dtype=_PACKED).view(np.uint8)   # as stored
+    off = _OFF[:n] if n <= len(_OFF) else np.arange(n, dtype=np.intp)[:, None, None, None] * 256
+    at = u8.reshape(n, 16, 16, 8)[:, :, ::-1, ::-1] + off   # z flipped, each long's bytes low first
+    h = np.bincount(at.reshape(-1), minlength=n * 256).reshape(n, 16, 16)
+    per = h.sum(axis=1) + h.sum(axis=2)      # [section, nibble]: low ones + high ones
+    ks = [len(r[1]) for r in rows]
+    if min(ks) < 16 and (per * (_NIB >= np.array(ks)[:, None])).any():
         return None
-    return [Section(y, names, idx, p.props, bio, p.key) for y, names, idx, p, bio in rows]
+    for r, a, c, k in zip(rows, at, per, ks):
+        r[2], r[5], r[6] = None, a, c[:k]
+    return at
 
 
 def _section(s, version):
@@ -206,6 +257,11 @@ def _unpack_all(found) -> bool:
 
 _PACKED = np.dtype(">i8")
 _NIBBLES = np.array([[b & 15, b >> 4] for b in range(256)], np.intp)   # a byte's two indices
+
+
+def nibbles(nib: np.ndarray) -> np.ndarray:
+    """A packed 4-bit section's (Section.nib) 4096 indices in Section's order."""
+    return _NIBBLES.take(nib & 255, axis=0).reshape(4096)
 
 
 def _flip(idx: np.ndarray) -> np.ndarray:

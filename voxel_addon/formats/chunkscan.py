@@ -4,7 +4,8 @@ palette and longs, biome palette and longs) and steps over everything else witho
 building objects. A block palette met before (they repeat across sections and
 chunks) is matched by its bytes and replayed as the same (immutable) names and
 properties, with a `key` (those bytes) that formats/minecraft.convert maps in one
-lookup.
+lookup; so is a whole section without block longs (the air above ground: Y, palette,
+biomes and light the same bytes from chunk to chunk), its tags charged the same.
 
 It accepts only well-formed chunks: anything unusual (a type it does not expect, a
 missing Y, a length that does not fit, nesting deeper than DEPTH, more tags than the
@@ -50,9 +51,15 @@ _BIOMES: dict = {}     # bytes of a biome palette -> its names; both memos hold 
 # _MEMO_MAX keys and _HELD_MAX bytes of palettes (a hostile flood of distinct ones)
 
 
+_SECS: dict = {}       # a section without block longs (most: all air) by its first bytes ->
+_SEC_MAX = 8192        # [(its bytes, [y, Palette, None, biomes], tags)]: the same bytes,
+# the same section (its Y among them); sections of at most _SEC_MAX bytes, bounded as above
+
+
 def _clear() -> None:
     _MEMO.clear()
     _BIOMES.clear()
+    _SECS.clear()
     _held[0] = 0
 
 
@@ -65,6 +72,17 @@ def _remember(mk, p: Palette) -> None:
     if len(got) < _PER_KEY:
         got.append(p)
         _held[0] += len(p.key)
+
+
+def _remember_section(mk, raw, sec, tags) -> None:
+    if len(_SECS) >= _MEMO_MAX or _held[0] + len(raw) > _HELD_MAX:
+        _clear()
+    got = _SECS.setdefault(mk, [])
+    if len(got) < _PER_KEY:
+        if sec is not None and sec[3] is not None and sec[3][1] is not None:
+            sec = [*sec[:3], (sec[3][0], sec[3][1].copy())]   # not a view of the chunk
+        got.append((raw, sec, tags))
+        _held[0] += len(raw)
 
 
 def _text(raw: bytes) -> str:
@@ -293,7 +311,19 @@ def _scan(b, limit):
                 continue
             tags += c
             for _ in range(c):
-                sec, pos, tags = _section(b, pos, tags, limit)
+                mk = b[pos:pos + _PREFIX]
+                for raw, sec, k in _SECS.get(mk, ()):
+                    if b.startswith(raw, pos):
+                        pos += len(raw)
+                        tags += k
+                        if tags > limit:
+                            raise Bail
+                        break
+                else:
+                    start, before = pos, tags
+                    sec, pos, tags = _section(b, pos, tags, limit)
+                    if pos - start <= _SEC_MAX and (sec is None or sec[2] is None):
+                        _remember_section(mk, b[start:pos], sec, tags - before)
                 if sec is not None:
                     secs.append(sec)
         elif key == b"DataVersion":

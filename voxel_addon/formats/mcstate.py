@@ -35,7 +35,8 @@ from ..storage import minecraft as mcfile
 KEY, COLOR_KEY, RESOURCES, Y_MIN = mcfile.STATES, mcfile.COLOR_STATES, mcfile.RESOURCES, mcfile.Y_MIN
 DEFAULTS = mcfile.DEFAULTS
 LIMIT = 1 << 16
-SETTLE = 256   # voxels of a block in one chunk that decide its default state
+SETTLE = 256
+MEMO = 4096    # section biome layouts remembered (columns)   # voxels of a block in one chunk that decide its default state
 DEFAULT_BIOME = "minecraft:plains"
 
 # 1.13–1.17 numeric biome ids (the common ones; others read as plains)
@@ -128,7 +129,8 @@ class States:
         if self.legacy:
             return self.dflt
         new = (self.dflt[ids] == 0) & (ids != 0) & (ids != _COLOR)
-        if new.any():
+        # (most chunks: only blocks too rare here to decide, such as ores, are new)
+        if new.any() and np.bincount(ids[new], counts[new]).max() >= SETTLE:
             tally: dict = {}
             total: dict = {}
             for b, v, n in zip(ids[new].tolist(), vals[new].tolist(), counts[new].tolist()):
@@ -216,18 +218,24 @@ def columns(ch, blocks: np.ndarray, y_min: int, biome, memo: dict | None = None)
         return None
     ys = sorted(secs)
     sy = np.clip(y >> 4, ys[0], ys[-1])
-    ds = sorted(set(sy.ravel().tolist()))
-    # each section met: its 64 cells' world biomes; then one lookup for all columns
-    table = np.empty((len(ds), 64), np.uint8)
-    for k, s in enumerate(ds):
+    ds = np.flatnonzero(np.bincount((sy - ys[0]).ravel())).tolist()   # sections met, sorted
+    # each section met: its 64 cells' world biomes (kept by the section's biome bytes,
+    # which repeat across chunks); then one lookup for all columns
+    rows = []
+    for s in ds:
+        s += ys[0]
         near = s if s in secs else min(ys, key=lambda v: abs(v - s))
-        names, _ = secs[near]
-        key = tuple(names)
-        glob = memo.get(key)
-        if glob is None:
-            glob = memo[key] = np.array([biome(n) for n in names], np.uint8)
-        idx = cells(secs[near])
-        table[k] = glob[0] if idx is None else glob[idx]
+        names, data = secs[near]
+        key = (tuple(names), None if data is None else data.tobytes())
+        row = memo.get(key)
+        if row is None:
+            if len(memo) >= MEMO:   # a save of endless distinct biome layouts
+                memo.clear()
+            glob = np.array([biome(n) for n in names], np.uint8)
+            idx = cells(secs[near])
+            row = memo[key] = np.full(64, glob[0], np.uint8) if idx is None else glob[idx]
+        rows.append(row)
     rank = np.zeros(ys[-1] - ys[0] + 1, np.intp)
-    rank[np.array(ds) - ys[0]] = np.arange(len(ds))
-    return table[rank[sy - ys[0]], ((y & 15) >> 2) * 16 + cell_xz]
+    rank[np.array(ds)] = np.arange(len(ds))
+    table = np.concatenate(rows)
+    return table[rank[sy - ys[0]] * 64 + ((y & 15) >> 2) * 16 + cell_xz]

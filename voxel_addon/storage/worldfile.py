@@ -27,78 +27,15 @@ import numpy as np
 
 from ..core import chunk as C
 from ..core.blocks import REGISTRY
-from ..core.errors import VoxelError, cause
+from ..core.errors import VoxelError
 from . import codecs
+from .decode import CorruptChunk, Decoding
 from .rows import Encoder
+from .schema import (APP_ID, FORMAT_VERSION, LIGHT_TABLE, SCHEMA, VERSION_TABLE,
+                     lock_timeout, open_error)
 from .transactions import Reading, Transaction
 
-FORMAT_VERSION = 1
-APP_ID = 0x564F5857  # "VOXW": marks our files in the SQLite header
-
-LIGHT_TABLE = """CREATE TABLE IF NOT EXISTS light(cx INTEGER, cy INTEGER, codec TEXT NOT NULL,
-    light BLOB NOT NULL, PRIMARY KEY (cx, cy))"""
-SCHEMA = f"""
-CREATE TABLE IF NOT EXISTS meta(key TEXT PRIMARY KEY, value TEXT);
-CREATE TABLE IF NOT EXISTS block_types(id INTEGER PRIMARY KEY, name TEXT UNIQUE NOT NULL);
-CREATE TABLE IF NOT EXISTS chunks(cx INTEGER, cy INTEGER, codec TEXT NOT NULL,
-    blocks BLOB NOT NULL, data BLOB, PRIMARY KEY (cx, cy));
--- A chunk's final light when it was saved, packed as SPEC 3 in linear order. Derived
--- data, kept apart from the chunks table of SPEC 3: a row is dropped whenever its
--- chunk is written without light or a block in its 3x3 changes, and a missing or
--- damaged one is only computed again (saves the light solve when reloading).
-{LIGHT_TABLE};
--- The user's own changes, kept apart so a world can be regenerated with them.
-CREATE TABLE IF NOT EXISTS edits(x INTEGER, y INTEGER, z INTEGER, block INTEGER NOT NULL,
-    data INTEGER NOT NULL DEFAULT 0, t REAL NOT NULL, PRIMARY KEY (x, y, z));
-"""
-
-# Our own table beside SPEC 3's `chunks` (whose columns stay as they are): the
-# version of each chunk row, the file-wide sequence number of its last write (or
-# delete). Kept by triggers, so every writer of `chunks` keeps it right.
-VERSION_TABLE = (
-    """CREATE TABLE IF NOT EXISTS chunk_versions(cx INTEGER, cy INTEGER, v INTEGER NOT NULL,
-        PRIMARY KEY (cx, cy)) WITHOUT ROWID""",  # the key is the table: no second b-tree
-    "CREATE INDEX IF NOT EXISTS chunk_versions_v ON chunk_versions(v)",
-) + tuple(
-    f"""CREATE TRIGGER IF NOT EXISTS chunk_version_{what} AFTER {what.upper()} ON chunks BEGIN
-        INSERT OR REPLACE INTO chunk_versions VALUES ({row}.cx, {row}.cy,
-            (SELECT COALESCE(MAX(v), 0) + 1 FROM chunk_versions));
-    END""" for what, row in (("insert", "NEW"), ("update", "NEW"), ("delete", "OLD")))
-
-
-def lock_timeout() -> float:
-    """Seconds a write waits for another program's transaction on the same file
-    (VOXEL_LOCK_TIMEOUT, default 30) before it fails as locked."""
-    try:
-        return max(0.0, float(os.environ.get("VOXEL_LOCK_TIMEOUT", "30")))
-    except ValueError:
-        return 30.0
-
-
-def _open_error(path: Path, e: sqlite3.DatabaseError) -> VoxelError:
-    """A full disk, a locked or read-only file is not a damaged one: say which."""
-    what = cause(e, path)
-    if what is not None:
-        return VoxelError(f"{what} while opening {path}: nothing was written")
-    return VoxelError(f"{path} is not a readable world file ({e})")
-
-
-_ZYX = (C.HEIGHT, C.SIZE, C.SIZE)  # linear order as C order: .T is the chunk's shape
-_MAX = np.maximum.reduce  # ndarray.max() without its Python wrapper (a read's 5 %)
-_LAYER = C.SIZE * C.SIZE
-
-
-def _flat_scratch() -> np.ndarray:
-    """This thread's scratch chunk array, flat (a frame kept as read decodes here
-    only to be checked: no fresh 128 KB, no page faults)."""
-    return C.scratch(C.SHAPE, np.dtype(np.uint16)).reshape(-1, order="F")
-
-
-class CorruptChunk(VoxelError):
-    """A chunk row that cannot be decoded; it is left as it is in the file."""
-
-
-class WorldFile:
+class WorldFile(Decoding):
     """A world file opened for reading (and writing unless `readonly`)."""
 
     def __init__(self, path, *, readonly: bool = False, _create: dict | None = None):
@@ -130,7 +67,7 @@ class WorldFile:
             file_names = dict(self.db.execute("SELECT id, name FROM block_types"))
             self.db.execute("PRAGMA synchronous=NORMAL")
         except sqlite3.DatabaseError as e:
-            raise _open_error(self.path, e) from None
+            raise open_error(self.path, e) from None
         self._check_version()
         if not readonly and _create is None:
             self.db.execute("PRAGMA journal_mode=WAL")
@@ -373,59 +310,6 @@ class WorldFile:
             except CorruptChunk as e:
                 out[k] = e
         return out
-
-    def _fetched(self, key, row, packed: bool = False):
-        v, codec, blob, dblob, lcodec, lblob = row
-        if codec is None:
-            return None, None, None, v
-        blocks, data = self._decode(key, codec, blob, dblob, packed)
-        return blocks, data, self._decode_light(lcodec, lblob, packed), v
-
-    def _decode(self, key, codec, blob, dblob, packed: bool = False):
-        # PACKED: keep the frame as read (what it decodes to is the chunk's blocks as
-        # is: the file's ids are the registry's); decoded only to check it
-        frame = packed and self._identity and codecs.framed(codec, blob, 2 * C.VOLUME)
-        try:  # decoded into new arrays: linear order is the (16, 16, 256) F order
-            blocks = codecs.decode_u16(codec, blob, C.VOLUME, out=_flat_scratch() if frame
-                                       else None)
-            data = None if dblob is None else \
-                codecs.decode_u16(codec, dblob, C.VOLUME).reshape(C.SHAPE, order="F")
-        except ValueError as e:
-            raise CorruptChunk(f"chunk ({key[0]}, {key[1]}) in {self.path} is damaged ({e}); "
-                               "it was left untouched") from None
-        # checked always: tables are indexed by id (the lookup checks what it maps);
-        # not the zeros (air) a frame says it ends with: ~70 % of a chunk's values
-        if self._identity:
-            n = C.VOLUME - (codecs.zero_tail(blob) >> 1)
-            ok = n == 0 or _MAX(blocks[:n]) < len(self._to_reg)
-        else:
-            try:
-                blocks, ok = self._to_reg[blocks], True
-            except IndexError:
-                ok = False
-        if not ok:
-            raise CorruptChunk(f"chunk ({key[0]}, {key[1]}) in {self.path} has block ids "
-                               "missing from block_types; it was left untouched")
-        if frame:
-            return C.Packed.frame(blob, C.SHAPE, np.uint16, -(-n // _LAYER)), data
-        return blocks.reshape(_ZYX).T, data  # (16, 16, 256) in F order: a view
-
-    def decode_row(self, row):
-        """(blocks, data-or-None) in registry ids of a row from encode_chunk."""
-        return self._decode((row[0], row[1]), row[2], row[3], row[4])
-
-    @staticmethod
-    def _decode_light(codec, blob, packed: bool = False):
-        if blob is None:
-            return None
-        try:
-            got = codecs.decode_u16(codec, blob, C.VOLUME).reshape(C.SHAPE, order="F")
-        except (ValueError, VoxelError):  # derived data: recomputed, never a failure
-            return None
-        if packed and codecs.framed(codec, blob, 2 * C.VOLUME):
-            n = C.VOLUME - (codecs.zero_tail(blob) >> 1)
-            return got, C.Packed.frame(blob, C.SHAPE, np.uint16, -(-n // _LAYER))
-        return got
 
     def version(self, key) -> int:
         """The stored version of chunk `key` (0: never written since versions exist)."""

@@ -1,0 +1,81 @@
+"""Stored chunk rows -> arrays in registry ids (or the stored frame kept packed),
+every block id checked; a row that cannot be decoded raises CorruptChunk."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..core import chunk as C
+from ..core.errors import VoxelError
+from . import codecs
+
+_ZYX = (C.HEIGHT, C.SIZE, C.SIZE)  # linear order as C order: .T is the chunk's shape
+_MAX = np.maximum.reduce  # ndarray.max() without its Python wrapper (a read's 5 %)
+_LAYER = C.SIZE * C.SIZE
+
+
+def _flat_scratch() -> np.ndarray:
+    """This thread's scratch chunk array, flat (a frame kept as read decodes here
+    only to be checked: no fresh 128 KB, no page faults)."""
+    return C.scratch(C.SHAPE, np.dtype(np.uint16)).reshape(-1, order="F")
+
+
+class CorruptChunk(VoxelError):
+    """A chunk row that cannot be decoded; it is left as it is in the file."""
+
+
+class Decoding:
+    """WorldFile's decoding half: needs `path`, `_identity` (the file's ids are the
+    registry's) and `_to_reg` (file id -> registry id)."""
+
+    def _fetched(self, key, row, packed: bool = False):
+        v, codec, blob, dblob, lcodec, lblob = row
+        if codec is None:
+            return None, None, None, v
+        blocks, data = self._decode(key, codec, blob, dblob, packed)
+        return blocks, data, self._decode_light(lcodec, lblob, packed), v
+
+    def _decode(self, key, codec, blob, dblob, packed: bool = False):
+        # PACKED: keep the frame as read (what it decodes to is the chunk's blocks as
+        # is: the file's ids are the registry's); decoded only to check it
+        frame = packed and self._identity and codecs.framed(codec, blob, 2 * C.VOLUME)
+        try:  # decoded into new arrays: linear order is the (16, 16, 256) F order
+            blocks = codecs.decode_u16(codec, blob, C.VOLUME, out=_flat_scratch() if frame
+                                       else None)
+            data = None if dblob is None else \
+                codecs.decode_u16(codec, dblob, C.VOLUME).reshape(C.SHAPE, order="F")
+        except ValueError as e:
+            raise CorruptChunk(f"chunk ({key[0]}, {key[1]}) in {self.path} is damaged ({e}); "
+                               "it was left untouched") from None
+        # checked always: tables are indexed by id (the lookup checks what it maps);
+        # not the zeros (air) a frame says it ends with: ~70 % of a chunk's values
+        if self._identity:
+            n = C.VOLUME - (codecs.zero_tail(blob) >> 1)
+            ok = n == 0 or _MAX(blocks[:n]) < len(self._to_reg)
+        else:
+            try:
+                blocks, ok = self._to_reg[blocks], True
+            except IndexError:
+                ok = False
+        if not ok:
+            raise CorruptChunk(f"chunk ({key[0]}, {key[1]}) in {self.path} has block ids "
+                               "missing from block_types; it was left untouched")
+        if frame:
+            return C.Packed.frame(blob, C.SHAPE, np.uint16, -(-n // _LAYER)), data
+        return blocks.reshape(_ZYX).T, data  # (16, 16, 256) in F order: a view
+
+    def decode_row(self, row):
+        """(blocks, data-or-None) in registry ids of a row from encode_chunk."""
+        return self._decode((row[0], row[1]), row[2], row[3], row[4])
+
+    @staticmethod
+    def _decode_light(codec, blob, packed: bool = False):
+        if blob is None:
+            return None
+        try:
+            got = codecs.decode_u16(codec, blob, C.VOLUME).reshape(C.SHAPE, order="F")
+        except (ValueError, VoxelError):  # derived data: recomputed, never a failure
+            return None
+        if packed and codecs.framed(codec, blob, 2 * C.VOLUME):
+            n = C.VOLUME - (codecs.zero_tail(blob) >> 1)
+            return got, C.Packed.frame(blob, C.SHAPE, np.uint16, -(-n // _LAYER))
+        return got

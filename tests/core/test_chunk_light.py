@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from voxel_addon.core import chunk as C
+from voxel_addon.core import chunk as C, packed as P
 from voxel_addon.core.chunk import Chunk, pack, pack_layers, unpack_layers
 
 
@@ -133,7 +133,7 @@ def test_layers_of_one_value_each_read_back():
 
 
 def test_pack_without_lz4_keeps_the_array(monkeypatch):
-    monkeypatch.setattr(C, "_lz4", None)
+    monkeypatch.setattr(P, "_lz4", None)
     a = _volume(np.random.default_rng(5), 17)
     a0 = a.copy()
     p = pack(a)
@@ -219,7 +219,7 @@ def test_air_from_is_where_the_blocks_stay_air(monkeypatch, lz4):
     packed, hot, and hot blocks written in place since they were packed (the packed
     copy is then a stale hint)."""
     if not lz4:
-        monkeypatch.setattr(C, "_lz4", None)
+        monkeypatch.setattr(P, "_lz4", None)
     rng = np.random.default_rng(8)
     for t in range(80):
         a = C.empty()

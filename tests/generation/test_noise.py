@@ -33,7 +33,7 @@ def _numpy(kind, metric, pts, perm, s):
 def test_numpy_equals_opencl(cl_device, name, kind, metric):
     import pyopencl as cl
     from voxel_addon import opencl
-    from voxel_addon.generation.clsource import OPTIONS
+    from voxel_addon.generation.clscalar import OPTIONS
     ctx, q, _ = cl_device
     prg = opencl.program("noise.cl", OPTIONS)
     pts = _points()

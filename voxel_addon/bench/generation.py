@@ -91,7 +91,7 @@ def run(ctx):
 
 def _noise(ctx):
     import pyopencl as cl
-    from ..generation.clsource import OPTIONS
+    from ..generation.clscalar import OPTIONS
     c, q, _ = opencl.context()
     prg = opencl.program("noise.cl", OPTIONS)
     s32 = N.seed32(SEED)

@@ -8,8 +8,9 @@ import numpy as np
 
 from .. import opencl
 from ..core import chunk as C
-from .clsource import (LAYER, LOCAL2D, OPTIONS, VLANES, VLOCAL, _Gen, _pad, g3_row, source,
-                       vectorizable)
+from .clscalar import LAYER, LOCAL2D, OPTIONS, VLANES, VLOCAL, _Gen, _pad, g3_row
+from .clsource import source
+from .clvector import vectorizable
 from .lower import lattice_dims, levels
 
 SMALL_GRID = 65535  # work items: pocl's small-grid work-group variant (Runner._launch)

@@ -199,9 +199,9 @@ def test_packed_sections_convert_as_unpacked(docs, tmp_path):
 
 
 def test_convert_keeps_a_bounded_number_of_byte_tables(docs, tmp_path, monkeypatch):
-    from voxel_addon.formats import minecraft
+    from voxel_addon.formats import convert as conv, minecraft
     from voxel_addon.world import World
-    monkeypatch.setattr(minecraft, "PAIRS", 3)
+    monkeypatch.setattr(conv, "PAIRS", 3)
     with World.create(tmp_path / "w.sqlite", seed=0, generator="empty", loader=False) as w:
         pal = minecraft._Palettes(w, minecraft.Report())
         for doc in docs[:3] + [_mixed_chunk()]:

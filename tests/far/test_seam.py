@@ -25,12 +25,13 @@ W, H, FOV = 320, 180, 60.0
 KEYS = [(1, tx, ty) for tx in (-1, 0, 1) for ty in (-1, 0, 1)]  # 64-block tiles, s = 2
 
 
-def _far():
+def flat_tiles(keys, floor: int, water: int) -> list:
+    """Far tiles of KEYS: sand at FLOOR under water up to WATER."""
     a = tiles.empty()
-    a["height"][:] = FLOOR
+    a["height"][:] = floor
     a["top"][:] = R.id("sand")
-    a["water"][:] = WATER
-    return [mesh.build(k, a) for k in KEYS]
+    a["water"][:] = water
+    return [mesh.build(k, a) for k in keys]
 
 
 def _render(gl, cam, nx: int, **kw) -> np.ndarray:
@@ -45,7 +46,7 @@ def _render(gl, cam, nx: int, **kw) -> np.ndarray:
     try:  # the chunks with their ring of neighbours (as the CLI): water goes on
         r.set_area(np.asfortranarray(b[15:-15, 15:-15]), light.solve(b), 0, 0, ring=True,
                    light_at=(-1, -1))
-        r.update_far(_far())
+        r.update_far(flat_tiles(KEYS, FLOOR, WATER))
         return r.render(cam, 11.0, (W, H)).astype(float)
     finally:
         r.release()

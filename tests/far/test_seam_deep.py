@@ -16,9 +16,10 @@ import pytest
 from voxel_addon import light
 from voxel_addon.core import chunk
 from voxel_addon.core.blocks import REGISTRY as R
-from voxel_addon.far import mesh, tiles
 from voxel_addon.render import Camera, Settings
 from voxel_addon.render.pipeline import Renderer
+
+from .test_seam import flat_tiles
 
 FLOOR, WATER = 30, 62          # sand top block, the top water block (sea level 63)
 W, H, FOV = 480, 270, 60.0
@@ -28,14 +29,6 @@ BOX = (0, 0, 4, 8)             # the chunks of the seam render (cx0, cy0, cx1, c
 # slant: the edges run diagonally over the screen, so their pixels fall at every
 # offset from them
 CAM = Camera(10.0, 40.0, 193.0, 25.0, -55.0, FOV, W / H)
-
-
-def _far():
-    a = tiles.empty()
-    a["height"][:] = FLOOR
-    a["top"][:] = R.id("sand")
-    a["water"][:] = WATER
-    return [mesh.build(k, a) for k in KEYS]
 
 
 def _render(gl, box, msaa: int) -> np.ndarray:
@@ -51,7 +44,7 @@ def _render(gl, box, msaa: int) -> np.ndarray:
     try:  # the chunks with their real ring, as the live view streams them
         r.set_area(np.asfortranarray(b[15:-15, 15:-15]), light.solve(b), cx0, cy0, ring=True,
                    light_at=(cx0 - 1, cy0 - 1), closed=False)
-        r.update_far(_far())
+        r.update_far(flat_tiles(KEYS, FLOOR, WATER))
         return r.render(CAM, 11.0, (W, H)).astype(float)
     finally:
         r.release()

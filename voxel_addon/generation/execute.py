@@ -106,13 +106,74 @@ class Runner:
     def at(self, org, seed32: int, perm: np.ndarray, want=()):
         """The 2D fields named in want, (n, size, size) [c, x, y], over the domains
         whose first column is org (n, 2) (every unit must be 2D: lower.prune)."""
-        self._start(np.asarray(org, np.int64).reshape(-1, 2), seed32, perm)
+        org = np.asarray(org, np.int64).reshape(-1, 2)
+        st = self._stencils(want) if self.size == 1 else None
+        if st is not None:
+            return self._at_points(org, seed32, perm, want, st)
+        self._start(org, seed32, perm)
         with np.errstate(all="ignore"):
             for u in self.units:
                 if u.kind != "2d":
                     raise ValueError("Runner.at evaluates 2D units only (lower.prune)")
                 self._unit2d(u)
         return {k: np.ascontiguousarray(self.field(k)) for k in want}
+
+    # ---- single columns: only the points a reader needs ----------------------
+    # A 1-column domain with halo h computes a unit on (2h+1)^2 columns, though its
+    # readers may need fewer (the Overworld's slope reads groundZ at 4 neighbours:
+    # 5 of 9), and far samples 2 apart share neighbours. Here each unit runs on the
+    # distinct columns its readers' constant offsets reach: the same operations per
+    # column, so the same values (far terrain's CPU on NumPy, issue 28).
+    def _stencils(self, want):
+        """Per unit the offsets (dx, dy) its fields are needed at around a column,
+        or None when a unit reads at a computed offset or uses its domain's layout."""
+        if getattr(self, "_st_want", None) == tuple(want):
+            return self._st
+        need = {n: {(0, 0)} for n in want}
+        out = []
+        for u in reversed(self.units):
+            st = set().union(*[need.get(n, set()) for n in u.outs])
+            out.append(st)
+            for e in nodes(u.roots()):
+                if e.op in ("lx", "ly", "c") or e.op == "read" and e.k[1] is None:
+                    out = None
+                    break
+                if e.op == "read":
+                    _, dx, dy, _ = e.k
+                    need.setdefault(e.k[0], set()).update((a + dx, b + dy) for a, b in st)
+            if out is None:
+                break
+        self._st_want, self._st = tuple(want), out and out[::-1]
+        return self._st
+
+    def _at_points(self, org, seed32, perm, want, st):
+        self._start(org[:0], seed32, perm)
+        self._pts: dict = {}  # field -> sorted keys of the columns it was computed on
+        with np.errstate(all="ignore"):
+            for u, s in zip(self.units, st):
+                if not s:
+                    continue
+                if u.kind != "2d":
+                    raise ValueError("Runner.at evaluates 2D units only (lower.prune)")
+                off = np.array(sorted(s), np.int64)
+                q = (org[:, None, :] + off[None]).reshape(-1, 2)
+                k, i = np.unique(_key(q), return_index=True)
+                q = q[i]
+                self.n = n = len(q)
+                self.ox, self.oy = q[:, 0].astype(I), q[:, 1].astype(I)
+                z = np.zeros(1, I)
+                self.dom = dict(kind="2d", halo=0, w=1, pts=q, c=np.arange(n)[:, None, None],
+                                lx=z[None, :, None], ly=z[None, None, :],
+                                x=self.ox[:, None, None], y=self.oy[:, None, None])
+                vals = self._eval(list(u.outs.values()))
+                for name, e in u.outs.items():
+                    self.fields[name] = (np.broadcast_to(vals[e.id], (n, 1, 1)).astype(DT[e.t]), 0)
+                    self._pts[name] = k
+        out = {}
+        for name in want:
+            i = np.searchsorted(self._pts[name], _key(org))
+            out[name] = np.ascontiguousarray(self.fields[name][0][i])
+        return out
 
     def _start(self, org, seed32, perm):
         self.seed, self.perm = seed32, perm
@@ -307,6 +368,8 @@ class Runner:
         if sc is not None:  # dynamic offsets on a scope's voxels: gather the indices
             d = dict(d, **{k: sc.down(d[k]) for k in ("lx", "ly", "c")})
         off = hf - d["halo"]
+        if "pts" in d:  # single columns (_at_points): those at the offset, by key
+            return arr[np.searchsorted(self._pts[name], _key(d["pts"] + (dx, dy)))]
         if dx is not None:  # constant offset: a slice
             w = d["w"]
             r = arr[:, off + dx:off + dx + w, off + dy:off + dy + w]
@@ -365,6 +428,11 @@ class Runner:
         out = np.zeros(self.prev.shape[:3] + (len(z),), I)
         out[..., ok] = self.prev[..., src[ok]]
         return out
+
+
+def _key(xy):
+    """One int64 per column (x, y), each within int32, ordered by x then y."""
+    return (xy[:, 0] << 32) + (xy[:, 1] + 2 ** 31)
 
 
 _OPS = {

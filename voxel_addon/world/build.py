@@ -39,7 +39,9 @@ def warm(world, opened: bool = False) -> bool:
     """Build and run once, in a background thread, the OpenCL kernels that streaming
     WORLD wants (its generator's chunks, then meshing: the order the stream needs
     them), on a 3x3 of chunks at the origin; generation runs NumPy until its kernels
-    are built (opencl.ready), meshing until the end (opencl.warm). Once per generator
+    are built (opencl.ready), meshing until the end (opencl.warm); when the file holds
+    that 3x3 (a stored view: the stream needs meshing, not generation) meshing first,
+    on those chunks, then the generator's at a lower priority. Once per generator
     (another world of the same generator and version reuses the build: cheap); False
     when nothing was started (no device, warmed already, another warm-up running).
     Cold, on 2 quiet cores: ~3.3 s for the generator (before clsource.called cut its

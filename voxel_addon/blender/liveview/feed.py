@@ -73,6 +73,8 @@ class Feed:
         ones (the view's redraws otherwise wait for new chunks: far tiles made while
         the near stream waits, e.g. for a fresh install's kernels, would wait too)."""
         b = self._far
+        if b is not None and b.error is not None:
+            return True  # a frame shows it (_update_far raises it)
         if b is None or not b.queued:
             return False
         w, r = b.counts

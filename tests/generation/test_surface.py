@@ -106,9 +106,11 @@ def test_numpy_single_columns_on_far_grids(cl_device, monkeypatch):
     from voxel_addon.generation import execute
     a = make_generator("overworld", SEED, None, "numpy")
     b = make_generator("overworld", SEED, None, "opencl")
-    g = np.stack(np.meshgrid(np.arange(24), np.arange(24), indexing="ij"), -1).reshape(-1, 2)
+    g = np.stack(np.meshgrid(np.arange(40), np.arange(40), indexing="ij"), -1).reshape(-1, 2)
     xy = np.concatenate([g * 2 + (-4000, 4000), g * 4 + (1000, -1000), g * 2 + (-3, -5)])
+    assert len(xy) >= execute.SPLIT  # groundZ's neighbours apart from the centres
     sa, sb = a.surface(xy), b.surface(xy)
+    sd = a.surface(xy[:1000])  # fewer columns: each unit's fields at once
     assert len(np.unique(sa["top"])) > 2  # rock on slopes among the rest
     monkeypatch.setattr(execute.Runner, "_stencils", lambda self, want: None)
     a._surf = None
@@ -116,3 +118,4 @@ def test_numpy_single_columns_on_far_grids(cl_device, monkeypatch):
     for k in sa:
         assert np.array_equal(sa[k], sb[k]), k
         assert np.array_equal(sa[k], sc[k]), k
+        assert np.array_equal(sd[k], sb[k][:1000]), k

@@ -20,6 +20,11 @@ LAZY_COST = 20
 LAZY_SHARE = 0.7
 
 
+# _at_points: at least this many columns, a unit's fields wanted at fewer offsets
+# (groundZ's neighbours) are evaluated apart; below it, Python's per-node steps
+# cost more than the columns saved
+SPLIT = 4096
+
 _PLANS: dict = {}  # (LAZY_COST, root node ids: unique in a process) -> _plan's analysis
 
 
@@ -121,54 +126,69 @@ class Runner:
     # ---- single columns: only the points a reader needs ----------------------
     # A 1-column domain with halo h computes a unit on (2h+1)^2 columns, though its
     # readers may need fewer (the Overworld's slope reads groundZ at 4 neighbours:
-    # 5 of 9), and far samples 2 apart share neighbours. Here each unit runs on the
-    # distinct columns its readers' constant offsets reach: the same operations per
-    # column, so the same values (far terrain's CPU on NumPy, issue 28).
+    # 5 of 9, and there groundZ alone, not the unit's 6 other fields), and far samples
+    # 2 apart share neighbours. Here each unit's fields are computed on the distinct
+    # columns their readers' constant offsets reach: the same operations per column,
+    # so the same values (far terrain's CPU on NumPy, issue 28).
     def _stencils(self, want):
-        """Per unit the offsets (dx, dy) its fields are needed at around a column,
-        or None when a unit reads at a computed offset or uses its domain's layout."""
+        """Per unit {field: offsets (dx, dy) it is needed at around a column}, or None
+        when a unit reads at a computed offset or uses its domain's layout."""
         if getattr(self, "_st_want", None) == tuple(want):
             return self._st
         need = {n: {(0, 0)} for n in want}
         out = []
         for u in reversed(self.units):
-            st = set().union(*[need.get(n, set()) for n in u.outs])
-            out.append(st)
-            for e in nodes(u.roots()):
-                if e.op in ("lx", "ly", "c") or e.op == "read" and e.k[1] is None:
-                    out = None
-                    break
-                if e.op == "read":
-                    _, dx, dy, _ = e.k
-                    need.setdefault(e.k[0], set()).update((a + dx, b + dy) for a, b in st)
-            if out is None:
+            if any(e.op in ("lx", "ly", "c") or e.op == "read" and e.k[1] is None
+                   for e in nodes(u.roots())):
+                out = None
                 break
+            st = {n: need[n] for n in u.outs if need.get(n)}
+            for n, offs in st.items():
+                for e in nodes([u.outs[n]]):
+                    if e.op == "read":
+                        _, dx, dy, _ = e.k
+                        need.setdefault(e.k[0], set()).update((a + dx, b + dy) for a, b in offs)
+            out.append(st)
         self._st_want, self._st = tuple(want), out and out[::-1]
         return self._st
 
     def _at_points(self, org, seed32, perm, want, st):
         self._start(org[:0], seed32, perm)
         self._pts: dict = {}  # field -> sorted keys of the columns it was computed on
+        z = np.zeros(1, I)
         with np.errstate(all="ignore"):
-            for u, s in zip(self.units, st):
-                if not s:
+            for u, need in zip(self.units, st):
+                if not need:
                     continue
                 if u.kind != "2d":
                     raise ValueError("Runner.at evaluates 2D units only (lower.prune)")
-                off = np.array(sorted(s), np.int64)
-                q = (org[:, None, :] + off[None]).reshape(-1, 2)
-                k, i = np.unique(_key(q), return_index=True)
-                q = q[i]
-                self.n = n = len(q)
-                self.ox, self.oy = q[:, 0].astype(I), q[:, 1].astype(I)
-                z = np.zeros(1, I)
-                self.dom = dict(kind="2d", halo=0, w=1, pts=q, c=np.arange(n)[:, None, None],
-                                lx=z[None, :, None], ly=z[None, None, :],
-                                x=self.ox[:, None, None], y=self.oy[:, None, None])
-                vals = self._eval(list(u.outs.values()))
-                for name, e in u.outs.items():
-                    self.fields[name] = (np.broadcast_to(vals[e.id], (n, 1, 1)).astype(DT[e.t]), 0)
-                    self._pts[name] = k
+                groups: dict = {}  # the fields wanted at an offset -> those offsets
+                for o in set().union(*need.values()):
+                    fs = tuple(n for n in need if o in need[n]) if len(org) >= SPLIT \
+                        else tuple(need)  # few columns: one evaluation costs less
+                    groups.setdefault(fs, []).append(o)
+                parts: dict = {n: [] for n in need}
+                for names, offs in sorted(groups.items()):
+                    off = np.array(sorted(offs), np.int64)
+                    q = (org[:, None, :] + off[None]).reshape(-1, 2)
+                    k, i = np.unique(_key(q), return_index=True)
+                    q = q[i]
+                    self.n = n = len(q)
+                    self.ox, self.oy = q[:, 0].astype(I), q[:, 1].astype(I)
+                    self.dom = dict(kind="2d", halo=0, w=1, pts=q,
+                                    c=np.arange(n)[:, None, None], lx=z[None, :, None],
+                                    ly=z[None, None, :], x=self.ox[:, None, None],
+                                    y=self.oy[:, None, None])
+                    vals = self._eval([u.outs[x] for x in names])
+                    for x in names:
+                        e = u.outs[x]
+                        parts[x].append((k, np.broadcast_to(vals[e.id], (n, 1, 1)).astype(DT[e.t])))
+                for x, got in parts.items():
+                    k, v = got[0]
+                    if len(got) > 1:  # the same column in two groups: one of its values
+                        k, i = np.unique(np.concatenate([g[0] for g in got]), return_index=True)
+                        v = np.concatenate([g[1] for g in got])[i]
+                    self.fields[x], self._pts[x] = (v, 0), k
         out = {}
         for name in want:
             i = np.searchsorted(self._pts[name], _key(org))

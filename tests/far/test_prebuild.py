@@ -113,20 +113,25 @@ def test_the_far_program_builds_after_meshing(fresh, tmp_path, monkeypatch):
 
 def test_far_tiles_alone_ask_for_a_redraw(tmp_path):
     """Feed.far_news: far tiles made while the near stream has nothing new are worth a
-    redraw of their own (the ring's last ones, or FAR_NEWS of them); drained: none."""
+    redraw of their own (the ring's last ones, or FAR_NEWS of them); drained: none.
+    Feed.far_made: the builder has made the whole ring (then no frame's wait)."""
     from voxel_addon.blender.liveview import feed as F
     from voxel_addon.world import World
     with World.create(tmp_path / "w.sqlite", seed=7) as w:
         f = F.Feed(str(tmp_path / "w.sqlite"), w, 2)
         try:
-            assert not f.far_news()  # no far ring
+            assert not f.far_news() and not f.far_made()  # no far ring
             f.set_far(8)
             f._at = (8.0, 8.0)
-            f._far.set_view(8.0, 8.0, 8, 2)
+            with w.gen_lock:  # (the builder builds under it: nothing made meanwhile)
+                f._far.set_view(8.0, 8.0, 8, 2)
+                time.sleep(0.2)
+                assert not f.far_made()
             assert f._far.wait_ready(120)
             w_, r = f._far.counts
             assert 0 < w_ < F.FAR_NEWS and r == w_ and f.far_news()  # the ring's last
+            assert f.far_made()  # the builder is done: the view redraws at once
             f._update_far(1e9)
-            assert not f.far_news()  # taken in
+            assert not f.far_news() and f.far_made()  # taken in
         finally:
             f.close()

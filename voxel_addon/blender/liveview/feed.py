@@ -68,6 +68,15 @@ class Feed:
         self.far_wanted, done = b.counts
         return done < self.far_wanted or bool(ready)
 
+    def far_made(self) -> bool:
+        """Whether the far builder has made every tile the view wants (it needs no
+        more CPU: what it queued may be drawn at once)."""
+        b = self._far
+        if b is None:
+            return False
+        w, r = b.counts
+        return r >= w
+
     def far_news(self) -> bool:
         """Far tiles worth a redraw of their own: FAR_NEWS made, or the ring's last
         ones (the view's redraws otherwise wait for new chunks: far tiles made while

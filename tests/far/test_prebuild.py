@@ -1,7 +1,7 @@
 """The far surface's OpenCL program built in the background as a world opens (issue 28:
 far 128 to the horizon cold): far tiles run on NumPy's twin meanwhile (the same
 values), the build takes neither the build lock nor the queue, and the world's
-warm-up starts it at once, not after the stream's kernels and streams."""
+warm-up starts it once meshing's kernels are built, not after the streams."""
 from __future__ import annotations
 
 import threading
@@ -66,12 +66,21 @@ def test_the_far_program_builds_while_another_build_holds_the_lock(fresh):
         assert done == [True]
 
 
-def test_the_world_warm_up_starts_the_far_build_at_once(fresh, tmp_path, monkeypatch):
-    """build.warm: the far program is built while the warm-up's own job (the near
-    view's kernels) still runs, in a thread of its own; far tiles use it then."""
+def test_the_warm_up_meshes_a_stored_view_first_then_builds_the_far_program(
+        fresh, tmp_path, monkeypatch):
+    """build.warm on a file holding the chunks at the origin (an opened world: its
+    view is stored): meshing's kernels first (all the stream needs: ready("meshing")),
+    then the far program in a thread of its own while the job builds the generator's
+    (pocl compiles one program at a time: meshing's waited behind the far build);
+    far tiles use it then."""
+    from voxel_addon.core import chunk as C
+    from voxel_addon.core.blocks import REGISTRY
     from voxel_addon.world import World, build
     gate = threading.Event()
+    blocks = np.zeros(C.SHAPE, np.uint16)
+    blocks[:, :, :20] = REGISTRY.id("stone")
     with World.create(tmp_path / "w.sqlite", seed=7) as w:
+        w.file.write_chunks([(k, blocks, None) for k in build.keys_of(-1, -1, 2, 2)])
         g = w.generator
         monkeypatch.setattr(g, "warm_opencl", lambda keys: gate.wait(120) and [])
         monkeypatch.setattr(g, "warm_surface", lambda: True)
@@ -80,29 +89,59 @@ def test_the_world_warm_up_starts_the_far_build_at_once(fresh, tmp_path, monkeyp
             end = time.monotonic() + 60
             while (g._surf or {}).get("opencl") is None and time.monotonic() < end:
                 time.sleep(0.05)
-            assert opencl.warming() and (g._surf or {}).get("opencl") is not None
+            assert (g._surf or {}).get("opencl") is not None
+            assert opencl.warming("generation") and not opencl.warming("meshing")
+            assert opencl.pick(None, "meshing") == "opencl"
         finally:
             gate.set()
             opencl._warm["thread"].join(120)
+        assert list(opencl.warm_state()["ready"]) == ["meshing", "generation"]
     assert not build.prebuild(object())  # a generator without a far surface
+
+
+def test_the_far_program_builds_after_meshing(fresh, tmp_path, monkeypatch):
+    """A new world (nothing stored): the warm-up builds the generator's kernels, then
+    meshing's; the far program waits for meshing's (pocl compiles one at a time)."""
+    from voxel_addon.world import World, build
+    gate = threading.Event()
+    with World.create(tmp_path / "w.sqlite", seed=7) as w:
+        g = w.generator
+        monkeypatch.setattr(g, "warm_opencl", lambda keys: gate.wait(120) and [])
+        monkeypatch.setattr(g, "warm_surface", lambda: True)
+        try:
+            assert build.warm(w)
+            time.sleep(1.5)  # the far build (the kernel cache warm) takes < 0.5 s
+            assert (g._surf or {}).get("opencl") is None and opencl.warming("meshing")
+        finally:
+            gate.set()
+            opencl._warm["thread"].join(120)
+        end = time.monotonic() + 60
+        while (g._surf or {}).get("opencl") is None and time.monotonic() < end:
+            time.sleep(0.05)
+        assert (g._surf or {}).get("opencl") is not None
 
 
 def test_far_tiles_alone_ask_for_a_redraw(tmp_path):
     """Feed.far_news: far tiles made while the near stream has nothing new are worth a
-    redraw of their own (the ring's last ones, or FAR_NEWS of them); drained: none."""
+    redraw of their own (the ring's last ones, or FAR_NEWS of them); drained: none.
+    Feed.far_made: the builder has made the whole ring (then no frame's wait)."""
     from voxel_addon.blender.liveview import feed as F
     from voxel_addon.world import World
     with World.create(tmp_path / "w.sqlite", seed=7) as w:
         f = F.Feed(str(tmp_path / "w.sqlite"), w, 2)
         try:
-            assert not f.far_news()  # no far ring
+            assert not f.far_news() and not f.far_made()  # no far ring
             f.set_far(8)
             f._at = (8.0, 8.0)
-            f._far.set_view(8.0, 8.0, 8, 2)
+            with w.gen_lock:  # (the builder builds under it: nothing made meanwhile)
+                f._far.set_view(8.0, 8.0, 8, 2)
+                time.sleep(0.2)
+                assert not f.far_made()
             assert f._far.wait_ready(120)
             w_, r = f._far.counts
             assert 0 < w_ < F.FAR_NEWS and r == w_ and f.far_news()  # the ring's last
+            assert f.far_made()  # the builder is done: the view redraws at once
             f._update_far(1e9)
-            assert not f.far_news()  # taken in
+            assert not f.far_news() and f.far_made()  # taken in
         finally:
             f.close()

@@ -96,3 +96,26 @@ def test_surface_allocates_no_blocks(backend, cl_device):
     finally:
         tracemalloc.stop()
     assert peak < 256 << 20, f"{peak / 2**20:.0f} MiB"
+
+
+def test_numpy_single_columns_on_far_grids(cl_device, monkeypatch):
+    """NumPy's surface computes each 2D pass only on the columns its readers reach
+    (execute.Runner._at_points): on far tiles' grids (spacing 2: neighbours shared
+    by two samples; 4; mountains, where the slope picks rock) it equals OpenCL's and
+    the whole-halo domains it replaces."""
+    from voxel_addon.generation import execute
+    a = make_generator("overworld", SEED, None, "numpy")
+    b = make_generator("overworld", SEED, None, "opencl")
+    g = np.stack(np.meshgrid(np.arange(40), np.arange(40), indexing="ij"), -1).reshape(-1, 2)
+    xy = np.concatenate([g * 2 + (-4000, 4000), g * 4 + (1000, -1000), g * 2 + (-3, -5)])
+    assert len(xy) >= execute.SPLIT  # groundZ's neighbours apart from the centres
+    sa, sb = a.surface(xy), b.surface(xy)
+    sd = a.surface(xy[:1000])  # fewer columns: each unit's fields at once
+    assert len(np.unique(sa["top"])) > 2  # rock on slopes among the rest
+    monkeypatch.setattr(execute.Runner, "_stencils", lambda self, want: None)
+    a._surf = None
+    sc = a.surface(xy)
+    for k in sa:
+        assert np.array_equal(sa[k], sb[k]), k
+        assert np.array_equal(sa[k], sc[k]), k
+        assert np.array_equal(sd[k], sb[k][:1000]), k

@@ -293,3 +293,38 @@ def test_past_the_first_chunks_the_stream_waits_for_every_kernel(world_path, mon
     assert len(got) == 49
     area, meshes = one_shot(world_path, 8.0, 8.0, 3)
     check_equal(got, area, meshes)
+
+
+def test_stored_chunks_stream_once_meshing_is_warm(world_path, cl_device, monkeypatch):
+    """build.warm meshes a stored view's chunks before building the generator's kernels
+    (opencl.ready("meshing")): the stream then goes past its first chunks for tiles
+    the file has, while a tile with chunks to generate still waits for the
+    generator's kernels (no NumPy generation beside their build; issue 28)."""
+    import threading
+    from voxel_addon import opencl
+    from voxel_addon.core import chunk as C
+    monkeypatch.setattr(opencl, "_warm", dict.fromkeys(opencl._warm))  # never warmed
+    stored = {(x, y) for x in range(-4, 4) for y in range(-4, 4)}  # whole tiles of 4
+    blocks = np.zeros(C.SHAPE, np.uint16)
+    blocks[:, :, :20] = REGISTRY.id("stone")
+    near = {(x, y): -2 for x in range(-1, 2) for y in range(-1, 2)}  # done (FIRST)
+    done = {**near, **{k: -2 for k in stored}}
+    gate, went = threading.Event(), threading.Event()
+
+    def job():
+        opencl.ready("meshing")
+        went.set()
+        gate.wait(30)
+    with World.create(world_path, seed=SEED, generator="flat") as w:
+        w.file.write_chunks([(k, blocks, None) for k in sorted(stored)])
+        with Stream(w, 6) as s:  # no view: its worker waits
+            assert opencl.warm(job) and went.wait(30)
+            try:
+                got = s._next(0, 0, None, near, set())
+                assert got and set(got) <= stored
+                assert s._next(0, 0, None, done, set()) is None
+            finally:
+                gate.set()
+                opencl._warm["thread"].join(30)
+            got = s._next(0, 0, None, done, set())
+            assert got and not set(got) & stored

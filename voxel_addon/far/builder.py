@@ -24,6 +24,10 @@ from ..storage.far import FarStore
 from . import grid, mesh, tiles
 
 FORMAT = 1  # of the far data: another value rebuilds what a file holds
+# tiles built per step: the generator's 2D passes on NumPy take ~40 % less CPU per
+# column on 16 tiles' columns at once than tile by tile (issue 28: fewer Python
+# steps, and execute.SPLIT); the nearest tile waits for 15 more (~0.1 s)
+BATCH = 16
 
 
 def signature(generator) -> str:
@@ -158,9 +162,10 @@ class Builder:
                 seen = self._changes
             try:
                 self._invalidate()
-                key = self._next()
-                if key is not None:
-                    self._do(key)
+                keys = self._next()
+                key = keys[0] if keys else None
+                if keys:
+                    self._do(keys)
             except BaseException as e:  # kept for the consumer; the worker goes on
                 self.error = e
                 key = None
@@ -180,12 +185,10 @@ class Builder:
             for k in keys:
                 self._emitted.pop(k, None)
 
-    def _next(self):
+    def _next(self) -> list:
+        """Up to BATCH wanted tiles without a mesh, nearest first."""
         with self._lock:
-            for k in self._wanted:
-                if k not in self._emitted:
-                    return k
-        return None
+            return [k for k in self._wanted if k not in self._emitted][:BATCH]
 
     def _read_chunk(self, key):
         try:
@@ -194,25 +197,34 @@ class Builder:
             return None
         return None if got is None else got[0]
 
-    def _do(self, key) -> None:
+    def _do(self, keys) -> None:
+        """Tiles' samples (stored, else built: the ones to build together, so the
+        generator runs larger steps), stored, meshed and queued one by one."""
         from ..core import trace
-        with trace.span("far.tile", key=key) as kw:
-            self._do_tile(key, kw)
-
-    def _do_tile(self, key, kw) -> None:
+        got = {k: None if k in self._stale else self.store.tile(k, grid.N) for k in keys}
+        build = [k for k in keys if got[k] is None]
         t0 = time.perf_counter()
-        a = None if key in self._stale else self.store.tile(key, grid.N)
-        kw["built"] = a is None
-        if a is None:
-            if self._gen_lock is None:
-                a, n = tiles.build(key, self.store, self.generator, self._read_chunk)
-            else:
-                with self._gen_lock:
-                    a, n = tiles.build(key, self.store, self.generator, self._read_chunk)
-            self.store.put_tiles([(key, a)])
-            self.stats["built"] += 1
-            self.stats["from_chunks"] += n
-        else:
+        if build:
+            with trace.span("far.build", n=len(build)):
+                if self._gen_lock is None:
+                    made = tiles.build_many(build, self.store, self.generator, self._read_chunk)
+                else:
+                    with self._gen_lock:
+                        made = tiles.build_many(build, self.store, self.generator,
+                                                self._read_chunk)
+                self.store.put_tiles([(k, a) for k, (a, _) in zip(build, made)])
+            for k, (a, n) in zip(build, made):
+                got[k] = a
+                self.stats["built"] += 1
+                self.stats["from_chunks"] += n
+        self.stats["build_s"] += time.perf_counter() - t0
+        for k in keys:
+            with trace.span("far.tile", key=k, built=k in build):
+                self._mesh(k, got[k], k in build)
+
+    def _mesh(self, key, a, built) -> None:
+        t0 = time.perf_counter()
+        if not built:
             self.stats["loaded"] += 1
         with self._lock:
             self._tick += 1

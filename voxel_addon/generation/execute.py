@@ -20,6 +20,11 @@ LAZY_COST = 20
 LAZY_SHARE = 0.7
 
 
+# _at_points: at least this many columns, a unit's fields wanted at fewer offsets
+# (groundZ's neighbours) are evaluated apart; below it, Python's per-node steps
+# cost more than the columns saved
+SPLIT = 4096
+
 _PLANS: dict = {}  # (LAZY_COST, root node ids: unique in a process) -> _plan's analysis
 
 
@@ -106,13 +111,89 @@ class Runner:
     def at(self, org, seed32: int, perm: np.ndarray, want=()):
         """The 2D fields named in want, (n, size, size) [c, x, y], over the domains
         whose first column is org (n, 2) (every unit must be 2D: lower.prune)."""
-        self._start(np.asarray(org, np.int64).reshape(-1, 2), seed32, perm)
+        org = np.asarray(org, np.int64).reshape(-1, 2)
+        st = self._stencils(want) if self.size == 1 else None
+        if st is not None:
+            return self._at_points(org, seed32, perm, want, st)
+        self._start(org, seed32, perm)
         with np.errstate(all="ignore"):
             for u in self.units:
                 if u.kind != "2d":
                     raise ValueError("Runner.at evaluates 2D units only (lower.prune)")
                 self._unit2d(u)
         return {k: np.ascontiguousarray(self.field(k)) for k in want}
+
+    # ---- single columns: only the points a reader needs ----------------------
+    # A 1-column domain with halo h computes a unit on (2h+1)^2 columns, though its
+    # readers may need fewer (the Overworld's slope reads groundZ at 4 neighbours:
+    # 5 of 9, and there groundZ alone, not the unit's 6 other fields), and far samples
+    # 2 apart share neighbours. Here each unit's fields are computed on the distinct
+    # columns their readers' constant offsets reach: the same operations per column,
+    # so the same values (far terrain's CPU on NumPy, issue 28).
+    def _stencils(self, want):
+        """Per unit {field: offsets (dx, dy) it is needed at around a column}, or None
+        when a unit reads at a computed offset or uses its domain's layout."""
+        if getattr(self, "_st_want", None) == tuple(want):
+            return self._st
+        need = {n: {(0, 0)} for n in want}
+        out = []
+        for u in reversed(self.units):
+            if any(e.op in ("lx", "ly", "c") or e.op == "read" and e.k[1] is None
+                   for e in nodes(u.roots())):
+                out = None
+                break
+            st = {n: need[n] for n in u.outs if need.get(n)}
+            for n, offs in st.items():
+                for e in nodes([u.outs[n]]):
+                    if e.op == "read":
+                        _, dx, dy, _ = e.k
+                        need.setdefault(e.k[0], set()).update((a + dx, b + dy) for a, b in offs)
+            out.append(st)
+        self._st_want, self._st = tuple(want), out and out[::-1]
+        return self._st
+
+    def _at_points(self, org, seed32, perm, want, st):
+        self._start(org[:0], seed32, perm)
+        self._pts: dict = {}  # field -> sorted keys of the columns it was computed on
+        z = np.zeros(1, I)
+        with np.errstate(all="ignore"):
+            for u, need in zip(self.units, st):
+                if not need:
+                    continue
+                if u.kind != "2d":
+                    raise ValueError("Runner.at evaluates 2D units only (lower.prune)")
+                groups: dict = {}  # the fields wanted at an offset -> those offsets
+                for o in set().union(*need.values()):
+                    fs = tuple(n for n in need if o in need[n]) if len(org) >= SPLIT \
+                        else tuple(need)  # few columns: one evaluation costs less
+                    groups.setdefault(fs, []).append(o)
+                parts: dict = {n: [] for n in need}
+                for names, offs in sorted(groups.items()):
+                    off = np.array(sorted(offs), np.int64)
+                    q = (org[:, None, :] + off[None]).reshape(-1, 2)
+                    k, i = np.unique(_key(q), return_index=True)
+                    q = q[i]
+                    self.n = n = len(q)
+                    self.ox, self.oy = q[:, 0].astype(I), q[:, 1].astype(I)
+                    self.dom = dict(kind="2d", halo=0, w=1, pts=q,
+                                    c=np.arange(n)[:, None, None], lx=z[None, :, None],
+                                    ly=z[None, None, :], x=self.ox[:, None, None],
+                                    y=self.oy[:, None, None])
+                    vals = self._eval([u.outs[x] for x in names])
+                    for x in names:
+                        e = u.outs[x]
+                        parts[x].append((k, np.broadcast_to(vals[e.id], (n, 1, 1)).astype(DT[e.t])))
+                for x, got in parts.items():
+                    k, v = got[0]
+                    if len(got) > 1:  # the same column in two groups: one of its values
+                        k, i = np.unique(np.concatenate([g[0] for g in got]), return_index=True)
+                        v = np.concatenate([g[1] for g in got])[i]
+                    self.fields[x], self._pts[x] = (v, 0), k
+        out = {}
+        for name in want:
+            i = np.searchsorted(self._pts[name], _key(org))
+            out[name] = np.ascontiguousarray(self.fields[name][0][i])
+        return out
 
     def _start(self, org, seed32, perm):
         self.seed, self.perm = seed32, perm
@@ -307,6 +388,8 @@ class Runner:
         if sc is not None:  # dynamic offsets on a scope's voxels: gather the indices
             d = dict(d, **{k: sc.down(d[k]) for k in ("lx", "ly", "c")})
         off = hf - d["halo"]
+        if "pts" in d:  # single columns (_at_points): those at the offset, by key
+            return arr[np.searchsorted(self._pts[name], _key(d["pts"] + (dx, dy)))]
         if dx is not None:  # constant offset: a slice
             w = d["w"]
             r = arr[:, off + dx:off + dx + w, off + dy:off + dy + w]
@@ -365,6 +448,11 @@ class Runner:
         out = np.zeros(self.prev.shape[:3] + (len(z),), I)
         out[..., ok] = self.prev[..., src[ok]]
         return out
+
+
+def _key(xy):
+    """One int64 per column (x, y), each within int32, ordered by x then y."""
+    return (xy[:, 0] << 32) + (xy[:, 1] + 2 ** 31)
 
 
 _OPS = {

@@ -39,7 +39,9 @@ def warm(world, opened: bool = False) -> bool:
     """Build and run once, in a background thread, the OpenCL kernels that streaming
     WORLD wants (its generator's chunks, then meshing: the order the stream needs
     them), on a 3x3 of chunks at the origin; generation runs NumPy until its kernels
-    are built (opencl.ready), meshing until the end (opencl.warm). Once per generator
+    are built (opencl.ready), meshing until the end (opencl.warm); when the file holds
+    that 3x3 (a stored view: the stream needs meshing, not generation) meshing first,
+    on those chunks, then the generator's at a lower priority. Once per generator
     (another world of the same generator and version reuses the build: cheap); False
     when nothing was started (no device, warmed already, another warm-up running).
     Cold, on 2 quiet cores: ~3.3 s for the generator (before clsource.called cut its
@@ -59,6 +61,23 @@ def warm(world, opened: bool = False) -> bool:
     def job():
         from ..core import trace
         keys = keys_of(-1, -1, 2, 2)
+        stored = _stored(world, keys)
+        if stored is not None:
+            # a file holding these chunks most likely holds the view's: the stream
+            # needs meshing, not generation (issue 28: a cold Show of a stored view
+            # waited ~5 s of quiet CPU, 15-20 s under load, for the generator's build)
+            blocks = C.paste(zip(keys, stored), -1, -1, 2, 2)
+            with CL_LOCK, trace.span("warm.mesh"):
+                meshing.build_chunks(blocks[15:-15, 15:-15], (0, 0), backend="opencl")
+            opencl.ready("meshing")
+            opencl._yield_cpu()  # the stream's threads come first now
+            with trace.span("warm.generate"):
+                if hasattr(g, "warm_opencl"):
+                    g.warm_opencl(keys)
+                else:
+                    g.generate(keys)
+            opencl.ready("generation")
+            return
         with trace.span("warm.generate"):
             if hasattr(g, "warm_opencl"):  # the world's own generator (its kernel objects)
                 arrays = g.warm_opencl(keys)
@@ -90,10 +109,19 @@ def warm(world, opened: bool = False) -> bool:
     return started
 
 
+def _stored(world, keys):
+    """The blocks of keys when the world's file has every one of them, else None."""
+    try:
+        got = [world.file.read_chunk(k) for k in keys]
+    except Exception:  # noqa: BLE001 - a damaged chunk, no file: generate them instead
+        return None
+    return None if any(x is None for x in got) else [x[0] for x in got]
+
+
 def prebuild(g) -> bool:
     """Build the far surface's OpenCL program now, in a thread of its own at a lower
-    priority (it takes leftover CPU): a separate program whose build takes neither the
-    queue nor the build lock, so the near view's kernels do not wait for it, and the
+    priority (it takes leftover CPU) once the warm-up has meshing's kernels: a separate
+    program whose build takes neither the queue nor the build lock, and the
     far ring's tiles run on it seconds after a world opens instead of after the
     streams have all they want (issue 28: far 128 to the horizon). Surface calls run
     NumPy meanwhile. False when the generator has no far surface."""
@@ -103,7 +131,13 @@ def prebuild(g) -> bool:
     from .. import opencl
 
     def run():
+        import time
         opencl._yield_cpu()
+        # pocl compiles one program at a time: meshing's (~1 s alone) waited 14 s
+        # behind this build under load, and the view's chunks with it (issue 28)
+        end = time.monotonic() + LATER_WAIT_S
+        while opencl.warming("meshing") and time.monotonic() < end:
+            time.sleep(0.05)
         try:
             fn()
         except Exception:  # noqa: BLE001 - surface() builds it (and raises) when used

@@ -292,7 +292,7 @@ class Stream:
             far = u > 0
             u[far] *= 1.5 - 0.5 * (vx[far] * d[0] + vy[far] * d[1]) / u[far]  # behind: x2
         i = int(np.argmin(u))
-        if u[i] >= FIRST and self.backends is None and opencl.warming():
+        if u[i] >= FIRST and self.backends is None and opencl.warming("meshing"):
             # the OpenCL kernels still build: NumPy made the first picture (the chunks
             # next to the view); more NumPy now takes the CPU from the build (one NumPy
             # worker during the warm-up: the build took 2x longer, the whole view came
@@ -304,7 +304,23 @@ class Stream:
         t = max(1, self.tile // (4 if u[i] < FIRST else 2)) if u[i] < NEAR else self.tile
         r = self.distance
         tx, ty = _tiling(cx - r, cx + r, t)(p[:, 0]), _tiling(cy - r, cy + r, t)(p[:, 1])
-        return [pending[j] for j in np.flatnonzero((tx == tx[i]) & (ty == ty[i])).tolist()]
+        keys = [pending[j] for j in np.flatnonzero((tx == tx[i]) & (ty == ty[i])).tolist()]
+        if u[i] >= FIRST and self.backends is None and opencl.warming("generation") and \
+                not self._stored(keys):
+            return None  # meshing is warm (build.warm meshed stored chunks first), but
+            # these chunks need generating: as above, not on NumPy beside the build
+        return keys
+
+    def _stored(self, keys) -> bool:
+        """Whether every chunk of keys is in memory or in the file (none to generate)."""
+        world = self.world
+        with world.locked():
+            rest = [k for k in keys if k not in world.chunks]
+        if not rest:
+            return True
+        xs, ys = [k[0] for k in rest], [k[1] for k in rest]
+        have = world.file.chunks_in(min(xs), min(ys), max(xs), max(ys))
+        return all(k in have for k in rest)
 
     def _do(self, keys, backends) -> None:
         from ..core import trace

@@ -68,11 +68,22 @@ class Feed:
         self.far_wanted, done = b.counts
         return done < self.far_wanted or bool(ready)
 
+    def far_made(self) -> bool:
+        """Whether the far builder has made every tile the view wants (it needs no
+        more CPU: what it queued may be drawn at once)."""
+        b = self._far
+        if b is None:
+            return False
+        w, r = b.counts
+        return r >= w
+
     def far_news(self) -> bool:
         """Far tiles worth a redraw of their own: FAR_NEWS made, or the ring's last
         ones (the view's redraws otherwise wait for new chunks: far tiles made while
         the near stream waits, e.g. for a fresh install's kernels, would wait too)."""
         b = self._far
+        if b is not None and b.error is not None:
+            return True  # a frame shows it (_update_far raises it)
         if b is None or not b.queued:
             return False
         w, r = b.counts

@@ -336,8 +336,11 @@ class LiveView:
             # throughout (~0.3 s on llvmpipe) and one without new chunks only slows
             # the NumPy workers of a fresh install (issue 28)
             self._want_redraw(max(0.05, ms / 1e3), news=True)
-        elif loading:  # only far tiles to come: their builder needs the GIL more than we
-            self._want_redraw(max(0.5, 4 * ms / 1e3))
+        elif loading:  # only far tiles to come: their builder needs the GIL more than
+            # we, so a redraw only for FAR_NEWS of them or the ring's last (Feed.far_news);
+            # a fixed 4 frames' wait left the last tiles undrawn 2-7 s under load (issue 28);
+            # once it has made them all, at once
+            self._want_redraw(0.05 if feed.far_made() else max(0.05, ms / 1e3), news=True)
         elif draft and vv.quality == "auto":  # once the view is still: a full frame
             self._want_redraw(max(0.02, STILL_S - (time.perf_counter() - st.changed)))
 

@@ -284,7 +284,7 @@ class Renderer:
         shaded = s.debug in graph.SHADED
         shadows = bool(s.shadows and (shaded or s.debug == "light") and sp["light_dir"][2] > 0.02)
         vis = geo.cull(cull_vp, keep=True)
-        view = dict(geo.batches(vis, PASSES))  # (a copy: the geometry caches its own)
+        view = dict(geo.batches(vis, PASSES, eye=(camera.x, camera.y, camera.z)))  # (a copy: cached)
         models = bool(self.models.chunks)
         if models:
             view.update(self.models.batches(MODEL_PASSES, cull_vp))

@@ -144,6 +144,7 @@ def test_batches_are_the_runs_of_visible_rows(gl):
     b[:, :, :30] = R.id("stone")
     b[:, :, 30:120][rng.random((82, 82, 90)) < 0.003] = R.id("stone")
     b[rng.random(b.shape) < 0.0005] = R.id("water")
+    b[:, :, 30][rng.random((82, 82)) < 0.3] = R.id("tall_grass")  # (cutout2: double-sided)
     dev = MglDevice(gl)
     geo = Geometry(dev)
     geo.set_chunks(meshing.build_chunks(b, (-2, -2), backend="numpy"))
@@ -178,6 +179,23 @@ def test_batches_are_the_runs_of_visible_rows(gl):
             assert sorted(mine) == sorted(key), (name, share)
             d = [float(((at[m, f] - eye) ** 2).sum()) for m, f, _ in mine]
             assert all(a <= b * (1 + 1e-5) + 1e-3 for a, b in zip(d, d[1:])), (name, share)
+        # a reach for the plants: theirs only from boxes within it, the others' as they were
+        c, eye = geo._boxes, np.array([*rng.uniform(-20, 40, 2), 60.0])
+        gap = np.maximum(np.abs(c[:2] - eye[:2, None]) - c[3:5], 0.0)
+        within = (gap ** 2).sum(0) <= 24.0 ** 2
+        assert 0 < within.sum() < within.size
+        reach = geo.batches(vis, PASSES, "reach", eye=eye, reach={"cutout2": 24.0})
+        plain = geo.batches(vis & within, PASSES, "within", eye=eye)
+        every = geo.batches(vis, PASSES, "every", eye=eye)
+        def same(a, b):
+            return sorted((id(m), f, k) for m, f, k, _ in a or []) == \
+                sorted((id(m), f, k) for m, f, k, _ in b or [])
+        for name in PASSES:
+            assert same(reach[name], (plain if name == "cutout2" else every)[name]), (name, share)
+        assert every["cutout2"] or share == 0.0  # (plants shown)
+        away = geo.batches(vis, PASSES, "reach", eye=eye + (500.0, 0.0, 0.0), reach={"cutout2": 24.0})
+        assert away["cutout2"] is None  # (not the last answer)
+        assert same(away["opaque"], reach["opaque"])
     assert runs > 50
     geo.release()
     dev.close()

@@ -202,18 +202,33 @@ class Geometry:
         t = self._rows[PASSES.index(name)]
         return t is not None and bool(vis[t[3]].any())
 
-    def batches(self, vis: np.ndarray, names, slot: str = "view", eye=None) -> dict:
+    def batches(self, vis: np.ndarray, names, slot: str = "view", eye=None,
+                reach: dict | None = None) -> dict:
         """{pass name: [(mesh, first quad, quads, origin)] or None} for the culling of
         cull(): a batch's visible rows that follow each other in its vertex order are
         one range. eye: each pass's ranges nearest first (by the box of their first
         row), so hidden surfaces fail the depth test before they are shaded (software
         GL's early depth test: caves and the ground behind a hill); else in vertex
-        order (regions bottom up, caves first)."""
+        order (regions bottom up, caves first). reach: {pass name: blocks}: that
+        pass's rows only where their box comes within so far of the eye
+        (horizontally)."""
+        key = (tuple(names), tuple(reach.items()) if reach else None)
+        if reach:
+            eye = tuple(map(float, eye))
         last = self._last.get(slot)
-        if last is not None and last[0] == tuple(names) and np.array_equal(last[1], vis):
+        if last is not None and last[0] == key and np.array_equal(last[1], vis) and \
+                (not reach or last[3] == eye):
             return last[2]
         gb, q, n, box, same_prev, same_next, pk = self._all
         v = vis[box]
+        for name, r in (reach or {}).items():
+            p = PASSES.index(name)
+            a, b = self._cut[p], self._cut[p + 1]
+            if a < b:
+                c = self._boxes[:, box[a:b]]  # centres, half extents
+                dx = np.maximum(np.abs(c[0] - eye[0]) - c[3], 0.0)
+                dy = np.maximum(np.abs(c[1] - eye[1]) - c[4], 0.0)
+                v[a:b] &= dx * dx + dy * dy <= r * r
         vb = np.zeros(len(v) + 1, bool)  # v shifted: vb[:-1] the row before, vb[1:] v
         vb[1:] = v
         starts = np.flatnonzero(v & ~(same_prev & vb[:-1]))
@@ -233,7 +248,7 @@ class Geometry:
         for name in names:
             p = PASSES.index(name)
             out[name] = None if self._rows[p] is None else (items[cut[p]:cut[p + 1]] or None)
-        self._last[slot] = (tuple(names), vis.copy(), out)
+        self._last[slot] = (key, vis.copy(), out, eye)
         return out
 
     @property

@@ -6,7 +6,11 @@ import math
 
 import numpy as np
 
-VIEW_SHADOW_SIZE = 1024  # the viewport's shadow map (renders: Settings.shadow_size)
+VIEW_SHADOW_SIZE = 1024
+# a draft frame's grass and flowers (double-sided plants: alpha tested, no early
+# depth test, a third of the G-buffer pass on llvmpipe for a sixth of its quads) out
+# to this many blocks; beyond, at a draft's resolution, they are a few pixels' speckle
+DRAFT_PLANTS = 128.0  # the viewport's shadow map (renders: Settings.shadow_size)
 # Blender's gpu module has no multisampled textures: frames in Blender are never
 # multisampled, so the MSAA switches are the command line's only (the panel says so)
 MSAA_ONLY = ("msaa_alpha", "per_sample")
@@ -43,6 +47,7 @@ def settings_of(vv, draft: bool = False, render: bool = False, world=None):
         s.per_sample = False
         s.peel_layers = min(s.peel_layers, 1)
         s.far_draft = True
+        s.plants_reach = DRAFT_PLANTS
     return s
 
 
@@ -93,10 +98,18 @@ def view_camera(view, window, far: float):
     V_inv = np.array(((a, d, g, x), (b, e, h, y), (c, f, i, z), (0.0, 0.0, 0.0, 1.0)))
     return Camera(x, y, z, math.degrees(math.atan2(fy, fx)),
                   math.degrees(math.asin(max(-1.0, min(1.0, fz)))), fov, aspect, near, far_,
-                  V, P, vps=(P @ V, V_inv @ P_inv))
+                  V, P, vps=_fixed(P @ V, V_inv @ P_inv))
 
 
 _PROJ: dict = {}  # (window matrix, far) -> view_camera's projection, its inverse, parameters
+
+
+def _fixed(*arrays):
+    """Arrays made read-only: a camera hands out the same ones on every call (and the
+    frame block takes them as unchanged while they are the same objects)."""
+    for a in arrays:
+        a.flags.writeable = False
+    return arrays
 
 
 def _projection(window, far: float):

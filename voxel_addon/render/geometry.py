@@ -179,6 +179,7 @@ class Geometry:
         self._origins = [b.origin for _ in PASSES for b in self._list]
         self._last: dict = {}
         self._culled: dict = {}
+        self._rects: dict = {}
 
     # ------------------------------------------------------------------ frames
     def cull(self, mvp: np.ndarray, keep: bool = False) -> np.ndarray:
@@ -196,6 +197,14 @@ class Geometry:
                 c.clear()
             v = c[k] = camera.visible_boxes(mvp, self._boxes)
         return v
+
+    def _rect(self, p: int):
+        """The horizontal extent (x0, x1, y0, y1) of pass p's rows' boxes (kept)."""
+        r = self._rects.get(p)
+        if r is None:
+            c = self._boxes[:, self._all[3][self._cut[p]:self._cut[p + 1]]]
+            r = self._rects[p] = (c[0] - c[3], c[0] + c[3], c[1] - c[4], c[1] + c[4])
+        return r
 
     def seen(self, name: str, vis: np.ndarray) -> bool:
         """Whether pass name has quads in a visible region."""
@@ -225,9 +234,9 @@ class Geometry:
             p = PASSES.index(name)
             a, b = self._cut[p], self._cut[p + 1]
             if a < b:
-                c = self._boxes[:, box[a:b]]  # centres, half extents
-                dx = np.maximum(np.abs(c[0] - eye[0]) - c[3], 0.0)
-                dy = np.maximum(np.abs(c[1] - eye[1]) - c[4], 0.0)
+                x0, x1, y0, y1 = self._rect(p)
+                dx = np.maximum(np.maximum(x0 - eye[0], eye[0] - x1), 0.0)
+                dy = np.maximum(np.maximum(y0 - eye[1], eye[1] - y1), 0.0)
                 v[a:b] &= dx * dx + dy * dy <= r * r
         vb = np.zeros(len(v) + 1, bool)  # v shifted: vb[:-1] the row before, vb[1:] v
         vb[1:] = v

@@ -6,11 +6,11 @@ import math
 
 import numpy as np
 
-VIEW_SHADOW_SIZE = 1024
+VIEW_SHADOW_SIZE = 1024  # the viewport's shadow map (renders: Settings.shadow_size)
 # a draft frame's grass and flowers (double-sided plants: alpha tested, no early
 # depth test, a third of the G-buffer pass on llvmpipe for a sixth of its quads) out
-# to this many blocks; beyond, at a draft's resolution, they are a few pixels' speckle
-DRAFT_PLANTS = 128.0  # the viewport's shadow map (renders: Settings.shadow_size)
+# to this many blocks; beyond, at a draft's resolution, they are a pixel or two
+DRAFT_PLANTS = 128.0
 # Blender's gpu module has no multisampled textures: frames in Blender are never
 # multisampled, so the MSAA switches are the command line's only (the panel says so)
 MSAA_ONLY = ("msaa_alpha", "per_sample")

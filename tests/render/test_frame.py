@@ -74,9 +74,10 @@ def test_pack_keeps_only_the_same_objects():
 
     def values():
         out = {}
-        for name, (_, n, kind) in members.items():
+        for i, (name, (_, n, kind)) in enumerate(members.items()):
             v = rng.uniform(-10, 10, (n // 4, 4) if kind == "a" else n)
-            out[name] = v.reshape(4, 4) if n == 16 else float(v[0]) if n == 1 else v
+            out[name] = v.reshape(4, 4) if n == 16 else float(v[0]) if n == 1 else \
+                tuple(v.tolist()) if i % 2 and kind != "a" else v  # (tuples and arrays)
         return out
     first = values()
     for step in range(3):

@@ -65,6 +65,8 @@ class FrameBlock:
                 f = np.asarray(v, float).ravel().tolist()
             elif n == 16:
                 f = np.asarray(v, float).T.ravel().tolist()
+            elif isinstance(v, tuple):  # (a new tuple each frame: the eye, the sun's pixel)
+                f = [float(x) for x in v]
             else:
                 f = np.asarray(v, float).tolist()
             seen[k] = (v, f)

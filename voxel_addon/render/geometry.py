@@ -173,7 +173,12 @@ class Geometry:
         gb, q, n, box, pi = np.concatenate(tabs, 1) if tabs else np.zeros((5, 0), np.int64)
         nb = np.ones(len(gb) + 1, bool)
         nb[1:-1] = gb[1:] != gb[:-1]
-        self._all = (gb, q, n, box, ~nb[:-1], ~nb[1:], pi * 1e12)
+        # per row its box's centre and, as a fourth coordinate far beyond any distance
+        # in blocks, its pass: a row's squared distance from (eye, 0) sorts by pass first
+        mid = np.empty((len(gb), 4))
+        mid[:, :3] = self._boxes[:3, box].T
+        mid[:, 3] = pi * 1e6
+        self._all = (gb, q, n, box, ~nb[:-1], ~nb[1:], mid)
         self._cut = np.cumsum([0] + [0 if t is None else t.shape[1] for t in self._rows])
         self._meshes = [b.meshes[p] for p in range(len(PASSES)) for b in self._list]
         self._origins = [b.origin for _ in PASSES for b in self._list]
@@ -228,7 +233,7 @@ class Geometry:
         if last is not None and last[0] == key and np.array_equal(last[1], vis) and \
                 (not reach or last[3] == eye):
             return last[2]
-        gb, q, n, box, same_prev, same_next, pk = self._all
+        gb, q, n, box, same_prev, same_next, mid = self._all
         v = vis[box]
         for name, r in (reach or {}).items():
             p = PASSES.index(name)
@@ -246,8 +251,8 @@ class Geometry:
         ends = np.flatnonzero(v & ~(same_next & vb[1:]))
         cut = np.searchsorted(starts, self._cut).tolist()  # each pass's first range
         if eye is not None and len(starts) > 1:
-            d = self._boxes[:3, box[starts]] - np.array(eye, np.float32).reshape(3, 1)
-            order = np.argsort(pk[starts] + (d * d).sum(0))  # (within each pass)
+            d = mid[starts] - (*eye, 0.0)
+            order = np.argsort(np.einsum("ij,ij->i", d, d))  # (within each pass)
             starts, ends = starts[order], ends[order]
         first = q[starts]
         M, O = self._meshes, self._origins

@@ -1,6 +1,7 @@
 """Our Python per live-view redraw in the real Blender GUI (issue 29): thread CPU of
 the handler's Python (Frame.python_ms) at distance 16 with the pipeline every redraw
-(full, draft), orbiting (a new view every redraw) and still (the kept frame), and with
+(full, draft), orbiting (a new view every redraw) and still (the kept frame); the
+orbiting draft frame's own time (wall with the GPU finished, and process CPU); with
 --parts the thread CPU per redraw of the calls that make it up.
 
     python tools/viewport_python_job.py OUT.json WORLD [N] [--parts] [--app 5.2]
@@ -78,6 +79,10 @@ def job(world, n, parts):
         if i == 1:
             T.clear()
     R["orbit_python"] = [f.python_ms for f in orb[2:]]
+    # the draft frame itself while orbiting (GPU finished in each): wall and the
+    # process's CPU (llvmpipe's threads too: what counts on a loaded machine)
+    R["orbit_frame"] = [f.ms for f in orb[2:]]
+    R["orbit_cpu"] = [f.cpu_ms for f in orb[2:]]
     R["orbit_parts"] = _took(n)
     V.look(30)
     vv.quality, LIVE.reuse = "full", True
@@ -91,6 +96,8 @@ def job(world, n, parts):
     R["still_parts"] = _took(n)
     for k in ("full", "draft", "orbit", "still"):
         R[f"{k}_ms"] = statistics.median(R[f"{k}_python"])
+    R["orbit_frame_ms"] = statistics.median(R["orbit_frame"])
+    R["orbit_cpu_ms"] = statistics.median(R["orbit_cpu"])
     import voxel_addon
     voxel_addon.unregister()
 
@@ -109,7 +116,10 @@ def host(argv):
     r = json.loads(out.read_text())
     if not r.get("ok"):
         raise SystemExit(r.get("error"))
-    print({k: round(r[f"{k}_ms"], 3) for k in ("full", "draft", "orbit", "still")})
+    print({k: round(r[f"{k}_ms"], 3) for k in ("full", "draft", "orbit", "still", "orbit_frame",
+                                                 "orbit_cpu")})
+    if "--parts" in argv:
+        print({k: r["orbit_parts"][k] for k in list(r["orbit_parts"])[:16]})
 
 
 if __name__ == "__main__":

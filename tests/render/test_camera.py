@@ -132,7 +132,8 @@ def test_batches_draw_every_visible_region_once(gl):
 
 def test_batches_are_the_runs_of_visible_rows(gl):
     """Geometry.batches against a plain loop over its rows: for random visibility
-    masks, one draw per maximal run of visible rows of one batch, in order."""
+    masks, one draw per maximal run of visible rows of one batch, in order; with an
+    eye the same draws, nearest first (by their first row's box)."""
     from voxel_addon import meshing
     from voxel_addon.core import chunk
     from voxel_addon.core.blocks import REGISTRY as R
@@ -143,6 +144,7 @@ def test_batches_are_the_runs_of_visible_rows(gl):
     b[:, :, :30] = R.id("stone")
     b[:, :, 30:120][rng.random((82, 82, 90)) < 0.003] = R.id("stone")
     b[rng.random(b.shape) < 0.0005] = R.id("water")
+    b[:, :, 30][rng.random((82, 82)) < 0.3] = R.id("tall_grass")  # (cutout2: double-sided)
     dev = MglDevice(gl)
     geo = Geometry(dev)
     geo.set_chunks(meshing.build_chunks(b, (-2, -2), backend="numpy"))
@@ -152,8 +154,10 @@ def test_batches_are_the_runs_of_visible_rows(gl):
     for share in (0.0, 0.1, 0.5, 0.9, 1.0):
         vis = rng.random(n) < share
         got = geo.batches(vis, PASSES)
+        eye = rng.uniform(-40, 100, 3)
+        near = geo.batches(vis, PASSES, "near", eye=eye)
         for p, name in enumerate(PASSES):
-            want, prev = [], None
+            want, prev, at = [], None, {}
             t = geo._rows[p]
             for j, (bi, q, c, box) in enumerate(zip(*t.tolist()) if t is not None else ()):
                 if not vis[box]:
@@ -165,9 +169,33 @@ def test_batches_are_the_runs_of_visible_rows(gl):
                     want[-1] = (m, f, q + c - f, o)
                 else:
                     want.append((b.meshes[p], q, c, b.origin))
+                    at[id(b.meshes[p]), q] = geo._boxes[:3, box]  # (the first row's box)
                 prev = bi
             runs += len(want)
             assert (got[name] or []) == want, (name, share)
+            # with an eye: the same ranges, nearest first
+            key = [(id(m), f, k) for m, f, k, _ in want]
+            mine = [(id(m), f, k) for m, f, k, _ in near[name] or []]
+            assert sorted(mine) == sorted(key), (name, share)
+            d = [float(((at[m, f] - eye) ** 2).sum()) for m, f, _ in mine]
+            assert all(a <= b * (1 + 1e-5) + 1e-3 for a, b in zip(d, d[1:])), (name, share)
+        # a reach for the plants: theirs only from boxes within it, the others' as they were
+        c, eye = geo._boxes, np.array([*rng.uniform(-20, 40, 2), 60.0])
+        gap = np.maximum(np.abs(c[:2] - eye[:2, None]) - c[3:5], 0.0)
+        within = (gap ** 2).sum(0) <= 24.0 ** 2
+        assert 0 < within.sum() < within.size
+        reach = geo.batches(vis, PASSES, "reach", eye=eye, reach={"cutout2": 24.0})
+        plain = geo.batches(vis & within, PASSES, "within", eye=eye)
+        every = geo.batches(vis, PASSES, "every", eye=eye)
+        def same(a, b):
+            return sorted((id(m), f, k) for m, f, k, _ in a or []) == \
+                sorted((id(m), f, k) for m, f, k, _ in b or [])
+        for name in PASSES:
+            assert same(reach[name], (plain if name == "cutout2" else every)[name]), (name, share)
+        assert every["cutout2"] or share == 0.0  # (plants shown)
+        away = geo.batches(vis, PASSES, "reach", eye=eye + (500.0, 0.0, 0.0), reach={"cutout2": 24.0})
+        assert away["cutout2"] is None  # (not the last answer)
+        assert same(away["opaque"], reach["opaque"])
     assert runs > 50
     geo.release()
     dev.close()

@@ -63,6 +63,33 @@ def test_block_layout_matches_the_driver(gl):
     buf.release()
 
 
+
+def test_pack_keeps_only_the_same_objects():
+    """pack() reuses a member's floats while it is set again as the same object (the
+    sky's tables of an hour) and packs new objects anew: the bytes are always those
+    of a fresh block with the same values."""
+    rng = np.random.default_rng(7)
+    members, _ = frame.layout()
+    mine = frame.FrameBlock()
+
+    def values():
+        out = {}
+        for i, (name, (_, n, kind)) in enumerate(members.items()):
+            v = rng.uniform(-10, 10, (n // 4, 4) if kind == "a" else n)
+            out[name] = v.reshape(4, 4) if n == 16 else float(v[0]) if n == 1 else \
+                tuple(v.tolist()) if i % 2 and kind != "a" else v  # (tuples and arrays)
+        return out
+    first = values()
+    for step in range(3):
+        v = values() if step else first
+        if step == 2:  # some members the same objects as before, others new
+            v.update({k: first[k] for k in list(first)[::2]})
+        mine.set(**v)
+        fresh = frame.FrameBlock()
+        fresh.set(**v)
+        assert mine.pack() == fresh.pack(), step
+
+
 def test_conditions_follow_the_preprocessor():
     c = glsl.condition
     assert c("defined(A) && B > 1", {"A": 1, "B": 2}) and not c("defined(A) && B > 1", {"B": 2})

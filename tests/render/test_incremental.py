@@ -380,6 +380,34 @@ def test_from_matrices_takes_blender_matrices():
     assert o.ortho and np.isclose(o.near, -100, atol=1e-3) and np.isclose(o.far, 100, atol=1e-3)
 
 
+
+def test_view_camera_is_from_matrices():
+    """The live view's camera (blender/liveview/options.view_camera: closed form for a
+    region's rigid view, the projection's part kept per window matrix) is the general
+    Camera.from_matrices of the same matrices: eye, angles, clip range, and the
+    frame's matrix and its inverse; perspective and orthographic, mathutils or tuples."""
+    pytest.importorskip("bpy")  # brings mathutils
+    import mathutils
+    from voxel_addon.blender.liveview.options import view_camera
+    far = 16 * 16 * 1.5 + 256.0
+    for i, (yaw, pitch) in enumerate(((30.0, -20.0), (200.0, -75.0), (-95.0, 10.0))):
+        cam = Camera(5.0 * i - 40.0, 12.0, 70.0 + i, yaw, pitch, 50.0, 1.7, 0.5, 800.0)
+        for proj in (cam.proj(), C.ortho(-30, 30, -18, 18, -500, 500)):
+            V = mathutils.Matrix([list(r) for r in cam.view()])
+            W = mathutils.Matrix([list(r) for r in proj])
+            got = view_camera(tuple(map(tuple, V)), tuple(map(tuple, W)), far)
+            again = view_camera(V, W, far)  # (the projection's part kept)
+            ref = Camera.from_matrices(V, got.proj_m)
+            for c in (got, again):
+                assert np.allclose((c.x, c.y, c.z, c.yaw, c.pitch, c.fov, c.aspect, c.near, c.far),
+                                   (ref.x, ref.y, ref.z, ref.yaw, ref.pitch, ref.fov, ref.aspect,
+                                    ref.near, ref.far), atol=1e-6)
+                vp, inv = c.matrices()
+                assert np.allclose(vp, ref.proj_m @ ref.view_m, atol=1e-9)
+                assert np.allclose(inv @ vp, np.eye(4), atol=1e-6)
+            assert got.ortho == (proj[3][3] == 1.0) and np.isclose(got.far, far)
+
+
 def test_region_height_is_one_for_all_shown(gl, area):
     """Chunks of another region height are refused while others are shown, and taken
     once nothing is (the region table starts over)."""

@@ -31,6 +31,9 @@ class Camera:
     # from_matrices: the host's matrices, used as given (the fields above describe them)
     view_m: np.ndarray | None = field(default=None, repr=False, compare=False)
     proj_m: np.ndarray | None = field(default=None, repr=False, compare=False)
+    # (view_proj, its inverse) when the maker knows them (a host's rigid view:
+    # blender/liveview/options.view_camera), else matrices() works them out
+    vps: tuple | None = field(default=None, repr=False, compare=False)
 
     @classmethod
     def from_matrices(cls, view, projection) -> "Camera":
@@ -94,6 +97,8 @@ class Camera:
         """(view_proj, its inverse), in closed form on Python floats: a frame needs
         them a few times and NumPy's per-call cost dwarfs 4x4 arithmetic. The inverse
         is the rigid view's transpose times the perspective's own inverse."""
+        if self.vps is not None:
+            return self.vps
         if self.proj_m is not None:
             vp = self.proj_m @ self.view_m
             return vp, np.linalg.inv(vp)

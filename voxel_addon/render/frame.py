@@ -39,6 +39,7 @@ class FrameBlock:
         self.data = bytearray(size)
         self.values = {k: 0 if self.members[k][1] == 1 else (0,) * self.members[k][1]
                        for k in self.order}
+        self._seen: dict = {}  # member -> (the value object last packed, its floats)
 
     def set(self, **values) -> None:
         """Scalars, sequences, row-major 4x4 NumPy matrices (GL gets columns), or
@@ -46,17 +47,29 @@ class FrameBlock:
         self.values.update(values)
 
     def pack(self) -> bytes:
-        """The block's bytes (a device uploads them: Device.frame)."""
-        flat = []
+        """The block's bytes (a device uploads them: Device.frame). A member set again
+        as the same object keeps its converted floats (the sky's tables and colours
+        of an hour, a still view's matrices: issue 29, a redraw's Python); so values
+        are never changed in place once set."""
+        flat, seen = [], self._seen
         for k in self.order:
             v, (_, n, kind) = self.values[k], self.members[k]
             if n == 1:
                 flat.append(float(v))
-            elif kind == "a":  # (N, 4) rows
-                flat.extend(np.asarray(v, float).ravel().tolist())
+                continue
+            c = seen.get(k)
+            if c is not None and c[0] is v:
+                flat.extend(c[1])
+                continue
+            if kind == "a":  # (N, 4) rows
+                f = np.asarray(v, float).ravel().tolist()
             elif n == 16:
-                flat.extend(np.asarray(v, float).T.ravel().tolist())
+                f = np.asarray(v, float).T.ravel().tolist()
+            elif isinstance(v, tuple):  # (a new tuple each frame: the eye, the sun's pixel)
+                f = [float(x) for x in v]
             else:
-                flat.extend(map(float, v))
+                f = np.asarray(v, float).tolist()
+            seen[k] = (v, f)
+            flat.extend(f)
         struct.pack_into(self.fmt, self.data, 0, *flat)
         return bytes(self.data)

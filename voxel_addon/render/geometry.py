@@ -158,23 +158,33 @@ class Geometry:
         hi = lo + [16.0, 16.0, h]
         # 0.5 slack for waving: vertices move by < 0.1 blocks
         self._boxes = camera.boxes(lo.reshape(-1, 3) - 0.5, hi.reshape(-1, 3) + 0.5)
-        self._rows, self._runs = [], []
+        self._rows = []
         for p in range(len(PASSES)):
             t = [(i, q, n, index[k] * nreg + r) for i, b in enumerate(self._list)
                  for q, n, k, r in b.rows[p]]
             self._rows.append(np.array(t, np.int64).reshape(-1, 4).T if t else None)
-            if not t:
-                self._runs.append(None)
-                continue
-            bi = self._rows[-1][0]
-            # per row: whether the row before / after it is the same batch's (a run of
-            # visible rows within a batch is one draw); the batches' buffers and origins
-            nb = np.ones(len(bi) + 1, bool)
-            nb[1:-1] = bi[1:] != bi[:-1]
-            self._runs.append((~nb[:-1], ~nb[1:], [b.meshes[p] for b in self._list],
-                               [b.origin for b in self._list]))
+        # every pass's rows in one table, so a frame's draw lists are one set of NumPy
+        # calls (issue 29): per row its batch among all passes' (pass * batches +
+        # batch), first quad, quads, box, whether the row before / after it is the
+        # same batch's (a run of visible rows within a batch is one draw), its pass
+        nl = len(self._list)
+        tabs = [np.vstack([t[:1] + p * nl, t[1:], np.full((1, t.shape[1]), p)])
+                for p, t in enumerate(self._rows) if t is not None]
+        gb, q, n, box, pi = np.concatenate(tabs, 1) if tabs else np.zeros((5, 0), np.int64)
+        nb = np.ones(len(gb) + 1, bool)
+        nb[1:-1] = gb[1:] != gb[:-1]
+        # per row its box's centre and, as a fourth coordinate far beyond any distance
+        # in blocks, its pass: a row's squared distance from (eye, 0) sorts by pass first
+        mid = np.empty((len(gb), 4))
+        mid[:, :3] = self._boxes[:3, box].T
+        mid[:, 3] = pi * 1e6
+        self._all = (gb, q, n, box, ~nb[:-1], ~nb[1:], mid)
+        self._cut = np.cumsum([0] + [0 if t is None else t.shape[1] for t in self._rows])
+        self._meshes = [b.meshes[p] for p in range(len(PASSES)) for b in self._list]
+        self._origins = [b.origin for _ in PASSES for b in self._list]
         self._last: dict = {}
         self._culled: dict = {}
+        self._rects: dict = {}
 
     # ------------------------------------------------------------------ frames
     def cull(self, mvp: np.ndarray, keep: bool = False) -> np.ndarray:
@@ -193,39 +203,66 @@ class Geometry:
             v = c[k] = camera.visible_boxes(mvp, self._boxes)
         return v
 
+    def _rect(self, p: int):
+        """The horizontal extent (x0, x1, y0, y1) of pass p's rows' boxes (kept)."""
+        r = self._rects.get(p)
+        if r is None:
+            c = self._boxes[:, self._all[3][self._cut[p]:self._cut[p + 1]]]
+            r = self._rects[p] = (c[0] - c[3], c[0] + c[3], c[1] - c[4], c[1] + c[4])
+        return r
+
     def seen(self, name: str, vis: np.ndarray) -> bool:
         """Whether pass name has quads in a visible region."""
         t = self._rows[PASSES.index(name)]
         return t is not None and bool(vis[t[3]].any())
 
-    def batches(self, vis: np.ndarray, names, slot: str = "view") -> dict:
+    def batches(self, vis: np.ndarray, names, slot: str = "view", eye=None,
+                reach: dict | None = None) -> dict:
         """{pass name: [(mesh, first quad, quads, origin)] or None} for the culling of
         cull(): a batch's visible rows that follow each other in its vertex order are
-        one range."""
+        one range. eye: each pass's ranges nearest first (by the box of their first
+        row), so hidden surfaces fail the depth test before they are shaded (software
+        GL's early depth test: caves and the ground behind a hill); else in vertex
+        order (regions bottom up, caves first). reach: {pass name: blocks}: that
+        pass's rows only where their box comes within so far of the eye
+        (horizontally)."""
+        key = (tuple(names), tuple(reach.items()) if reach else None)
+        if reach:
+            eye = tuple(map(float, eye))
         last = self._last.get(slot)
-        if last is not None and last[0] == tuple(names) and np.array_equal(last[1], vis):
+        if last is not None and last[0] == key and np.array_equal(last[1], vis) and \
+                (not reach or last[3] == eye):
             return last[2]
+        gb, q, n, box, same_prev, same_next, mid = self._all
+        v = vis[box]
+        for name, r in (reach or {}).items():
+            p = PASSES.index(name)
+            a, b = self._cut[p], self._cut[p + 1]
+            if a < b:
+                x0, x1, y0, y1 = self._rect(p)
+                dx = np.maximum(np.maximum(x0 - eye[0], eye[0] - x1), 0.0)
+                dy = np.maximum(np.maximum(y0 - eye[1], eye[1] - y1), 0.0)
+                v[a:b] &= dx * dx + dy * dy <= r * r
+        vb = np.zeros(len(v) + 1, bool)  # v shifted: vb[:-1] the row before, vb[1:] v
+        vb[1:] = v
+        starts = np.flatnonzero(v & ~(same_prev & vb[:-1]))
+        vb[:-1] = v                      # vb[1:] now the row after (last: False)
+        vb[-1] = False
+        ends = np.flatnonzero(v & ~(same_next & vb[1:]))
+        cut = np.searchsorted(starts, self._cut).tolist()  # each pass's first range
+        if eye is not None and len(starts) > 1:
+            d = mid[starts] - (*eye, 0.0)
+            order = np.argsort(np.einsum("ij,ij->i", d, d))  # (within each pass)
+            starts, ends = starts[order], ends[order]
+        first = q[starts]
+        M, O = self._meshes, self._origins
+        items = [(M[i], f, c, O[i]) for i, f, c in
+                 zip(gb[starts].tolist(), first.tolist(), (q[ends] + n[ends] - first).tolist())]
         out = {}
         for name in names:
             p = PASSES.index(name)
-            t = self._rows[p]
-            if t is None:
-                out[name] = None
-                continue
-            bi, q, n, box = t
-            same_prev, same_next, meshes, origins = self._runs[p]
-            v = vis[box]
-            vb = np.zeros(len(v) + 1, bool)  # v shifted: vb[:-1] the row before, vb[1:] v
-            vb[1:] = v
-            starts = np.flatnonzero(v & ~(same_prev & vb[:-1]))
-            vb[:-1] = v                      # vb[1:] now the row after (last: False)
-            vb[-1] = False
-            ends = np.flatnonzero(v & ~(same_next & vb[1:]))
-            first = q[starts]
-            out[name] = [(meshes[i], f, c, origins[i]) for i, f, c in
-                         zip(bi[starts].tolist(), first.tolist(), (q[ends] + n[ends] - first).tolist())] \
-                or None
-        self._last[slot] = (tuple(names), vis.copy(), out)
+            out[name] = None if self._rows[p] is None else (items[cut[p]:cut[p + 1]] or None)
+        self._last[slot] = (key, vis.copy(), out, eye)
         return out
 
     @property

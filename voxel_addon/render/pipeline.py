@@ -28,6 +28,10 @@ from .targets import Shape, Targets
 from .walls import Walls
 
 
+_EYE = np.eye(4)
+_EYE.flags.writeable = False
+
+
 class Renderer:
     def __init__(self, dev, settings: Settings | None = None):
         """dev: a render.device.Device, or a moderngl context (wrapped, and closed
@@ -284,7 +288,8 @@ class Renderer:
         shaded = s.debug in graph.SHADED
         shadows = bool(s.shadows and (shaded or s.debug == "light") and sp["light_dir"][2] > 0.02)
         vis = geo.cull(cull_vp, keep=True)
-        view = dict(geo.batches(vis, PASSES))  # (a copy: the geometry caches its own)
+        view = dict(geo.batches(vis, PASSES, eye=(camera.x, camera.y, camera.z),  # (a copy)
+                                reach={"cutout2": s.plants_reach} if s.plants_reach else None))
         models = bool(self.models.chunks)
         if models:
             view.update(self.models.batches(MODEL_PASSES, cull_vp))
@@ -316,7 +321,7 @@ class Renderer:
             far = (self.far.visible(fvp, (camera.x, camera.y), fog_end), fvp)
             F.set(far_inv_vp=far_inv, far_split=far_mod.SPLIT)
         else:
-            F.set(far_inv_vp=np.eye(4), far_split=0.0)
+            F.set(far_inv_vp=_EYE, far_split=0.0)
         cast = None
         if shadows:
             light_vp, texel, bias = shadow.fit(camera, sp["light_dir"], self.area,

@@ -19,6 +19,9 @@ class Settings:
     distance: int = 8             # view distance in chunks
     far: int = 0                  # far terrain out to this many chunks (0: off; render/far.py)
     far_draft: bool = False       # far tiles at half their resolution (the view's draft frames)
+    plants_reach: float = 0.0     # double-sided plants (grass, flowers) drawn out to this
+                                  # many blocks from the eye; 0: everywhere (the view's
+                                  # draft frames: a third of the G-buffer's cost there)
     light_radius: int = 8         # chunks around the centre with exact light (bounded volume)
     msaa: int = 2                 # 1, 2, 4, 8 (clamped to the context's maximum)
     per_sample: bool = True       # MSAA shading per sample (else per pixel)
@@ -146,7 +149,7 @@ class Settings:
                              ("cloud_cover", 0.0, 1.0), ("cloud_height", 0.0, 1000.0),
                              ("cloud_speed", 0.0, 1000.0), ("sea_level", -1, 255),
                              ("fade_distance", 0.0, 100000.0), ("fade_width", 0.01, 1.0),
-                             ("sea_from", 0.0, 100000.0)):
+                             ("sea_from", 0.0, 100000.0), ("plants_reach", 0.0, 100000.0)):
             if not lo <= getattr(self, name) <= hi:
                 raise VoxelError(f"{name} must be between {lo} and {hi}")
 

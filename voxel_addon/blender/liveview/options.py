@@ -2,9 +2,15 @@
 scene's View panel, the time of day, and the camera of a region's matrices."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 VIEW_SHADOW_SIZE = 1024  # the viewport's shadow map (renders: Settings.shadow_size)
+# a draft frame's grass and flowers (double-sided plants: alpha tested, no early
+# depth test, a third of the G-buffer pass on llvmpipe for a sixth of its quads) out
+# to this many blocks; beyond, at a draft's resolution, they are a pixel or two
+DRAFT_PLANTS = 128.0
 # Blender's gpu module has no multisampled textures: frames in Blender are never
 # multisampled, so the MSAA switches are the command line's only (the panel says so)
 MSAA_ONLY = ("msaa_alpha", "per_sample")
@@ -41,6 +47,7 @@ def settings_of(vv, draft: bool = False, render: bool = False, world=None):
         s.per_sample = False
         s.peel_layers = min(s.peel_layers, 1)
         s.far_draft = True
+        s.plants_reach = DRAFT_PLANTS
     return s
 
 
@@ -69,13 +76,50 @@ def hours_of(scene) -> float:
 def view_camera(view, window, far: float):
     """render.Camera for Blender's region matrices with the window's x/y rows but
     our own near/far: Blender's clip range (0.01..1000 by default) would spoil the
-    G-buffer's depth precision; the composite converts depth to Blender's projection."""
+    G-buffer's depth precision; the composite converts depth to Blender's projection.
+    A region's view matrix is rigid (its rotation and distance), so the eye and the
+    inverse come in closed form; the projection's part is kept per window matrix
+    (orbiting changes only the view: issue 29, a redraw's Python)."""
     from ...render import Camera
+    if not isinstance(view, tuple):  # (mathutils matrices)
+        view, window = tuple(map(tuple, view)), tuple(map(tuple, window))
+    key = (window, far)
+    pj = _PROJ.get(key)
+    if pj is None:
+        if len(_PROJ) >= 8:
+            _PROJ.clear()
+        pj = _PROJ[key] = _projection(window, far)
+    P, P_inv, (fov, aspect, near, far_) = pj
+    (a, b, c, tx), (d, e, f, ty), (g, h, i, tz) = view[0], view[1], view[2]
+    x, y, z = -(a * tx + d * ty + g * tz), -(b * tx + e * ty + h * tz), -(c * tx + f * ty + i * tz)
+    k = -1.0 / math.sqrt(g * g + h * h + i * i)
+    fx, fy, fz = g * k, h * k, i * k
+    V = np.array(view, np.float64)
+    V_inv = np.array(((a, d, g, x), (b, e, h, y), (c, f, i, z), (0.0, 0.0, 0.0, 1.0)))
+    return Camera(x, y, z, math.degrees(math.atan2(fy, fx)),
+                  math.degrees(math.asin(max(-1.0, min(1.0, fz)))), fov, aspect, near, far_,
+                  V, P, vps=_fixed(P @ V, V_inv @ P_inv))
+
+
+_PROJ: dict = {}  # (window matrix, far) -> view_camera's projection, its inverse, parameters
+
+
+def _fixed(*arrays):
+    """Arrays made read-only: a camera hands out the same ones on every call (and the
+    frame block takes them as unchanged while they are the same objects)."""
+    for a in arrays:
+        a.flags.writeable = False
+    return arrays
+
+
+def _projection(window, far: float):
     P = np.array(window, np.float64)
     if abs(P[3, 3] - 1.0) < 1e-6:  # orthographic: the eye's plane is arbitrary, look both ways
         n, f = -far, far
         P[2, :] = (0.0, 0.0, -2 / (f - n), -(f + n) / (f - n))
+        fov = 0.0
     else:
-        n = max(float(P[2, 3] / (P[2, 2] - 1.0)), 0.05)
+        n, f = max(float(P[2, 3] / (P[2, 2] - 1.0)), 0.05), far
         P[2, 2], P[2, 3] = (far + n) / (n - far), 2 * far * n / (n - far)
-    return Camera.from_matrices(np.array(view, np.float64), P)
+        fov = math.degrees(2 * math.atan(1 / P[1, 1]))
+    return P, np.linalg.inv(P), (fov, float(P[1, 1] / P[0, 0]), float(n), float(f))

@@ -41,7 +41,7 @@ from . import composite, host
 from .feed import Feed
 from .options import hours_of, settings_of, view_camera
 
-DRAFT_SCALE = 0.5    # draft frames render at this fraction of the region's size
+DRAFT_SCALE = 0.4    # draft frames render at this fraction of the region's size
 STILL_S = 0.25       # the view is still this long after its last change: full quality
 BUDGET_S = 0.004     # CPU time per redraw for taking in streamed chunks
 POLL_S = 0.05        # while loading: how often to look for new payloads between redraws

@@ -1,7 +1,8 @@
 """The far surface's OpenCL program built in the background as a world opens (issue 28:
 far 128 to the horizon cold): far tiles run on NumPy's twin meanwhile (the same
 values), the build takes neither the build lock nor the queue, and the world's
-warm-up starts it at once, not after the stream's kernels and streams."""
+warm-up starts it once its own job has built the near view's kernels (pocl compiles
+one thing at a time per process), not after the streams have all they want."""
 from __future__ import annotations
 
 import threading
@@ -56,11 +57,20 @@ def test_the_far_program_builds_while_another_build_holds_the_lock(fresh):
         assert done == [True]
 
 
-def test_the_world_warm_up_starts_the_far_build_at_once(fresh, tmp_path, monkeypatch):
-    """build.warm: the far program is built while the warm-up's own job (the near
-    view's kernels) still runs, in a thread of its own; far tiles use it then."""
+def test_the_world_warm_up_builds_the_far_program_after_its_job(fresh, tmp_path, monkeypatch):
+    """build.warm: far tiles run NumPy from the start (the far program is claimed),
+    and its build waits until the warm-up's own job (the near view's kernels) has
+    ended: pocl compiles one thing at a time per process, so the generator's build
+    waited behind the whole far build (issue 28). Then far tiles use it."""
     from voxel_addon.world import World, build
-    gate = threading.Event()
+    gate, seen = threading.Event(), []
+    real = opencl.build
+
+    def build_(source, options=(), alone=False):
+        if alone:  # the far program's (generation.cl.Runner of 1-column domains)
+            seen.append(opencl.warming())
+        return real(source, options, alone)
+    monkeypatch.setattr(opencl, "build", build_)
     with World.create(tmp_path / "w.sqlite", seed=7) as w:
         g = w.generator
         monkeypatch.setattr(g, "warm_opencl", lambda keys: gate.wait(120) and [])
@@ -68,12 +78,18 @@ def test_the_world_warm_up_starts_the_far_build_at_once(fresh, tmp_path, monkeyp
         try:
             assert build.warm(w)
             end = time.monotonic() + 60
-            while (g._surf or {}).get("opencl") is None and time.monotonic() < end:
-                time.sleep(0.05)
-            assert opencl.warming() and (g._surf or {}).get("opencl") is not None
+            while not g._surf_held and time.monotonic() < end:
+                time.sleep(0.01)
+            assert g._surf_held and opencl.warming()  # claimed: far tiles on NumPy
+            time.sleep(1.0)  # (time enough for a build that would not wait)
+            assert seen == [] and (g._surf or {}).get("opencl") is None
         finally:
             gate.set()
             opencl._warm["thread"].join(120)
+        end = time.monotonic() + 120
+        while (g._surf or {}).get("opencl") is None and time.monotonic() < end:
+            time.sleep(0.05)
+        assert (g._surf or {}).get("opencl") is not None and seen == [False]
     assert not build.prebuild(object())  # a generator without a far surface
 
 

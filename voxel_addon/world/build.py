@@ -91,12 +91,16 @@ def warm(world, opened: bool = False) -> bool:
 
 
 def prebuild(g) -> bool:
-    """Build the far surface's OpenCL program now, in a thread of its own at a lower
-    priority (it takes leftover CPU): a separate program whose build takes neither the
-    queue nor the build lock, so the near view's kernels do not wait for it, and the
-    far ring's tiles run on it seconds after a world opens instead of after the
-    streams have all they want (issue 28: far 128 to the horizon). Surface calls run
-    NumPy meanwhile. False when the generator has no far surface."""
+    """Build the far surface's OpenCL program once the warm-up's job (the near view's
+    kernels) has ended, in a thread of its own at a lower priority (it takes leftover
+    CPU): a separate program whose build takes neither the queue nor the build lock,
+    and the far ring's tiles run on it seconds after a world opens instead of after
+    the streams have all they want (issue 28: far 128 to the horizon). Surface calls
+    run NumPy from now until then. Not beside the job: pocl (3.0, LLVM 14) compiles
+    one program or work-group function at a time in the whole process, other
+    cl.Contexts included, so the generator's build waited for the whole far build,
+    which at nice 10 on a busy machine took seconds (issue 28's timeline: both builds
+    ended together). False when the generator has no far surface."""
     fn = getattr(g, "prebuild_surface", None)
     if fn is None:
         return False
@@ -105,12 +109,20 @@ def prebuild(g) -> bool:
     def run():
         opencl._yield_cpu()
         try:
-            fn()
+            fn(before=_after_warm_up)
         except Exception:  # noqa: BLE001 - surface() builds it (and raises) when used
             pass
 
     threading.Thread(target=run, daemon=True, name="voxel-far-prebuild").start()
     return True
+
+
+def _after_warm_up() -> None:
+    """Returns once no warm-up job runs (opencl.warming: its LATER part not counted)."""
+    import time
+    from .. import opencl
+    while opencl.warming():
+        time.sleep(0.05)
 
 
 LATER_WAIT_S = 60.0  # the far prebuild waits at most this long for busy streams

@@ -144,3 +144,36 @@ def test_the_far_prebuild_waits_for_the_streams_of_the_world(fresh, tmp_path, mo
         # the stream generated with OpenCL once the generator's kernels were ready,
         # before the warm-up had built meshing's
         assert st["ready"]["generation"] < st["ended_at"]
+
+
+def test_a_helper_process_puts_meshings_kernels_into_pocls_cache(cl_device, tmp_path, monkeypatch):
+    """opencl.helper runs meshing.vertex.warm_cache in a process of its own (pocl
+    compiles one thing at a time per process): the mesher's program with this
+    process's options and both greedy kernels' work-group code land in the kernel
+    cache, under the key this process's own build of that program then finds (no
+    second program folder), so world.build.warm's meshing step only loads them."""
+    from voxel_addon import resources
+    from voxel_addon.meshing import cl as mcl
+    monkeypatch.setenv("POCL_CACHE_DIR", str(tmp_path))  # (the helper's environment)
+    opts = list(mcl._options())
+    p = opencl.helper("meshing.vertex", "warm_cache", opts)
+    assert p is not None and p.wait(120) == 0
+    progs = {f.parent for f in tmp_path.rglob("program.bc")}
+    assert len(progs) == 1, progs
+    built = {f.name for f in next(iter(progs)).rglob("*.so")}
+    assert {"layers.so", "tile.so"} <= built, built
+    # pocl reads POCL_CACHE_DIR once per process: a process of its own builds here too
+    import subprocess
+    import sys
+    code = ("import sys, pyopencl as cl; from voxel_addon import opencl, resources; "
+            "cl.Program(opencl.context()[0], resources.kernel('mesh_greedy.cl'))"
+            ".build(options=sys.argv[1:])")
+    subprocess.run([sys.executable, "-c", code, *opts], check=True, timeout=120,
+                   env=dict(__import__("os").environ, PYTHONPATH=str(resources.ROOT)))
+    assert {f.parent for f in tmp_path.rglob("program.bc")} == progs
+
+
+def test_a_helper_that_cannot_start_is_none(monkeypatch):
+    import sys
+    monkeypatch.setattr(sys, "executable", "/nonexistent/blender")
+    assert opencl.helper("meshing.vertex", "warm_cache", []) is None

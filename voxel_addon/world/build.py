@@ -58,6 +58,11 @@ def warm(world, opened: bool = False) -> bool:
 
     def job():
         from ..core import trace
+        from ..meshing import cl as mcl
+        # meshing's kernels build in a process of their own meanwhile (opencl.helper:
+        # pocl compiles one thing at a time per process); here they then load from
+        # pocl's cache
+        helper = opencl.helper("meshing.vertex", "warm_cache", list(mcl._options()))
         keys = keys_of(-1, -1, 2, 2)
         with trace.span("warm.generate"):
             if hasattr(g, "warm_opencl"):  # the world's own generator (its kernel objects)
@@ -67,6 +72,8 @@ def warm(world, opened: bool = False) -> bool:
         # the stream generates with OpenCL from now on, while meshing's kernels build
         opencl.ready("generation")
         blocks = C.paste(zip(keys, arrays), -1, -1, 2, 2)
+        with trace.span("warm.helper", started=helper is not None):
+            _finish(helper)
         with CL_LOCK, trace.span("warm.mesh"):
             meshing.build_chunks(blocks[15:-15, 15:-15], (0, 0), backend="opencl")
 
@@ -115,6 +122,22 @@ def prebuild(g) -> bool:
 
     threading.Thread(target=run, daemon=True, name="voxel-far-prebuild").start()
     return True
+
+
+def _finish(proc) -> None:
+    """Wait for opencl.helper's process PROC (None: none) at most HELPER_WAIT_S, then
+    end it: what it has not put into pocl's cache by then is built here."""
+    if proc is None:
+        return
+    import subprocess
+    try:
+        proc.wait(HELPER_WAIT_S)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+
+
+HELPER_WAIT_S = 30.0
 
 
 def _after_warm_up() -> None:

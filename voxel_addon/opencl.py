@@ -203,10 +203,11 @@ def build(source: str, options: tuple[str, ...] = (), alone: bool = False):
 # ---- building in another process -----------------------------------------------------
 def helper(module: str, fn: str, *args):
     """Start `<this package>.MODULE.FN(*ARGS)` (ARGS: JSON values) in a fresh Python
-    process and return its Popen, or None where none can be started (no Python
-    interpreter as sys.executable, e.g. a Blender without one). pocl (3.0, LLVM 14)
-    compiles one program or kernel work-group function at a time in a whole process
-    (other cl.Contexts included), so a second core helps a cold build only from
+    process and return its Popen, or None where none is worth starting (a platform
+    other than pocl, whose on-disk kernel cache this relies on) or none can be (no
+    Python interpreter as sys.executable, e.g. a Blender without one). pocl (3.0,
+    LLVM 14) compiles one program or kernel work-group function at a time in a whole
+    process (other cl.Contexts included), so a second core helps a cold build only from
     another process: what FN builds and launches lands in pocl's on-disk kernel cache
     (the same POCL_CACHE_DIR: the environment is inherited), and this process's own
     build and first launch of the same source and options then load it (meshing's:
@@ -217,7 +218,7 @@ def helper(module: str, fn: str, *args):
     import sys
     from pathlib import Path
     exe = sys.executable or ""
-    if not Path(exe).name.lower().startswith("python"):
+    if not Path(exe).name.lower().startswith("python") or not _is_pocl():
         return None
     here = Path(__file__).resolve().parent
     code = ("import importlib, json, sys; sys.path.insert(0, sys.argv[1]); "
@@ -226,9 +227,19 @@ def helper(module: str, fn: str, *args):
     try:
         return subprocess.Popen([exe, "-c", code, str(here.parent), f"{here.name}.{module}", fn,
                                  json.dumps(args)], env=env, stdin=subprocess.DEVNULL,
-                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                creationflags=getattr(subprocess, "CREATE_NO_WINDOW", 0))
     except OSError:
         return None
+
+
+def _is_pocl() -> bool:
+    try:
+        p = context()[2].platform
+    except NoOpenCL:
+        return False
+    text = f"{p.name} {p.version}".lower()
+    return "pocl" in text or "portable computing" in text
 
 
 # ---- warming up in the background ---------------------------------------------------

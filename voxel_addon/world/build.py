@@ -43,7 +43,8 @@ def warm(world, opened: bool = False) -> bool:
     (another world of the same generator and version reuses the build: cheap); False
     when nothing was started (no device, warmed already, another warm-up running).
     Cold, on 2 quiet cores: ~3.3 s for the generator (before clsource.called cut its
-    first launches' CPU ~3x), ~0.6 s meshing. Then, with
+    first launches' CPU ~3x), ~0.6 s meshing, which now builds beside the generator in
+    a helper process (opencl.helper) and only loads from pocl's cache here. Then, with
     OpenCL already the default (opencl.warm's `later`) and once the world's streams
     have made all they want (one pocl queue: the stream's kernels would wait behind
     it), the far surface's program (the generator's 2D passes, its own kernel

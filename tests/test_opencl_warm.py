@@ -177,3 +177,18 @@ def test_a_helper_that_cannot_start_is_none(monkeypatch):
     import sys
     monkeypatch.setattr(sys, "executable", "/nonexistent/blender")
     assert opencl.helper("meshing.vertex", "warm_cache", []) is None
+
+
+def test_the_warm_up_ends_a_helper_that_takes_too_long(monkeypatch):
+    """build._finish: a stuck helper is waited for HELPER_WAIT_S at most, then killed
+    (the warm-up then builds meshing itself, the stream no longer held on NumPy)."""
+    import subprocess
+    import sys
+    import time
+    from voxel_addon.world import build
+    monkeypatch.setattr(build, "HELPER_WAIT_S", 0.3)
+    p = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    t0 = time.monotonic()
+    build._finish(p)
+    assert p.poll() is not None and time.monotonic() - t0 < 10
+    build._finish(None)  # no helper: nothing to wait for

@@ -186,7 +186,7 @@ def test_the_warm_up_ends_a_helper_that_takes_too_long(monkeypatch):
     import sys
     import time
     from voxel_addon.world import build
-    monkeypatch.setattr(build, "HELPER_WAIT_S", 0.3)
+    monkeypatch.setattr(build, "HELPER_WAIT_S", 0.3)  # (2 s by default)
     p = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
     t0 = time.monotonic()
     build._finish(p)

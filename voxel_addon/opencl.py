@@ -201,9 +201,10 @@ def build(source: str, options: tuple[str, ...] = (), alone: bool = False):
 
 
 # ---- building in another process -----------------------------------------------------
-def helper(module: str, fn: str, *args):
+def helper(module: str, fn: str, *args, nice: int = 0):
     """Start `<this package>.MODULE.FN(*ARGS)` (ARGS: JSON values) in a fresh Python
-    process and return its Popen, or None where none is worth starting (a platform
+    process (at niceness NICE where the platform has one) and return its Popen, or
+    None where none is worth starting (a platform
     other than pocl, whose on-disk kernel cache this relies on) or none can be (no
     Python interpreter as sys.executable, e.g. a Blender without one). pocl (3.0,
     LLVM 14) compiles one program or kernel work-group function at a time in a whole
@@ -221,12 +222,14 @@ def helper(module: str, fn: str, *args):
     if not Path(exe).name.lower().startswith("python") or not _is_pocl():
         return None
     here = Path(__file__).resolve().parent
-    code = ("import importlib, json, sys; sys.path.insert(0, sys.argv[1]); "
+    code = ("import importlib, json, os, sys; sys.path.insert(0, sys.argv[1]); "
+            "hasattr(os, 'nice') and os.nice(int(sys.argv[5])); "
             "getattr(importlib.import_module(sys.argv[2]), sys.argv[3])(*json.loads(sys.argv[4]))")
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
     try:
         return subprocess.Popen([exe, "-c", code, str(here.parent), f"{here.name}.{module}", fn,
-                                 json.dumps(args)], env=env, stdin=subprocess.DEVNULL,
+                                 json.dumps(args), str(int(nice))], env=env,
+                                stdin=subprocess.DEVNULL,
                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                                 creationflags=getattr(subprocess, "CREATE_NO_WINDOW", 0))
     except OSError:

@@ -63,7 +63,8 @@ def warm(world, opened: bool = False) -> bool:
         # meshing's kernels build in a process of their own meanwhile (opencl.helper:
         # pocl compiles one thing at a time per process); here they then load from
         # pocl's cache
-        helper = opencl.helper("meshing.vertex", "warm_cache", list(mcl._options()))
+        helper = opencl.helper("meshing.vertex", "warm_cache", list(mcl._options()),
+                               nice=HELPER_NICE)
         keys = keys_of(-1, -1, 2, 2)
         with trace.span("warm.generate"):
             if hasattr(g, "warm_opencl"):  # the world's own generator (its kernel objects)
@@ -127,7 +128,8 @@ def prebuild(g) -> bool:
 
 def _finish(proc) -> None:
     """Wait for opencl.helper's process PROC (None: none) at most HELPER_WAIT_S, then
-    end it: what it has not put into pocl's cache by then is built here."""
+    end it: what it has not put into pocl's cache by then is built here (a busy
+    machine starves the niced helper: then this process builds as it did before)."""
     if proc is None:
         return
     import subprocess
@@ -138,7 +140,10 @@ def _finish(proc) -> None:
         proc.wait()
 
 
-HELPER_WAIT_S = 10.0  # a stuck helper holds the stream on NumPy no longer (~1.5 s CPU)
+HELPER_WAIT_S = 2.0  # after the generator's kernels: the helper's ~1.5 s CPU is mostly done
+# The helper's niceness: it takes the core the first frame and the first NumPy chunks
+# leave (at 0 the first frames of a fresh Blender, its shader compiles, came later)
+HELPER_NICE = 5
 
 
 def _after_warm_up() -> None:

@@ -204,12 +204,12 @@ def build(source: str, options: tuple[str, ...] = (), alone: bool = False):
 def helper(module: str, fn: str, *args, nice: int = 0):
     """Start `<this package>.MODULE.FN(*ARGS)` (ARGS: JSON values) in a fresh Python
     process (at niceness NICE where the platform has one) and return its Popen, or
-    None where none is worth starting (a platform
-    other than pocl, whose on-disk kernel cache this relies on) or none can be (no
-    Python interpreter as sys.executable, e.g. a Blender without one). pocl (3.0,
-    LLVM 14) compiles one program or kernel work-group function at a time in a whole
-    process (other cl.Contexts included), so a second core helps a cold build only from
-    another process: what FN builds and launches lands in pocl's on-disk kernel cache
+    None where none is worth starting (a platform other than pocl, whose on-disk
+    kernel cache this relies on) or none can be (no Python interpreter as
+    sys.executable, e.g. a Blender without one). pocl (3.0, LLVM 14) compiles one
+    program or kernel work-group function at a time in a whole process (other
+    cl.Contexts included), so a second core helps a cold build only from another
+    process: what FN builds and launches lands in pocl's on-disk kernel cache
     (the same POCL_CACHE_DIR: the environment is inherited), and this process's own
     build and first launch of the same source and options then load it (meshing's:
     ~0.85 s of CPU down to ~0.03 s; world.build.warm). The caller waits for it or not;

@@ -66,11 +66,15 @@ def warm(world, opened: bool = False) -> bool:
         helper = opencl.helper("meshing.vertex", "warm_cache", list(mcl._options()),
                                nice=HELPER_NICE)
         keys = keys_of(-1, -1, 2, 2)
-        with trace.span("warm.generate"):
-            if hasattr(g, "warm_opencl"):  # the world's own generator (its kernel objects)
-                arrays = g.warm_opencl(keys)
-            else:
-                arrays = g.generate(keys)
+        try:
+            with trace.span("warm.generate"):
+                if hasattr(g, "warm_opencl"):  # the world's own generator (its kernels)
+                    arrays = g.warm_opencl(keys)
+                else:
+                    arrays = g.generate(keys)
+        except BaseException:
+            _finish(helper, 0.0)
+            raise
         # the stream generates with OpenCL from now on, while meshing's kernels build
         opencl.ready("generation")
         blocks = C.paste(zip(keys, arrays), -1, -1, 2, 2)
@@ -126,15 +130,16 @@ def prebuild(g) -> bool:
     return True
 
 
-def _finish(proc) -> None:
-    """Wait for opencl.helper's process PROC (None: none) at most HELPER_WAIT_S, then
-    end it: what it has not put into pocl's cache by then is built here (a busy
-    machine starves the niced helper: then this process builds as it did before)."""
+def _finish(proc, wait: float | None = None) -> None:
+    """Wait for opencl.helper's process PROC (None: none) at most WAIT seconds
+    (HELPER_WAIT_S), then end it: what it has not put into pocl's cache by then is
+    built here (a busy machine starves the niced helper: then this process builds as
+    it did before)."""
     if proc is None:
         return
     import subprocess
     try:
-        proc.wait(HELPER_WAIT_S)
+        proc.wait(HELPER_WAIT_S if wait is None else wait)
     except subprocess.TimeoutExpired:
         proc.kill()
         proc.wait()

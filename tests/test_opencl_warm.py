@@ -125,10 +125,20 @@ def test_a_kernel_family_is_used_as_soon_as_the_warm_up_says_it_is_ready(fresh):
 
 
 def test_the_far_prebuild_waits_for_the_streams_of_the_world(fresh, tmp_path, monkeypatch):
-    """world.build.warm's later part (the far surface's build) starts only once every
-    stream of the world has all its chunks: pocl runs one in-order queue, and the far
-    batch and its build queued before the stream's kernels held the view back ~2 s."""
+    """world.build.warm's later part (the far surface's first batch) and its prebuild
+    (the far program) start only once every stream of the world has all its chunks:
+    pocl runs one in-order queue, and the far batch and its build queued before the
+    stream's kernels held the view back ~2 s; the build's CPU came from the near
+    view's last batches."""
+    import time
     from voxel_addon.world import Stream, World, build
+    built, real = [], opencl.build
+
+    def build_(source, options=(), alone=False):
+        if alone:  # the far program's
+            built.append([s.idle for s in w.streams])
+        return real(source, options, alone)
+    monkeypatch.setattr(opencl, "build", build_)
     with World.create(tmp_path / "w.sqlite", seed=7) as w:
         seen = []
         monkeypatch.setattr(w.generator, "warm_surface",
@@ -138,9 +148,13 @@ def test_the_far_prebuild_waits_for_the_streams_of_the_world(fresh, tmp_path, mo
             assert build.warm(w)
             assert s.wait_ready(120)
             opencl._warm["thread"].join(120)
+            end = time.monotonic() + 120
+            while not built and time.monotonic() < end:
+                time.sleep(0.05)
         st = opencl.warm_state()
         assert st["error"] is None and st["later_error"] is None, st
         assert seen == [[True]], seen
+        assert built == [[True]], built
         # the stream generated with OpenCL once the generator's kernels were ready,
         # before the warm-up had built meshing's
         assert st["ready"]["generation"] < st["ended_at"]

@@ -99,21 +99,24 @@ def warm(world, opened: bool = False) -> bool:
     started = opencl.warm(job, later=later if surface is not None else None)
     if started:
         _warmed.add(g)
-        prebuild(g)
+        prebuild(g, world)
     return started
 
 
-def prebuild(g) -> bool:
+def prebuild(g, world=None) -> bool:
     """Build the far surface's OpenCL program once the warm-up's job (the near view's
-    kernels) has ended, in a thread of its own at a lower priority (it takes leftover
-    CPU): a separate program whose build takes neither the queue nor the build lock,
-    and the far ring's tiles run on it seconds after a world opens instead of after
-    the streams have all they want (issue 28: far 128 to the horizon). Surface calls
-    run NumPy from now until then. Not beside the job: pocl (3.0, LLVM 14) compiles
-    one program or work-group function at a time in the whole process, other
-    cl.Contexts included, so the generator's build waited for the whole far build,
-    which at nice 10 on a busy machine took seconds (issue 28's timeline: both builds
-    ended together). False when the generator has no far surface."""
+    kernels) has ended and WORLD's streams have every chunk they want (none yet: at
+    once), in a thread of its own at a lower priority (it takes leftover CPU): a
+    separate program whose build takes neither the queue nor the build lock, and the
+    far ring's tiles run on it seconds after a world opens (New, Open: the build fits
+    in the user's pause before Show) instead of after the warm-up's later part (issue
+    28: far 128 to the horizon). Surface calls run NumPy from now until then. Not
+    beside the job: pocl (3.0, LLVM 14) compiles one program or work-group function
+    at a time in the whole process, other cl.Contexts included, so the generator's
+    build waited for the whole far build, which at nice 10 on a busy machine took
+    seconds (issue 28's timeline: both builds ended together); not while the near
+    view streams in: its CPU came from the near view's last batches, which bound the
+    horizon in the GUI anyway. False when the generator has no far surface."""
     fn = getattr(g, "prebuild_surface", None)
     if fn is None:
         return False
@@ -122,7 +125,7 @@ def prebuild(g) -> bool:
     def run():
         opencl._yield_cpu()
         try:
-            fn(before=_after_warm_up)
+            fn(before=lambda: _after_warm_up(world))
         except Exception:  # noqa: BLE001 - surface() builds it (and raises) when used
             pass
 
@@ -151,12 +154,17 @@ HELPER_WAIT_S = 2.0  # after the generator's kernels: the helper's ~1.5 s CPU is
 HELPER_NICE = 5
 
 
-def _after_warm_up() -> None:
-    """Returns once no warm-up job runs (opencl.warming: its LATER part not counted)."""
+def _after_warm_up(world=None) -> None:
+    """Returns once no warm-up job runs (opencl.warming: its LATER part not counted)
+    and WORLD's streams (if any) have all they want, or LATER_WAIT_S after that job."""
     import time
     from .. import opencl
     while opencl.warming():
         time.sleep(0.05)
+    end = time.monotonic() + LATER_WAIT_S
+    while world is not None and time.monotonic() < end and \
+            any(not s.idle for s in list(world.streams)):
+        time.sleep(0.1)
 
 
 LATER_WAIT_S = 60.0  # the far prebuild waits at most this long for busy streams

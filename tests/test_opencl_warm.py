@@ -125,10 +125,20 @@ def test_a_kernel_family_is_used_as_soon_as_the_warm_up_says_it_is_ready(fresh):
 
 
 def test_the_far_prebuild_waits_for_the_streams_of_the_world(fresh, tmp_path, monkeypatch):
-    """world.build.warm's later part (the far surface's build) starts only once every
-    stream of the world has all its chunks: pocl runs one in-order queue, and the far
-    batch and its build queued before the stream's kernels held the view back ~2 s."""
+    """world.build.warm's later part (the far surface's first batch) and its prebuild
+    (the far program) start only once every stream of the world has all its chunks:
+    pocl runs one in-order queue, and the far batch and its build queued before the
+    stream's kernels held the view back ~2 s; the build's CPU came from the near
+    view's last batches."""
+    import time
     from voxel_addon.world import Stream, World, build
+    built, real = [], opencl.build
+
+    def build_(source, options=(), alone=False):
+        if alone:  # the far program's
+            built.append([s.idle for s in w.streams])
+        return real(source, options, alone)
+    monkeypatch.setattr(opencl, "build", build_)
     with World.create(tmp_path / "w.sqlite", seed=7) as w:
         seen = []
         monkeypatch.setattr(w.generator, "warm_surface",
@@ -138,9 +148,61 @@ def test_the_far_prebuild_waits_for_the_streams_of_the_world(fresh, tmp_path, mo
             assert build.warm(w)
             assert s.wait_ready(120)
             opencl._warm["thread"].join(120)
+            end = time.monotonic() + 120
+            while not built and time.monotonic() < end:
+                time.sleep(0.05)
         st = opencl.warm_state()
         assert st["error"] is None and st["later_error"] is None, st
         assert seen == [[True]], seen
+        assert built == [[True]], built
         # the stream generated with OpenCL once the generator's kernels were ready,
         # before the warm-up had built meshing's
         assert st["ready"]["generation"] < st["ended_at"]
+
+
+def test_a_helper_process_puts_meshings_kernels_into_pocls_cache(cl_device, tmp_path, monkeypatch):
+    """opencl.helper runs meshing.vertex.warm_cache in a process of its own (pocl
+    compiles one thing at a time per process): the mesher's program with this
+    process's options and both greedy kernels' work-group code land in the kernel
+    cache, under the key this process's own build of that program then finds (no
+    second program folder), so world.build.warm's meshing step only loads them."""
+    from voxel_addon import resources
+    from voxel_addon.meshing import cl as mcl
+    monkeypatch.setenv("POCL_CACHE_DIR", str(tmp_path))  # (the helper's environment)
+    opts = list(mcl._options())
+    p = opencl.helper("meshing.vertex", "warm_cache", opts)
+    assert p is not None and p.wait(120) == 0
+    progs = {f.parent for f in tmp_path.rglob("program.bc")}
+    assert len(progs) == 1, progs
+    built = {f.name for f in next(iter(progs)).rglob("*.so")}
+    assert {"layers.so", "tile.so"} <= built, built
+    # pocl reads POCL_CACHE_DIR once per process: a process of its own builds here too
+    import subprocess
+    import sys
+    code = ("import sys, pyopencl as cl; from voxel_addon import opencl, resources; "
+            "cl.Program(opencl.context()[0], resources.kernel('mesh_greedy.cl'))"
+            ".build(options=sys.argv[1:])")
+    subprocess.run([sys.executable, "-c", code, *opts], check=True, timeout=120,
+                   env=dict(__import__("os").environ, PYTHONPATH=str(resources.ROOT)))
+    assert {f.parent for f in tmp_path.rglob("program.bc")} == progs
+
+
+def test_a_helper_that_cannot_start_is_none(monkeypatch):
+    import sys
+    monkeypatch.setattr(sys, "executable", "/nonexistent/blender")
+    assert opencl.helper("meshing.vertex", "warm_cache", []) is None
+
+
+def test_the_warm_up_ends_a_helper_that_takes_too_long(monkeypatch):
+    """build._finish: a stuck helper is waited for HELPER_WAIT_S at most, then killed
+    (the warm-up then builds meshing itself, the stream no longer held on NumPy)."""
+    import subprocess
+    import sys
+    import time
+    from voxel_addon.world import build
+    monkeypatch.setattr(build, "HELPER_WAIT_S", 0.3)  # (2 s by default)
+    p = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    t0 = time.monotonic()
+    build._finish(p)
+    assert p.poll() is not None and time.monotonic() - t0 < 10
+    build._finish(None)  # no helper: nothing to wait for

@@ -29,3 +29,23 @@ def test_gen_moves_exactly_when_the_chunks_change(world_path):
             assert step((16.0 * 10, 8.0))  # the view left: its chunks went
         finally:
             f.close()
+
+
+def test_the_last_chunks_are_taken_in_without_waiting_a_frames_time(world_path):
+    """LiveView._tick: after a frame the next redraw waits as long as the frame took
+    (the stream's workers' share of the CPU), but not once the stream has made every
+    chunk it wants (issue 28: the whole view came 0.45-1.3 s after the last batch)."""
+    from voxel_addon.blender.liveview.feed import Feed
+    from voxel_addon.blender.liveview.view import POLL_S, LiveView
+    lv = LiveView()
+    with World.create(world_path, seed=7, generator="flat") as w:
+        f = lv.feed = Feed(str(world_path), w, 1)
+        try:
+            lv._news, lv._due = True, time.perf_counter() + 30.0  # after a 30 s frame
+            f.stream.set_view(8.0, 8.0)
+            left = lv._tick()  # the stream still works: wait, polling
+            assert left is not None and 0 < left <= POLL_S
+            assert f.stream.wait_ready(60) and f.stream.queued
+            assert lv._tick() is None  # all made, some not drawn: redraw now
+        finally:
+            f.close()

@@ -1,7 +1,8 @@
 """The far surface's OpenCL program built in the background as a world opens (issue 28:
 far 128 to the horizon cold): far tiles run on NumPy's twin meanwhile (the same
 values), the build takes neither the build lock nor the queue, and the world's
-warm-up starts it once meshing's kernels are built, not after the streams."""
+warm-up starts it once its own job has built the near view's kernels (pocl compiles
+one thing at a time per process), not after the streams have all they want."""
 from __future__ import annotations
 
 import threading
@@ -66,13 +67,11 @@ def test_the_far_program_builds_while_another_build_holds_the_lock(fresh):
         assert done == [True]
 
 
-def test_the_warm_up_meshes_a_stored_view_first_then_builds_the_far_program(
-        fresh, tmp_path, monkeypatch):
+def test_the_warm_up_meshes_a_stored_view_first(fresh, tmp_path, monkeypatch):
     """build.warm on a file holding the chunks at the origin (an opened world: its
     view is stored): meshing's kernels first (all the stream needs: ready("meshing")),
-    then the far program in a thread of its own while the job builds the generator's
-    (pocl compiles one program at a time: meshing's waited behind the far build);
-    far tiles use it then."""
+    then the generator's at a lower priority; the far program after the whole job
+    (the next test)."""
     from voxel_addon.core import chunk as C
     from voxel_addon.core.blocks import REGISTRY
     from voxel_addon.world import World, build
@@ -87,38 +86,54 @@ def test_the_warm_up_meshes_a_stored_view_first_then_builds_the_far_program(
         try:
             assert build.warm(w)
             end = time.monotonic() + 60
-            while (g._surf or {}).get("opencl") is None and time.monotonic() < end:
+            while opencl.warming("meshing") and time.monotonic() < end:
                 time.sleep(0.05)
-            assert (g._surf or {}).get("opencl") is not None
             assert opencl.warming("generation") and not opencl.warming("meshing")
             assert opencl.pick(None, "meshing") == "opencl"
         finally:
             gate.set()
             opencl._warm["thread"].join(120)
         assert list(opencl.warm_state()["ready"]) == ["meshing", "generation"]
-    assert not build.prebuild(object())  # a generator without a far surface
+        end = time.monotonic() + 120  # the far build after the job: not into the next test
+        while (g._surf or {}).get("opencl") is None and time.monotonic() < end:
+            time.sleep(0.05)
+        assert (g._surf or {}).get("opencl") is not None
 
 
-def test_the_far_program_builds_after_meshing(fresh, tmp_path, monkeypatch):
-    """A new world (nothing stored): the warm-up builds the generator's kernels, then
-    meshing's; the far program waits for meshing's (pocl compiles one at a time)."""
+def test_the_world_warm_up_builds_the_far_program_after_its_job(fresh, tmp_path, monkeypatch):
+    """build.warm: far tiles run NumPy from the start (the far program is claimed),
+    and its build waits until the warm-up's own job (the near view's kernels) has
+    ended: pocl compiles one thing at a time per process, so the generator's build
+    waited behind the whole far build (issue 28). Then far tiles use it."""
     from voxel_addon.world import World, build
-    gate = threading.Event()
+    gate, seen = threading.Event(), []
+    real = opencl.build
+
+    def build_(source, options=(), alone=False):
+        if alone:  # the far program's (generation.cl.Runner of 1-column domains)
+            seen.append(opencl.warming())
+        return real(source, options, alone)
+    monkeypatch.setattr(opencl, "build", build_)
     with World.create(tmp_path / "w.sqlite", seed=7) as w:
         g = w.generator
         monkeypatch.setattr(g, "warm_opencl", lambda keys: gate.wait(120) and [])
         monkeypatch.setattr(g, "warm_surface", lambda: True)
         try:
             assert build.warm(w)
-            time.sleep(1.5)  # the far build (the kernel cache warm) takes < 0.5 s
-            assert (g._surf or {}).get("opencl") is None and opencl.warming("meshing")
+            end = time.monotonic() + 60
+            while not g._surf_held and time.monotonic() < end:
+                time.sleep(0.01)
+            assert g._surf_held and opencl.warming()  # claimed: far tiles on NumPy
+            time.sleep(1.0)  # (time enough for a build that would not wait)
+            assert seen == [] and (g._surf or {}).get("opencl") is None
         finally:
             gate.set()
             opencl._warm["thread"].join(120)
-        end = time.monotonic() + 60
+        end = time.monotonic() + 120
         while (g._surf or {}).get("opencl") is None and time.monotonic() < end:
             time.sleep(0.05)
-        assert (g._surf or {}).get("opencl") is not None
+        assert (g._surf or {}).get("opencl") is not None and seen == [False]
+    assert not build.prebuild(object())  # a generator without a far surface
 
 
 def test_far_tiles_alone_ask_for_a_redraw(tmp_path):

@@ -124,7 +124,8 @@ def _first(ctx, blender, gpu, distance, wait):
     yield (f"viewport_cold_whole_view_{tag}_s", R["whole_s"], "s",
            f"the same -> every chunk drawn; goal 5 s (load {R['load']:.1f})")
     yield (f"viewport_cold_whole_view_{tag}_cpu_s", R["whole_cpu_s"], "s",
-           "the same, process CPU (every thread: pocl's builds, llvmpipe's drawing)")
+           "the same, process CPU (every thread: pocl's builds, llvmpipe's drawing; "
+           f"helper processes' {R.get('children_cpu_s', 0.0):.2f} s included)")
     if R.get("warm_ended_s") is not None and not wait:
         yield (f"viewport_cold_after_warmup_{tag}_s", R["whole_s"] - R["warm_ended_s"], "s",
                "from the warm-up's end (every kernel built) to every chunk drawn")

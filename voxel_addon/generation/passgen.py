@@ -147,14 +147,15 @@ class PassGenerator(Generator):
         finally:
             self._surf_held = False  # launched (or failed: surface() then raises it)
 
-    def prebuild_surface(self) -> bool:
+    def prebuild_surface(self, before=None) -> bool:
         """Build surface()'s OpenCL program and kernel objects now, launching nothing
         (world.build.warm, as a world opens: the build takes no queue and no build
-        lock, so the near view's kernels never wait behind it); surface() calls asked
-        for no backend run NumPy (the same values) until warm_surface has launched it
-        once (world.build.warm's later part, when the streams have all they want).
-        False when there is nothing to build (no far surface, no device, built
-        already)."""
+        lock); surface() calls asked for no backend run NumPy (the same values) from
+        this call until warm_surface has launched it once (world.build.warm's later
+        part, when the streams have all they want). BEFORE() (if given) runs between
+        that claim and the build (world.build waits there for the near view's kernels:
+        pocl compiles one thing at a time). False when there is nothing to build (no
+        far surface, no device, built already)."""
         want = self.surface_wants()
         if self.surface_fields[0] not in want or not opencl.available():
             return False
@@ -165,6 +166,8 @@ class PassGenerator(Generator):
         try:
             from ..core import trace
             from .cl import Runner
+            if before is not None:
+                before()
             with trace.span("far.prebuild"):
                 run = Runner(prune(self.units, want), 1)
             with self._surf_lock:

@@ -120,6 +120,19 @@ class ChunkMesh:
     models: object = None  # Minecraft model quads drawn beside (world/models.py), or None
 
 
+def warm_cache(options) -> None:
+    """Build and launch the OpenCL mesher's kernels once, on one chunk, with the
+    program OPTIONS (cl._options() of the process that asks: the same source and
+    options then hit pocl's kernel cache there): run by opencl.helper in a process of
+    its own while the asking one builds the generator's kernels (world.build.warm)."""
+    opts = tuple(options)
+    cl._options = lambda: opts  # this process does nothing else
+    from ..core import chunk as C
+    b = C.empty(width=18, depth=18)
+    b[:, :, :40], b[:, :, 40] = 1, 2  # any blocks: the code built is the same
+    build_chunks(b, (0, 0), backend="opencl")
+
+
 def _check_region(region_h):
     if not (0 < region_h <= MAX_REGION_H and 256 % region_h == 0):
         raise VoxelError(f"region height must divide 256 and be at most {MAX_REGION_H}")

@@ -45,7 +45,8 @@ def warm(world, opened: bool = False) -> bool:
     (another world of the same generator and version reuses the build: cheap); False
     when nothing was started (no device, warmed already, another warm-up running).
     Cold, on 2 quiet cores: ~3.3 s for the generator (before clsource.called cut its
-    first launches' CPU ~3x), ~0.6 s meshing. Then, with
+    first launches' CPU ~3x), ~0.6 s meshing, which now builds beside the generator in
+    a helper process (opencl.helper) and only loads from pocl's cache here. Then, with
     OpenCL already the default (opencl.warm's `later`) and once the world's streams
     have made all they want (one pocl queue: the stream's kernels would wait behind
     it), the far surface's program (the generator's 2D passes, its own kernel
@@ -78,14 +79,26 @@ def warm(world, opened: bool = False) -> bool:
                     g.generate(keys)
             opencl.ready("generation")
             return
-        with trace.span("warm.generate"):
-            if hasattr(g, "warm_opencl"):  # the world's own generator (its kernel objects)
-                arrays = g.warm_opencl(keys)
-            else:
-                arrays = g.generate(keys)
+        from ..meshing import cl as mcl
+        # meshing's kernels build in a process of their own meanwhile (opencl.helper:
+        # pocl compiles one thing at a time per process); here they then load from
+        # pocl's cache
+        helper = opencl.helper("meshing.vertex", "warm_cache", list(mcl._options()),
+                               nice=HELPER_NICE)
+        try:
+            with trace.span("warm.generate"):
+                if hasattr(g, "warm_opencl"):  # the world's own generator (its kernels)
+                    arrays = g.warm_opencl(keys)
+                else:
+                    arrays = g.generate(keys)
+        except BaseException:
+            _finish(helper, 0.0)
+            raise
         # the stream generates with OpenCL from now on, while meshing's kernels build
         opencl.ready("generation")
         blocks = C.paste(zip(keys, arrays), -1, -1, 2, 2)
+        with trace.span("warm.helper", started=helper is not None):
+            _finish(helper)
         with CL_LOCK, trace.span("warm.mesh"):
             meshing.build_chunks(blocks[15:-15, 15:-15], (0, 0), backend="opencl")
 
@@ -105,7 +118,7 @@ def warm(world, opened: bool = False) -> bool:
     started = opencl.warm(job, later=later if surface is not None else None)
     if started:
         _warmed.add(g)
-        prebuild(g)
+        prebuild(g, world)
     return started
 
 
@@ -118,33 +131,68 @@ def _stored(world, keys):
     return None if any(x is None for x in got) else [x[0] for x in got]
 
 
-def prebuild(g) -> bool:
-    """Build the far surface's OpenCL program now, in a thread of its own at a lower
-    priority (it takes leftover CPU) once the warm-up has meshing's kernels: a separate
-    program whose build takes neither the queue nor the build lock, and the
-    far ring's tiles run on it seconds after a world opens instead of after the
-    streams have all they want (issue 28: far 128 to the horizon). Surface calls run
-    NumPy meanwhile. False when the generator has no far surface."""
+def prebuild(g, world=None) -> bool:
+    """Build the far surface's OpenCL program once the warm-up's job (the near view's
+    kernels) has ended and WORLD's streams have every chunk they want (none yet: at
+    once), in a thread of its own at a lower priority (it takes leftover CPU): a
+    separate program whose build takes neither the queue nor the build lock, and the
+    far ring's tiles run on it seconds after a world opens (New, Open: the build fits
+    in the user's pause before Show) instead of after the warm-up's later part (issue
+    28: far 128 to the horizon). Surface calls run NumPy from now until then. Not
+    beside the job: pocl (3.0, LLVM 14) compiles one program or work-group function
+    at a time in the whole process, other cl.Contexts included, so the generator's
+    build waited for the whole far build, which at nice 10 on a busy machine took
+    seconds (issue 28's timeline: both builds ended together); not while the near
+    view streams in: its CPU came from the near view's last batches, which bound the
+    horizon in the GUI anyway. False when the generator has no far surface."""
     fn = getattr(g, "prebuild_surface", None)
     if fn is None:
         return False
     from .. import opencl
 
     def run():
-        import time
         opencl._yield_cpu()
-        # pocl compiles one program at a time: meshing's (~1 s alone) waited 14 s
-        # behind this build under load, and the view's chunks with it (issue 28)
-        end = time.monotonic() + LATER_WAIT_S
-        while opencl.warming("meshing") and time.monotonic() < end:
-            time.sleep(0.05)
         try:
-            fn()
+            fn(before=lambda: _after_warm_up(world))
         except Exception:  # noqa: BLE001 - surface() builds it (and raises) when used
             pass
 
     threading.Thread(target=run, daemon=True, name="voxel-far-prebuild").start()
     return True
+
+
+def _finish(proc, wait: float | None = None) -> None:
+    """Wait for opencl.helper's process PROC (None: none) at most WAIT seconds
+    (HELPER_WAIT_S), then end it: what it has not put into pocl's cache by then is
+    built here (a busy machine starves the niced helper: then this process builds as
+    it did before)."""
+    if proc is None:
+        return
+    import subprocess
+    try:
+        proc.wait(HELPER_WAIT_S if wait is None else wait)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+
+
+HELPER_WAIT_S = 2.0  # after the generator's kernels: the helper's ~1.5 s CPU is mostly done
+# The helper's niceness: it takes the core the first frame and the first NumPy chunks
+# leave (at 0 the first frames of a fresh Blender, its shader compiles, came later)
+HELPER_NICE = 5
+
+
+def _after_warm_up(world=None) -> None:
+    """Returns once no warm-up job runs (opencl.warming: its LATER part not counted)
+    and WORLD's streams (if any) have all they want, or LATER_WAIT_S after that job."""
+    import time
+    from .. import opencl
+    while opencl.warming():
+        time.sleep(0.05)
+    end = time.monotonic() + LATER_WAIT_S
+    while world is not None and time.monotonic() < end and \
+            any(not s.idle for s in list(world.streams)):
+        time.sleep(0.1)
 
 
 LATER_WAIT_S = 60.0  # the far prebuild waits at most this long for busy streams

@@ -371,14 +371,26 @@ class LiveView:
     # ------------------------------------------------------------------ redraws
     def _want_redraw(self, after: float, news: bool = False) -> None:
         """A redraw AFTER seconds; news: not before the stream has new payloads (or an
-        error) for us, checked every POLL_S."""
+        error) for us, checked every POLL_S, and sooner than AFTER once the stream has
+        made every chunk it wants (`_tick`)."""
         import bpy
         self._news = news
+        self._due = time.perf_counter() + after
         if not self._timer_on:
             self._timer_on = True
-            bpy.app.timers.register(self._tick_fn, first_interval=after)
+            bpy.app.timers.register(self._tick_fn,
+                                    first_interval=min(after, POLL_S) if news else after)
 
     _news = False
+    _due = 0.0
+
+    def _streamed(self) -> bool:
+        """Whether the stream has every chunk it wants (no worker left to leave the
+        CPU to): the last chunks are drawn at once, not a frame's time later (issue
+        28: after a 0.5-1 s draft frame on llvmpipe the whole view waited as long
+        again with nothing left to make)."""
+        f = self.feed
+        return f is not None and f.stream.error is None and f.stream.idle
 
     def _nothing_new(self) -> bool:
         f = self.feed
@@ -407,6 +419,9 @@ class LiveView:
 
     def _tick(self):
         """Redraw while chunks stream in or a region still shows a draft frame."""
+        left = self._due - time.perf_counter()
+        if self._news and left > 0 and not self._streamed():
+            return min(left, POLL_S)  # the workers' share of the CPU (_draw)
         if self._nothing_new():
             return POLL_S  # (the timer stays on)
         self._timer_on = False

@@ -177,9 +177,11 @@ def _finish(proc, wait: float | None = None) -> None:
 
 
 HELPER_WAIT_S = 2.0  # after the generator's kernels: the helper's ~1.5 s CPU is mostly done
-# The helper's niceness: it takes the core the first frame and the first NumPy chunks
-# leave (at 0 the first frames of a fresh Blender, its shader compiles, came later)
-HELPER_NICE = 5
+# The helper's niceness: it takes only the CPU the first frames and the first NumPy
+# chunks leave. At 0 the first frames of a fresh Blender (its shader compiles) came
+# later; at 5, quiet, 2 of 5 cold Shows drew their first chunks at 3.0-3.6 s (frames of
+# 1.3 s each) against 0.8-1.4 s for the rest and at 19 (issue 28's goal: 2 s)
+HELPER_NICE = 19
 
 
 def _after_warm_up(world=None) -> None:

@@ -85,8 +85,8 @@ def test_params_change_the_world_and_still_agree(cl_device):
 def test_same_program_shares_its_kernels(cl_device):
     """Generators of one program (any seed) share one compiled Runner (a new world's
     source was written again: ~40 ms of its first batch, issue 29); another program
-    (a sea level one higher: only constants differ) has its own; concurrent batches of two seeds each get their own
-    seed's chunks."""
+    (a sea level one higher: only constants differ) has its own; concurrent batches
+    of two seeds each get their own seed's chunks."""
     import threading
     keys = [(0, 0), (5, -2)]
     a = make_generator("overworld", 3, None, "opencl")

@@ -82,6 +82,41 @@ def test_params_change_the_world_and_still_agree(cl_device):
     assert any(not np.array_equal(x, y) for x, y in zip(a, c))
 
 
+def test_same_program_shares_its_kernels(cl_device):
+    """Generators of one program (any seed) share one compiled Runner (a new world's
+    source was written again: ~40 ms of its first batch, issue 29); another program
+    (a sea level one higher: only constants differ) has its own; concurrent batches
+    of two seeds each get their own seed's chunks."""
+    import threading
+    keys = [(0, 0), (5, -2)]
+    a = make_generator("overworld", 3, None, "opencl")
+    b = make_generator("overworld", 4, None, "opencl")
+    c = make_generator("overworld", 3, {"sea_level": 63}, "opencl")
+    want = {g: make_generator("overworld", s, p, "numpy").generate(keys)
+            for g, s, p in ((a, 3, None), (b, 4, None), (c, 3, {"sea_level": 63}))}
+    assert any(not np.array_equal(x, y) for x, y in zip(want[a], want[c]))
+    c.generate(keys)
+    got, errors = {a: [], b: []}, []
+
+    def run(g):
+        try:
+            for _ in range(4):
+                got[g].append(g.generate(keys))
+        except BaseException as e:  # noqa: BLE001 (reported below)
+            errors.append(e)
+    ts = [threading.Thread(target=run, args=(g,)) for g in (a, b)]
+    for t in ts:
+        t.start()
+    for t in ts:
+        t.join()
+    assert not errors, errors
+    assert a._runner is b._runner and c._runner is not a._runner
+    for g in (a, b):
+        for res in got[g]:
+            assert all(np.array_equal(x, y) for x, y in zip(res, want[g]))
+    assert all(np.array_equal(x, y) for x, y in zip(c.generate(keys), want[c]))
+
+
 @pytest.mark.parametrize("backend", ["opencl", "numpy"])
 def test_seamless_any_order(backend, cl_device):
     """A chunk alone equals the same chunk in a batch, in any order; and a tree

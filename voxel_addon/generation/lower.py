@@ -6,7 +6,7 @@ cl.py (OpenCL C) run the units."""
 from __future__ import annotations
 
 from ..core import chunk as C
-from .lang import E, Program, const, tofloat
+from .lang import Body, E, Program, const, tofloat
 
 class Unit:
     """One kernel: a 2D domain (chunk + halo columns) or the 3D chunk volume.
@@ -40,6 +40,33 @@ def nodes(roots):
         stack.append((e, True))
         stack.extend((a, False) for a in reversed(e.a) if a.id not in seen)
     return order
+
+
+def shape(units) -> tuple:
+    """What the units compute, without node ids (a new per-process counter value each
+    time a program is built): equal for the same program built twice, so its compiled
+    kernels can be shared (cl.shared)."""
+    order, key = _shape([r for u in units for r in u.roots()])
+    num = {e.id: i for i, e in enumerate(order)}
+    return key, tuple((u.kind, tuple((n, num[e.id]) for n, e in u.outs.items()), u.halo,
+                       None if u.blk is None else num[u.blk.id], u.top, u.cell)
+                      for u in units)
+
+
+def _shape(roots):
+    order = nodes(roots)
+    num = {e.id: i for i, e in enumerate(order)}
+    return order, tuple((e.op, e.t, _payload(e.k), tuple(num[a.id] for a in e.a))
+                        for e in order)
+
+
+def _payload(k):
+    """A payload by value (repr, as `cse` keys them), a coarse Body by its expression."""
+    if isinstance(k, tuple):
+        return tuple(_payload(x) for x in k)
+    if isinstance(k, Body):
+        return "body", _shape([k.e])[1]
+    return repr(k)
 
 
 def _rebuild(roots, fn):

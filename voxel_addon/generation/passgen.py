@@ -72,8 +72,8 @@ class PassGenerator(Generator):
     def _run_on(self, keys, want, backend):
         if backend == "opencl":
             if self._runner is None:
-                from .cl import Runner
-                self._runner = Runner(self.units)
+                from .cl import shared
+                self._runner = shared(self.units)
             return self._runner.run(keys, self.seed32, self.perm, want)
         from .execute import Runner
         return Runner(self.units).run(keys, self.seed32, self.perm, want)

@@ -27,6 +27,15 @@ def _within(seconds, fn, *args):
     return out[0]
 
 
+def _gated(g, monkeypatch) -> threading.Event:
+    """G's warm-up job held in its generator step until the returned event is set
+    (and its far surface's warm launch a no-op)."""
+    gate = threading.Event()
+    monkeypatch.setattr(g, "warm_opencl", lambda keys: gate.wait(120) and [])
+    monkeypatch.setattr(g, "warm_surface", lambda: True)
+    return gate
+
+
 @pytest.fixture
 def fresh(monkeypatch, cl_device):
     """A process that has not warmed up yet (warm runs once per process)."""
@@ -75,14 +84,11 @@ def test_the_warm_up_meshes_a_stored_view_first(fresh, tmp_path, monkeypatch):
     from voxel_addon.core import chunk as C
     from voxel_addon.core.blocks import REGISTRY
     from voxel_addon.world import World, build
-    gate = threading.Event()
     blocks = np.zeros(C.SHAPE, np.uint16)
     blocks[:, :, :20] = REGISTRY.id("stone")
     with World.create(tmp_path / "w.sqlite", seed=7) as w:
         w.file.write_chunks([(k, blocks, None) for k in build.keys_of(-1, -1, 2, 2)])
-        g = w.generator
-        monkeypatch.setattr(g, "warm_opencl", lambda keys: gate.wait(120) and [])
-        monkeypatch.setattr(g, "warm_surface", lambda: True)
+        g, gate = w.generator, _gated(w.generator, monkeypatch)
         try:
             assert build.warm(w)
             end = time.monotonic() + 60
@@ -106,7 +112,7 @@ def test_the_world_warm_up_builds_the_far_program_after_its_job(fresh, tmp_path,
     ended: pocl compiles one thing at a time per process, so the generator's build
     waited behind the whole far build (issue 28). Then far tiles use it."""
     from voxel_addon.world import World, build
-    gate, seen = threading.Event(), []
+    seen = []
     real = opencl.build
 
     def build_(source, options=(), alone=False):
@@ -115,9 +121,7 @@ def test_the_world_warm_up_builds_the_far_program_after_its_job(fresh, tmp_path,
         return real(source, options, alone)
     monkeypatch.setattr(opencl, "build", build_)
     with World.create(tmp_path / "w.sqlite", seed=7) as w:
-        g = w.generator
-        monkeypatch.setattr(g, "warm_opencl", lambda keys: gate.wait(120) and [])
-        monkeypatch.setattr(g, "warm_surface", lambda: True)
+        g, gate = w.generator, _gated(w.generator, monkeypatch)
         try:
             assert build.warm(w)
             end = time.monotonic() + 60

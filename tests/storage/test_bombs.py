@@ -196,6 +196,9 @@ def test_the_first_id_past_the_table_is_a_damaged_chunk(world_path, identity):
         assert wf.read_chunk((0, 0))[0].max() == wf.registry_ids[n - 1]
         with pytest.raises(CorruptChunk, match="missing from block_types"):
             wf.read_chunk((1, 0))
+        many = dict(wf.read_many([(0, 0), (1, 0)]))  # the batch read: the same check
+        assert many[(0, 0)][0].max() == wf.registry_ids[n - 1]
+        assert isinstance(many[(1, 0)], CorruptChunk)
         # the world's loader (frames kept as read where the ids are the registry's)
         got = wf.fetch_many([(0, 0), (1, 0)], packed=True)
         b = got[(0, 0)][0]
@@ -246,6 +249,8 @@ def test_an_rle_end_hides_no_ids(world_path, how):
             wf.read_chunk((0, 0))
         assert "\n" not in str(e.value)
         got = wf.fetch_many([(0, 0)], packed=True)[(0, 0)]  # the world's loader
+        assert isinstance(got, CorruptChunk) and "\n" not in str(got)
+        got = dict(wf.read_many([(0, 0)]))[(0, 0)]
         assert isinstance(got, CorruptChunk) and "\n" not in str(got)
     finally:
         wf.close()

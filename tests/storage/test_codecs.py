@@ -136,3 +136,33 @@ def test_fetch_many_is_fetch_of_each(world_path):
         assert got[(5, 5)] == (None, None, None, 0)
     finally:
         wf.close()
+
+
+def test_read_many_is_read_chunk_of_each(world_path, monkeypatch):
+    """read_many (a statement per _MANY keys, each chunk decoded when the loop asks):
+    every key in order with read_chunk's pair, None or a damaged chunk's error; keys
+    spread over several statements (_MANY made 2)."""
+    from voxel_addon.storage import worldfile
+    with World.create(world_path, seed=1, generator="flat", loader=False) as w:
+        w.generate_area([(0, 0), (1, 0), (2, 0), (0, 1)])
+        w.set_block(17, 3, 40, "glass")
+        w.set_block(3, 20, 41, "glass")
+    db = sqlite3.connect(world_path)
+    db.execute("UPDATE chunks SET blocks=? WHERE cx=2 AND cy=0", (b"junk",))
+    db.commit()
+    db.close()
+    monkeypatch.setattr(worldfile, "_MANY", 2)
+    wf = WorldFile(world_path, readonly=True)
+    try:
+        keys = [(0, 1), (1, 0), (2, 0), (5, 5), (0, 0)]
+        got = list(wf.read_many(keys))
+        assert [k for k, _ in got] == keys
+        got = dict(got)
+        for k in ((0, 0), (1, 0), (0, 1)):
+            assert np.array_equal(got[k][0], wf.read_chunk(k)[0]) and got[k][1] is None
+            assert got[k][0].shape == chunk.SHAPE and got[k][0].flags.f_contiguous
+        assert got[(1, 0)][0][1, 3, 40] != got[(0, 0)][0][1, 3, 40]
+        assert got[(0, 1)][0][3, 4, 41] != got[(0, 0)][0][3, 4, 41]
+        assert isinstance(got[(2, 0)], CorruptChunk) and got[(5, 5)] is None
+    finally:
+        wf.close()

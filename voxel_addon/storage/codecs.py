@@ -117,17 +117,23 @@ _FIRST, _LAST = struct.Struct("<5s4xI"), struct.Struct("<I")
 def decode_u16(codec: str, blob, count: int, out: np.ndarray | None = None) -> np.ndarray:
     """decode() of `count` little-endian uint16 values into a new writable array, or
     into OUT (a flat uint16 array of `count`: a reader's scratch); no copy of the
-    decoded bytes where zstd writes into the array."""
-    if framed(codec, blob, 2 * count):
-        if out is None:
-            out = np.empty(count, np.uint16)
-        try:  # zstd stops at the size the frame declares
-            n = _zstd_pair()[1].stream_reader(blob).readinto(out)
-        except _zstd.ZstdError as e:
-            raise ValueError(str(e)) from None
-        if n != 2 * count:
-            raise ValueError(f"decoded {n} bytes, expected {2 * count}")
-        return out
+    decoded bytes where zstd writes into the array. (Every chunk read runs this:
+    its Python is kept to a few calls, issue 29.)"""
+    if codec == "zstd" and _WHOLE and isinstance(blob, _BUFFERS):
+        try:  # a frame declaring another size takes the general path (and fails there)
+            whole = _zstd.frame_content_size(blob) == 2 * count
+        except _zstd.ZstdError:
+            whole = False
+        if whole:
+            if out is None:
+                out = np.empty(count, np.uint16)
+            try:  # zstd stops at the size the frame declares
+                n = _dctx().stream_reader(blob).readinto(out)
+            except _zstd.ZstdError as e:
+                raise ValueError(str(e)) from None
+            if n != 2 * count:
+                raise ValueError(f"decoded {n} bytes, expected {2 * count}")
+            return out
     got = np.frombuffer(decode(codec, blob, 2 * count), "<u2")
     if out is None:
         return got.astype(np.uint16)
@@ -135,13 +141,20 @@ def decode_u16(codec: str, blob, count: int, out: np.ndarray | None = None) -> n
     return out
 
 
+def _dctx():
+    try:
+        return _local.d
+    except AttributeError:
+        _local.d = _zstd_pair()[1]
+        return _local.d
+
+
 def framed(codec: str, blob, size: int) -> bool:
     """Whether BLOB is a zstd frame declaring `size` bytes that this machine's
     arrays can take as is (zstd installed, little-endian): what decode_u16 writes
     straight into an array, and what a chunk may keep in memory as read
     (core.chunk.Packed.frame) once it decoded."""
-    if codec != "zstd" or _zstd is None or not LITTLE or \
-            not isinstance(blob, (bytes, bytearray, memoryview)):
+    if codec != "zstd" or not _WHOLE or not isinstance(blob, _BUFFERS):
         return False
     try:
         return _zstd.frame_content_size(blob) == size
@@ -150,6 +163,8 @@ def framed(codec: str, blob, size: int) -> bool:
 
 
 LITTLE = sys.byteorder == "little"
+_WHOLE = _zstd is not None and LITTLE  # zstd may write straight into our arrays
+_BUFFERS = (bytes, bytearray, memoryview)
 
 
 def decode(codec: str, blob: bytes, size: int) -> bytes:

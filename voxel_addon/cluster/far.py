@@ -51,23 +51,20 @@ def _inputs(key, store, file, made: dict):
     sample box, the summaries of those it samples (made here and stored when the
     file has none, as the builder does), the edits over its cells."""
     from ..far import grid, tiles
-    from ..storage import CorruptChunk
     X, Y = grid.columns(key)
     ck = np.stack([X >> 4, Y >> 4], -1).reshape(-1, 2)
     have = store.chunks_in(int(ck[:, 0].min()), int(ck[:, 1].min()),
                            int(ck[:, 0].max()), int(ck[:, 1].max()))
-    cols = {}
+    cols, read = {}, []
     for k in {tuple(v) for v in ck.tolist()} & have:
         col = made.get(k) or store.columns(k)
         if col is None:
-            try:
-                got = file.read_chunk(k)
-            except CorruptChunk:
-                got = None  # the builder skips it too (tiles.build: read_chunk -> None)
-            if got is None:
-                continue
-            col = made[k] = tiles.summary(got[0])
-        cols[k] = col
+            read.append(k)
+        else:
+            cols[k] = col
+    for k, got in file.read_many(read):  # each array dropped once summed up
+        if isinstance(got, tuple):  # damaged or gone: the builder skips it too
+            cols[k] = made[k] = tiles.summary(got[0])
     s = grid.spacing(key[0])
     x0, y0 = grid.origin(key)
     bx0, by0 = x0 - s, y0 - s

@@ -22,6 +22,7 @@ import os
 import sqlite3
 import threading
 import time
+from itertools import chain
 from pathlib import Path
 
 import numpy as np
@@ -318,6 +319,7 @@ class WorldFile(Decoding):
         the stored blob (checked by a decode into this thread's scratch, not kept):
         what a world keeps in memory, with no array made and packed; light as
         (array, its frame) (Chunk.light_read). Keys: (cx, cy) tuples of ints."""
+        keys = list(keys)
         rows = self._rows(self._fetch_sql, keys)
         out = {}
         for k in keys:
@@ -334,6 +336,7 @@ class WorldFile(Decoding):
         loop asks for it (a caller that drops each array before the next gets the
         same memory again: 32 fresh 128 KB arrays kept cost page faults, ~4x the
         read). Keys: (cx, cy) tuples of ints."""
+        keys = list(keys)
         rows = self._rows(_READ_MANY, keys)
         decode = self._decode
         for k in keys:
@@ -347,16 +350,17 @@ class WorldFile(Decoding):
                 got = e
             yield k, got
 
-    def _rows(self, template: str, keys) -> dict:
+    def _rows(self, template: str, keys: list) -> dict:
         """{(cx, cy): the rest of its row} of TEMPLATE's statement for every key,
         read at one instant, a statement per _MANY keys."""
         got = {}
-        keys = list(keys)
+        if not keys:
+            return got
         with self.reading():
             for i in range(0, len(keys), _MANY):
                 part = keys[i:i + _MANY]
                 for row in self.db.execute(_sql(template, len(part)),
-                                           [c for k in part for c in k]):
+                                           list(chain.from_iterable(part))):
                     got[row[0], row[1]] = row[2:]
         return got
 

@@ -222,11 +222,14 @@ def _rle_end(frame: bytes, zeros: int, byte: int = 0) -> bytes:
                      (3 | zeros << 3).to_bytes(3, "little"), bytes([byte])))
 
 
-@pytest.mark.parametrize("how", ["ids under the zeros", "zeros of another byte"])
+@pytest.mark.parametrize("how", ["ids under the zeros", "zeros of another byte",
+                                 "an id just below zeros that end mid-layer"])
 def test_an_rle_end_hides_no_ids(world_path, how):
     """The block-id check skips the zeros a frame ends with (codecs.zero_tail): a
     frame that claims such an end over ids past the table, or ends with another
-    byte (0x0505 ids), is still a damaged chunk, in one line."""
+    byte (0x0505 ids), is still a damaged chunk, in one line; so is a well-formed
+    one whose zeros start inside a layer, an id past the table just below them
+    (the check skips whole layers of zeros only)."""
     with World.create(world_path, seed=1, generator="flat", loader=False) as w:
         w.generate_area([(0, 0)])
     ids = np.zeros(chunk.VOLUME, "<u2")
@@ -235,10 +238,15 @@ def test_an_rle_end_hides_no_ids(world_path, how):
     if how == "ids under the zeros":  # the first block already holds all SIZE bytes
         ids[-100] = 60000
         blob = _rle_end(zstandard.ZstdCompressor().compress(ids.tobytes()), zeros)
+    elif how.startswith("an id just below"):
+        zeros = 2 * (chunk.VOLUME - 5001)  # ends 1 value into layer 19
+        ids[5000] = 60000
+        blob = _rle_end(zstandard.ZstdCompressor().compress(ids[:5001].tobytes()), zeros)
+        assert codecs.decode("zstd", blob, SIZE) == ids.tobytes()  # a sound frame
     else:
         blob = _rle_end(zstandard.ZstdCompressor().compress(ids[:-zeros // 2].tobytes()),
                         zeros, 5)
-    assert codecs.zero_tail(blob) == (zeros if how == "ids under the zeros" else 0)
+    assert codecs.zero_tail(blob) == (0 if how == "zeros of another byte" else zeros)
     db = sqlite3.connect(world_path)
     db.execute("UPDATE chunks SET codec='zstd', blocks=? WHERE cx=0 AND cy=0", (blob,))
     db.commit()

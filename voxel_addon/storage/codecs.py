@@ -115,10 +115,10 @@ _FIRST, _LAST = struct.Struct("<5s4xI"), struct.Struct("<I")
 
 
 def decode_u16(codec: str, blob, count: int, out: np.ndarray | None = None) -> np.ndarray:
-    """decode() of `count` little-endian uint16 values into a new writable array, or
-    into OUT (a flat uint16 array of `count`: a reader's scratch); no copy of the
-    decoded bytes where zstd writes into the array. (Every chunk read runs this:
-    its Python is kept to a few calls, issue 29.)"""
+    """decode() of `count` little-endian uint16 values into a new writable flat array,
+    or into OUT (a C-contiguous uint16 array of `count` values: a new chunk's, a
+    reader's scratch); no copy of the decoded bytes where zstd writes into the
+    array. (Every chunk read runs this: its Python is kept to a few calls, issue 29.)"""
     if codec == "zstd" and _WHOLE and isinstance(blob, _BUFFERS):
         try:  # a frame declaring another size takes the general path (and fails there)
             whole = _zstd.frame_content_size(blob) == 2 * count
@@ -127,8 +127,12 @@ def decode_u16(codec: str, blob, count: int, out: np.ndarray | None = None) -> n
         if whole:
             if out is None:
                 out = np.empty(count, np.uint16)
+            try:
+                d = _local.d
+            except AttributeError:
+                d = _local.d = _zstd_pair()[1]
             try:  # zstd stops at the size the frame declares
-                n = _dctx().stream_reader(blob).readinto(out)
+                n = d.stream_reader(blob).readinto(out)
             except _zstd.ZstdError as e:
                 raise ValueError(str(e)) from None
             if n != 2 * count:
@@ -137,16 +141,8 @@ def decode_u16(codec: str, blob, count: int, out: np.ndarray | None = None) -> n
     got = np.frombuffer(decode(codec, blob, 2 * count), "<u2")
     if out is None:
         return got.astype(np.uint16)
-    out[...] = got
+    out.reshape(-1)[...] = got
     return out
-
-
-def _dctx():
-    try:
-        return _local.d
-    except AttributeError:
-        _local.d = _zstd_pair()[1]
-        return _local.d
 
 
 def framed(codec: str, blob, size: int) -> bool:

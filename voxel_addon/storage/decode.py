@@ -17,10 +17,10 @@ _N, _BYTES = C.VOLUME, 2 * C.VOLUME
 _u16, _tail = codecs.decode_u16, codecs.zero_tail
 
 
-def _flat_scratch() -> np.ndarray:
-    """This thread's scratch chunk array, flat (a frame kept as read decodes here
-    only to be checked: no fresh 128 KB, no page faults)."""
-    return C.scratch(C.SHAPE, np.dtype(np.uint16)).reshape(-1, order="F")
+def _scratch() -> np.ndarray:
+    """This thread's scratch chunk array as (HEIGHT, SIZE, SIZE) in C order (a frame
+    kept as read decodes here only to be checked: no fresh 128 KB, no page faults)."""
+    return C.scratch(C.SHAPE, np.dtype(np.uint16)).T
 
 
 class CorruptChunk(VoxelError):
@@ -32,7 +32,7 @@ class Decoding:
     registry's) and `_to_reg` (file id -> registry id)."""
 
     def _fetched(self, key, row, packed: bool = False):
-        v, codec, blob, dblob, lcodec, lblob = row
+        _, _, v, codec, blob, dblob, lcodec, lblob = row  # (cx, cy, ...)
         if codec is None:
             return None, None, None, v
         blocks, data = self._decode(key, codec, blob, dblob, packed)
@@ -42,18 +42,18 @@ class Decoding:
         # PACKED: keep the frame as read (what it decodes to is the chunk's blocks as
         # is: the file's ids are the registry's); decoded only to check it
         frame = packed and self._identity and codecs.framed(codec, blob, _BYTES)
-        try:  # decoded into new arrays: linear order is the (16, 16, 256) F order
-            blocks = _u16(codec, blob, _N, _flat_scratch() if frame else None)
+        try:  # into new (HEIGHT, SIZE, SIZE) C-order arrays: .T is the chunk's shape
+            blocks = _u16(codec, blob, _N, _scratch() if frame else np.empty(_ZYX, np.uint16))
             data = None if dblob is None else _u16(codec, dblob, _N).reshape(_ZYX).T
         except ValueError as e:
             raise CorruptChunk(f"chunk ({key[0]}, {key[1]}) in {self.path} is damaged ({e}); "
                                "it was left untouched") from None
         # checked always: tables are indexed by id (the lookup checks what it maps);
-        # not the zeros (air) a frame says it ends with: ~70 % of a chunk's values
+        # not the layers of zeros (air) a frame says it ends with: ~70 % of a chunk
         if self._identity:
-            n = _N - (_tail(blob) >> 1)
-            below = blocks[:n]
-            ok = n == 0 or below.item(_ARGMAX(below)) < len(self._to_reg)
+            layers = -(-(_N - (_tail(blob) >> 1)) // _LAYER)
+            below = blocks[:layers]
+            ok = layers == 0 or below.item(_ARGMAX(below)) < len(self._to_reg)
         else:
             try:
                 blocks, ok = self._to_reg[blocks], True
@@ -63,8 +63,8 @@ class Decoding:
             raise CorruptChunk(f"chunk ({key[0]}, {key[1]}) in {self.path} has block ids "
                                "missing from block_types; it was left untouched")
         if frame:
-            return C.Packed.frame(blob, C.SHAPE, np.uint16, -(-n // _LAYER)), data
-        return blocks.reshape(_ZYX).T, data  # (16, 16, 256) in F order: a view
+            return C.Packed.frame(blob, C.SHAPE, np.uint16, layers), data
+        return blocks.T, data  # (16, 16, 256) in F order: a view
 
     def decode_row(self, row):
         """(blocks, data-or-None) in registry ids of a row from encode_chunk."""

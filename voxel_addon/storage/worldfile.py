@@ -38,18 +38,17 @@ from .schema import (APP_ID, FORMAT_VERSION, LIGHT_TABLE, SCHEMA, VERSION_TABLE,
 from .transactions import Reading, Transaction
 
 _MANY = 64  # keys per statement of a batch read (128 parameters: any SQLite's limit)
-_READ_MANY = ("SELECT k.cx, k.cy, c.codec, c.blocks, c.data FROM {k} k "
-              "LEFT JOIN chunks c ON c.cx = k.cx AND c.cy = k.cy")
+_READ_MANY = ("SELECT k.column1, k.column2, c.codec, c.blocks, c.data FROM {k} k "
+              "LEFT JOIN chunks c ON c.cx = k.column1 AND c.cy = k.column2")
 
 
 @functools.lru_cache(maxsize=256)
 def _sql(template: str, n: int) -> str:
-    """TEMPLATE with {k} as a table (cx, cy) of n bound keys; n = 0: of one, bound
-    as (cx, cy)."""
+    """TEMPLATE with {k} as a table of n bound keys (columns column1, column2: cx,
+    cy, as SQLite names a VALUES table's); n = 0: of one, bound as (cx, cy)."""
     if n == 0:
-        return template.format(k="(SELECT ? AS cx, ? AS cy)")
-    return template.format(k="(SELECT column1 AS cx, column2 AS cy FROM (VALUES " +
-                           ", ".join(["(?, ?)"] * n) + "))")
+        return template.format(k="(SELECT ? AS column1, ? AS column2)")
+    return template.format(k="(VALUES " + ", ".join(["(?, ?)"] * n) + ")")
 
 
 class WorldFile(Decoding):
@@ -91,15 +90,16 @@ class WorldFile(Decoding):
         self._map_ids(file_names)
         self._light_table(readonly)
         self._version_table(readonly)
-        # {k}: the keys' table (cx, cy): one key, or many (_keys)
+        # {k}: the keys' table (column1, column2 = cx, cy): one key or many (_sql)
         self._fetch_sql = (
-            "SELECT k.cx, k.cy, {v}, c.codec, c.blocks, c.data, {l} FROM {{k}} k "
-            "LEFT JOIN chunks c ON c.cx = k.cx AND c.cy = k.cy {vj} {lj}").format(
+            "SELECT k.column1, k.column2, {v}, c.codec, c.blocks, c.data, {l} FROM {{k}} k "
+            "LEFT JOIN chunks c ON c.cx = k.column1 AND c.cy = k.column2 {vj} {lj}").format(
             v="COALESCE(v.v, 0)" if self._has_versions else "0",
-            vj="LEFT JOIN chunk_versions v ON v.cx = k.cx AND v.cy = k.cy"
+            vj="LEFT JOIN chunk_versions v ON v.cx = k.column1 AND v.cy = k.column2"
             if self._has_versions else "",
             l="l.codec, l.light" if self._has_light else "NULL, NULL",
-            lj="LEFT JOIN light l ON l.cx = k.cx AND l.cy = k.cy" if self._has_light else "")
+            lj="LEFT JOIN light l ON l.cx = k.column1 AND l.cy = k.column2"
+            if self._has_light else "")
 
     # ---- creation and checks -------------------------------------------------
     @classmethod
@@ -309,7 +309,7 @@ class WorldFile(Decoding):
         Light is None when missing or damaged; a damaged chunk raises CorruptChunk."""
         with self._lock:
             row = self.db.execute(_sql(self._fetch_sql, 0), tuple(key)).fetchone()
-        return self._fetched(key, row[2:])
+        return self._fetched(key, row)
 
     def fetch_many(self, keys, packed: bool = False) -> dict:
         """{key: fetch(key)} of `keys` read at one instant (one read transaction),
@@ -340,7 +340,7 @@ class WorldFile(Decoding):
         rows = self._rows(_READ_MANY, keys)
         decode = self._decode
         for k in keys:
-            codec, blob, dblob = rows[k]
+            _, _, codec, blob, dblob = rows[k]
             if codec is None:
                 yield k, None
                 continue
@@ -351,17 +351,16 @@ class WorldFile(Decoding):
             yield k, got
 
     def _rows(self, template: str, keys: list) -> dict:
-        """{(cx, cy): the rest of its row} of TEMPLATE's statement for every key,
+        """{(cx, cy): its row (cx, cy first)} of TEMPLATE's statement for every key,
         read at one instant, a statement per _MANY keys."""
         got = {}
-        if not keys:
-            return got
-        with self.reading():
-            for i in range(0, len(keys), _MANY):
-                part = keys[i:i + _MANY]
+        parts = [keys[i:i + _MANY] for i in range(0, len(keys), _MANY)]
+        # one statement reads at one instant by itself (BEGIN and END cost more)
+        with self.reading() if len(parts) > 1 else self._lock:
+            for part in parts:
                 for row in self.db.execute(_sql(template, len(part)),
                                            list(chain.from_iterable(part))):
-                    got[row[0], row[1]] = row[2:]
+                    got[row[0], row[1]] = row
         return got
 
     def version(self, key) -> int:

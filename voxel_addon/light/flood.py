@@ -139,4 +139,42 @@ def levels_lanes(fc: np.ndarray, cost: np.ndarray, seeds: np.ndarray, vals: np.n
     return np.concatenate(lanes), np.concatenate(values).astype(np.uint8)
 
 
+def spread(fc: np.ndarray, cost: np.ndarray, seed: int, val: int, sy: int, sz: int):
+    """`levels` for one component from one seed voxel at `val` (a lamp placed: its
+    light only rises, from it outwards): all six directions at once per level, on
+    flat uint8 `fc` (value + cost, >= 16 never rises) and `cost`. Returns the written
+    voxels and their values (each voxel once, brightest first)."""
+    offs = np.array([-1, 1, -sy, sy, -sz, sz], np.int64)
+    buckets: list = [[] for _ in range(model.MAX + 1)]
+    buckets[val].append(np.array([seed], np.int64))
+    out, values = [], []
+    owner = np.empty(fc.size, np.int32)  # scratch, read only where just written
+    ramp = np.arange(4096, dtype=np.int32)
+    for v in range(val, 1, -1):
+        if not buckets[v]:
+            continue
+        idx = buckets[v][0] if len(buckets[v]) == 1 else np.concatenate(buckets[v])
+        n = (idx[:, None] + offs).ravel()
+        n = n[fc[n] < v]
+        if not n.size:
+            continue
+        i = ramp[:n.size] if n.size <= ramp.size else np.arange(n.size, dtype=np.int32)
+        owner[n] = i
+        n = n[owner[n] == i]  # once each
+        fc[n] = v
+        nv = v - cost[n].astype(np.int16)
+        out.append(n)
+        values.append(nv)
+        if (nv == v - 1).all():  # plain air
+            if v > 2:
+                buckets[v - 1].append(n)
+            continue
+        for k in np.unique(nv).tolist():
+            if k > 1:
+                buckets[k].append(n[nv == k])
+    if not out:
+        return np.zeros(0, np.int64), np.zeros(0, np.int16)
+    return np.concatenate(out), np.concatenate(values)
+
+
 assert model.OPAQUE_COST > model.MAX  # v - OPAQUE_COST < 0: such voxels never rise

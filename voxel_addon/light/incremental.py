@@ -75,7 +75,7 @@ def _lut() -> np.ndarray:
     return model.unpack(np.arange(1 << 16, dtype=np.uint16)).view(np.uint32).reshape(-1)
 
 
-STATS = {"local": 0, "sparse": 0, "box": 0}  # how edits were relit (tests check each runs)
+STATS = {"local": 0, "sparse": 0, "lamp": 0, "box": 0}  # how edits were relit (tests check each runs)
 SPARSE_BUDGET = 200  # lane writes a sparse relight may make before it leaves it to the box
 SPARSE_EMISSION = 3  # a lamp placed or removed floods thousands of voxels: box at once
 SHIFTS = (0, 4, 8, 12)
@@ -136,13 +136,14 @@ class _Beyond(Exception):
     """_sparse with `part` reached the arrays' side faces."""
 
 
-def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False):
+def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False, lanes=(0, 1, 2, 3)):
     """The box path's relight (removal, then a brightest-first refill) in plain Python
     on the voxels it touches, for an edit whose light barely moves (leaves or water on
     top: the daylight of the column below p changes); None (nothing written) once it
     has written SPARSE_BUDGET lanes or, with `part` (see update), read a voxel on the
     arrays' side faces (the voxels it reads are those whose neighbours it visits).
-    Its per-voxel reads are dict hits inlined in the loops (calls cost more here)."""
+    Its per-voxel reads are dict hits inlined in the loops (calls cost more here).
+    `lanes`: the components it relights (the others stay as they are: _lamp)."""
     cost_l, _, _, emis_l = model.lists()
     w, h, zs = blocks.shape
     OPAQUE = model.OPAQUE_COST
@@ -195,19 +196,22 @@ def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False):
 
     p = (x, y, z)
     column = [(x, y, k) for k in range(zc, z)]
-    seeds = [(q, c) for q in near(p) for c in range(4)]
+    seeds = [(q, c) for q in near(p) for c in lanes]
+    day = 3 in lanes
     writes = 0
     if brighter:
-        for q in column:
+        for q in column if day else ():
             lq = get(q)
             lq[3] = max(lq[3], int(now[q[2]]))
         lp = get(p)
         e = emis_l[bitem(p)] + [int(now[z])]
-        lp[:] = e if (costs.get(p) or cost(p)) == OPAQUE else [max(a, b) for a, b in zip(lp, e)]
-        seeds += [(q, 3) for q in column] + [(p, c) for c in range(4)]
+        top = (costs.get(p) or cost(p)) == OPAQUE
+        for c in lanes:
+            lp[c] = e[c] if top else max(lp[c], e[c])
+        seeds += [(q, 3) for q in column if day] + [(p, c) for c in lanes]
     else:  # removal from the changed lanes, as _remove does
         stack = []
-        gone = [(q, 3) for q in column] + [(p, c) for c in range(4)]
+        gone = [(q, 3) for q in column if day] + [(p, c) for c in lanes]
         for q, c in gone:
             lq = get(q)
             if lq[c] > 1:
@@ -326,6 +330,13 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
         if box is not None:
             STATS["sparse"] += 1
             return box
+    if pval is not None:
+        box = _lamp(blocks, light, x, y, z, pval, part)
+    else:
+        box = _placed(blocks, light, x, y, z, old, new, now, zc, brighter, part)
+    if box is not None:
+        STATS["lamp"] += 1
+        return box
     if part:
         return None
     STATS["box"] += 1
@@ -396,6 +407,92 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
     bz = slice(sz.start + z0 - 2, sz.start + z1 - 2)
     light[bx, by, bz] = model.pack(f[z0:z1, y0:y1, x0:x1]).T
     return bx, by, bz
+
+
+LAMP_LANES = 1  # rising components a _lamp floods one by one (more: the box, all at once)
+
+
+def _lamp(blocks, light, x, y, z, pval, part=False):
+    """The box path for p's new light `pval` from _local (only p changed; its rising
+    components spread, nothing else falls: a lamp placed) with one lane and no
+    removal: each rising component floods from p alone over the voxels within its
+    reach (value v: v - 1 steps), the rest of the light as it is. Writes p and the
+    raised lanes, returns their bounds; None (nothing written) for more rising
+    components than LAMP_LANES, or with `part` where the reach meets the arrays'
+    side faces."""
+    w, h, zs = blocks.shape
+    lp = light.item(x, y, z)
+    rise = [(k, v) for k, v in enumerate(pval) if v > (lp >> SHIFTS[k]) & 15]
+    if len(rise) > LAMP_LANES:
+        return None
+    r = max([v for _, v in rise] + [1]) - 1
+    if part and not _inside(blocks.shape, x, y, r):
+        return None
+    light[x, y, z] = pval[0] | pval[1] << 4 | pval[2] << 8 | pval[3] << 12
+    lo, hi = [x, y, z], [x + 1, y + 1, z + 1]
+    if not rise or r < 1:
+        return tuple(slice(a, b) for a, b in zip(lo, hi))
+    sx = slice(max(x - r, 0), min(x + r + 1, w))
+    sy = slice(max(y - r, 0), min(y + r + 1, h))
+    sz = slice(max(z - r, 0), min(z + r + 1, zs))
+    nx, ny, nz = sx.stop - sx.start, sy.stop - sy.start, sz.stop - sz.start
+    gy, gz = nx + 2, (nx + 2) * (ny + 2)  # a one-voxel rim that never rises
+    cost = np.full((nz + 2, ny + 2, nx + 2), model.OPAQUE_COST, np.uint8)
+    cost[1:-1, 1:-1, 1:-1] = np.take(_cost16(), blocks[sx, sy, sz].T, mode="clip")
+    near = light[sx, sy, sz].T
+    p = (z - sz.start + 1) * gz + (y - sy.start + 1) * gy + x - sx.start + 1
+    for k, v in rise:
+        fc = cost.copy()  # value + cost: >= 16 never rises (opaque, the rim)
+        fc[1:-1, 1:-1, 1:-1] += ((near >> SHIFTS[k]) & 15).astype(np.uint8)
+        fc = fc.reshape(-1)
+        fc[p] = 255  # p holds its exact value
+        n, nv = flood.spread(fc, cost.reshape(-1), p, v, gy, gz)
+        if not n.size:
+            continue
+        i = n % gy + (sx.start - 1)
+        j = n // gy % (ny + 2) + (sy.start - 1)
+        l = n // gz + (sz.start - 1)
+        m = ~np.uint16(15 << SHIFTS[k])
+        light[i, j, l] = (light[i, j, l] & m) | (nv.astype(np.uint16) << SHIFTS[k])
+        lo = [min(a, int(b.min())) for a, b in zip(lo, (i, j, l))]
+        hi = [max(a, int(b.max()) + 1) for a, b in zip(hi, (i, j, l))]
+    return tuple(slice(a, b) for a, b in zip(lo, hi))
+
+
+def _placed(blocks, light, x, y, z, old, new, now, zc, brighter, part):
+    """A lamp set where no colour passed (an opaque emitter in place of a block that
+    emits nothing, p's colours at most 1 before): its daylight falls (p's and the
+    column's below: _sparse on that lane alone) and its colours rise from p alone
+    (_lamp); the components are independent. Nothing written and None otherwise, or
+    where _sparse would leave it to the box."""
+    cost_l, _, _, emis_l = model.lists()
+    e = emis_l[new]
+    lp = light.item(x, y, z)
+    if (any(emis_l[old]) or cost_l[new] != model.OPAQUE_COST
+            or any((lp >> SHIFTS[k]) & 15 > 1 for k in range(3))
+            or sum(v > (lp >> SHIFTS[k]) & 15 for k, v in enumerate(e)) > LAMP_LANES
+            or part and not _inside(blocks.shape, x, y, max(e) - 1)):
+        return None
+    try:
+        box = _sparse(blocks, light, x, y, z, old, now, zc, brighter, part, lanes=(3,))
+    except _Beyond:
+        return None
+    if box is None:
+        return None
+    lamp = _lamp(blocks, light, x, y, z, e + [light.item(x, y, z) >> 12], part)
+    return tuple(slice(min(a.start, b.start), max(a.stop, b.stop)) if a.stop > a.start
+                 else b for a, b in zip(box, lamp))
+
+
+def _inside(shape, x, y, r) -> bool:
+    """Whether columns within r of (x, y) stay off the arrays' side faces."""
+    return 0 < x - r and x + r < shape[0] - 1 and 0 < y - r and y + r < shape[1] - 1
+
+
+@lru_cache(maxsize=1)
+def _cost16() -> np.ndarray:
+    """Per block id its cost capped at 16 (_lamp's value + cost stays in a uint8)."""
+    return np.minimum(model.tables()[0], model.MAX + 1).astype(np.uint8)
 
 
 def _remove(f, cost, lanes, blocks, base, strides):

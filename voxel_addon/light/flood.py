@@ -15,6 +15,8 @@ of a small box at once (the incremental relight).
 """
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 
 from . import model
@@ -94,6 +96,19 @@ def edge(fc: np.ndarray, cost: np.ndarray, offs, lo: int, hi: int):
     return i + lo, v[i]
 
 
+_local = threading.local()
+
+
+def _scratch(size: int):
+    """This thread's int32 scratch of at least SIZE (stale values) and a ramp 0..4095:
+    a fresh owner array per relight (144-576 KB) cost its page faults every edit."""
+    a = getattr(_local, "owner", None)
+    if a is None or a.size < size:
+        a = _local.owner = np.empty(max(size, 1 << 16), np.int32)
+        _local.ramp = np.arange(4096, dtype=np.int32)
+    return a, _local.ramp
+
+
 def levels_lanes(fc: np.ndarray, cost: np.ndarray, seeds: np.ndarray, vals: np.ndarray,
                  sy: int, sz: int):
     """`levels` for all four components at once on flat uint8 lanes (4 per voxel, R,
@@ -110,8 +125,7 @@ def levels_lanes(fc: np.ndarray, cost: np.ndarray, seeds: np.ndarray, vals: np.n
         if v > 1:
             buckets[v].append(seeds[vals == v])
     lanes, values = [], []
-    owner = np.empty(fc.size, np.int32)  # scratch, read only where just written
-    ramp = np.arange(4096, dtype=np.int32)
+    owner, ramp = _scratch(fc.size)  # owner: read only where just written
     for v in range(model.MAX, 1, -1):
         if not buckets[v]:
             continue
@@ -148,8 +162,7 @@ def spread(fc: np.ndarray, cost: np.ndarray, seed: int, val: int, sy: int, sz: i
     buckets: list = [[] for _ in range(model.MAX + 1)]
     buckets[val].append(np.array([seed], np.int64))
     out, values = [], []
-    owner = np.empty(fc.size, np.int32)  # scratch, read only where just written
-    ramp = np.arange(4096, dtype=np.int32)
+    owner, ramp = _scratch(fc.size)  # owner: read only where just written
     for v in range(val, 1, -1):
         if not buckets[v]:
             continue

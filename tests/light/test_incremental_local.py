@@ -212,3 +212,19 @@ def test_column_days_equals_the_column_pass():
         blocked = np.maximum.accumulate(opaque[col[:, ::-1]], axis=1)[:, ::-1].astype(bool)
         want = np.where(blocked, 0, np.clip(carry - a, 0, model.MAX))
         assert np.array_equal(incremental._column_days(b, 0, 0, z, old), want), (i, z)
+
+
+def test_sparse_at_the_arrays_edges():
+    """The sparse path's neighbours of a voxel on the arrays' side faces stop there: a
+    leaf column at each side, a sealed dark air voxel at the far end of the next row
+    (where a flat index would run on to), the column roofed and opened again."""
+    for col, pocket in (((10, 23), (11, 0)), ((10, 0), (9, 23)),
+                        ((23, 10), (0, 11)), ((0, 10), (23, 9))):
+        b = _rock()
+        b[:, :, 60:64] = STONE
+        b[col[0], col[1], 60:64] = R.id("leaves")
+        b[pocket[0], pocket[1], 61] = 0
+        L = full.solve(b, "numpy")
+        assert _edit(b, L, (*col, 64), STONE) == "sparse"
+        assert _edit(b, L, (*col, 64), 0) == "sparse"
+        assert L[col[0], col[1], 61] >> 12 > 1 and L[pocket[0], pocket[1], 61] == 0

@@ -142,10 +142,14 @@ def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False, lanes=(0
     top: the daylight of the column below p changes); None (nothing written) once it
     has written SPARSE_BUDGET lanes or, with `part` (see update), read a voxel on the
     arrays' side faces (the voxels it reads are those whose neighbours it visits).
-    Its per-voxel reads are dict hits inlined in the loops (calls cost more here).
+    Its per-voxel reads are dict hits inlined in the loops (calls cost more here), a
+    voxel keyed by its flat C-order index (as .item reads it: an int hashes and
+    offsets faster than a tuple).
     `lanes`: the components it relights (the others stay as they are: _lamp)."""
     cost_l, _, _, emis_l = model.lists()
     w, h, zs = blocks.shape
+    SX, SY = h * zs, zs  # the key's steps in x and y (z: 1)
+    last = (w - 1) * SX
     OPAQUE = model.OPAQUE_COST
     bitem, litem = blocks.item, light.item
     cur: dict = {}  # voxel -> its four lanes as now (read from `light` on first use)
@@ -157,7 +161,7 @@ def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False, lanes=(0
     def get(v):
         lv = cur.get(v)
         if lv is None:
-            if part and not (0 < v[0] < w - 1 and 0 < v[1] < h - 1):
+            if part and not (SX <= v < last and 0 < v // SY % h < h - 1):
                 raise _Beyond
             pv = was[v] = litem(v)
             lv = cur[v] = [pv & 15, pv >> 4 & 15, pv >> 8 & 15, pv >> 12]
@@ -168,41 +172,42 @@ def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False, lanes=(0
         return c
 
     def near(v):
-        i, j, k = v
+        k = v % SY
+        j = v // SY % h
         out = []
-        if i > 0:
-            out.append((i - 1, j, k))
-        if i < w - 1:
-            out.append((i + 1, j, k))
+        if v >= SX:
+            out.append(v - SX)
+        if v < last:
+            out.append(v + SX)
         if j > 0:
-            out.append((i, j - 1, k))
+            out.append(v - SY)
         if j < h - 1:
-            out.append((i, j + 1, k))
+            out.append(v + SY)
         if k > 0:
-            out.append((i, j, k - 1))
+            out.append(v - 1)
         if k < zs - 1:
-            out.append((i, j, k + 1))
+            out.append(v + 1)
         nbs[v] = out
         return out
 
     def start(v, c):
         if c < 3:
             return emis_l[bitem(v)][c]
-        col = days.get(v[:2])
+        col = days.get(v // SY)
         if col is None:
-            i, j = v[:2]
-            col = days[v[:2]] = _column_days(blocks, i, j, zs - 1, bitem(i, j, zs - 1))[0]
-        return int(col[v[2]])
+            i, j = divmod(v // SY, h)
+            col = days[v // SY] = _column_days(blocks, i, j, zs - 1, bitem(i, j, zs - 1))[0]
+        return int(col[v % SY])
 
-    p = (x, y, z)
-    column = [(x, y, k) for k in range(zc, z)]
+    p = (x * h + y) * SY + z
+    column = [p - z + k for k in range(zc, z)]
     seeds = [(q, c) for q in near(p) for c in lanes]
     day = 3 in lanes
     writes = 0
     if brighter:
         for q in column if day else ():
             lq = get(q)
-            lq[3] = max(lq[3], int(now[q[2]]))
+            lq[3] = max(lq[3], int(now[q - p + z]))
         lp = get(p)
         e = emis_l[bitem(p)] + [int(now[z])]
         top = (costs.get(p) or cost(p)) == OPAQUE
@@ -253,10 +258,12 @@ def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False, lanes=(0
     for v, lv in cur.items():
         pv = lv[0] | lv[1] << 4 | lv[2] << 8 | lv[3] << 12
         if pv != was[v]:
-            light[v] = pv
+            i, j = divmod(v // SY, h)
+            k = v % SY
+            light[i, j, k] = pv
             moved = True
-            lo = [min(a, b) for a, b in zip(lo, v)]
-            hi = [max(a, b) for a, b in zip(hi, v)]
+            lo = [min(lo[0], i), min(lo[1], j), min(lo[2], k)]
+            hi = [max(hi[0], i), max(hi[1], j), max(hi[2], k)]
     if not moved:
         return (slice(x, x), slice(y, y), slice(z, z))
     return tuple(slice(a, b + 1) for a, b in zip(lo, hi))

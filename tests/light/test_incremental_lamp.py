@@ -1,9 +1,9 @@
-"""The incremental relight's lamp paths (incremental._lamp: a lamp's colour flooded
-from it alone, one component; _placed: a lamp set where no colour passed, its
-daylight on the sparse path and its colour from _lamp) against a full solve: random
-lamps of every colour placed and removed on ground with leaf, water and glass
-columns, beside and under each other, and with part windows (an edit's first
-relight window: world/edit.py)."""
+"""The incremental relight's lamp paths (light/lamp.spread: a lamp's colour flooded
+from it alone, one component; incremental._placed: a lamp set where no colour
+passed, its daylight on the sparse path and its colour by lamp.spread) against a
+full solve: random lamps of every colour placed and removed on ground with leaf,
+water and glass columns, beside and under each other, and with part windows (an
+edit's first relight window: world/edit.py)."""
 import numpy as np
 
 from voxel_addon.core.blocks import REGISTRY as R

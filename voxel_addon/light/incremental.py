@@ -20,6 +20,10 @@ When the edit can only add light (p's cost does not rise and no emission falls, 
 placing a lamp or digging out a block), the new light is >= the old everywhere and is
 the fixpoint reached from max(old light, new start values): the box keeps the old
 light and floods only from the voxels whose start value rose (flood.py).
+
+The four components are independent (they share only the costs): a lamp of one
+colour set where no colour passed is relit per component, its daylight on the
+sparse path and its colour flooded from it alone (lamp.py), not as a box.
 """
 from __future__ import annotations
 
@@ -28,7 +32,7 @@ from functools import lru_cache
 import numpy as np
 
 from ..core import chunk
-from . import flood, model
+from . import flood, lamp, model
 
 R = model.MAX - 1  # reach of a change
 
@@ -145,7 +149,7 @@ def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False, lanes=(0
     Its per-voxel reads are dict hits inlined in the loops (calls cost more here), a
     voxel keyed by its flat C-order index (as .item reads it: an int hashes and
     offsets faster than a tuple).
-    `lanes`: the components it relights (the others stay as they are: _lamp)."""
+    `lanes`: the components it relights (the others stay as they are: _placed)."""
     cost_l, _, _, emis_l = model.lists()
     w, h, zs = blocks.shape
     SX, SY = h * zs, zs  # the key's steps in x and y (z: 1)
@@ -338,7 +342,7 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
             STATS["sparse"] += 1
             return box
     if pval is not None:
-        box = _lamp(blocks, light, x, y, z, pval, part)
+        box = lamp.spread(blocks, light, x, y, z, pval, part)
     else:
         box = _placed(blocks, light, x, y, z, old, new, now, zc, brighter, part)
     if box is not None:
@@ -416,69 +420,19 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
     return bx, by, bz
 
 
-LAMP_LANES = 1  # rising components a _lamp floods one by one (more: the box, all at once)
-
-
-def _lamp(blocks, light, x, y, z, pval, part=False):
-    """The box path for p's new light `pval` from _local (only p changed; its rising
-    components spread, nothing else falls: a lamp placed) with one lane and no
-    removal: each rising component floods from p alone over the voxels within its
-    reach (value v: v - 1 steps), the rest of the light as it is. Writes p and the
-    raised lanes, returns their bounds; None (nothing written) for more rising
-    components than LAMP_LANES, or with `part` where the reach meets the arrays'
-    side faces."""
-    w, h, zs = blocks.shape
-    lp = light.item(x, y, z)
-    rise = [(k, v) for k, v in enumerate(pval) if v > (lp >> SHIFTS[k]) & 15]
-    if len(rise) > LAMP_LANES:
-        return None
-    r = max([v for _, v in rise] + [1]) - 1
-    if part and not _inside(blocks.shape, x, y, r):
-        return None
-    light[x, y, z] = pval[0] | pval[1] << 4 | pval[2] << 8 | pval[3] << 12
-    lo, hi = [x, y, z], [x + 1, y + 1, z + 1]
-    if not rise or r < 1:
-        return tuple(slice(a, b) for a, b in zip(lo, hi))
-    sx = slice(max(x - r, 0), min(x + r + 1, w))
-    sy = slice(max(y - r, 0), min(y + r + 1, h))
-    sz = slice(max(z - r, 0), min(z + r + 1, zs))
-    nx, ny, nz = sx.stop - sx.start, sy.stop - sy.start, sz.stop - sz.start
-    gy, gz = nx + 2, (nx + 2) * (ny + 2)  # a one-voxel rim that never rises
-    cost = np.full((nz + 2, ny + 2, nx + 2), model.OPAQUE_COST, np.uint8)
-    cost[1:-1, 1:-1, 1:-1] = np.take(_cost16(), blocks[sx, sy, sz].T, mode="clip")
-    near = light[sx, sy, sz].T
-    p = (z - sz.start + 1) * gz + (y - sy.start + 1) * gy + x - sx.start + 1
-    for k, v in rise:
-        fc = cost.copy()  # value + cost: >= 16 never rises (opaque, the rim)
-        fc[1:-1, 1:-1, 1:-1] += ((near >> SHIFTS[k]) & 15).astype(np.uint8)
-        fc = fc.reshape(-1)
-        fc[p] = 255  # p holds its exact value
-        n, nv = flood.spread(fc, cost.reshape(-1), p, v, gy, gz)
-        if not n.size:
-            continue
-        i = n % gy + (sx.start - 1)
-        j = n // gy % (ny + 2) + (sy.start - 1)
-        l = n // gz + (sz.start - 1)
-        m = ~np.uint16(15 << SHIFTS[k])
-        light[i, j, l] = (light[i, j, l] & m) | (nv.astype(np.uint16) << SHIFTS[k])
-        lo = [min(a, int(b.min())) for a, b in zip(lo, (i, j, l))]
-        hi = [max(a, int(b.max()) + 1) for a, b in zip(hi, (i, j, l))]
-    return tuple(slice(a, b) for a, b in zip(lo, hi))
-
-
 def _placed(blocks, light, x, y, z, old, new, now, zc, brighter, part):
     """A lamp set where no colour passed (an opaque emitter in place of a block that
     emits nothing, p's colours at most 1 before): its daylight falls (p's and the
     column's below: _sparse on that lane alone) and its colours rise from p alone
-    (_lamp); the components are independent. Nothing written and None otherwise, or
+    (lamp.spread); the components are independent. Nothing written and None otherwise, or
     where _sparse would leave it to the box."""
     cost_l, _, _, emis_l = model.lists()
     e = emis_l[new]
     lp = light.item(x, y, z)
     if (any(emis_l[old]) or cost_l[new] != model.OPAQUE_COST
             or any((lp >> SHIFTS[k]) & 15 > 1 for k in range(3))
-            or sum(v > (lp >> SHIFTS[k]) & 15 for k, v in enumerate(e)) > LAMP_LANES
-            or part and not _inside(blocks.shape, x, y, max(e) - 1)):
+            or sum(v > (lp >> SHIFTS[k]) & 15 for k, v in enumerate(e)) > lamp.LANES
+            or part and not lamp.inside(blocks.shape, x, y, max(e) - 1)):
         return None
     try:
         box = _sparse(blocks, light, x, y, z, old, now, zc, brighter, part, lanes=(3,))
@@ -486,20 +440,9 @@ def _placed(blocks, light, x, y, z, old, new, now, zc, brighter, part):
         return None
     if box is None:
         return None
-    lamp = _lamp(blocks, light, x, y, z, e + [light.item(x, y, z) >> 12], part)
+    got = lamp.spread(blocks, light, x, y, z, e + [light.item(x, y, z) >> 12], part)
     return tuple(slice(min(a.start, b.start), max(a.stop, b.stop)) if a.stop > a.start
-                 else b for a, b in zip(box, lamp))
-
-
-def _inside(shape, x, y, r) -> bool:
-    """Whether columns within r of (x, y) stay off the arrays' side faces."""
-    return 0 < x - r and x + r < shape[0] - 1 and 0 < y - r and y + r < shape[1] - 1
-
-
-@lru_cache(maxsize=1)
-def _cost16() -> np.ndarray:
-    """Per block id its cost capped at 16 (_lamp's value + cost stays in a uint8)."""
-    return np.minimum(model.tables()[0], model.MAX + 1).astype(np.uint8)
+                 else b for a, b in zip(box, got))
 
 
 def _remove(f, cost, lanes, blocks, base, strides):

@@ -1,0 +1,73 @@
+"""A lamp's light in an incremental relight (incremental.update): one component
+flooded from the lamp alone over the voxels within its reach (flood.spread), the rest
+of the light as it is; cheaper than the box path, which unpacks, floods and packs
+all four components of a 29-voxel box (issue 29: a lamp click's relight)."""
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+
+from . import flood, model
+
+SHIFTS = flood.SHIFTS
+LANES = 1  # rising components spread floods one by one (more: the box, all at once)
+
+
+def spread(blocks, light, x, y, z, pval, part=False):
+    """incremental.update's box path for p's new light `pval` (from its _local: only
+    p changed, its rising components spread, nothing else falls; or a lamp set
+    where no colour passed, its daylight relit already: _placed) with one lane and
+    no removal: each rising component floods from p alone over the voxels within
+    its reach (value v: v - 1 steps), the rest of the light as it is. Writes p and
+    the raised lanes, returns their bounds; None (nothing written) for more rising
+    components than LANES, or with `part` where the reach meets the arrays' side
+    faces."""
+    w, h, zs = blocks.shape
+    lp = light.item(x, y, z)
+    rise = [(k, v) for k, v in enumerate(pval) if v > (lp >> SHIFTS[k]) & 15]
+    if len(rise) > LANES:
+        return None
+    r = max([v for _, v in rise] + [1]) - 1
+    if part and not inside(blocks.shape, x, y, r):
+        return None
+    light[x, y, z] = pval[0] | pval[1] << 4 | pval[2] << 8 | pval[3] << 12
+    lo, hi = [x, y, z], [x + 1, y + 1, z + 1]
+    if not rise or r < 1:
+        return tuple(slice(a, b) for a, b in zip(lo, hi))
+    sx = slice(max(x - r, 0), min(x + r + 1, w))
+    sy = slice(max(y - r, 0), min(y + r + 1, h))
+    sz = slice(max(z - r, 0), min(z + r + 1, zs))
+    nx, ny, nz = sx.stop - sx.start, sy.stop - sy.start, sz.stop - sz.start
+    gy, gz = nx + 2, (nx + 2) * (ny + 2)  # a one-voxel rim that never rises
+    cost = np.full((nz + 2, ny + 2, nx + 2), model.OPAQUE_COST, np.uint8)
+    cost[1:-1, 1:-1, 1:-1] = np.take(_cost16(), blocks[sx, sy, sz].T, mode="clip")
+    near = light[sx, sy, sz].T
+    p = (z - sz.start + 1) * gz + (y - sy.start + 1) * gy + x - sx.start + 1
+    for k, v in rise:
+        fc = cost.copy()  # value + cost: >= 16 never rises (opaque, the rim)
+        fc[1:-1, 1:-1, 1:-1] += ((near >> SHIFTS[k]) & 15).astype(np.uint8)
+        fc = fc.reshape(-1)
+        fc[p] = 255  # p holds its exact value
+        n, nv = flood.spread(fc, cost.reshape(-1), p, v, gy, gz)
+        if not n.size:
+            continue
+        i = n % gy + (sx.start - 1)
+        j = n // gy % (ny + 2) + (sy.start - 1)
+        l = n // gz + (sz.start - 1)
+        m = ~np.uint16(15 << SHIFTS[k])
+        light[i, j, l] = (light[i, j, l] & m) | (nv.astype(np.uint16) << SHIFTS[k])
+        lo = [min(a, int(b.min())) for a, b in zip(lo, (i, j, l))]
+        hi = [max(a, int(b.max()) + 1) for a, b in zip(hi, (i, j, l))]
+    return tuple(slice(a, b) for a, b in zip(lo, hi))
+
+
+def inside(shape, x, y, r) -> bool:
+    """Whether columns within r of (x, y) stay off the arrays' side faces."""
+    return 0 < x - r and x + r < shape[0] - 1 and 0 < y - r and y + r < shape[1] - 1
+
+
+@lru_cache(maxsize=1)
+def _cost16() -> np.ndarray:
+    """Per block id its cost capped at 16 (spread's value + cost stays in a uint8)."""
+    return np.minimum(model.tables()[0], model.MAX + 1).astype(np.uint8)

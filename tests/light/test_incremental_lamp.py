@@ -1,6 +1,6 @@
-"""The incremental relight's lamp paths (light/lamp.spread: a lamp's colour flooded
+"""The incremental relight's lamp paths (light/lamp.relight: a lamp's colour flooded
 from it alone, one component; incremental._placed: a lamp set where no colour
-passed, its daylight on the sparse path and its colour by lamp.spread) against a
+passed, its daylight on the sparse path and its colour by lamp.relight) against a
 full solve: random lamps of every colour placed and removed on ground with leaf,
 water and glass columns, beside and under each other, and with part windows (an
 edit's first relight window: world/edit.py)."""

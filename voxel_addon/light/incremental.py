@@ -342,7 +342,7 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
             STATS["sparse"] += 1
             return box
     if pval is not None:
-        box = lamp.spread(blocks, light, x, y, z, pval, part)
+        box = lamp.relight(blocks, light, x, y, z, pval, part)
     else:
         box = _placed(blocks, light, x, y, z, old, new, now, zc, brighter, part)
     if box is not None:
@@ -424,7 +424,7 @@ def _placed(blocks, light, x, y, z, old, new, now, zc, brighter, part):
     """A lamp set where no colour passed (an opaque emitter in place of a block that
     emits nothing, p's colours at most 1 before): its daylight falls (p's and the
     column's below: _sparse on that lane alone) and its colours rise from p alone
-    (lamp.spread); the components are independent. Nothing written and None otherwise, or
+    (lamp.relight); the components are independent. Nothing written and None otherwise, or
     where _sparse would leave it to the box."""
     cost_l, _, _, emis_l = model.lists()
     e = emis_l[new]
@@ -440,7 +440,7 @@ def _placed(blocks, light, x, y, z, old, new, now, zc, brighter, part):
         return None
     if box is None:
         return None
-    got = lamp.spread(blocks, light, x, y, z, e + [light.item(x, y, z) >> 12], part)
+    got = lamp.relight(blocks, light, x, y, z, e + [light.item(x, y, z) >> 12], part)
     return tuple(slice(min(a.start, b.start), max(a.stop, b.stop)) if a.stop > a.start
                  else b for a, b in zip(box, got))
 

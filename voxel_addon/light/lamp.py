@@ -11,10 +11,10 @@ import numpy as np
 from . import flood, model
 
 SHIFTS = flood.SHIFTS
-LANES = 1  # rising components spread floods one by one (more: the box, all at once)
+LANES = 1  # rising components relight floods one by one (more: the box, all at once)
 
 
-def spread(blocks, light, x, y, z, pval, part=False):
+def relight(blocks, light, x, y, z, pval, part=False):
     """incremental.update's box path for p's new light `pval` (from its _local: only
     p changed, its rising components spread, nothing else falls; or a lamp set
     where no colour passed, its daylight relit already: _placed) with one lane and
@@ -69,5 +69,5 @@ def inside(shape, x, y, r) -> bool:
 
 @lru_cache(maxsize=1)
 def _cost16() -> np.ndarray:
-    """Per block id its cost capped at 16 (spread's value + cost stays in a uint8)."""
+    """Per block id its cost capped at 16 (relight's value + cost stays in a uint8)."""
     return np.minimum(model.tables()[0], model.MAX + 1).astype(np.uint8)

@@ -153,17 +153,22 @@ def levels_lanes(fc: np.ndarray, cost: np.ndarray, seeds: np.ndarray, vals: np.n
     return np.concatenate(lanes), np.concatenate(values).astype(np.uint8)
 
 
-def spread(fc: np.ndarray, cost: np.ndarray, seed: int, val: int, sy: int, sz: int):
-    """`levels` for one component from one seed voxel at `val` (a lamp placed: its
-    light only rises, from it outwards): all six directions at once per level, on
-    flat uint8 `fc` (value + cost, >= 16 never rises) and `cost`. Returns the written
-    voxels and their values (each voxel once, brightest first)."""
+def spread(fc: np.ndarray, cost: np.ndarray, seeds: np.ndarray, vals: np.ndarray,
+           sy: int, sz: int):
+    """`levels` for one component (a lamp set or taken out: light/lamp.py), all six
+    directions at once per level, on flat uint8 `fc` (value + cost, >= 16 never
+    rises) and `cost`, from `seeds` (flat voxel indices, duplicates allowed) at
+    `vals`. Returns the written voxels and their values (each voxel once, brightest
+    first)."""
     offs = np.array([-1, 1, -sy, sy, -sz, sz], np.int64)
     buckets: list = [[] for _ in range(model.MAX + 1)]
-    buckets[val].append(np.array([seed], np.int64))
+    seeds, vals = np.asarray(seeds, np.int64), np.asarray(vals)
+    for v in np.unique(vals).tolist():
+        if v > 1:
+            buckets[v].append(seeds[vals == v])
     out, values = [], []
     owner, ramp = _scratch(fc.size)  # owner: read only where just written
-    for v in range(val, 1, -1):
+    for v in range(model.MAX, 1, -1):
         if not buckets[v]:
             continue
         idx = buckets[v][0] if len(buckets[v]) == 1 else np.concatenate(buckets[v])

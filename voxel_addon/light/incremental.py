@@ -345,6 +345,8 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
         box = lamp.relight(blocks, light, x, y, z, pval, part)
     else:
         box = _placed(blocks, light, x, y, z, old, new, now, zc, brighter, part)
+        if box is None:
+            box = _taken(blocks, light, x, y, z, old, new, now, before, zc, part)
     if box is not None:
         STATS["lamp"] += 1
         return box
@@ -441,6 +443,30 @@ def _placed(blocks, light, x, y, z, old, new, now, zc, brighter, part):
     if box is None:
         return None
     got = lamp.relight(blocks, light, x, y, z, e + [light.item(x, y, z) >> 12], part)
+    return tuple(slice(min(a.start, b.start), max(a.stop, b.stop)) if a.stop > a.start
+                 else b for a, b in zip(box, got))
+
+
+def _taken(blocks, light, x, y, z, old, new, now, before, zc, part):
+    """A one-colour lamp taken out (its block's cost not rising, no emission and no
+    daylight falling): the other components only gain (_sparse, brighter, on them
+    alone), its colour is cleared and refilled on that lane alone (lamp.taken).
+    Nothing written and None otherwise, or where _sparse would leave it to the box."""
+    cost_l, _, _, emis_l = model.lists()
+    cols = [k for k, e in enumerate(emis_l[old]) if e]
+    if (len(cols) != 1 or any(emis_l[new]) or cost_l[new] > cost_l[old]
+            or not (now >= before).all()
+            or part and not lamp.inside(blocks.shape, x, y, model.MAX)):
+        return None
+    k = cols[0]
+    try:
+        box = _sparse(blocks, light, x, y, z, old, now, zc, True, part,
+                      lanes=tuple(c for c in range(4) if c != k))
+    except _Beyond:
+        return None
+    if box is None:
+        return None
+    got = lamp.taken(blocks, light, x, y, z, k)
     return tuple(slice(min(a.start, b.start), max(a.stop, b.stop)) if a.stop > a.start
                  else b for a, b in zip(box, got))
 

@@ -49,7 +49,7 @@ def relight(blocks, light, x, y, z, pval, part=False):
         fc[1:-1, 1:-1, 1:-1] += ((near >> SHIFTS[k]) & 15).astype(np.uint8)
         fc = fc.reshape(-1)
         fc[p] = 255  # p holds its exact value
-        n, nv = flood.spread(fc, cost.reshape(-1), p, v, gy, gz)
+        n, nv = flood.spread(fc, cost.reshape(-1), [p], [v], gy, gz)
         if not n.size:
             continue
         i = n % gy + (sx.start - 1)
@@ -60,6 +60,59 @@ def relight(blocks, light, x, y, z, pval, part=False):
         lo = [min(a, int(b.min())) for a, b in zip(lo, (i, j, l))]
         hi = [max(a, int(b.max()) + 1) for a, b in zip(hi, (i, j, l))]
     return tuple(slice(a, b) for a, b in zip(lo, hi))
+
+
+def taken(blocks, light, x, y, z, k):
+    """Component k after p stopped emitting it (a lamp taken out; p's cost did not
+    rise): what may owe itself to p's old value is cleared (incremental._remove on
+    one lane), given its start values back and refilled from around (flood.spread).
+    Changes lie within 14 of p (the cleared voxels, and what p, now passing light,
+    lets through), reads within 15. Writes lane k, returns the written bounds."""
+    w, h, zs = blocks.shape
+    r, sh = model.MAX, SHIFTS[k]
+    sx = slice(max(x - r, 0), min(x + r + 1, w))
+    sy = slice(max(y - r, 0), min(y + r + 1, h))
+    sz = slice(max(z - r, 0), min(z + r + 1, zs))
+    nx, ny, nz = sx.stop - sx.start, sy.stop - sy.start, sz.stop - sz.start
+    gy, gz = nx + 2, (nx + 2) * (ny + 2)  # a one-voxel rim: dark, never rises
+    cost = np.full((nz + 2, ny + 2, nx + 2), model.OPAQUE_COST, np.uint8)
+    cost[1:-1, 1:-1, 1:-1] = np.take(_cost16(), blocks[sx, sy, sz].T, mode="clip")
+    cost = cost.reshape(-1)
+    f = np.zeros((nz + 2, ny + 2, nx + 2), np.uint8)
+    f[1:-1, 1:-1, 1:-1] = (light[sx, sy, sz].T >> sh) & 15
+    f = f.reshape(-1)
+    offs = np.array([-1, 1, -gy, gy, -gz, gz], np.int64)
+    p = (z - sz.start + 1) * gz + (y - sy.start + 1) * gy + x - sx.start + 1
+    idx, val = np.array([p], np.int64), f[[p]].astype(np.int16)
+    f[p] = 0
+    out = [idx]
+    while idx.size:  # every neighbour below the voxel it was reached from may owe it
+        n = (idx[:, None] + offs).ravel()
+        v = f[n]
+        n = np.unique(n[(v > 0) & (v < np.repeat(val, 6)) & (cost[n] <= model.MAX)])
+        if not n.size:
+            break
+        val = f[n].astype(np.int16)
+        f[n] = 0
+        out.append(n)
+        idx, val = n[val > 1], val[val > 1]
+    gone = np.unique(np.concatenate(out))
+    i = gone % gy + (sx.start - 1)
+    j = gone // gy % (ny + 2) + (sy.start - 1)
+    l = gone // gz + (sz.start - 1)
+    f[gone] = np.minimum(model.tables()[3][blocks[i, j, l], k], model.MAX)  # start values
+    seeds = np.concatenate([gone, (gone[:, None] + offs).ravel()])
+    seeds = seeds[f[seeds] > 1]
+    fc = f + np.minimum(cost, model.MAX + 1)  # the rim: 0 + 16, never rises
+    n, nv = flood.spread(fc, cost, seeds, f[seeds], gy, gz)
+    f[n] = nv
+    v = np.concatenate([gone, n])
+    i = v % gy + (sx.start - 1)
+    j = v // gy % (ny + 2) + (sy.start - 1)
+    l = v // gz + (sz.start - 1)
+    m = ~np.uint16(15 << sh)
+    light[i, j, l] = (light[i, j, l] & m) | (f[v].astype(np.uint16) << sh)
+    return tuple(slice(int(a.min()), int(a.max()) + 1) for a in (i, j, l))
 
 
 def inside(shape, x, y, r) -> bool:

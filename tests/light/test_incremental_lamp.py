@@ -1,5 +1,5 @@
 """The incremental relight's lamp paths (light/lamp.relight: a lamp's colour flooded
-from it alone, one component; incremental._placed: a lamp set where no colour
+from it alone, one component; lamp.placed: a lamp set where no colour
 passed, its daylight on the sparse path and its colour by lamp.relight) against a
 full solve: random lamps of every colour placed and removed on ground with leaf,
 water and glass columns, beside and under each other, and with part windows (an

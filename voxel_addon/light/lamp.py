@@ -1,14 +1,16 @@
-"""A lamp's light in an incremental relight (incremental.update): one component
-flooded from the lamp alone over the voxels within its reach (flood.spread), the rest
-of the light as it is; cheaper than the box path, which unpacks, floods and packs
-all four components of a 29-voxel box (issue 29: a lamp click's relight)."""
+"""A one-colour lamp set or taken out, in an incremental relight (incremental.update),
+by component (they share only the costs): its colour flooded from the lamp alone
+over the voxels within its reach (relight), or cleared and refilled on that lane
+alone (refill), the other components on the sparse path (placed, taken); cheaper
+than the box path, which unpacks, floods and packs all four components of a
+29-voxel box (issue 29: a lamp click's relight)."""
 from __future__ import annotations
 
 from functools import lru_cache
 
 import numpy as np
 
-from . import flood, model
+from . import flood, model, sparse
 
 SHIFTS = flood.SHIFTS
 LANES = 1  # rising components relight floods one by one (more: the box, all at once)
@@ -17,7 +19,7 @@ LANES = 1  # rising components relight floods one by one (more: the box, all at 
 def relight(blocks, light, x, y, z, pval, part=False):
     """incremental.update's box path for p's new light `pval` (from its _local: only
     p changed, its rising components spread, nothing else falls; or a lamp set
-    where no colour passed, its daylight relit already: _placed) with one lane and
+    where no colour passed, its daylight relit already: placed) with one lane and
     no removal: each rising component floods from p alone over the voxels within
     its reach (value v: v - 1 steps), the rest of the light as it is. Writes p and
     the raised lanes, returns their bounds; None (nothing written) for more rising
@@ -62,7 +64,7 @@ def relight(blocks, light, x, y, z, pval, part=False):
     return tuple(slice(a, b) for a, b in zip(lo, hi))
 
 
-def taken(blocks, light, x, y, z, k):
+def refill(blocks, light, x, y, z, k):
     """Component k after p stopped emitting it (a lamp taken out; p's cost did not
     rise): what may owe itself to p's old value is cleared (incremental._remove on
     one lane), given its start values back and refilled from around (flood.spread).
@@ -113,6 +115,57 @@ def taken(blocks, light, x, y, z, k):
     m = ~np.uint16(15 << sh)
     light[i, j, l] = (light[i, j, l] & m) | (f[v].astype(np.uint16) << sh)
     return tuple(slice(int(a.min()), int(a.max()) + 1) for a in (i, j, l))
+
+
+def placed(blocks, light, x, y, z, old, new, now, zc, brighter, part):
+    """A lamp set where no colour passed (an opaque emitter in place of a block that
+    emits nothing, p's colours at most 1 before): its daylight falls (p's and the
+    column's below: sparse.relight on that lane alone) and its colours rise from p
+    alone (relight); the components are independent. Nothing written and None
+    otherwise, or where sparse.relight would leave it to the box."""
+    cost_l, _, _, emis_l = model.lists()
+    e = emis_l[new]
+    lp = light.item(x, y, z)
+    if (any(emis_l[old]) or cost_l[new] != model.OPAQUE_COST
+            or any((lp >> SHIFTS[k]) & 15 > 1 for k in range(3))
+            or sum(v > (lp >> SHIFTS[k]) & 15 for k, v in enumerate(e)) > LANES
+            or part and not inside(blocks.shape, x, y, max(e) - 1)):
+        return None
+    try:
+        box = sparse.relight(blocks, light, x, y, z, now, zc, brighter, part,
+                             lanes=(3,))
+    except sparse.Beyond:
+        return None
+    if box is None:
+        return None
+    got = relight(blocks, light, x, y, z, e + [light.item(x, y, z) >> 12], part)
+    return tuple(slice(min(a.start, b.start), max(a.stop, b.stop)) if a.stop > a.start
+                 else b for a, b in zip(box, got))
+
+
+def taken(blocks, light, x, y, z, old, new, now, before, zc, part):
+    """A one-colour lamp taken out (its block's cost not rising, no emission and no
+    daylight falling): the other components only gain (sparse.relight, brighter,
+    on them alone), its colour is cleared and refilled on that lane alone (refill).
+    Nothing written and None otherwise, or where sparse.relight would leave it to
+    the box."""
+    cost_l, _, _, emis_l = model.lists()
+    cols = [k for k, e in enumerate(emis_l[old]) if e]
+    if (len(cols) != 1 or any(emis_l[new]) or cost_l[new] > cost_l[old]
+            or not (now >= before).all()
+            or part and not inside(blocks.shape, x, y, model.MAX)):
+        return None
+    k = cols[0]
+    try:
+        box = sparse.relight(blocks, light, x, y, z, now, zc, True, part,
+                             lanes=tuple(c for c in range(4) if c != k))
+    except sparse.Beyond:
+        return None
+    if box is None:
+        return None
+    got = refill(blocks, light, x, y, z, k)
+    return tuple(slice(min(a.start, b.start), max(a.stop, b.stop)) if a.stop > a.start
+                 else b for a, b in zip(box, got))
 
 
 def inside(shape, x, y, r) -> bool:

@@ -2,13 +2,13 @@
 edit that changes no voxel but the edited one skips the relight box), in scenes built
 so that its reasoning is wrong by one step if any of its conditions slips (a p that
 rises to exactly 2, a neighbour that kept its daylight only through p, a column
-below p that changes), and incremental._sparse (the box path's algorithm on the
+below p that changes), and sparse.relight (the box path's algorithm on the
 voxels it touches, for light that barely moves: leaves and water on top), with
 streams of random edits that take every path."""
 import numpy as np
 
 from voxel_addon.core.blocks import REGISTRY as R
-from voxel_addon.light import full, incremental
+from voxel_addon.light import full, incremental, sparse
 
 STONE, ORE, MUSH = R.id("stone"), R.id("ore"), R.id("glowing_mushroom")
 
@@ -188,7 +188,7 @@ def test_part_window_relights_exactly_or_says_it_cannot():
 
 
 def test_column_days_equals_the_column_pass():
-    """incremental._column_days (walked down in Python from the highest block below
+    """sparse.column_days (walked down in Python from the highest block below
     z, air runs at once) against the column pass written with NumPy over the whole
     column: water, leaves and glass under and over z, caves of air below the
     surface, opaque voxels at z or just under it, z at the floor and the top."""
@@ -211,4 +211,20 @@ def test_column_days_equals_the_column_pass():
         a = np.cumsum(att[col[:, ::-1]], axis=1, dtype=np.int16)[:, ::-1]
         blocked = np.maximum.accumulate(opaque[col[:, ::-1]], axis=1)[:, ::-1].astype(bool)
         want = np.where(blocked, 0, np.clip(carry - a, 0, model.MAX))
-        assert np.array_equal(incremental._column_days(b, 0, 0, z, old), want), (i, z)
+        assert np.array_equal(sparse.column_days(b, 0, 0, z, old), want), (i, z)
+
+
+def test_sparse_at_the_arrays_edges():
+    """The sparse path's neighbours of a voxel on the arrays' side faces stop there: a
+    leaf column at each side, a sealed dark air voxel at the far end of the next row
+    (where a flat index would run on to), the column roofed and opened again."""
+    for col, pocket in (((10, 23), (11, 0)), ((10, 0), (9, 23)),
+                        ((23, 10), (0, 11)), ((0, 10), (23, 9))):
+        b = _rock()
+        b[:, :, 60:64] = STONE
+        b[col[0], col[1], 60:64] = R.id("leaves")
+        b[pocket[0], pocket[1], 61] = 0
+        L = full.solve(b, "numpy")
+        assert _edit(b, L, (*col, 64), STONE) == "sparse"
+        assert _edit(b, L, (*col, 64), 0) == "sparse"
+        assert L[col[0], col[1], 61] >> 12 > 1 and L[pocket[0], pocket[1], 61] == 0

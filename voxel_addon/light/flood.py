@@ -15,6 +15,8 @@ of a small box at once (the incremental relight).
 """
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 
 from . import model
@@ -94,6 +96,19 @@ def edge(fc: np.ndarray, cost: np.ndarray, offs, lo: int, hi: int):
     return i + lo, v[i]
 
 
+_local = threading.local()
+
+
+def _scratch(size: int):
+    """This thread's int32 scratch of at least SIZE (stale values) and a ramp 0..4095:
+    a fresh owner array per relight (144-576 KB) cost its page faults every edit."""
+    a = getattr(_local, "owner", None)
+    if a is None or a.size < size:
+        a = _local.owner = np.empty(max(size, 1 << 16), np.int32)
+        _local.ramp = np.arange(4096, dtype=np.int32)
+    return a, _local.ramp
+
+
 def levels_lanes(fc: np.ndarray, cost: np.ndarray, seeds: np.ndarray, vals: np.ndarray,
                  sy: int, sz: int):
     """`levels` for all four components at once on flat uint8 lanes (4 per voxel, R,
@@ -110,8 +125,7 @@ def levels_lanes(fc: np.ndarray, cost: np.ndarray, seeds: np.ndarray, vals: np.n
         if v > 1:
             buckets[v].append(seeds[vals == v])
     lanes, values = [], []
-    owner = np.empty(fc.size, np.int32)  # scratch, read only where just written
-    ramp = np.arange(4096, dtype=np.int32)
+    owner, ramp = _scratch(fc.size)  # owner: read only where just written
     for v in range(model.MAX, 1, -1):
         if not buckets[v]:
             continue
@@ -137,6 +151,48 @@ def levels_lanes(fc: np.ndarray, cost: np.ndarray, seeds: np.ndarray, vals: np.n
     if not lanes:
         return np.zeros(0, np.int64), np.zeros(0, np.uint8)
     return np.concatenate(lanes), np.concatenate(values).astype(np.uint8)
+
+
+def spread(fc: np.ndarray, cost: np.ndarray, seeds: np.ndarray, vals: np.ndarray,
+           sy: int, sz: int):
+    """`levels` for one component (a lamp set or taken out: light/lamp.py), all six
+    directions at once per level, on flat uint8 `fc` (value + cost, >= 16 never
+    rises) and `cost`, from `seeds` (flat voxel indices, duplicates allowed) at
+    `vals`. Returns the written voxels and their values (each voxel once, brightest
+    first)."""
+    offs = np.array([-1, 1, -sy, sy, -sz, sz], np.int64)
+    buckets: list = [[] for _ in range(model.MAX + 1)]
+    seeds, vals = np.asarray(seeds, np.int64), np.asarray(vals)
+    for v in np.unique(vals).tolist():
+        if v > 1:
+            buckets[v].append(seeds[vals == v])
+    out, values = [], []
+    owner, ramp = _scratch(fc.size)  # owner: read only where just written
+    for v in range(model.MAX, 1, -1):
+        if not buckets[v]:
+            continue
+        idx = buckets[v][0] if len(buckets[v]) == 1 else np.concatenate(buckets[v])
+        n = (idx[:, None] + offs).ravel()
+        n = n[fc[n] < v]
+        if not n.size:
+            continue
+        i = ramp[:n.size] if n.size <= ramp.size else np.arange(n.size, dtype=np.int32)
+        owner[n] = i
+        n = n[owner[n] == i]  # once each
+        fc[n] = v
+        nv = v - cost[n].astype(np.int16)
+        out.append(n)
+        values.append(nv)
+        if (nv == v - 1).all():  # plain air
+            if v > 2:
+                buckets[v - 1].append(n)
+            continue
+        for k in np.unique(nv).tolist():
+            if k > 1:
+                buckets[k].append(n[nv == k])
+    if not out:
+        return np.zeros(0, np.int64), np.zeros(0, np.int16)
+    return np.concatenate(out), np.concatenate(values)
 
 
 assert model.OPAQUE_COST > model.MAX  # v - OPAQUE_COST < 0: such voxels never rise

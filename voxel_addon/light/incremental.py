@@ -20,6 +20,10 @@ When the edit can only add light (p's cost does not rise and no emission falls, 
 placing a lamp or digging out a block), the new light is >= the old everywhere and is
 the fixpoint reached from max(old light, new start values): the box keeps the old
 light and floods only from the voxels whose start value rose (flood.py).
+
+The four components are independent (they share only the costs): a lamp of one
+colour set where no colour passed, or taken out, is relit per component (lamp.py),
+not as a box: its colour on one lane, the others on the sparse path (sparse.py).
 """
 from __future__ import annotations
 
@@ -28,44 +32,9 @@ from functools import lru_cache
 import numpy as np
 
 from ..core import chunk
-from . import flood, model
+from . import flood, lamp, model, sparse
 
 R = model.MAX - 1  # reach of a change
-
-
-def _column_days(blocks: np.ndarray, x: int, y: int, z: int, old: int) -> np.ndarray:
-    """Column-pass daylight of column (x, y) at layers 0..z with the block at z as it
-    is now (row 0) and as `old` (row 1): (2, z + 1). Walked down in Python from the
-    column's highest block below z to the first opaque voxel or the first 0 (below
-    both it stays 0): a few layers at the surface, where NumPy's calls over the
-    whole column cost more."""
-    _, att, opaque, _, _, _ = model.tables()
-    _, att_l, opaque_l, _ = model.lists()
-    above = blocks[x, y, z + 1:]
-    carry = model.MAX if not above.any() else \
-        0 if opaque[above].any() else max(model.MAX - int(att[above].sum()), 0)
-    out = np.zeros((2, z + 1), np.int16)
-    item = blocks.item
-    below = np.flatnonzero(blocks[x, y, :z])
-    t = int(below[-1]) if below.size else -1    # air from t + 1 up to z: the carry stays
-    for r, b in enumerate((item(x, y, z), old)):
-        if opaque_l[b]:
-            continue
-        c = carry - att_l[b]
-        if c <= 0:
-            continue
-        out[r, t + 1:z + 1] = c
-        k = t
-        while k >= 0:
-            b = item(x, y, k)
-            if opaque_l[b]:
-                break
-            c -= att_l[b]
-            if c <= 0:
-                break
-            out[r, k] = c
-            k -= 1
-    return out
 
 
 @lru_cache(maxsize=1)
@@ -75,8 +44,7 @@ def _lut() -> np.ndarray:
     return model.unpack(np.arange(1 << 16, dtype=np.uint16)).view(np.uint32).reshape(-1)
 
 
-STATS = {"local": 0, "sparse": 0, "box": 0}  # how edits were relit (tests check each runs)
-SPARSE_BUDGET = 200  # lane writes a sparse relight may make before it leaves it to the box
+STATS = {"local": 0, "sparse": 0, "lamp": 0, "box": 0}  # how edits were relit (tests check each runs)
 SPARSE_EMISSION = 3  # a lamp placed or removed floods thousands of voxels: box at once
 SHIFTS = (0, 4, 8, 12)
 
@@ -132,132 +100,6 @@ def _local(blocks, light, x, y, z, now, zc, brighter):
     return (slice(x, x + 1), slice(y, y + 1), slice(z, z + 1))
 
 
-class _Beyond(Exception):
-    """_sparse with `part` reached the arrays' side faces."""
-
-
-def _sparse(blocks, light, x, y, z, old, now, zc, brighter, part=False):
-    """The box path's relight (removal, then a brightest-first refill) in plain Python
-    on the voxels it touches, for an edit whose light barely moves (leaves or water on
-    top: the daylight of the column below p changes); None (nothing written) once it
-    has written SPARSE_BUDGET lanes or, with `part` (see update), read a voxel on the
-    arrays' side faces (the voxels it reads are those whose neighbours it visits).
-    Its per-voxel reads are dict hits inlined in the loops (calls cost more here)."""
-    cost_l, _, _, emis_l = model.lists()
-    w, h, zs = blocks.shape
-    OPAQUE = model.OPAQUE_COST
-    bitem, litem = blocks.item, light.item
-    cur: dict = {}  # voxel -> its four lanes as now (read from `light` on first use)
-    was: dict = {}  # voxel -> its packed light as read
-    costs: dict = {}
-    nbs: dict = {}  # voxel -> its neighbours in the arrays
-    days: dict = {}  # column -> its column-pass daylight (blocks as they are now)
-
-    def get(v):
-        lv = cur.get(v)
-        if lv is None:
-            if part and not (0 < v[0] < w - 1 and 0 < v[1] < h - 1):
-                raise _Beyond
-            pv = was[v] = litem(v)
-            lv = cur[v] = [pv & 15, pv >> 4 & 15, pv >> 8 & 15, pv >> 12]
-        return lv
-
-    def cost(v):
-        c = costs[v] = cost_l[bitem(v)]
-        return c
-
-    def near(v):
-        i, j, k = v
-        out = []
-        if i > 0:
-            out.append((i - 1, j, k))
-        if i < w - 1:
-            out.append((i + 1, j, k))
-        if j > 0:
-            out.append((i, j - 1, k))
-        if j < h - 1:
-            out.append((i, j + 1, k))
-        if k > 0:
-            out.append((i, j, k - 1))
-        if k < zs - 1:
-            out.append((i, j, k + 1))
-        nbs[v] = out
-        return out
-
-    def start(v, c):
-        if c < 3:
-            return emis_l[bitem(v)][c]
-        col = days.get(v[:2])
-        if col is None:
-            i, j = v[:2]
-            col = days[v[:2]] = _column_days(blocks, i, j, zs - 1, bitem(i, j, zs - 1))[0]
-        return int(col[v[2]])
-
-    p = (x, y, z)
-    column = [(x, y, k) for k in range(zc, z)]
-    seeds = [(q, c) for q in near(p) for c in range(4)]
-    writes = 0
-    if brighter:
-        for q in column:
-            lq = get(q)
-            lq[3] = max(lq[3], int(now[q[2]]))
-        lp = get(p)
-        e = emis_l[bitem(p)] + [int(now[z])]
-        lp[:] = e if (costs.get(p) or cost(p)) == OPAQUE else [max(a, b) for a, b in zip(lp, e)]
-        seeds += [(q, 3) for q in column] + [(p, c) for c in range(4)]
-    else:  # removal from the changed lanes, as _remove does
-        stack = []
-        gone = [(q, 3) for q in column] + [(p, c) for c in range(4)]
-        for q, c in gone:
-            lq = get(q)
-            if lq[c] > 1:
-                stack.append((q, c, lq[c]))
-            lq[c] = 0
-        while stack:
-            q, c, val = stack.pop()
-            for n in nbs.get(q) or near(q):
-                ln = cur.get(n) or get(n)
-                if 0 < ln[c] < val and (costs.get(n) or cost(n)) != OPAQUE:
-                    writes += 1
-                    if writes > SPARSE_BUDGET:
-                        return None
-                    if ln[c] > 1:
-                        stack.append((n, c, ln[c]))
-                    ln[c] = 0
-                    gone.append((n, c))
-        for q, c in gone:
-            get(q)[c] = start(q, c)
-        seeds += gone + [(n, c) for q, c in gone for n in (nbs.get(q) or near(q))]
-    buckets: list = [[] for _ in range(model.MAX + 1)]
-    for q, c in seeds:
-        buckets[(cur.get(q) or get(q))[c]].append((q, c))
-    for val in range(model.MAX, 1, -1):
-        for q, c in buckets[val]:
-            if cur[q][c] != val:
-                continue  # raised since: done at its new value
-            for n in nbs.get(q) or near(q):
-                nv = val - (costs.get(n) or cost(n))
-                ln = cur.get(n) or get(n)
-                if nv > ln[c]:
-                    writes += 1
-                    if writes > SPARSE_BUDGET:
-                        return None
-                    ln[c] = nv
-                    buckets[nv].append((n, c))
-    lo, hi = [x, y, z], [x, y, z]
-    moved = False
-    for v, lv in cur.items():
-        pv = lv[0] | lv[1] << 4 | lv[2] << 8 | lv[3] << 12
-        if pv != was[v]:
-            light[v] = pv
-            moved = True
-            lo = [min(a, b) for a, b in zip(lo, v)]
-            hi = [max(a, b) for a, b in zip(hi, v)]
-    if not moved:
-        return (slice(x, x), slice(y, y), slice(z, z))
-    return tuple(slice(a, b + 1) for a, b in zip(lo, hi))
-
-
 def _raises(blocks, light, nb, k, v):
     """Whether p at value v of component k raises one of its neighbours `nb`."""
     cost_l = model.lists()[0]
@@ -306,7 +148,7 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
     if old == new:
         return (slice(x, x), slice(y, y), slice(z, z))
     cost_t, _, _, emis, _, _ = model.tables()
-    now, before = _column_days(blocks, x, y, z, old)
+    now, before = sparse.column_days(blocks, x, y, z, old)
     diff = np.flatnonzero(now != before)
     zc = int(diff[0]) if diff.size else z
     cost_l, _, _, emis_l = model.lists()
@@ -320,12 +162,21 @@ def update(blocks: np.ndarray, light: np.ndarray, x: int, y: int, z: int, old: i
     pval = box  # p's exact new light when only its rising components must flood
     if max(en + eo) <= SPARSE_EMISSION:
         try:
-            box = _sparse(blocks, light, x, y, z, old, now, zc, brighter, part)
-        except _Beyond:
+            box = sparse.relight(blocks, light, x, y, z, now, zc, brighter, part)
+        except sparse.Beyond:
             return None
         if box is not None:
             STATS["sparse"] += 1
             return box
+    if pval is not None:
+        box = lamp.relight(blocks, light, x, y, z, pval, part)
+    else:
+        box = lamp.placed(blocks, light, x, y, z, old, new, now, zc, brighter, part)
+        if box is None:
+            box = lamp.taken(blocks, light, x, y, z, old, new, now, before, zc, part)
+    if box is not None:
+        STATS["lamp"] += 1
+        return box
     if part:
         return None
     STATS["box"] += 1

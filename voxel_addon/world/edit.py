@@ -252,14 +252,15 @@ def _apply(world, items, write=True):
             remeshed = _remesh(world, last, win, first)
             if opened is not None:   # the light sees the blocks the full solve sees
                 blocks[opened] = 0
-            relit = _relight(world, blocks, lit, steps, near, w0, sight, part is not None)
+            relit = _relight(world, blocks, lit, steps, near, w0, (z0, z1), sight,
+                             part is not None)
             if relit is None:   # the light reads past the part: on the whole window
                 blocks = _gather(world, win.x0, win.y0, win.x1, win.y1, "blocks", z0,
                                  writes=top)
                 lit = _gather(world, win.x0, win.y0, win.x1, win.y1, "light", z0, z1)
                 for (x, y, z), (b, _) in first.items():   # as before the stroke
                     blocks[x - win.x0, y - win.y0, z] = b
-                relit = _relight(world, blocks, lit, steps, near, win, sight)
+                relit = _relight(world, blocks, lit, steps, near, win, (z0, z1), sight)
             payloads = []
             for k in sorted(relit | remeshed):
                 c = world.chunks[k]
@@ -405,14 +406,20 @@ def _patch(world, meshing, sub, last, first, remesh, rx0, ry0):
     return out
 
 
-def _relight(world, blocks, lit, steps, near, win, sight=None, part=False) -> set | None:
+def _relight(world, blocks, lit, steps, near, win, layers, sight=None,
+             part=False) -> set | None:
     """Relight voxel by voxel (each update starts from the exact light of the blocks
     before it; `blocks` and `lit` are the window as the light sees it, changed in
-    place), then keep what changed inside the relit boxes on the chunks. Returns the
-    keys relit; with `part` (the window is a _part) None where the light would
-    read past it (nothing kept)."""
+    place; `lit` is the chunks' light over `layers`), then keep what changed inside
+    the relit boxes on the chunks. Returns the keys relit; with `part` (the window is
+    a _part) None where the light would read past it (nothing kept)."""
     from .. import light
     x0, y0 = win.x0, win.y0
+    # the chunks' light as it was, for the compare below: lit's layers copied into a
+    # scratch buffer (a chunk's own light may be packed: decoding it again cost more)
+    za, zb = layers
+    was = _gather(world, 0, 0, lit.shape[0], lit.shape[1], "light_was", fill=False)
+    was[:, :, za:zb] = lit[:, :, za:zb]
     lo = [win.x1 - x0, win.y1 - y0, C.HEIGHT]  # union of the relit boxes
     hi = [0, 0, 0]
     seen = [b for _, _, _, b, _ in steps]
@@ -445,12 +452,9 @@ def _relight(world, blocks, lit, steps, near, win, sight=None, part=False) -> se
             box = (slice(i0 + x0 - cx * S, i1 + x0 - cx * S),
                    slice(j0 + y0 - cy * S, j1 + y0 - cy * S), slice(lo[2], hi[2]))
             new = lit[i0:i1, j0:j1, lo[2]:hi[2]]
-            # compared without rebuilding a packed light (its sections were decoded
-            # for the window: remembered); changed, a new array (payloads out there
-            # keep theirs) rebuilt or copied once
-            cur = np.empty_like(new, order="F")
-            c.light_into(cur, box[0], box[1], lo[2], hi[2])
-            if not np.array_equal(new, cur):
+            # changed, a new array (payloads out there keep theirs) rebuilt or
+            # copied once
+            if not np.array_equal(new, was[i0:i1, j0:j1, lo[2]:hi[2]]):
                 a = c.light_copy()
                 a[box] = new
                 c.light = a

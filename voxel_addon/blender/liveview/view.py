@@ -46,6 +46,8 @@ STILL_S = 0.25       # the view is still this long after its last change: full q
 BUDGET_S = 0.004     # CPU time per redraw for taking in streamed chunks
 POLL_S = 0.05        # while loading: how often to look for new payloads between redraws
 KEPT_MAX = 8         # kept frames per window (one per region; quad view has four)
+CHECK_S = 0.5        # a redraw looks for the world file (a stat), and for a world
+                     # reopened or the file path resolved anew, at most this often
 
 
 class Frame(NamedTuple):
@@ -171,6 +173,19 @@ class LiveView:
                                       # finish Blender's queued drawing before ours starts)
         self._timer_on = False
         self._tick_fn, self._tick_ui_fn = self._tick, self._tick_ui  # (one object each)
+        # the panel's values are read again only after touch() (issue 29: ~0.08 ms of
+        # RNA reads per redraw): (gen, ...) -> Settings and its values as a tuple
+        self.gen = 0
+        self._s = None
+        self._ok = (None, 0.0)        # (path, until): the file was there, not looked for
+                                      # again before
+        self._world_until = 0.0       # _feed_for: the world's look-up holds until then
+        self._nwin = 0                # windows open at the last frame (their number)
+
+    def touch(self) -> None:
+        """The View panel's values may have changed (a property's update, undo, a
+        frame change: liveview.sync's handlers): the next redraw reads them."""
+        self.gen += 1
 
     # ------------------------------------------------------------------ status
     @staticmethod
@@ -200,11 +215,16 @@ class LiveView:
         vv = getattr(scene, "voxel_view", None)
         if vv is None or not vv.show:
             return
-        if not self.error and self.problem(context):
-            return
+        path = scene.voxel.path
+        if not self.error and (path != self._ok[0] or time.perf_counter() >= self._ok[1]):
+            if self.problem(context):
+                return
+            # (a removed file is seen by the first redraw CHECK_S after the last look;
+            # the panel asks problem() itself on each of its redraws)
+            self._ok = (path, time.perf_counter() + CHECK_S)
         try:
             with host.kept():
-                self._frame(context, scene, vv)
+                self._frame(context, scene, vv, path)
             self.error = None
         except VoxelError as e:
             self.error = str(e)
@@ -215,7 +235,7 @@ class LiveView:
         for fn in list(self.overlays):
             fn(context)
 
-    def _frame(self, context, scene, vv):
+    def _frame(self, context, scene, vv, path):
         import gpu
         host_cpu = 0.0
         if self.finish:  # bench: Blender's own drawing of the region, queued before ours
@@ -226,9 +246,13 @@ class LiveView:
         region, rv3d, window = context.region, context.region_data, context.window
         if region is None or rv3d is None or window is None:
             return
-        wins = frozenset(w.as_pointer() for w in context.window_manager.windows)
-        if wins != self.windows:
-            self._prune(context, wins)
+        wp = window.as_pointer()
+        wm = context.window_manager
+        if wp not in self.windows or len(wm.windows) != self._nwin:  # one opened or closed
+            wins = frozenset(w.as_pointer() for w in wm.windows)
+            self._nwin = len(wins)
+            if wins != self.windows:
+                self._prune(context, wins)
         view = tuple(map(tuple, rv3d.view_matrix))
         key = region.as_pointer()
         st = self.regions.setdefault(key, _Region())
@@ -243,7 +267,7 @@ class LiveView:
         if st.cam[0] != ck:  # (a linear solve and a dataclass: reused while the view rests)
             st.cam = (ck, view_camera(view, win_m, vv.distance * 16 * 1.5 + 256.0))
         cam = st.cam[1]
-        feed = self._feed_for(scene)
+        feed = self._feed_for(path, vv, now)
         # the stream follows one region (quad view: the one last navigated): the eye of a
         # perspective view, the pivot of an orthographic one (its eye is arbitrary)
         at = None
@@ -259,17 +283,11 @@ class LiveView:
         # draft while moving and while chunks stream in: a full frame holds the GIL for
         # seconds on software GL and starves the stream's worker thread
         draft = vv.quality == "draft" or (vv.quality == "auto" and busy)
-        s = settings_of(vv, draft, world=feed.world)
-        if cam.ortho:
-            # distance fog needs an eye; an orthographic view's is arbitrary (it moves with
-            # the zoom), and a side view would show the far half of the area washed out
-            s.fog = False
-        else:
-            s.fov = min(150.0, max(10.0, cam.fov))
+        s, s_look = self._settings(vv, draft, feed.world, cam)
         hours = hours_of(scene)
-        pane = self.panes.get(window.as_pointer())
+        pane = self.panes.get(wp)
         if pane is None:
-            pane = self.panes[window.as_pointer()] = Pane(host.device())
+            pane = self.panes[wp] = Pane(host.device())
         t_py = time.thread_time() - c0
         t1 = time.perf_counter()
         drawn = pane.sync(feed)
@@ -277,8 +295,7 @@ class LiveView:
         vw, vh = gpu.state.viewport_get()[2:]
         # everything the picture depends on (Blender's objects are mixed in by depth
         # on every redraw): the same again, and the kept frame is the frame
-        look = (view, win_m, (vw, vh), tuple(vars(s).values()), hours, vv.sky, pane.gen,
-                draft)
+        look = (view, win_m, (vw, vh), s_look, hours, vv.sky, pane.gen, draft)
         k = pane.kept.get(key)
         reused, calls, t_sub, comp_cpu = False, 0, 0.0, 0.0
         if self.reuse and k is not None and k.look == look:
@@ -344,17 +361,40 @@ class LiveView:
         elif draft and vv.quality == "auto":  # once the view is still: a full frame
             self._want_redraw(max(0.02, STILL_S - (time.perf_counter() - st.changed)))
 
-    def _feed_for(self, scene) -> Feed:
+    def _settings(self, vv, draft, world, cam):
+        """render.Settings for this redraw, and its values as a tuple (the kept
+        frame's look): read from the panel again only after touch() (kept while
+        orbiting), or for another scene, quality, world or projection."""
+        key = (self.gen, vv.as_pointer(), draft, world, cam.ortho, cam.fov)
+        c = self._s
+        if c is not None and c[0] == key:
+            return c[1], c[2]
+        s = settings_of(vv, draft, world=world)
+        if cam.ortho:
+            # distance fog needs an eye; an orthographic view's is arbitrary (it moves with
+            # the zoom), and a side view would show the far half of the area washed out
+            s.fog = False
+        else:
+            s.fov = min(150.0, max(10.0, cam.fov))
+        self._s = (key, s, tuple(vars(s).values()))
+        return s, self._s[2]
+
+    def _feed_for(self, path, vv, now) -> Feed:
         from .. import session
-        vv = scene.voxel_view
-        world = session.world(scene.voxel.path)
         f = self.feed
+        # the world is looked up by its path (a realpath, cached by session._key for a
+        # second) only every CHECK_S while the path and the world stay
+        if f is not None and now < self._world_until and f.path == path and \
+                f.distance == vv.distance and session.still_open(f.world):
+            return f
+        world = session.world(path)
         if f is None or f.world is not world or f.distance != vv.distance:
             if f is not None:
                 f.close()
-            self.feed = Feed(scene.voxel.path, world, vv.distance)
+            self.feed = Feed(path, world, vv.distance)
             self.stats.update(drawn=0, wanted=0)
-            firstview.shown(scene.voxel.path)  # the first minute: views underground come up
+            firstview.shown(path)  # the first minute: views underground come up
+        self._world_until = now + CHECK_S
         return self.feed
 
     def _prune(self, context, wins) -> None:
@@ -454,6 +494,7 @@ class LiveView:
             self.feed = None
         self.regions.clear()
         self.windows = frozenset()
+        self._s, self._ok, self._world_until, self._nwin = None, (None, 0.0), 0.0, 0
         for p in self.panes.values():
             p.release()
         self.panes.clear()

@@ -490,6 +490,7 @@ class LiveView:
             self.handle = bpy.types.SpaceView3D.draw_handler_add(self._draw, (), "WINDOW",
                                                                  "POST_VIEW")
         self.error = None
+        self.touch()  # (the View panel's properties call this on every change)
         redraw()
 
     def close(self) -> None:

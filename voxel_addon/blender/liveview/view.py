@@ -278,7 +278,7 @@ class LiveView:
             at = tuple(rv3d.view_location)[:2] if cam.ortho else (cam.x, cam.y)
         feed.set_far(far)
         had = len(feed.chunks)
-        loading = feed.update(at, cam.forward, BUDGET_S)
+        loading = feed.update(at, cam.fwd(), BUDGET_S)  # (a tuple: set_view takes floats)
         # a frame that takes in new chunks is a draft too: the last streamed ones show
         # without a full frame's wait (~0.5 s on llvmpipe); the full one follows
         busy = moving or loading or len(feed.chunks) > had

@@ -165,8 +165,8 @@ def run(world: str, distance: int, far: int, rounds: int):
     want = {"far": far}
     real = lv.settings_of
 
-    def settings_of(v, draft=False, render=False):
-        s = real(v, draft, render)
+    def settings_of(v, draft=False, render=False, **kw):
+        s = real(v, draft, render, **kw)
         s.far = want["far"]
         return s
     lv.settings_of = settings_of
@@ -198,6 +198,7 @@ def run(world: str, distance: int, far: int, rounds: int):
                 for side, f in steps[k:] + steps[:k]:  # rotated: no side always first
                     if side == "gpu":
                         want["far"] = f
+                        LIVE.touch()  # (the view reads its settings again)
                         fr = yield from V.frames(1)
                         ms, cpu, calls = fr[-1].ms, fr[-1].cpu_ms, fr[-1].draw_calls
                         if fr[-1].reused or fr[-1].quality != q:

@@ -237,6 +237,9 @@ def test_moving_the_view_streams_new_chunks(run):
 def test_no_python_error_over_100_redraws(run):
     r = run["steps"]["redraws"]
     assert r["frames"] >= 100 and r["error"] is None, r
+    # a keyframed panel value reaches the redraws at each frame (the kept settings
+    # are read again after a frame change)
+    assert r["animated_haze"] == [7.0, 1.5], r
     bad = [ln for ln in run["log"].splitlines()
            if re.search(r"Traceback|Error:|Exception", ln)]
     assert not bad, bad[:20]

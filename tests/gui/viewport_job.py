@@ -383,8 +383,25 @@ def step_redraws():
         set_view((8.0, 8.0, 80.0), (60, 0, 3.6 * i), 80.0)
         yield 0.0
     yield from wait_frames()
+    # a panel value that changes with no update callback of its own (keyframed Haze at
+    # another frame): the next redraw reads it (redraws keep the panel's settings until
+    # something may have changed them: LiveView.touch)
+    vv = sc.voxel_view
+    haze = vv.haze
+    vv.haze = 1.5
+    vv.keyframe_insert("haze", frame=1)
+    vv.haze = 7.0
+    vv.keyframe_insert("haze", frame=30)
+    got = []
+    for f in (30, 1):
+        sc.frame_set(f)
+        yield from wait_frames()
+        got.append(LIVE._s[1].haze)  # (what the last redraw drew with)
+    sc.animation_data_clear()
+    sc.frame_set(1)
+    vv.haze = haze
     RESULT["steps"]["redraws"] = {"frames": LIVE.stats["frames"] - n0,
-                                  "error": LIVE.error}
+                                  "error": LIVE.error, "animated_haze": got}
 
 
 def step_quad():

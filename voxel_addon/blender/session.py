@@ -68,6 +68,12 @@ def world(path: str, *, create_seed: int | None = None, generator: str | None = 
     return w
 
 
+def still_open(w) -> bool:
+    """Whether the World w is still the open one of its path (a redraw's cheap check:
+    no path resolved)."""
+    return any(x is w for x in _worlds.values())
+
+
 def _warm(w) -> None:
     """A fresh install's first kernel builds take ~4 s (issue 28): start them when a
     world opens (New, Open, a panel that needs it), so they are done by the time the

@@ -238,12 +238,17 @@ def visible_boxes(mvp: np.ndarray, ch: np.ndarray) -> np.ndarray:
     """visible() for boxes(lo, hi): the per-frame form, ~8k regions (view distance 32)
     in ~0.05 ms (the (7, n) layout is 10x faster than (n, 3) @ (3, 6) products).
     shaders/cull.comp is its GPU twin."""
-    p = planes(mvp)
-    a = np.empty((6, 7), ch.dtype)
-    a[:, :3] = p[:, :3]
-    a[:, 3:6] = np.abs(p[:, :3])
-    a[:, 6] = p[:, 3]
-    return (a @ ch).min(0) >= 0  # all six planes non-negative (one reduction)
+    # planes() as one product, spread to (n, |n|, d) by another (sums with zeros and
+    # ones: the same floats; a redraw's Python, issue 29)
+    a = _PLANES @ np.asarray(mvp, np.float64) @ _SPREAD
+    np.abs(a[:, 3:6], out=a[:, 3:6])
+    return (a.astype(ch.dtype) @ ch).min(0) >= 0  # all six planes non-negative (one reduction)
+
+
+_PLANES = np.array([[1, 0, 0, 1], [-1, 0, 0, 1], [0, 1, 0, 1], [0, -1, 0, 1], [0, 0, 1, 1],
+                    [0, 0, -1, 1]], np.float64)  # planes(m) == _PLANES @ m
+_SPREAD = np.zeros((4, 7))
+_SPREAD[[0, 1, 2, 0, 1, 2, 3], range(7)] = 1.0
 
 
 def frustum_corners(inv_vp: np.ndarray) -> np.ndarray:

@@ -6,8 +6,6 @@ stored as floats, vec4 arrays as their rows) and this packs the values the same 
 """
 from __future__ import annotations
 
-import struct
-
 import numpy as np
 
 from . import glsl
@@ -22,24 +20,26 @@ def layout() -> tuple[dict, int]:
 
 
 class FrameBlock:
-    """The block's values by member name; pack() packs them in one struct call (a
-    frame sets ~30 members: one NumPy write each cost more than the whole pack)."""
+    """The block's values by member name, packed into one float32 array that stays:
+    pack() writes only the members set to another object or scalar value since the
+    last pack (a redraw while orbiting changes a dozen of ~60: issue 29)."""
 
     def __init__(self):
         self.members, size = layout()
         self.order = sorted(self.members, key=lambda k: self.members[k][0])
-        fmt, at = "<", 0
-        for k in self.order:
-            o, n, _ = self.members[k]
-            fmt += f"{4 * (o - at)}x" if o > at else ""
-            fmt += "f" * n
-            at = o + n
-        fmt += f"{size - 4 * at}x" if 4 * at < size else ""
-        self.fmt = fmt
-        self.data = bytearray(size)
+        self.arr = np.zeros(size // 4, np.float32)  # (the paddings stay 0)
         self.values = {k: 0 if self.members[k][1] == 1 else (0,) * self.members[k][1]
                        for k in self.order}
-        self._seen: dict = {}  # member -> (the value object last packed, its floats)
+        # per member: how pack writes it (an index, or a view of arr in the value's
+        # shape: a row-major 4x4 into a column-major one, (N, 4) rows, a vector), and
+        # the value object last written
+        self._at: dict = {}
+        for k in self.order:
+            o, n, kind = self.members[k]
+            a = self.arr[o:o + n]
+            self._at[k] = o if n == 1 else a.reshape(4, 4).T if n == 16 and kind != "a" \
+                else a.reshape(-1, 4) if kind == "a" else a
+        self._seen = dict(self.values)
 
     def set(self, **values) -> None:
         """Scalars, sequences, row-major 4x4 NumPy matrices (GL gets columns), or
@@ -48,28 +48,18 @@ class FrameBlock:
 
     def pack(self) -> bytes:
         """The block's bytes (a device uploads them: Device.frame). A member set again
-        as the same object keeps its converted floats (the sky's tables and colours
-        of an hour, a still view's matrices: issue 29, a redraw's Python); so values
-        are never changed in place once set."""
-        flat, seen = [], self._seen
-        for k in self.order:
-            v, (_, n, kind) = self.values[k], self.members[k]
-            if n == 1:
-                flat.append(float(v))
+        as the same object is not written again (the sky's tables and colours of an
+        hour, a still view's matrices: issue 29, a redraw's Python); so values are
+        never changed in place once set."""
+        seen, at, arr = self._seen, self._at, self.arr
+        for k, v in self.values.items():
+            w = seen[k]
+            if w is v:
                 continue
-            c = seen.get(k)
-            if c is not None and c[0] is v:
-                flat.extend(c[1])
-                continue
-            if kind == "a":  # (N, 4) rows
-                f = np.asarray(v, float).ravel().tolist()
-            elif n == 16:
-                f = np.asarray(v, float).T.ravel().tolist()
-            elif isinstance(v, tuple):  # (a new tuple each frame: the eye, the sun's pixel)
-                f = [float(x) for x in v]
+            a = at[k]
+            if a.__class__ is int:
+                arr[a] = float(v)
             else:
-                f = np.asarray(v, float).tolist()
-            seen[k] = (v, f)
-            flat.extend(f)
-        struct.pack_into(self.fmt, self.data, 0, *flat)
-        return bytes(self.data)
+                a[...] = v
+            seen[k] = v
+        return arr.tobytes()

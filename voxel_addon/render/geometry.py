@@ -156,13 +156,22 @@ class Geometry:
         lo[:, :, :2] = (np.array(keys, np.float64).reshape(-1, 1, 2) * 16) if keys else 0.0
         lo[..., 2] = np.arange(nreg) * h
         hi = lo + [16.0, 16.0, h]
-        # 0.5 slack for waving: vertices move by < 0.1 blocks
-        self._boxes = camera.boxes(lo.reshape(-1, 3) - 0.5, hi.reshape(-1, 3) + 0.5)
         self._rows = []
         for p in range(len(PASSES)):
             t = [(i, q, n, index[k] * nreg + r) for i, b in enumerate(self._list)
                  for q, n, k, r in b.rows[p]]
             self._rows.append(np.array(t, np.int64).reshape(-1, 4).T if t else None)
+        # only the boxes of regions with quads (a half or less of all: the air above
+        # the ground, issue 29: culling reads a half as much), numbered anew
+        used = np.unique(np.concatenate([t[3] for t in self._rows if t is not None] or
+                                        [np.zeros(0, np.int64)]))
+        new = np.zeros(len(keys) * nreg, np.int64)
+        new[used] = np.arange(len(used))
+        for t in self._rows:
+            if t is not None:
+                t[3] = new[t[3]]
+        # 0.5 slack for waving: vertices move by < 0.1 blocks
+        self._boxes = camera.boxes(lo.reshape(-1, 3)[used] - 0.5, hi.reshape(-1, 3)[used] + 0.5)
         # every pass's rows in one table, so a frame's draw lists are one set of NumPy
         # calls (issue 29): per row its batch among all passes' (pass * batches +
         # batch), first quad, quads, box, whether the row before / after it is the
@@ -179,6 +188,8 @@ class Geometry:
         mid[:, :3] = self._boxes[:3, box].T
         mid[:, 3] = pi * 1e6
         self._all = (gb, q, n, box, ~nb[:-1], ~nb[1:], mid)
+        self._bq, self._end = np.vstack([gb, q]), q + n  # (a range's batch, first quad; its end)
+        self._join = np.zeros(len(gb) + 1, bool)  # batches' scratch: J[i], row i joins i - 1
         self._cut = np.cumsum([0] + [0 if t is None else t.shape[1] for t in self._rows])
         self._meshes = [b.meshes[p] for p in range(len(PASSES)) for b in self._list]
         self._origins = [b.origin for _ in PASSES for b in self._list]
@@ -204,11 +215,12 @@ class Geometry:
         return v
 
     def _rect(self, p: int):
-        """The horizontal extent (x0, x1, y0, y1) of pass p's rows' boxes (kept)."""
+        """The horizontal extent of pass p's rows' boxes as (x0, -x1, y0, -y1) rows of
+        one (4, n) array (kept)."""
         r = self._rects.get(p)
         if r is None:
             c = self._boxes[:, self._all[3][self._cut[p]:self._cut[p + 1]]]
-            r = self._rects[p] = (c[0] - c[3], c[0] + c[3], c[1] - c[4], c[1] + c[4])
+            r = self._rects[p] = np.array((c[0] - c[3], -(c[0] + c[3]), c[1] - c[4], -(c[1] + c[4])))
         return r
 
     def seen(self, name: str, vis: np.ndarray) -> bool:
@@ -233,31 +245,34 @@ class Geometry:
         if last is not None and last[0] == key and np.array_equal(last[1], vis) and \
                 (not reach or last[3] == eye):
             return last[2]
-        gb, q, n, box, same_prev, same_next, mid = self._all
+        _, _, _, box, same_prev, _, mid = self._all
         v = vis[box]
         for name, r in (reach or {}).items():
             p = PASSES.index(name)
             a, b = self._cut[p], self._cut[p + 1]
             if a < b:
-                x0, x1, y0, y1 = self._rect(p)
-                dx = np.maximum(np.maximum(x0 - eye[0], eye[0] - x1), 0.0)
-                dy = np.maximum(np.maximum(y0 - eye[1], eye[1] - y1), 0.0)
-                v[a:b] &= dx * dx + dy * dy <= r * r
-        vb = np.zeros(len(v) + 1, bool)  # v shifted: vb[:-1] the row before, vb[1:] v
-        vb[1:] = v
-        starts = np.flatnonzero(v & ~(same_prev & vb[:-1]))
-        vb[:-1] = v                      # vb[1:] now the row after (last: False)
-        vb[-1] = False
-        ends = np.flatnonzero(v & ~(same_next & vb[1:]))
+                # (x0 - x, x - x1, y0 - y, y - y1), at least 0: of each pair one is 0, so
+                # their sums are the distances along x and y (in fewer NumPy calls)
+                d = self._rect(p) - np.array((eye[0], -eye[0], eye[1], -eye[1]))[:, None]
+                np.maximum(d, 0.0, out=d)
+                d = d.reshape(2, 2, -1).sum(1)
+                v[a:b] &= (d * d).sum(0) <= r * r
+        # J[i]: row i continues row i - 1's range (both visible, one batch's); J[0] and
+        # J[-1] stay False. A range starts at a visible row that continues none, ends at
+        # one that the next does not continue (few NumPy calls: issue 29)
+        J = self._join
+        np.logical_and(v[1:], v[:-1], out=J[1:-1])
+        J[1:-1] &= same_prev[1:]
+        starts = np.flatnonzero(v > J[:-1])
+        ends = np.flatnonzero(v > J[1:])
         cut = np.searchsorted(starts, self._cut).tolist()  # each pass's first range
         if eye is not None and len(starts) > 1:
             d = mid[starts] - (*eye, 0.0)
             order = np.argsort(np.einsum("ij,ij->i", d, d))  # (within each pass)
             starts, ends = starts[order], ends[order]
-        first = q[starts]
+        bs, fs = self._bq[:, starts].tolist()
         M, O = self._meshes, self._origins
-        items = [(M[i], f, c, O[i]) for i, f, c in
-                 zip(gb[starts].tolist(), first.tolist(), (q[ends] + n[ends] - first).tolist())]
+        items = [(M[i], f, e - f, O[i]) for i, f, e in zip(bs, fs, self._end[ends].tolist())]
         out = {}
         for name in names:
             p = PASSES.index(name)

@@ -30,6 +30,8 @@ from .walls import Walls
 
 _EYE = np.eye(4)
 _EYE.flags.writeable = False
+_NO_SKY = np.full((sky.NE * sky.NA, 4), math.log(sky.EPS))  # the sky tables of a debug view
+_NO_SKY.flags.writeable = False  # (one object: the frame block packs it once)
 
 
 class Renderer:
@@ -452,7 +454,7 @@ def sky_values(s: Settings, sp: dict, hours: float, sky_on: bool, camera, area,
     also asks source.open_sea whether the shown area's edge is at sea). far: the far
     ring's reach in blocks when it is drawn: the fade moves out to it, the sea starts
     beyond it (far terrain has its own water)."""
-    zero = np.full((sky.NE * sky.NA, 4), math.log(sky.EPS))
+    zero = _NO_SKY
     fade_end = s.fade_distance or far or (s.distance + 0.5) * 16.0
     fade = s.fade and not camera.ortho
     box = [16.0 * v for v in area] if area else [0.0, 0.0, 0.0, 0.0]

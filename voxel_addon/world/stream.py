@@ -92,6 +92,13 @@ class Stream:
             self._view = (cx, cy, d)
             if old is None or old[:2] != (cx, cy):
                 self._prune()
+            else:
+                # the same chunk (a live view's redraws: orbiting turns the direction
+                # only): a worker at work reads the view again for its next batch, an
+                # idle one has nothing in range left to make, so none is woken (each
+                # woken worker copied the chunk map and scanned the range, holding the
+                # GIL beside every redraw: issue 29)
+                return
             self._changes += 1
             self._wake.notify_all()
 

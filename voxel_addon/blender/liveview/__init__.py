@@ -18,6 +18,23 @@ def sync(context=None) -> None:
     LIVE.sync()
     if LIVE.handle is not None and _load_pre not in bpy.app.handlers.load_pre:
         bpy.app.handlers.load_pre.append(bpy.app.handlers.persistent(_load_pre))
+    if LIVE.handle is not None:
+        for hs in _touched_by():
+            if _touch not in hs:
+                hs.append(bpy.app.handlers.persistent(_touch))
+
+
+def _touched_by():
+    """What may change the View panel's values without their update callbacks (which
+    call sync): undo, redo, animation (a frame change, drivers), other edits of the
+    scene. A redraw reads the panel only after one of them (LiveView.touch)."""
+    import bpy
+    h = bpy.app.handlers
+    return (h.depsgraph_update_post, h.frame_change_post, h.undo_post, h.redo_post)
+
+
+def _touch(*_):
+    LIVE.touch()
 
 
 def _load_pre(*_):
@@ -40,7 +57,8 @@ def shutdown() -> None:
     """Unregister: every handler, timer, thread (the stream's) and GPU object goes."""
     import bpy
     LIVE.close()
-    for hs, fn in ((bpy.app.handlers.load_pre, _load_pre), (bpy.app.handlers.load_post, _load_post)):
+    for hs, fn in ((bpy.app.handlers.load_pre, _load_pre), (bpy.app.handlers.load_post, _load_post),
+                   *((h, _touch) for h in _touched_by())):
         while fn in hs:
             hs.remove(fn)
     LIVE.stop_timers()

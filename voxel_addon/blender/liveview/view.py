@@ -36,7 +36,7 @@ import numpy as np
 
 from ...core import trace
 from ...core.errors import VoxelError
-from .. import firstview
+from .. import firstview, session
 from . import composite, host
 from .feed import Feed
 from .options import hours_of, settings_of, view_camera
@@ -46,6 +46,8 @@ STILL_S = 0.25       # the view is still this long after its last change: full q
 BUDGET_S = 0.004     # CPU time per redraw for taking in streamed chunks
 POLL_S = 0.05        # while loading: how often to look for new payloads between redraws
 KEPT_MAX = 8         # kept frames per window (one per region; quad view has four)
+CHECK_S = 0.5        # a redraw looks for the world file (a stat), and for a world
+                     # reopened or the file path resolved anew, at most this often
 
 
 class Frame(NamedTuple):
@@ -171,6 +173,20 @@ class LiveView:
                                       # finish Blender's queued drawing before ours starts)
         self._timer_on = False
         self._tick_fn, self._tick_ui_fn = self._tick, self._tick_ui  # (one object each)
+        # the panel's values are read again only after touch() (issue 29: ~0.08 ms of
+        # RNA reads per redraw): (gen, ...) -> Settings and its values as a tuple
+        self.gen = 0
+        self._s = None
+        self._ok = (None, 0.0)        # (path, until): the file was there, not looked for
+                                      # again before
+        self._world_until = 0.0       # _feed_for: the world's look-up holds until then
+        self._wins_until = 0.0        # the open windows are listed again then
+        self._pv = None               # (key, _panel's values)
+
+    def touch(self) -> None:
+        """The View panel's values may have changed (a property's update, undo, a
+        frame change: liveview.sync's handlers): the next redraw reads them."""
+        self.gen += 1
 
     # ------------------------------------------------------------------ status
     @staticmethod
@@ -200,11 +216,16 @@ class LiveView:
         vv = getattr(scene, "voxel_view", None)
         if vv is None or not vv.show:
             return
-        if not self.error and self.problem(context):
-            return
+        path = scene.voxel.path
+        if not self.error and (path != self._ok[0] or time.perf_counter() >= self._ok[1]):
+            if self.problem(context):
+                return
+            # (a removed file is seen by the first redraw CHECK_S after the last look;
+            # the panel asks problem() itself on each of its redraws)
+            self._ok = (path, time.perf_counter() + CHECK_S)
         try:
             with host.kept():
-                self._frame(context, scene, vv)
+                self._frame(context, scene, vv, path)
             self.error = None
         except VoxelError as e:
             self.error = str(e)
@@ -215,7 +236,7 @@ class LiveView:
         for fn in list(self.overlays):
             fn(context)
 
-    def _frame(self, context, scene, vv):
+    def _frame(self, context, scene, vv, path):
         import gpu
         host_cpu = 0.0
         if self.finish:  # bench: Blender's own drawing of the region, queued before ours
@@ -226,50 +247,49 @@ class LiveView:
         region, rv3d, window = context.region, context.region_data, context.window
         if region is None or rv3d is None or window is None:
             return
-        wins = frozenset(w.as_pointer() for w in context.window_manager.windows)
-        if wins != self.windows:
-            self._prune(context, wins)
+        wp = window.as_pointer()
+        now = time.perf_counter()
+        # a window opened: at once; one closed (its Pane released, its regions
+        # forgotten): within CHECK_S (RNA reads are ~10 us each in a redraw)
+        if wp not in self.windows or now >= self._wins_until:
+            wins = frozenset(w.as_pointer() for w in context.window_manager.windows)
+            self._wins_until = now + CHECK_S
+            if wins != self.windows:
+                self._prune(context, wins)
         view = tuple(map(tuple, rv3d.view_matrix))
         key = region.as_pointer()
         st = self.regions.setdefault(key, _Region())
-        now = time.perf_counter()
+        distance, far, quality, sky_on, hours = self._panel(scene, vv)
         if view != st.view:
             if st.view is not None or self.lead not in self.regions:
                 self.lead = key  # the region being navigated leads the stream
             st.view, st.changed = view, now
         moving = now - st.changed < STILL_S
         win_m = tuple(map(tuple, rv3d.window_matrix))
-        ck = (view, win_m, vv.distance)
+        ck = (view, win_m, distance)
         if st.cam[0] != ck:  # (a linear solve and a dataclass: reused while the view rests)
-            st.cam = (ck, view_camera(view, win_m, vv.distance * 16 * 1.5 + 256.0))
+            st.cam = (ck, view_camera(view, win_m, distance * 16 * 1.5 + 256.0))
         cam = st.cam[1]
-        feed = self._feed_for(scene)
+        feed = self._feed_for(path, distance, now)
         # the stream follows one region (quad view: the one last navigated): the eye of a
         # perspective view, the pivot of an orthographic one (its eye is arbitrary)
         at = None
         if key == self.lead:
             at = tuple(rv3d.view_location)[:2] if cam.ortho else (cam.x, cam.y)
-        feed.set_far(vv.far)
+        feed.set_far(far)
         had = len(feed.chunks)
-        loading = feed.update(at, cam.forward, BUDGET_S)
+        loading = feed.update(at, cam.fwd(), BUDGET_S)  # (a tuple: set_view takes floats)
         # a frame that takes in new chunks is a draft too: the last streamed ones show
         # without a full frame's wait (~0.5 s on llvmpipe); the full one follows
         busy = moving or loading or len(feed.chunks) > had
         self.stats.update(wanted=feed.wanted, far_wanted=feed.far_wanted)
         # draft while moving and while chunks stream in: a full frame holds the GIL for
         # seconds on software GL and starves the stream's worker thread
-        draft = vv.quality == "draft" or (vv.quality == "auto" and busy)
-        s = settings_of(vv, draft, world=feed.world)
-        if cam.ortho:
-            # distance fog needs an eye; an orthographic view's is arbitrary (it moves with
-            # the zoom), and a side view would show the far half of the area washed out
-            s.fog = False
-        else:
-            s.fov = min(150.0, max(10.0, cam.fov))
-        hours = hours_of(scene)
-        pane = self.panes.get(window.as_pointer())
+        draft = quality == "draft" or (quality == "auto" and busy)
+        s, s_look = self._settings(vv, draft, feed.world, cam)
+        pane = self.panes.get(wp)
         if pane is None:
-            pane = self.panes[window.as_pointer()] = Pane(host.device())
+            pane = self.panes[wp] = Pane(host.device())
         t_py = time.thread_time() - c0
         t1 = time.perf_counter()
         drawn = pane.sync(feed)
@@ -277,8 +297,7 @@ class LiveView:
         vw, vh = gpu.state.viewport_get()[2:]
         # everything the picture depends on (Blender's objects are mixed in by depth
         # on every redraw): the same again, and the kept frame is the frame
-        look = (view, win_m, (vw, vh), tuple(vars(s).values()), hours, vv.sky, pane.gen,
-                draft)
+        look = (view, win_m, (vw, vh), s_look, hours, sky_on, pane.gen, draft)
         k = pane.kept.get(key)
         reused, calls, t_sub, comp_cpu = False, 0, 0.0, 0.0
         if self.reuse and k is not None and k.look == look:
@@ -308,7 +327,7 @@ class LiveView:
             # paid before the first terrain
             keep = not moving and len(feed.chunks) == had and (not loading or had > 0)
             k = pane.kept_for(key, (vw, vh)) if self.reuse and keep else None
-            composite.composite(pane.dev, f, host_vp, vv.sky, k, (vw, vh))
+            composite.composite(pane.dev, f, host_vp, sky_on, k, (vw, vh))
             if self.finish:
                 pane.dev.finish()
                 comp_cpu = time.process_time() - pc
@@ -341,20 +360,51 @@ class LiveView:
             # a fixed 4 frames' wait left the last tiles undrawn 2-7 s under load (issue 28);
             # once it has made them all, at once
             self._want_redraw(0.05 if feed.far_made() else max(0.05, ms / 1e3), news=True)
-        elif draft and vv.quality == "auto":  # once the view is still: a full frame
+        elif draft and quality == "auto":  # once the view is still: a full frame
             self._want_redraw(max(0.02, STILL_S - (time.perf_counter() - st.changed)))
 
-    def _feed_for(self, scene) -> Feed:
-        from .. import session
-        vv = scene.voxel_view
-        world = session.world(scene.voxel.path)
+    def _panel(self, scene, vv):
+        """(distance, far, quality, sky, hours) from the View panel, read again only
+        after touch()."""
+        key = (self.gen, vv.as_pointer())
+        c = self._pv
+        if c is None or c[0] != key:
+            c = self._pv = (key, (vv.distance, vv.far, vv.quality, vv.sky, hours_of(scene)))
+        return c[1]
+
+    def _settings(self, vv, draft, world, cam):
+        """render.Settings for this redraw, and its values as a tuple (the kept
+        frame's look): read from the panel again only after touch() (kept while
+        orbiting), or for another scene, quality, world or projection."""
+        key = (self._pv[0], draft, world, cam.ortho, cam.fov)  # (after _panel)
+        c = self._s
+        if c is not None and c[0] == key:
+            return c[1], c[2]
+        s = settings_of(vv, draft, world=world)
+        if cam.ortho:
+            # distance fog needs an eye; an orthographic view's is arbitrary (it moves with
+            # the zoom), and a side view would show the far half of the area washed out
+            s.fog = False
+        else:
+            s.fov = min(150.0, max(10.0, cam.fov))
+        self._s = (key, s, tuple(vars(s).values()))
+        return s, self._s[2]
+
+    def _feed_for(self, path, distance, now) -> Feed:
         f = self.feed
-        if f is None or f.world is not world or f.distance != vv.distance:
+        # the world is looked up by its path (a realpath, cached by session._key for a
+        # second) only every CHECK_S while the path and the world stay
+        if f is not None and now < self._world_until and f.path == path and \
+                f.distance == distance and session.still_open(f.world):
+            return f
+        world = session.world(path)
+        if f is None or f.world is not world or f.distance != distance:
             if f is not None:
                 f.close()
-            self.feed = Feed(scene.voxel.path, world, vv.distance)
+            self.feed = Feed(path, world, distance)
             self.stats.update(drawn=0, wanted=0)
-            firstview.shown(scene.voxel.path)  # the first minute: views underground come up
+            firstview.shown(path)  # the first minute: views underground come up
+        self._world_until = now + CHECK_S
         return self.feed
 
     def _prune(self, context, wins) -> None:
@@ -440,6 +490,7 @@ class LiveView:
             self.handle = bpy.types.SpaceView3D.draw_handler_add(self._draw, (), "WINDOW",
                                                                  "POST_VIEW")
         self.error = None
+        self.touch()  # (the View panel's properties call this on every change)
         redraw()
 
     def close(self) -> None:
@@ -454,6 +505,8 @@ class LiveView:
             self.feed = None
         self.regions.clear()
         self.windows = frozenset()
+        self._s, self._pv, self._ok, self._world_until = None, None, (None, 0.0), 0.0
+        self._wins_until = 0.0
         for p in self.panes.values():
             p.release()
         self.panes.clear()

@@ -12,7 +12,7 @@ import pytest
 from voxel_addon.cli import main
 from voxel_addon.core.blocks import REGISTRY
 from voxel_addon.core.errors import VoxelError
-from voxel_addon.formats import anvil, minecraft
+from voxel_addon.formats import anvil, minecraft, nbt
 from voxel_addon.world import World
 
 from . import mcfiles as mc
@@ -248,7 +248,11 @@ def test_a_large_chunk_is_not_inflated_ahead_and_still_imported(tmp_path):
     from voxel_addon.formats.region import Region
     reg = Region(tmp_path / "region" / "r.0.0.mca")
     got = minecraft._inflate([(reg, 0, 0), (reg, 1, 0)])
-    assert got[0] is None and got[1] == small
+    assert got[0] is None and got[1][0] == small
+    pre, tags = got[1][1]                               # read ahead, charged by the import
+    want = anvil.read(small)
+    assert [(s.y, s.palette) for s in pre.sections] == [(s.y, s.palette) for s in want.sections]
+    assert tags == nbt.read(small, anvil.KEEP, anvil.CHUNK_TAGS)[1]
     with World.create(tmp_path / "w.sqlite", seed=0, generator="empty", loader=False) as world:
         rep = minecraft.import_world(world, tmp_path)
         assert rep.chunks == 2 and not rep.damaged and world.file.chunk_count() == 2

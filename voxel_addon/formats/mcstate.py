@@ -198,15 +198,40 @@ _MZ = 15 - np.arange(16)[None, :].repeat(16, 0)        # voxel ly → Minecraft 
 _CELL_XZ = (_MZ >> 2) * 4 + (_LX >> 2)                 # a column's 4×4 biome cell
 
 
+_SPAN = 32
+_DOWN = np.arange(_SPAN, 0, -1, dtype=np.uint8)[:, None]   # span row r (from the top) -> SPAN - r
+
+
+def tops(blocks: np.ndarray) -> np.ndarray:
+    """(16, 16) [lx, ly]: each column's highest non-air z, 0 when it has none. Found in
+    the _SPAN layers below the highest non-empty one when every column has a block
+    there (most chunks: the ground is not that far below the tree tops), else over
+    all layers (one pass, not three over the chunk)."""
+    h = blocks.shape[2]
+    lay = np.ascontiguousarray(blocks.T).reshape(h, -1)   # [z][ly * 16 + lx]: a view (x fastest)
+    solid = lay[::-1] != 0                                # [h - 1 - z]: from the top down
+    first = int(solid.reshape(-1).argmax()) // lay.shape[1]   # first row with a block
+    if not solid[first].any():
+        return np.zeros(blocks.shape[:2], np.intp)
+    span = solid[first:first + _SPAN]
+    k = len(span)
+    got = (span.view(np.uint8) * _DOWN[_SPAN - k:]).max(axis=0)   # k - (first hit's row), 0: none
+    if got.all():
+        top = got.astype(np.intp)
+        top += h - 1 - first - k                           # z = h - 1 - (first + k - got)
+    else:   # a column without a block in the span: each column's last solid layer
+        top = h - 1 - solid.argmax(axis=0)
+        top[~solid.any(axis=0)] = 0
+    return top.reshape(blocks.shape[1], blocks.shape[0]).T
+
+
 def columns(ch, blocks: np.ndarray, y_min: int, biome, memo: dict | None = None) -> np.ndarray | None:
     """(16, 16) biome indices [lx, ly] of a chunk: the biome at each column's highest
     block (the lowest cell where a column is empty); `biome` (a name or a legacy id →
     an index) numbers them, `memo` keeps a section palette's numbers between calls."""
     from .anvil import cells
     memo = {} if memo is None else memo
-    # the highest non-air z per column (0 when empty): a max over z + 1 where solid
-    top = np.maximum(((blocks != 0) * np.arange(1, blocks.shape[2] + 1, dtype=np.int16)).max(axis=2) - 1, 0)
-    y = top + y_min                             # Minecraft y of each column's top
+    y = tops(blocks) + y_min                    # Minecraft y of each column's top
     lx, mz, cell_xz = _LX, _MZ, _CELL_XZ
     if ch.biomes is not None:                   # 1.13–1.17
         b = ch.biomes

@@ -222,9 +222,11 @@ def import_world(world, path, *, y_min=None, area=None, replace=False, progress=
 
 
 def _inflate(items):
-    """Each (region, cx, cz)'s NBT when it inflates to at most AHEAD_MAX bytes, else
-    None (the import's thread decodes it as before: a bomb is never held ahead), or
-    the error of reading its sectors."""
+    """Each (region, cx, cz)'s (NBT, anvil.scanned of it) when it inflates to at most
+    AHEAD_MAX bytes, else None (the import's thread decodes it as before: a bomb is
+    never held ahead), or the error of reading its sectors. The helper thread reads
+    the well-formed chunks too (anvil.scanned: their NumPy work lets go of the GIL
+    while the import's thread converts), their tags charged by the import's thread."""
     out = []
     for reg, cx, cz in items:
         try:
@@ -233,9 +235,11 @@ def _inflate(items):
             out.append(e)
             continue
         try:
-            out.append(decompress(kind, body, AHEAD_MAX))
+            nbt_ = decompress(kind, body, AHEAD_MAX)
         except ValueError:   # larger, or damaged: decoded again with the real limits
             out.append(None)
+            continue
+        out.append((nbt_, anvil.scanned(nbt_, packed=True)))
     return out
 
 
@@ -266,16 +270,23 @@ def _rows(enc, items):
 
 
 def _charged(got, reg, cx, cz, budget):
-    """_inflate's answer charged to the import's budget: what reg.payload(cx, cz,
-    budget) gives. While the budget has MAX_NBT left that is the same decode (it fits
-    the limit); a chunk _inflate left, or one near the budget's end, is decoded again
-    here under what is left."""
+    """_inflate's answer charged to the import's budget: what anvil.read(reg.payload(cx,
+    cz, budget), budget, packed=True) gives. While the budget has MAX_NBT left that is
+    the same decode (it fits the limit), and the helper's read is that chunk while its
+    tags fit what is left; a chunk _inflate left, or one near the budget's end, is
+    decoded again here under what is left, and a chunk the fast path left (or one
+    whose tags do not fit) read here by the general reader: what read does after its
+    fast path gives up (so this thread never scans while the helper does)."""
     if got is None or budget.bytes < MAX_NBT:
-        return reg.payload(cx, cz, budget)
+        return anvil.read(reg.payload(cx, cz, budget), budget, fast=False)
     if isinstance(got, BaseException):
         raise got
-    budget.spend_bytes(len(got))
-    return got
+    payload, pre = got
+    budget.spend_bytes(len(payload))
+    if pre is not None and pre[1] <= anvil.limit_of(budget):
+        budget.spend_tags(pre[1])
+        return pre[0]
+    return anvil.read(payload, budget, fast=False)
 
 
 def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
@@ -306,7 +317,7 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
     # A batch is written once the next one is converted, in the same order and with
     # the same staged meta as one after the other; an error writes the batch in hand
     # first, as the sequential import had (a close at a yield drops the one ahead).
-    ex = _helper()
+    ex, ex_rows = _helper(), _helper()   # reads ahead; compresses rows (one batch at a time)
     enc = world.file.encoder()
     ahead, got = deque(), deque()
     nxt = 0
@@ -330,7 +341,7 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
             if not got:
                 got.extend(ahead.popleft().result())
             try:
-                ch = anvil.read(_charged(got.popleft(), reg, cx, cz, budget), budget, packed=True)
+                ch = _charged(got.popleft(), reg, cx, cz, budget)
             except Exceeded as e:
                 raise VoxelError(f"{reg.path.name} chunk ({cx}, {cz}): {e}; import refused") \
                     from None
@@ -362,7 +373,7 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
             if len(batch) >= BATCH or (done == len(todo) and batch):
                 upto = flush() if pending else None
                 pal.save()   # staged for this batch's transaction, as before
-                pending = (ex.submit(_rows, enc, batch), biomes, done)
+                pending = (ex_rows.submit(_rows, enc, batch), biomes, done)
                 batch, biomes = [], []
                 if upto is not None:
                     yield upto, len(todo)
@@ -376,6 +387,7 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
         raise
     finally:
         ex.shutdown(wait=True, cancel_futures=True)
+        ex_rows.shutdown(wait=True, cancel_futures=True)
     if old and old == len(report.damaged) and not (report.chunks or report.unfinished):
         # nothing written: a world Minecraft never saved in 1.13+ is refused whole
         raise VoxelError(f"none of the {old} chunks is from Minecraft 1.13 or newer, nothing "

@@ -27,6 +27,7 @@ from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..core import chunk as C
 from ..core import colors
 from ..core.blocks import REGISTRY
 from ..core.errors import VoxelError
@@ -265,6 +266,29 @@ def _helper():
     return ThreadPoolExecutor(1, thread_name_prefix="mc-import")
 
 
+class _Blank:
+    """Zeroed chunk arrays for convert: those of a batch already compressed, zeroed
+    again (new ones cost their pages' first touch, a few times a zeroing), at most
+    HELD of them kept."""
+    HELD = 4 * BATCH
+
+    def __init__(self):
+        self.free: list = []
+
+    def __call__(self):
+        if self.free:
+            a = self.free.pop()
+            a.fill(0)
+            return a
+        return C.empty()
+
+    def give(self, items) -> None:
+        for _, b, d in items:
+            for a in (b, d):
+                if a is not None and len(self.free) < self.HELD:
+                    self.free.append(a)
+
+
 def _rows(enc, items):
     return [enc.row(k, b, d) for k, b, d in items]
 
@@ -322,11 +346,14 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
     ahead, got = deque(), deque()
     nxt = 0
     batch, biomes, pending = [], [], None
+    blank = _Blank()
 
     def flush():
         nonlocal pending
-        fut, bio, upto = pending
+        fut, bio, upto, items = pending
         pending = None
+        fut.result()
+        blank.give(items)   # compressed: its arrays are free
         kept = world.store_rows(fut.result(), replace=replace, since=start)
         report.chunks += len(fut.result()) - len(kept)
         report.kept += len(kept)
@@ -363,7 +390,7 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
                 if ch.status not in anvil.DONE:
                     report.unfinished[ch.status] += 1
                 else:
-                    blocks, data, dropped = convert(ch, report.y_min, pal)
+                    blocks, data, dropped = convert(ch, report.y_min, pal, blank)
                     report.dropped += dropped
                     key = to_key(cx, cz)
                     cols = pal.states.columns(ch, blocks, report.y_min)
@@ -373,7 +400,7 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
             if len(batch) >= BATCH or (done == len(todo) and batch):
                 upto = flush() if pending else None
                 pal.save()   # staged for this batch's transaction, as before
-                pending = (ex_rows.submit(_rows, enc, batch), biomes, done)
+                pending = (ex_rows.submit(_rows, enc, batch), biomes, done, batch)
                 batch, biomes = [], []
                 if upto is not None:
                     yield upto, len(todo)

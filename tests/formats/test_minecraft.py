@@ -249,8 +249,10 @@ def test_a_large_chunk_is_not_inflated_ahead_and_still_imported(tmp_path):
     from voxel_addon.formats.region import Region
     reg = Region(tmp_path / "region" / "r.0.0.mca")
     got = minecraft._inflate([(reg, 0, 0), (reg, 1, 0)])
-    assert got[0] is None and got[1][0] == small
-    pre, tags = got[1][1]                               # read ahead, charged by the import
+    assert got[0] is None and got[1] == small
+    done = minecraft._Inline().submit(lambda: got)
+    assert minecraft._scan(done)[0] is None and minecraft._scan(done)[1][0] == small
+    pre, tags = minecraft._scan(done)[1][1]             # read ahead, charged by the import
     want = anvil.read(small)
     assert [(s.y, s.palette) for s in pre.sections] == [(s.y, s.palette) for s in want.sections]
     assert tags == nbt.read(small, anvil.KEEP, anvil.CHUNK_TAGS)[1]

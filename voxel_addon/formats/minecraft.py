@@ -223,11 +223,9 @@ def import_world(world, path, *, y_min=None, area=None, replace=False, progress=
 
 
 def _inflate(items):
-    """Each (region, cx, cz)'s (NBT, anvil.scanned of it) when it inflates to at most
-    AHEAD_MAX bytes, else None (the import's thread decodes it as before: a bomb is
-    never held ahead), or the error of reading its sectors. The helper thread reads
-    the well-formed chunks too (anvil.scanned: their NumPy work lets go of the GIL
-    while the import's thread converts), their tags charged by the import's thread."""
+    """Each (region, cx, cz)'s NBT when it inflates to at most AHEAD_MAX bytes, else
+    None (the import's thread decodes it as before: a bomb is never held ahead), or
+    the error of reading its sectors."""
     out = []
     for reg, cx, cz in items:
         try:
@@ -236,12 +234,18 @@ def _inflate(items):
             out.append(e)
             continue
         try:
-            nbt_ = decompress(kind, body, AHEAD_MAX)
+            out.append(decompress(kind, body, AHEAD_MAX))
         except ValueError:   # larger, or damaged: decoded again with the real limits
             out.append(None)
-            continue
-        out.append((nbt_, anvil.scanned(nbt_, packed=True)))
     return out
+
+
+def _scan(inflated):
+    """_inflate's answers (a future of them), each NBT as (NBT, anvil.scanned of it):
+    the well-formed chunks read ahead (their NumPy work lets go of the GIL while the
+    import's thread converts), their tags charged by the import's thread (_charged)."""
+    return [x if x is None or isinstance(x, BaseException)
+            else (x, anvil.scanned(bytes(x), packed=True)) for x in inflated.result()]
 
 
 class _Inline:
@@ -341,7 +345,10 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
     # A batch is written once the next one is converted, in the same order and with
     # the same staged meta as one after the other; an error writes the batch in hand
     # first, as the sequential import had (a close at a yield drops the one ahead).
-    ex, ex_rows = _helper(), _helper()   # reads ahead; compresses rows (one batch at a time)
+    # one helper inflates chunks and compresses rows (one batch at a time: zlib and
+    # zstd), the other reads the inflated chunks (anvil.scanned): three threads of
+    # about equal work
+    ex, ex_rows = _helper(), _helper()
     enc = world.file.encoder()
     ahead, got = deque(), deque()
     nxt = 0
@@ -363,7 +370,7 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
     try:
         for done, (reg, cx, cz) in enumerate(todo, 1):
             while nxt < len(todo) and len(ahead) < 2:
-                ahead.append(ex.submit(_inflate, todo[nxt:nxt + GROUP]))
+                ahead.append(ex.submit(_scan, ex_rows.submit(_inflate, todo[nxt:nxt + GROUP])))
                 nxt += GROUP
             if not got:
                 got.extend(ahead.popleft().result())

@@ -271,22 +271,19 @@ def _helper():
 
 
 class _Blank:
-    """Zeroed chunk arrays for convert: those of a batch already compressed, zeroed
-    again (new ones cost their pages' first touch, a few times a zeroing), at most
-    HELD of them kept."""
+    """Zeroed chunk arrays for convert: those of a batch already compressed (zeroed by
+    _rows on the helper, while they are in its cache: new ones cost their pages' first
+    touch, a few times a zeroing), at most HELD of them kept."""
     HELD = 4 * BATCH
 
     def __init__(self):
         self.free: list = []
 
     def __call__(self):
-        if self.free:
-            a = self.free.pop()
-            a.fill(0)
-            return a
-        return C.empty()
+        return self.free.pop() if self.free else C.empty()
 
     def give(self, items) -> None:
+        """The arrays of ITEMS, which _rows has compressed and zeroed."""
         for _, b, d in items:
             for a in (b, d):
                 if a is not None and len(self.free) < self.HELD:
@@ -294,7 +291,14 @@ class _Blank:
 
 
 def _rows(enc, items):
-    return [enc.row(k, b, d) for k, b, d in items]
+    """Each (key, blocks, data)'s row, the arrays zeroed once compressed (_Blank)."""
+    out = []
+    for k, b, d in items:
+        out.append(enc.row(k, b, d))
+        b.fill(0)
+        if d is not None:
+            d.fill(0)
+    return out
 
 
 def _charged(got, reg, cx, cz, budget):

@@ -193,6 +193,7 @@ class States:
 
 
 _COLOR = REGISTRY.id("color")
+_LAYERS: dict = {}   # (y_min, lowest and highest section with biomes, height) -> columns' lookups
 _LX = np.arange(16)[:, None].repeat(16, 1)             # voxel lx = Minecraft x
 _MZ = 15 - np.arange(16)[None, :].repeat(16, 0)        # voxel ly → Minecraft z
 _CELL_XZ = (_MZ >> 2) * 4 + (_LX >> 2)                 # a column's 4×4 biome cell
@@ -231,9 +232,9 @@ def columns(ch, blocks: np.ndarray, y_min: int, biome, memo: dict | None = None)
     an index) numbers them, `memo` keeps a section palette's numbers between calls."""
     from .anvil import cells
     memo = {} if memo is None else memo
-    y = tops(blocks) + y_min                    # Minecraft y of each column's top
     lx, mz, cell_xz = _LX, _MZ, _CELL_XZ
     if ch.biomes is not None:                   # 1.13–1.17
+        y = tops(blocks) + y_min                # Minecraft y of each column's top
         b = ch.biomes
         ids = b[mz * 16 + lx] if b.size == 256 else b[np.clip(y >> 2, 0, 63) * 16 + cell_xz]
         uniq, inv = np.unique(ids, return_inverse=True)
@@ -242,8 +243,18 @@ def columns(ch, blocks: np.ndarray, y_min: int, biome, memo: dict | None = None)
     if not secs:
         return None
     ys = sorted(secs)
-    sy = np.clip(y >> 4, ys[0], ys[-1])
-    ds = np.flatnonzero(np.bincount((sy - ys[0]).ravel())).tolist()   # sections met, sorted
+    # per top layer: its section (clipped to those with biomes) - ys[0], and the row of
+    # its cells (((y & 15) >> 2) * 16): two lookups instead of a dozen array passes
+    got = _LAYERS.get((y_min, ys[0], ys[-1], blocks.shape[2]))
+    if got is None:
+        if len(_LAYERS) >= MEMO:
+            _LAYERS.clear()
+        y = np.arange(blocks.shape[2]) + y_min
+        got = _LAYERS[y_min, ys[0], ys[-1], blocks.shape[2]] = (
+            np.clip(y >> 4, ys[0], ys[-1]) - ys[0], ((y & 15) >> 2) * 16)
+    top = tops(blocks)
+    sy = got[0][top]
+    ds = np.flatnonzero(np.bincount(sy.ravel())).tolist()   # sections met, sorted
     # each section met: its 64 cells' world biomes (kept by the section's biome bytes,
     # which repeat across chunks); then one lookup for all columns
     rows = []
@@ -260,7 +271,11 @@ def columns(ch, blocks: np.ndarray, y_min: int, biome, memo: dict | None = None)
             idx = cells(secs[near])
             row = memo[key] = np.full(64, glob[0], np.uint8) if idx is None else glob[idx]
         rows.append(row)
+    at = got[1][top]
+    at += cell_xz
+    if len(rows) == 1:
+        return rows[0][at]
     rank = np.zeros(ys[-1] - ys[0] + 1, np.intp)
-    rank[np.array(ds)] = np.arange(len(ds))
-    table = np.concatenate(rows)
-    return table[rank[sy - ys[0]] * 64 + ((y & 15) >> 2) * 16 + cell_xz]
+    rank[ds] = np.arange(0, 64 * len(ds), 64)
+    at += rank[sy]
+    return np.concatenate(rows)[at]

@@ -271,33 +271,35 @@ def _helper():
 
 
 class _Blank:
-    """Zeroed chunk arrays for convert: those of a batch already compressed (zeroed by
-    _rows on the helper, while they are in its cache: new ones cost their pages' first
-    touch, a few times a zeroing), at most HELD of them kept."""
-    HELD = 4 * BATCH
+    """Zeroed chunk arrays for convert: those of chunks already compressed (zeroed by
+    _rows on the helper, while they are in its cache, and handed back at once: no
+    more arrays alive than without them): new ones cost their pages' first touch, a
+    few times a zeroing. At most HELD kept."""
+    HELD = 2 * BATCH
 
     def __init__(self):
         self.free: list = []
 
     def __call__(self):
-        return self.free.pop() if self.free else C.empty()
+        try:
+            return self.free.pop()   # list.pop and append: atomic across the threads
+        except IndexError:
+            return C.empty()
 
-    def give(self, items) -> None:
-        """The arrays of ITEMS, which _rows has compressed and zeroed."""
-        for _, b, d in items:
-            for a in (b, d):
-                if a is not None and len(self.free) < self.HELD:
-                    self.free.append(a)
+    def give(self, a) -> None:
+        if a is not None and len(self.free) < self.HELD:
+            a.fill(0)
+            self.free.append(a)
 
 
-def _rows(enc, items):
-    """Each (key, blocks, data)'s row, the arrays zeroed once compressed (_Blank)."""
+def _rows(enc, items, blank=None):
+    """Each (key, blocks, data)'s row; the arrays then go back to `blank` (_Blank)."""
     out = []
     for k, b, d in items:
         out.append(enc.row(k, b, d))
-        b.fill(0)
-        if d is not None:
-            d.fill(0)
+        if blank is not None:
+            blank.give(b)
+            blank.give(d)
     return out
 
 
@@ -361,10 +363,8 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
 
     def flush():
         nonlocal pending
-        fut, bio, upto, items = pending
+        fut, bio, upto = pending
         pending = None
-        fut.result()
-        blank.give(items)   # compressed: its arrays are free
         kept = world.store_rows(fut.result(), replace=replace, since=start)
         report.chunks += len(fut.result()) - len(kept)
         report.kept += len(kept)
@@ -411,7 +411,7 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
             if len(batch) >= BATCH or (done == len(todo) and batch):
                 upto = flush() if pending else None
                 pal.save()   # staged for this batch's transaction, as before
-                pending = (ex_rows.submit(_rows, enc, batch), biomes, done, batch)
+                pending = (ex_rows.submit(_rows, enc, batch, blank), biomes, done)
                 batch, biomes = [], []
                 if upto is not None:
                     yield upto, len(todo)

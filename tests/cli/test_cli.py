@@ -134,3 +134,23 @@ def test_a_command_builds_its_own_parser_only():
     whole = cli("--help").stdout
     assert all(c in whole for c in ("generate", "import", "export", "render", "bench"))
     assert "--from" in cli("import", "--help").stdout
+
+
+def test_a_minecraft_import_loads_no_meshing_nor_resource_packs(tmp_path):
+    """The whole `import` of a save (its start is ~a third of a 1,000-chunk import's
+    CPU): no meshing, OpenCL, streaming or resource pack modules, nor uuid's platform."""
+    from tests.formats import mcfiles as mc
+    mc.write_region(tmp_path / "save" / "region",
+                    {(0, 0): mc.chunk_nbt(0, 0, {0: np.full((16, 16, 16), "minecraft:stone", object)})})
+    code = ("import runpy, sys\nsys.argv = ['voxel_addon', 'import', '--world', sys.argv[1], "
+            "'--from', sys.argv[2]]\ntry:\n    runpy.run_module('voxel_addon', run_name='__main__')\n"
+            "except SystemExit as e:\n    assert not e.code, e.code\n"
+            "print(sorted(m for m in sys.modules if m.startswith('voxel_addon.') or m == 'uuid'))")
+    r = subprocess.run([sys.executable, "-c", code, str(tmp_path / "w.sqlite"), str(tmp_path / "save")],
+                       capture_output=True, text=True, env=dict(os.environ, PYTHONPATH=str(ROOT)))
+    assert r.returncode == 0, r.stderr
+    mods = r.stdout.splitlines()[-1]
+    assert "1 chunks imported" in r.stdout and "voxel_addon.formats.minecraft" in mods
+    for m in ("voxel_addon.meshing", "voxel_addon.opencl", "voxel_addon.world.stream",
+              "voxel_addon.world.payload", "voxel_addon.mcres.pack", "'uuid'"):
+        assert m not in mods, m

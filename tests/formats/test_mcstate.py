@@ -187,3 +187,43 @@ def test_cli_resources_are_checked_and_kept(tmp_path, capsys):
     assert got["resources"] == [str(jar.resolve()), str(pack.resolve())] and got["y_min"] == -64
     assert got["states"] == 7 and set(got["biomes"]) == {"minecraft:plains", "minecraft:forest",
                                                           "minecraft:desert"}
+
+
+def test_columns_match_a_plain_loop_over_columns():
+    """mcstate.columns (tops from the span below the highest block, lookups per top
+    layer) against a loop over each column: random heights, holes, empty columns,
+    sections with biomes here and there (nearest one taken), y_min moved."""
+    from types import SimpleNamespace as NS
+    from voxel_addon.core import chunk as C
+    from voxel_addon.formats.anvil import cells
+    rng = np.random.default_rng(3)
+    names = [f"minecraft:b{i}" for i in range(5)]
+    for t in range(60):
+        b = C.empty()
+        ground = int(rng.integers(1, 200)) if t % 3 else 0   # most: every column has a block
+        b[:, :, :ground] = 1
+        for _ in range(rng.integers(0, 6)):
+            x0, y0 = rng.integers(0, 16, 2)
+            z1 = int(rng.integers(ground, min(ground + 48, 256) + 1)) if ground else int(rng.integers(0, 257))
+            b[x0:, y0:, int(rng.integers(0, z1 + 1)):z1] = rng.integers(0, 3)
+        secs = []
+        for y in sorted(set(rng.integers(-4, 20, rng.integers(1, 6)).tolist())):
+            k = int(rng.integers(1, 4))
+            per = 64 // max(1, (k - 1).bit_length())
+            data = None if k == 1 else rng.integers(0, 2 ** 62, -(-64 // per)).astype(">i8")
+            secs.append(NS(y=y, biomes=(list(rng.choice(names, k, replace=False)), data)))
+        y_min = int(rng.choice([-64, 0, -32]))
+        index: dict = {}
+        got = mcstate.columns(NS(biomes=None, sections=secs), b, y_min,
+                              lambda n: index.setdefault(n, len(index)), {})
+        by = {s.y: s.biomes for s in secs}
+        for lx in range(16):
+            for ly in range(16):
+                solid = np.flatnonzero(b[lx, ly])
+                y = (int(solid[-1]) if len(solid) else 0) + y_min
+                sy = min(max(y >> 4, min(by)), max(by))
+                near = min(by, key=lambda v: abs(v - sy))
+                c = cells(by[near])
+                cell = ((y & 15) >> 2) * 16 + ((15 - ly) >> 2) * 4 + (lx >> 2)
+                want = by[near][0][0 if c is None else int(c[cell])]
+                assert got[lx, ly] == index[want], (t, lx, ly)

@@ -10,9 +10,10 @@ import numpy as np
 import pytest
 
 from voxel_addon.cli import main
+from voxel_addon.core import chunk as C
 from voxel_addon.core.blocks import REGISTRY
 from voxel_addon.core.errors import VoxelError
-from voxel_addon.formats import anvil, minecraft
+from voxel_addon.formats import anvil, minecraft, nbt
 from voxel_addon.world import World
 
 from . import mcfiles as mc
@@ -249,6 +250,42 @@ def test_a_large_chunk_is_not_inflated_ahead_and_still_imported(tmp_path):
     reg = Region(tmp_path / "region" / "r.0.0.mca")
     got = minecraft._inflate([(reg, 0, 0), (reg, 1, 0)])
     assert got[0] is None and got[1] == small
+    done = minecraft._Inline().submit(lambda: got)
+    assert minecraft._scan(done)[0] is None and minecraft._scan(done)[1][0] == small
+    pre, tags = minecraft._scan(done)[1][1]             # read ahead, charged by the import
+    want = anvil.read(small)
+    assert [(s.y, s.palette) for s in pre.sections] == [(s.y, s.palette) for s in want.sections]
+    assert tags == nbt.read(small, anvil.KEEP, anvil.CHUNK_TAGS)[1]
     with World.create(tmp_path / "w.sqlite", seed=0, generator="empty", loader=False) as world:
         rep = minecraft.import_world(world, tmp_path)
         assert rep.chunks == 2 and not rep.damaged and world.file.chunk_count() == 2
+
+
+def test_arrays_used_again_hold_nothing_of_their_last_chunk(tmp_path, monkeypatch):
+    """convert fills the arrays of batches already compressed (_Blank): each chunk's
+    rows are those of an import with new arrays, though its chunks hold fewer blocks
+    and states than ones before them (three batches)."""
+    rng = np.random.default_rng(7)
+    names = np.array(["minecraft:stone", "minecraft:water[level=3]",
+                      "minecraft:oak_stairs[facing=east,half=top,shape=straight,waterlogged=false]",
+                      "minecraft:oak_stairs[facing=west,half=top,shape=straight,waterlogged=false]"],
+                     object)   # one stairs state is not the default: data
+    chunks = {}
+    for i in range(2 * minecraft.BATCH + 6):
+        top = int(rng.integers(1, 64))
+        a = names[rng.integers(0, 4, (64, 16, 16))]
+        a[top:] = "minecraft:air"
+        chunks[(i % 9, i // 9)] = mc.chunk_nbt(i % 9, i // 9, {y: a[16 * y:16 * y + 16] for y in range(4)})
+    mc.write_region(tmp_path / "region", chunks, 2)
+    rows = []
+    for fresh in (False, True):
+        if fresh:
+            monkeypatch.setattr(minecraft._Blank, "__call__", lambda self: C.empty())
+        w = tmp_path / f"w{fresh}.sqlite"
+        with World.create(w, seed=0, generator="empty", loader=False) as world:
+            minecraft.import_world(world, tmp_path)
+        db = sqlite3.connect(w)
+        rows.append(db.execute("SELECT cx, cy, blocks, data FROM chunks ORDER BY cx, cy").fetchall())
+        db.close()
+    assert len(rows[0]) == len(chunks) and rows[0] == rows[1]
+    assert sum(r[3] is not None for r in rows[0]) > len(chunks) // 2   # states kept

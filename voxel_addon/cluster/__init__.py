@@ -4,9 +4,7 @@ process is the one writer. Dask is imported here only, lazily: the Blender exten
 does not carry it and never reaches this module."""
 from __future__ import annotations
 
-import hashlib
 import sys
-import uuid
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -72,6 +70,7 @@ def version() -> str:
     not just a version number, and the same compressor)."""
     import numpy
     from ..storage import codecs
+    import hashlib
     h = hashlib.sha256()
     root = Path(__file__).resolve().parent.parent
     for p in sorted(root.rglob("*.py")):
@@ -299,6 +298,7 @@ class Pool:
         # keys unique across processes: id() repeats from one run of a command to the
         # next, and a scheduler that still knows a key cancels or answers the new task
         # as the old one ("already forgotten", or another command's result)
+        import uuid   # here: uuid imports platform (a start's few ms)
         tag = uuid.uuid4().hex
         ac = as_completed(loop=c.loop)
         done = 0

@@ -63,19 +63,13 @@ def read(payload: bytes, budget=None, fast: bool = True, packed: bool = False) -
     `fast`: try chunkscan first (False: the general reader only, the tests' oracle).
     `packed`: the fast path leaves 4-bit sections packed (Section.nib and counts:
     formats/minecraft.convert looks their bytes up, no 4096 indices made)."""
-    limit = CHUNK_TAGS if budget is None else min(CHUNK_TAGS, max(budget.tags, 0))
+    limit = limit_of(budget)
     payload = payload if isinstance(payload, bytes) else bytes(payload)
-    sections = None
-    if fast:
-        try:   # a well-formed 1.18+ chunk: one pass, nothing else built
-            version, status, found, tags = chunkscan.scan(payload, limit)
-            sections, nibs = _fast(found, packed)
-        except chunkscan.Bail:
-            pass
-    if sections is not None:
+    got = scanned(payload, limit, packed) if fast else None
+    if got is not None:
         if budget is not None:
-            budget.spend_tags(tags)
-        return Chunk(version, status, sections, None, nibs)
+            budget.spend_tags(got[1])
+        return got[0]
     try:
         root, tags = nbt.read(payload, KEEP, limit)
     except nbt.TooMany:
@@ -126,6 +120,27 @@ def read(payload: bytes, budget=None, fast: bool = True, packed: bool = False) -
     return Chunk(version, status, sections, None if old is None else old.astype(np.int32))
 
 
+def limit_of(budget) -> int:
+    """The NBT tags one chunk may hold under `budget` (None: CHUNK_TAGS)."""
+    return CHUNK_TAGS if budget is None else min(CHUNK_TAGS, max(budget.tags, 0))
+
+
+def scanned(payload: bytes, limit: int = CHUNK_TAGS, packed: bool = False):
+    """read's fast path alone: (Chunk, tags) of a well-formed 1.18+ chunk of at most
+    `limit` tags, None when the general reader must decide. Nothing is charged: the
+    import's helper thread reads ahead with this (CHUNK_TAGS), and its own thread
+    charges the tags, or reads the chunk again (read(fast=False)) where they pass
+    what is left of the budget: the same chunk, or the same error, as read gives."""
+    try:   # one pass, nothing else built
+        version, status, found, tags = chunkscan.scan(payload, limit)
+        sections, nibs = _fast(found, packed)
+    except chunkscan.Bail:
+        return None
+    if sections is None:
+        return None
+    return Chunk(version, status, sections, None, nibs), tags
+
+
 def _fast(found, packed=False):
     """(chunkscan's sections unpacked (4-bit ones left packed with `packed`), Chunk.nibs),
     or (None, None) when an index lies outside its palette (the general path then
@@ -157,6 +172,9 @@ def _fast(found, packed=False):
 
 _OFF = np.arange(64, dtype=np.intp)[:, None, None, None] * 256
 _NIB = np.arange(16)
+_B = np.arange(256)[:, None]
+_BYTE_NIBS = ((_B & 15) == _NIB).astype(np.float64) + ((_B >> 4) == _NIB)  # a byte's two nibbles
+_OUTSIDE = _NIB[None, :] >= np.arange(17)[:, None]   # [palette size]: nibbles outside it
 
 
 def _count(rows):
@@ -164,13 +182,17 @@ def _count(rows):
     of them returned), and voxels per palette entry (counts), their longs dropped: one
     histogram of those values for all; None when an index lies outside its palette."""
     n = len(rows)
-    u8 = np.concatenate([r[2] for r in rows], dtype=_PACKED).view(np.uint8)   # as stored
     off = _OFF[:n] if n <= len(_OFF) else np.arange(n, dtype=np.intp)[:, None, None, None] * 256
-    at = u8.reshape(n, 16, 16, 8)[:, :, ::-1, ::-1] + off   # z flipped, each long's bytes low first
-    h = np.bincount(at.reshape(-1), minlength=n * 256).reshape(n, 16, 16)
-    per = h.sum(axis=1) + h.sum(axis=2)      # [section, nibble]: low ones + high ones
+    # z flipped and each long's bytes low first (one byte-swapping copy of the longs),
+    # then widened and offset in place: contiguous passes, no 8-byte inner strides
+    w = np.concatenate([r[2] for r in rows], dtype=_PACKED).reshape(n, 16, 16)[:, :, ::-1]
+    at = w.astype("<u8").view(np.uint8).reshape(n, 16, 16, 8).astype(np.intp)
+    at += off
+    h = np.bincount(at.reshape(-1), minlength=n * 256).reshape(n, 256)
+    # [section, nibble]: low ones + high ones, one small product (exact: counts < 2**53)
+    per = (h.astype(np.float64) @ _BYTE_NIBS).astype(np.int64)
     ks = [len(r[1]) for r in rows]
-    if min(ks) < 16 and (per * (_NIB >= np.array(ks)[:, None])).any():
+    if min(ks) < 16 and (per * _OUTSIDE[ks]).any():
         return None
     for r, a, c, k in zip(rows, at, per, ks):
         r[2], r[5], r[6] = None, a, c[:k]

@@ -12,12 +12,13 @@ from . import anvil
 PAIRS = 1024   # 4-bit sections' lookup tables (1 KiB each) convert keeps
 
 
-def convert(ch: anvil.Chunk, y_min: int, pal):
+def convert(ch: anvil.Chunk, y_min: int, pal, blank=C.empty):
     """(blocks, data or None, dropped voxels) of one chunk in world axes; PAL (the
     import's minecraft._Palettes, or a cluster worker's twin): `pal.settle`
     sees every palette entry's (block id, data, voxels) before data is written and
-    gives the data stored as 0 per block id (its default state, mcstate.States)."""
-    blocks, data, dropped = C.empty(), None, 0
+    gives the data stored as 0 per block id (its default state, mcstate.States).
+    `blank()`: a zeroed chunk array (C.empty, or one of arrays used before)."""
+    blocks, data, dropped = blank(), None, 0
     counts = pal.report.blocks
     keyed = pal.keyed   # a palette's bytes -> its entries' ids, values and report rows
     ids_l, vals_l, n_l, secs, four, packed = [], [], [], [], [], []
@@ -69,7 +70,7 @@ def convert(ch: anvil.Chunk, y_min: int, pal):
                 blocks[:, :, lo:hi] = idl[i]
             if vall[i]:
                 if data is None:
-                    data = C.empty()
+                    data = blank()
                 data[:, :, lo:hi] = vall[i]
             continue
         ids = ids_a[i:j]
@@ -83,7 +84,7 @@ def convert(ch: anvil.Chunk, y_min: int, pal):
         ids.take(sec, out=blocks.T[lo:hi], mode="clip")   # indices checked by anvil
         if any(vall[i:j]):
             if data is None:
-                data = C.empty()
+                data = blank()
             vals_a[i:j].take(sec, out=data.T[lo:hi], mode="clip")
         if hi - lo < 16:
             outside = np.ones(16, bool)
@@ -91,11 +92,11 @@ def convert(ch: anvil.Chunk, y_min: int, pal):
             cut = idx.reshape(16, 4096 // 16)[outside].ravel()
             dropped += int((ids != 0)[cut].sum())
     if four:
-        data = _four(four, packed, ch.nibs, y_min, blocks, data, ids_a, vals_a, vall, keyed)
+        data = _four(four, packed, ch.nibs, y_min, blocks, data, ids_a, vals_a, vall, keyed, blank)
     return blocks, data, dropped
 
 
-def _four(four, packed, nibs, y_min, blocks, data, ids_a, vals_a, vall, keyed):
+def _four(four, packed, nibs, y_min, blocks, data, ids_a, vals_a, vall, keyed, blank=C.empty):
     """The packed 4-bit sections (`packed`; `four`: those whole inside the world's
     height) of a chunk: two voxels a byte, so each byte looks up its two block ids
     (data values) as one 32-bit word, in a table of 256 per section (the ids' kept
@@ -116,7 +117,7 @@ def _four(four, packed, nibs, y_min, blocks, data, ids_a, vals_a, vall, keyed):
         _place(got, ys, y_min, blocks)
     if any(any(vall[i:j]) for _, i, j in four):
         if data is None:
-            data = C.empty()
+            data = blank()
         tab = np.concatenate([_table(memo, s.key, vals_a[i:j], vall[i:j]) for s, i, j in packed])
         out = data.T[z0:z0 + 16 * n].view(np.uint32).reshape(n, 16, 16, 8) if run else None
         got = tab.take(at, out=out, mode="clip")

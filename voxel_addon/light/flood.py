@@ -114,40 +114,10 @@ def levels_lanes(fc: np.ndarray, cost: np.ndarray, seeds: np.ndarray, vals: np.n
     """`levels` for all four components at once on flat uint8 lanes (4 per voxel, R,
     G, B, D; lane i belongs to voxel i >> 2): fewer, larger NumPy steps for the small
     boxes of an edit. `fc` = lane value + cost of its voxel (>= 16 never rises),
-    `cost` per voxel; `seeds` are lane indices (duplicates allowed) holding `vals`. All six
-    directions at once per level (a level's writes to one lane carry the same value,
-    so duplicates only need dropping from the next bucket: `owner` keeps one). Returns the written
-    lanes and their values."""
+    `cost` per voxel; `seeds` are lane indices (duplicates allowed) holding `vals`.
+    Returns the written lanes and their values."""
     offs = 4 * np.array([-1, 1, -sy, sy, -sz, sz], np.int64)
-    seeds = np.asarray(seeds, np.int64)
-    buckets = [[] for _ in range(model.MAX + 1)]
-    for v in np.unique(vals).tolist():
-        if v > 1:
-            buckets[v].append(seeds[vals == v])
-    lanes, values = [], []
-    owner, ramp = _scratch(fc.size)  # owner: read only where just written
-    for v in range(model.MAX, 1, -1):
-        if not buckets[v]:
-            continue
-        idx = buckets[v][0] if len(buckets[v]) == 1 else np.concatenate(buckets[v])
-        n = (idx[:, None] + offs).ravel()
-        n = n[fc[n] < v]  # stale seeds (raised since) find nothing here
-        if not n.size:
-            continue
-        i = ramp[:n.size] if n.size <= ramp.size else np.arange(n.size, dtype=np.int32)
-        owner[n] = i
-        n = n[owner[n] == i]  # once each (the last writer of each lane)
-        fc[n] = v
-        nv = v - cost[n >> 2].astype(np.int16)
-        lanes.append(n)
-        values.append(nv)
-        if (nv == v - 1).all():  # the common case: plain air
-            if v > 2:
-                buckets[v - 1].append(n)
-            continue
-        for k in np.unique(nv).tolist():
-            if k > 1:
-                buckets[k].append(n[nv == k])
+    lanes, values = _rise(fc, cost, seeds, vals, offs, 2)
     if not lanes:
         return np.zeros(0, np.int64), np.zeros(0, np.uint8)
     return np.concatenate(lanes), np.concatenate(values).astype(np.uint8)
@@ -161,6 +131,17 @@ def spread(fc: np.ndarray, cost: np.ndarray, seeds: np.ndarray, vals: np.ndarray
     `vals`. Returns the written voxels and their values (each voxel once, brightest
     first)."""
     offs = np.array([-1, 1, -sy, sy, -sz, sz], np.int64)
+    out, values = _rise(fc, cost, seeds, vals, offs, 0)
+    if not out:
+        return np.zeros(0, np.int64), np.zeros(0, np.int16)
+    return np.concatenate(out), np.concatenate(values)
+
+
+def _rise(fc, cost, seeds, vals, offs, shift: int):
+    """The level loop of `levels_lanes` and `spread`: all six directions at once per
+    level (a level's writes to one index carry the same value, so duplicates only need
+    dropping from the next bucket: `owner` keeps one); index i's voxel is i >> shift.
+    Returns the lists of written indices and their int16 values, level by level."""
     buckets: list = [[] for _ in range(model.MAX + 1)]
     seeds, vals = np.asarray(seeds, np.int64), np.asarray(vals)
     for v in np.unique(vals).tolist():
@@ -173,26 +154,24 @@ def spread(fc: np.ndarray, cost: np.ndarray, seeds: np.ndarray, vals: np.ndarray
             continue
         idx = buckets[v][0] if len(buckets[v]) == 1 else np.concatenate(buckets[v])
         n = (idx[:, None] + offs).ravel()
-        n = n[fc[n] < v]
+        n = n[fc[n] < v]  # stale seeds (raised since) find nothing here
         if not n.size:
             continue
         i = ramp[:n.size] if n.size <= ramp.size else np.arange(n.size, dtype=np.int32)
         owner[n] = i
-        n = n[owner[n] == i]  # once each
+        n = n[owner[n] == i]  # once each (the last writer of each index)
         fc[n] = v
-        nv = v - cost[n].astype(np.int16)
+        nv = v - cost[n >> shift if shift else n].astype(np.int16)
         out.append(n)
         values.append(nv)
-        if (nv == v - 1).all():  # plain air
+        if (nv == v - 1).all():  # the common case: plain air
             if v > 2:
                 buckets[v - 1].append(n)
             continue
         for k in np.unique(nv).tolist():
             if k > 1:
                 buckets[k].append(n[nv == k])
-    if not out:
-        return np.zeros(0, np.int64), np.zeros(0, np.int16)
-    return np.concatenate(out), np.concatenate(values)
+    return out, values
 
 
 assert model.OPAQUE_COST > model.MAX  # v - OPAQUE_COST < 0: such voxels never rise

@@ -31,8 +31,8 @@ from ..core.errors import VoxelError
 from . import codecs
 from .decode import CorruptChunk, Decoding
 from .rows import Encoder
-from .schema import (APP_ID, FORMAT_VERSION, LIGHT_TABLE, SCHEMA, VERSION_TABLE,
-                     lock_timeout, open_error)
+from .schema import (APP_ID, EDITS_TABLE, FORMAT_VERSION, LIGHT_TABLE, SCHEMA,
+                     VERSION_TABLE, lock_timeout, open_error)
 from .transactions import Reading, Transaction
 
 class WorldFile(Decoding):
@@ -45,6 +45,7 @@ class WorldFile(Decoding):
         self._identity_at_open = None
         self._cursor = None  # read_chunk's
         self._staged: dict[str, str] = {}  # meta values written by the next save
+        self.db = None
         if _create is None and not self.path.is_file():
             raise VoxelError(f"no world file at {self.path}")
         if _create is not None and self.path.exists():
@@ -65,15 +66,27 @@ class WorldFile(Decoding):
             # Read before any pragma that writes, so a foreign file is never touched.
             self.meta = dict(self.db.execute("SELECT key, value FROM meta"))
             file_names = dict(self.db.execute("SELECT id, name FROM block_types"))
+            tables = {r[0] for r in self.db.execute(
+                "SELECT name FROM sqlite_master WHERE type='table'")}
             self.db.execute("PRAGMA synchronous=NORMAL")
         except sqlite3.DatabaseError as e:
+            if self.db is not None:
+                self.db.close()
             raise open_error(self.path, e) from None
-        self._check_version()
-        if not readonly and _create is None:
-            self.db.execute("PRAGMA journal_mode=WAL")
-        self._map_ids(file_names)
-        self._light_table(readonly)
-        self._version_table(readonly)
+        try:
+            self._check_version()
+            if "chunks" not in tables:  # another program's file: refused before any write
+                raise VoxelError(f"{self.path} is not a Voxel Worlds file (it has no "
+                                 "chunks table)")
+            if not readonly and _create is None:
+                self.db.execute("PRAGMA journal_mode=WAL")
+            self._map_ids(file_names)
+            self._edits_table(readonly, tables)
+            self._light_table(readonly)
+            self._version_table(readonly)
+        except BaseException:
+            self.db.close()  # no handle on a file it refused (Blender goes on running)
+            raise
         self._fetch_sql = (
             "SELECT {v}, c.codec, c.blocks, c.data, {l} FROM (SELECT ? AS cx, ? AS cy) k "
             "LEFT JOIN chunks c ON c.cx = k.cx AND c.cy = k.cy {vj} {lj}").format(
@@ -141,6 +154,18 @@ class WorldFile(Decoding):
             self._to_file[REGISTRY.id(n)] = 0
         self._identity = all(self._to_reg[i] == i for i in file_names) and \
             len(file_names) == len(names)
+
+    def _edits_table(self, readonly: bool, tables: set) -> None:
+        """A file another program wrote to SPEC 3 alone (meta, block_types, chunks)
+        gets our edits table; read-only, an empty one of the session's own (TEMP:
+        the file is not touched) stands in for it."""
+        if "edits" in tables:
+            return
+        if readonly:
+            self.db.execute(EDITS_TABLE.replace("CREATE TABLE", "CREATE TEMP TABLE"))
+        else:
+            with self.transaction():
+                self.db.execute(EDITS_TABLE)
 
     def _light_table(self, readonly: bool) -> None:
         """Files written before the light table get it (empty: light is recomputed)."""

@@ -223,6 +223,37 @@ def test_bad_edits_refused_before_anything_changes(world_path, bad, msg):
     assert hashlib.sha256(world_path.read_bytes()).hexdigest() == digest
 
 
+def test_a_damaged_chunk_not_yet_read_is_refused_before_anything_changes(world_path):
+    """The damage is found only when the stroke reads the chunk: a stroke (and a
+    set_blocks reaching it from a good chunk) is refused on one line, nothing
+    changed in memory or in the file."""
+    import sqlite3
+    with World.create(world_path, seed=1, generator="flat", loader=False) as w:
+        w.generate_area([(x, y) for x in range(-1, 3) for y in range(-1, 2)])
+    db = sqlite3.connect(world_path)
+    db.execute("UPDATE chunks SET blocks=X'28b52ffd00deadbeef' WHERE cx=0 AND cy=0")
+    db.commit()
+    db.close()
+
+    def rows():  # the stored chunks and edits (generated neighbours may be saved)
+        db = sqlite3.connect(world_path)
+        try:
+            return ({(r[0], r[1]): r for r in db.execute("SELECT * FROM chunks")},
+                    db.execute("SELECT * FROM edits").fetchall())
+        finally:
+            db.close()
+    before = rows()
+    with World.open(world_path, loader=False) as w:
+        with pytest.raises(VoxelError, match=r"chunk \(0, 0\).* is damaged") as e:
+            edit(w, (2, 2, 100, "glass"))
+        assert "\n" not in str(e.value)
+    with World.open(world_path, loader=False) as w:
+        with pytest.raises(VoxelError, match=r"chunk \(0, 0\).* is damaged"):
+            w.set_blocks([(-15, 1, 100), (1, 1, 100)], [REGISTRY.id("glass")] * 2)
+        assert w.get_block(-15, 1, 100) == 0 and w.file.edit_count() == 0
+    after = rows()
+    assert {k: after[0][k] for k in before[0]} == before[0] and after[1] == before[1] == []
+
 def test_closing_while_streaming_keeps_every_finished_edit(world_path):
     glass = REGISTRY.id("glass")
     done = []

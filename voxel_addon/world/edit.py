@@ -230,6 +230,9 @@ def _apply(world, items, write=True):
                                                or not world.chunks[k].has_light)
                    for k in near):
                 continue
+            bad = sorted({C.key_of(x, y) for x, y, _, _, _ in items} & world.corrupt.keys())
+            if bad:  # found damaged only now, loading it (check() knows loaded ones)
+                raise VoxelError(f"chunk {bad[0]} is damaged in the file; it cannot be edited")
             # light.update reads and writes only layers [z0, z1) of the light and
             # blocks from z0 up (the daylight of a column comes from above)
             z0, z1 = _light_layers(world, items, sight)

@@ -450,7 +450,9 @@ class World(Saving):
         if len(ids) and int(ids.max()) >= len(REGISTRY):
             raise VoxelError(f"unknown block id {int(ids.max())}")
         keys = np.stack([xyz[:, 0] >> 4, xyz[:, 1] >> 4], 1)
-        for k in {tuple(v) for v in keys.tolist()}:
+        touched = {tuple(v) for v in keys.tolist()}
+        self.load(touched)  # a damaged one is known once read: refused before any change
+        for k in touched:
             if k in self.corrupt:
                 raise VoxelError(f"chunk {k} is damaged in the file; it cannot be edited")
         order = np.lexsort((keys[:, 1], keys[:, 0]))

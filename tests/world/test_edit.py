@@ -210,6 +210,9 @@ def test_payloads_only_for_what_changed(world_path):
     ((1, 1, 100, "unobtainium"), "unknown block name"),
     ((1, 1, 100, 9999), "unknown block id"),
     ((1, 1, 100, "stone", 70000), "data must be"),
+    ((1 << 30, 1, 100, "stone"), "outside the world"),     # generation's int32 would wrap
+    ((1, -(1 << 30) - 1, 100, "stone"), "outside the world"),
+    ((1 << 63, 1, 100, "stone"), "outside the world"),     # past SQLite's integers
 ])
 def test_bad_edits_refused_before_anything_changes(world_path, bad, msg):
     with World.create(world_path, seed=1, generator="flat", loader=False) as w:

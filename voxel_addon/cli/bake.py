@@ -9,16 +9,16 @@ import time
 from pathlib import Path
 
 from ..core.errors import VoxelError
-from .common import Progress, add_world, note, write_whole
+from .common import Progress, add_world, coord, note, write_whole
 
 
 def add_parser(sub):
     from ..meshing import METHODS
     p = sub.add_parser("bake", help="bake a block region into a glTF binary (.glb) with bpy")
     add_world(p)
-    p.add_argument("--region", type=int, nargs=4, metavar=("X0", "Y0", "X1", "Y1"),
+    p.add_argument("--region", type=coord, nargs=4, metavar=("X0", "Y0", "X1", "Y1"),
                    help="half-open block columns [X0,X1) x [Y0,Y1), full height")
-    p.add_argument("--lod", type=int, nargs=4, metavar=("X", "Y", "NEAR", "FAR"),
+    p.add_argument("--lod", type=coord, nargs=4, metavar=("X", "Y", "NEAR", "FAR"),
                    help="instead of --region: the chunks within NEAR of block (X, Y) in full, "
                         "far terrain beyond out to FAR chunks, one object per level")
     p.add_argument("--out", type=Path, required=True, metavar="F.glb|DIR",

@@ -6,6 +6,25 @@ import time
 from pathlib import Path
 
 
+def coord(text: str, unit: int = 1) -> int:
+    """argparse type of a horizontal block coordinate (UNIT 16: a chunk's): a whole
+    number inside the world (core.chunk.REACH), else argparse's one line."""
+    import argparse
+    from ..core.chunk import REACH
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"invalid int value: {text!r}") from None
+    if not -REACH <= v * unit < REACH:
+        raise argparse.ArgumentTypeError(
+            f"{text} is outside the world (-{REACH // unit}..{REACH // unit - 1})")
+    return v
+
+
+def chunk_coord(text: str) -> int:
+    return coord(text, 16)
+
+
 def add_world(p, help="world file (.sqlite)"):
     p.add_argument("--world", required=True, type=Path, metavar="W.sqlite", help=help)
 

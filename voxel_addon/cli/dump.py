@@ -5,13 +5,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import add_world
+from .common import add_world, chunk_coord
 
 
 def add_parser(sub):
     p = sub.add_parser("dump", help="write a chunk's arrays to an .npz file")
     add_world(p)
-    p.add_argument("--chunk", nargs=2, type=int, required=True, metavar=("CX", "CY"))
+    p.add_argument("--chunk", nargs=2, type=chunk_coord, required=True, metavar=("CX", "CY"))
     p.add_argument("--out", required=True, type=Path, metavar="F.npz")
     return p
 

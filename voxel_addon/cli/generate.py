@@ -5,7 +5,7 @@ import time
 
 from .. import cluster
 from ..core.errors import VoxelError
-from .common import Progress, Writing, add_world, note
+from .common import Progress, Writing, add_world, coord, note
 
 
 def add_parser(sub):
@@ -13,7 +13,7 @@ def add_parser(sub):
     p = sub.add_parser("generate", help="create or extend a world")
     add_world(p)
     p.add_argument("--seed", type=int, help="world seed (required for a new world)")
-    p.add_argument("--center", type=int, nargs=2, metavar=("X", "Y"), default=(0, 0),
+    p.add_argument("--center", type=coord, nargs=2, metavar=("X", "Y"), default=(0, 0),
                    help="block column at the centre (default 0 0)")
     p.add_argument("--radius", type=int, default=4,
                    help="chunks around the centre chunk: (2R+1)^2 chunks (default 4)")

@@ -72,6 +72,11 @@ def run(args):
     hours = daytime.parse_time(hhmm or "12:00")
     if not 0 <= cam_args[2] <= 400:
         raise VoxelError("camera z must be between 0 and 400")
+    if not all(math.isfinite(v) for v in cam_args):
+        raise VoxelError("--camera takes finite numbers")
+    from ..core.chunk import REACH
+    if not all(-REACH <= v < REACH for v in cam_args[:2]):
+        raise VoxelError(f"camera x, y must lie inside the world (-{REACH}..{REACH})")
     far_meshes = []
     if args.scene:
         data = source.scene_area(args.scene)

@@ -111,6 +111,7 @@ def check(world, changes) -> list[tuple[int, int, int, int, int]]:
         x, y, z = (int(v) for v in ch[:3])
         b = ch[3]
         C.check_z(z)
+        C.check_xy(x, y)
         if isinstance(b, str):
             b = REGISTRY.id(b)
         elif not 0 <= int(b) < len(REGISTRY):

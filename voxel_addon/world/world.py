@@ -447,6 +447,8 @@ class World(Saving):
         vals = np.zeros(len(ids), np.uint16) if data is None else np.asarray(data, np.uint16)
         if len(xyz) and (xyz[:, 2].min() < 0 or xyz[:, 2].max() >= C.HEIGHT):
             raise VoxelError(f"z outside the world (0..{C.HEIGHT - 1})")
+        if len(xyz):
+            C.check_xy(int(xyz[:, :2].min()), int(xyz[:, :2].max()))
         if len(ids) and int(ids.max()) >= len(REGISTRY):
             raise VoxelError(f"unknown block id {int(ids.max())}")
         keys = np.stack([xyz[:, 0] >> 4, xyz[:, 1] >> 4], 1)

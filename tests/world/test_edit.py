@@ -174,6 +174,40 @@ def test_a_held_stroke_is_written_in_one_transaction(world_path):
         assert all(w.get_block(*c) == lamp for c in cells)
 
 
+def test_a_wide_stroke_is_relit_in_parts_and_written_at_once(world_path, tmp_path):
+    """Voxels 512 blocks apart in one stroke (a script's list; the undo of a long
+    drag): only the chunks around them are lit (one window over the box between
+    would light ~1,200 chunks and take ~0.6 GB), one COMMIT, the same blocks and light
+    as the voxels edited one by one in another world, and undo puts everything back."""
+    import sqlite3
+    stroke = [(0, 0, 100, "lamp_red"), (512, 7, 100, "stone"), (513, 7, 100, "glass"),
+              (0, 0, 100, "lamp_blue"), (-3, 510, 101, "glass")]
+    keys = {(x >> 4, y >> 4) for x, y, _, _ in stroke}
+    one = tmp_path / "one.sqlite"
+    with World.create(one, seed=1, generator="flat", loader=False, backend="numpy") as w1:
+        for ch in stroke:
+            edit(w1, ch)
+        want = {k: (w1.chunk_at(*k).blocks.copy(), w1.chunk_at(*k).light.copy()) for k in keys}
+    with World.create(world_path, seed=1, generator="flat", loader=False, backend="numpy") as w:
+        commits = []
+        w.file.db.set_trace_callback(
+            lambda sql: commits.append(sql) if sql.strip().upper().startswith("COMMIT") else None)
+        payloads, rec = edit(w, stroke)
+        w.settle()
+        w.file.db.set_trace_callback(None)
+        assert len(w.chunks) < 100 and len(commits) == 1
+        assert len({p.key for p in payloads}) == len(payloads) and keys <= {p.key for p in payloads}
+        assert w.get_block(0, 0, 100) == REGISTRY.id("lamp_blue")
+        for k, (b, light) in want.items():
+            assert np.array_equal(w.chunk_at(*k).blocks, b)
+            assert np.array_equal(w.chunk_at(*k).light, light), k
+        db = sqlite3.connect(world_path)
+        assert db.execute("SELECT COUNT(*) FROM edits").fetchone()[0] == 4
+        db.close()
+        assert sorted(rec.voxels) == sorted({tuple(ch[:3]) for ch in stroke})
+        undo(w, rec)
+        assert all(w.get_block(x, y, z) == 0 for x, y, z, _ in stroke)
+
 def test_payloads_only_for_what_changed(world_path):
     stone, glass, lamp = (REGISTRY.id(n) for n in ("stone", "glass", "lamp_red"))
     with World.create(world_path, seed=SEED, loader=False) as w:

@@ -224,7 +224,19 @@ class WorldFile(Decoding):
 
     @property
     def generator_params(self) -> dict:
-        return json.loads(self.meta.get("generator_params") or "{}")
+        raw = self.meta.get("generator_params") or "{}"
+        try:
+            params = json.loads(raw)
+        except ValueError as e:  # RecursionError too deep: a ValueError's sibling
+            raise VoxelError(f"{self.path}: its generator settings are damaged "
+                             f"(not JSON: {e})") from None
+        except RecursionError:
+            raise VoxelError(f"{self.path}: its generator settings are damaged "
+                             "(nested too deep)") from None
+        if not isinstance(params, dict):
+            raise VoxelError(f"{self.path}: its generator settings are damaged "
+                             f"(not a JSON object: {raw[:40]!r})")
+        return params
 
     def set_meta(self, key: str, value: str) -> None:
         with self.transaction():

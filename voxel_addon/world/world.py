@@ -94,11 +94,7 @@ class World(Saving):
         from ..storage import WorldFile
         wf = WorldFile(path, readonly=readonly)
         try:
-            gen = for_file(wf, backend)
-        except (ValueError, TypeError, KeyError, IndexError, AttributeError) as e:
-            wf.close()  # a hostile or damaged meta row: one line, not a traceback
-            raise VoxelError(f"{path}: its generator settings are damaged "
-                             f"({type(e).__name__}: {e})") from None
+            gen = for_file(wf, backend)  # damaged settings: a VoxelError
         except BaseException:
             wf.close()
             raise

@@ -129,9 +129,41 @@ class Writing:
         raise err from None
 
 
-def write_whole(path: Path, data: bytes) -> None:
-    """Write under a temporary name, then rename: a killed run leaves no half file
-    under the real name, so a file that is there is complete (resumable outputs)."""
+def out_file(path: Path, make_folder: bool = False) -> Path:
+    """Check an output file's path before the work: a folder there, or a missing
+    folder above it (made with MAKE_FOLDER), is one line now, not a traceback after."""
+    from ..core.errors import VoxelError
+    if path.is_dir():
+        raise VoxelError(f"--out {path} is a folder; name a file")
+    if make_folder:
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as e:
+            raise VoxelError(f"cannot create folder {path.parent}: {e.strerror}") from None
+    elif not path.parent.is_dir():
+        raise VoxelError(f"folder {path.parent} does not exist")
+    return path
+
+
+def write_out(path: Path, data) -> None:
+    """Write an output file (DATA: bytes, or a Path to copy) under a temporary name,
+    then rename: a killed run leaves no half file under the real name, so a file
+    that is there is complete (resumable outputs). A failure (a full disk, a
+    read-only folder) is one line naming the output, never the world, and leaves
+    no part of it."""
+    from ..core.errors import VoxelError, cause
     tmp = path.with_name(f".{path.name}.part")
-    tmp.write_bytes(data)
-    tmp.replace(path)
+    try:
+        if isinstance(data, Path):
+            import shutil
+            shutil.copyfile(data, tmp)
+        else:
+            tmp.write_bytes(data)
+        tmp.replace(path)
+    except OSError as e:
+        try:
+            tmp.unlink(missing_ok=True)
+        except OSError:
+            pass
+        why = cause(e, path) or e.strerror
+        raise VoxelError(f"cannot write {path} ({why}); the world is unchanged") from None

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .common import add_world, coord, note
+from .common import add_world, coord, note, out_file
 
 
 def add_parser(sub):
@@ -22,8 +22,7 @@ def run(args):
     from ..world import World
     if args.out.suffix.lower() != ".vox":
         raise VoxelError(f"--out {args.out}: the file name must end in .vox")
-    if not args.out.parent.is_dir():
-        raise VoxelError(f"folder {args.out.parent} does not exist")
+    out_file(args.out)
     with World.open(args.world, readonly=True, loader=False) as world:
         r = magica.export_vox(world, args.box, args.out)
     note(f"{r['voxels']} voxels, {r['colors']} colours"

@@ -18,7 +18,7 @@ import numpy as np
 from ..core import chunk as C
 from ..core import colors
 from ..core.blocks import REGISTRY
-from ..core.errors import VoxelError
+from ..core.errors import VoxelError, cause
 from . import vox
 
 COLOR = REGISTRY.id("color")
@@ -129,9 +129,15 @@ def export_vox(world, box, out) -> dict:
     full = np.zeros((256, 3), np.uint8)
     full[1:len(pal) + 1] = pal
     data = vox.write(grid, full)
+    tmp = Path(out).with_name(f".{Path(out).name}.part")  # no half file under the name
     try:
-        Path(out).write_bytes(data)
+        tmp.write_bytes(data)
+        tmp.replace(out)
     except OSError as e:
-        raise VoxelError(f"cannot write {out} ({e.strerror})") from None
+        try:
+            tmp.unlink(missing_ok=True)
+        except OSError:  # a read-only folder: nothing was made either
+            pass
+        raise VoxelError(f"cannot write {out} ({cause(e, out) or e.strerror})") from None
     return {"voxels": int(solid.sum()), "colors": int(len(pal)), "exact": len(ucol) <= 255,
             "models": -(-solid.shape[0] // 256) * -(-solid.shape[1] // 256) * -(-solid.shape[2] // 256)}

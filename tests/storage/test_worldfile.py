@@ -118,6 +118,11 @@ def test_not_a_world_file(tmp_path):
     assert p.read_bytes() == b""
     with pytest.raises(VoxelError, match="no world file"):
         WorldFile(tmp_path / "missing.sqlite")
+    (tmp_path / "folder.sqlite").mkdir()  # not 'no world file': there is something
+    for make in (lambda p: WorldFile(p), lambda p: WorldFile.create(
+            p, seed=1, generator="flat", generator_version=1)):
+        with pytest.raises(VoxelError, match="is a folder, not a world file"):
+            make(tmp_path / "folder.sqlite")
 
 
 def test_readonly_open_of_a_path_with_uri_characters(tmp_path):

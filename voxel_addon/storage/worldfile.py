@@ -46,6 +46,8 @@ class WorldFile(Decoding):
         self._cursor = None  # read_chunk's
         self._staged: dict[str, str] = {}  # meta values written by the next save
         self.db = None
+        if self.path.is_dir():
+            raise VoxelError(f"{self.path} is a folder, not a world file")
         if _create is None and not self.path.is_file():
             raise VoxelError(f"no world file at {self.path}")
         if _create is not None and self.path.exists():

@@ -118,15 +118,20 @@ def test_failed_create_leaves_no_file(disk):
     secs = {0: rng.choice(np.array(["minecraft:stone", "minecraft:air", "minecraft:dirt"],
                                    object), (16, 16, 16))}
     mc.write_region(save / "region", {(x, z): mc.chunk_nbt(x, z, secs)
-                                      for x in range(4) for z in range(4)})
+                                      for x in range(8) for z in range(8)})
     try:
-        disk(40 << 10)
         w = disk.path / "w.sqlite"
-        failed(cli("import", "--world", w, "--from", save), "disk full", "w.sqlite",
-               "was removed")
-        assert files(w) == []
-        failed(cli("generate", "--world", w, "--seed", 3, "--radius", 3), "disk full")
-        assert files(w) == []
+        # no room to make the file (it is made whole under a name of its own, then
+        # linked), then room to make it but not to fill it
+        for room, words in ((40 << 10, ("while creating", "nothing was made")),
+                            (160 << 10, ("nothing was kept", "which it created, was removed"))):
+            disk(room)
+            failed(cli("import", "--world", w, "--from", save), "disk full", "w.sqlite", *words)
+            assert files(w) == [] and sorted(os.listdir(disk.path)) == ["filler"]
+            r = cli("generate", "--world", w, "--seed", 3, "--radius", 5)  # after its note
+            assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr[-3000:]
+            assert all(x in r.stderr.splitlines()[-1] for x in ("disk full", *words)), r.stderr
+            assert files(w) == [] and sorted(os.listdir(disk.path)) == ["filler"]
     finally:
         shutil.rmtree(save)
 

@@ -146,3 +146,57 @@ def test_overlapping_loads_generate_each_chunk_once(tmp_path):
         for k, blocks in got.items():
             assert np.array_equal(w.load([k])[k].blocks, blocks), k
         assert w.get_block(20, 5, 90) == REGISTRY.id("glass")
+
+
+_RACER = """
+import sys, time
+from pathlib import Path
+from voxel_addon import cli
+d, me, rounds = Path(sys.argv[1]), sys.argv[2], int(sys.argv[3])
+for i in range(rounds):
+    print("ready", flush=True)
+    while not (d / f"go{i}").exists():
+        time.sleep(0.0005)
+    args = (["generate", "--seed", "4", "--generator", "flat", "--radius", "0",
+             "--center", "0" if me == "a" else "16", "0"] if i % 2 == 0 else
+            ["import", "--from", str(d / "m.vox"), "--at", "0" if me == "a" else "40", "0", "100"])
+    rc = cli.main([*args, "--world", str(d / f"w{i}.sqlite")])
+    print("rc", rc, flush=True)
+"""
+
+
+def test_two_processes_creating_one_world_at_once_both_succeed(tmp_path):
+    """Two generates (or two .vox imports) into the same new file, started together:
+    the second found a half-made file ('disk I/O error', 'already exists'), and its
+    failure removed the file the first was writing, so both failed and nothing was
+    kept. A new file appears whole (WorldFile.create links it in); the one that comes
+    second opens it and extends it; a failing command removes only a file it made."""
+    from voxel_addon.formats import vox
+    grid = np.zeros((2, 2, 2), np.uint8)
+    grid[0, 0, 0] = 1
+    (tmp_path / "m.vox").write_bytes(vox.write(grid, np.full((256, 3), 200, np.uint8)))
+    rounds = 16
+    procs = [subprocess.Popen(host.python_cmd("-c", _RACER, str(tmp_path), me, str(rounds)),
+                              env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                              text=True, cwd=host.ROOT) for me in "ab"]
+    rcs = []
+    try:
+        for i in range(rounds):
+            if any(p.stdout.readline().strip() != "ready" for p in procs):
+                break
+            (tmp_path / f"go{i}").touch()
+            rcs.append([p.stdout.readline().strip() for p in procs])
+            if rcs[-1] != ["rc 0", "rc 0"]:
+                break
+    finally:
+        for p in procs:
+            p.kill()
+    errs = [p.communicate()[1][-1500:] for p in procs]
+    assert rcs == [["rc 0", "rc 0"]] * rounds, (rcs, errs)
+    for i in range(rounds):
+        with World.open(tmp_path / f"w{i}.sqlite", loader=False, readonly=True) as w:
+            if i % 2 == 0:
+                assert sorted(w.file.chunk_keys()) == [(0, 0), (1, 0)]
+            else:
+                assert w.get_block(0, 0, 100) != 0 and w.get_block(40, 0, 100) != 0
+    assert sorted(p.name for p in tmp_path.iterdir() if ".new" in p.name) == []

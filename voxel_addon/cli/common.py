@@ -59,7 +59,8 @@ class Writing:
     """Around a command that writes the world file PATH (`with Writing(path, what) as w`,
     the world opened through `w.own(...)`): on success the world is closed (saved);
     on a failure nothing more is written, a file this command created is removed
-    (with its -wal and -shm) while one that existed never is, and a full disk, a
+    (with its -wal and -shm) while one that existed, or that another process made
+    meanwhile, never is (WorldFile.created), and a full disk, a
     read-only or locked file becomes one line saying what failed and what was kept
     (core.errors.explain). `w.kept`: a function saying what is in the file so far
     (batch-wise commands), None while nothing is."""
@@ -67,6 +68,7 @@ class Writing:
     def __init__(self, path, what: str, doing: str = "saving"):
         self.path, self.what, self.doing = Path(path), what, doing
         self.new = not any(p.exists() for p in self._files())
+        self.created = False  # this command made the file (not only found none at first)
         self.world = None
         self.kept = lambda: None
 
@@ -76,6 +78,7 @@ class Writing:
 
     def own(self, world):
         self.world = world
+        self.created = self.created or world.file.created
         return world
 
     def __enter__(self):
@@ -109,7 +112,7 @@ class Writing:
         except Exception:  # noqa: BLE001 - closing a broken file: the first error is the news
             pass
         removed = False
-        if self.new:
+        if self.created:
             for p in self._files():
                 try:
                     p.unlink()
@@ -117,6 +120,8 @@ class Writing:
                 except OSError:  # gone already (or never made)
                     pass
             kept = f"nothing was kept ({self.path.name}, which it created, was removed)"
+        elif self.new and not self.path.exists():  # failed making it: nothing is there
+            kept = f"nothing was kept ({self.path.name} was not made)"
         else:
             kept = self.kept()
             kept = f"{kept}; the rest was not written" if kept else \

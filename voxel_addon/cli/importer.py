@@ -36,15 +36,19 @@ def add_parser(sub):
 
 
 def _open(args):
+    from ..storage import Exists
     from ..world import World
-    if args.world.exists():
-        if args.generator:
-            raise VoxelError("--generator is for a new world; this one exists")
-        return World.open(args.world, loader=False)
-    if not args.world.parent.is_dir():
-        raise VoxelError(f"folder {args.world.parent} does not exist")
-    return World.create(args.world, seed=args.seed, generator=args.generator or "empty",
-                        loader=False)
+    if not args.world.exists():
+        if not args.world.parent.is_dir():
+            raise VoxelError(f"folder {args.world.parent} does not exist")
+        try:
+            return World.create(args.world, seed=args.seed,
+                                generator=args.generator or "empty", loader=False)
+        except Exists:  # another process made it just now: import into theirs
+            pass
+    if args.generator:
+        raise VoxelError("--generator is for a new world; this one exists")
+    return World.open(args.world, loader=False)
 
 
 def run(args):

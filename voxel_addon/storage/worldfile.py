@@ -27,7 +27,7 @@ import numpy as np
 
 from ..core import chunk as C
 from ..core.blocks import REGISTRY
-from ..core.errors import VoxelError
+from ..core.errors import VoxelError, cause
 from . import codecs
 from .decode import CorruptChunk, Decoding
 from .rows import Encoder
@@ -35,8 +35,13 @@ from .schema import (APP_ID, EDITS_TABLE, FORMAT_VERSION, LIGHT_TABLE, SCHEMA,
                      VERSION_TABLE, lock_timeout, open_error)
 from .transactions import Reading, Transaction
 
+class Exists(VoxelError):
+    """A new world's path is taken (by a file another process may have just made)."""
+
+
 class WorldFile(Decoding):
-    """A world file opened for reading (and writing unless `readonly`)."""
+    """A world file opened for reading (and writing unless `readonly`). `created`:
+    this object made the file (create), so a command that fails may remove it."""
 
     def __init__(self, path, *, readonly: bool = False, _create: dict | None = None):
         self.path = Path(path)
@@ -46,12 +51,22 @@ class WorldFile(Decoding):
         self._cursor = None  # read_chunk's
         self._staged: dict[str, str] = {}  # meta values written by the next save
         self.db = None
+        self.created = False
         if self.path.is_dir():
             raise VoxelError(f"{self.path} is a folder, not a world file")
-        if _create is None and not self.path.is_file():
+        if _create is not None:
+            self._make(_create)
+            self.created = True
+        elif not self.path.is_file():
             raise VoxelError(f"no world file at {self.path}")
-        if _create is not None and self.path.exists():
-            raise VoxelError(f"{self.path} already exists")
+        try:
+            self._open(readonly)
+        except BaseException:
+            if self.created:  # made here, refused on opening (a full disk): not left behind
+                self._unmake()
+            raise
+
+    def _open(self, readonly: bool) -> None:
         try:
             if readonly:
                 # as_uri escapes what a URI would misread (#, ?, %, spaces) and spells
@@ -63,8 +78,6 @@ class WorldFile(Decoding):
                                           timeout=lock_timeout())
             self.db.isolation_level = None  # explicit BEGIN/COMMIT below
             self._identity_at_open = self._stat()
-            if _create is not None:
-                self._init(_create)
             # Read before any pragma that writes, so a foreign file is never touched.
             self.meta = dict(self.db.execute("SELECT key, value FROM meta"))
             file_names = dict(self.db.execute("SELECT id, name FROM block_types"))
@@ -80,7 +93,7 @@ class WorldFile(Decoding):
             if "chunks" not in tables:  # another program's file: refused before any write
                 raise VoxelError(f"{self.path} is not a Voxel Worlds file (it has no "
                                  "chunks table)")
-            if not readonly and _create is None:
+            if not readonly:  # a new file too: it was made with a rollback journal (_make)
                 self.db.execute("PRAGMA journal_mode=WAL")
             self._map_ids(file_names)
             self._edits_table(readonly, tables)
@@ -106,10 +119,61 @@ class WorldFile(Decoding):
                                   "generator_version": str(generator_version),
                                   "generator_params": json.dumps(params or {}, sort_keys=True)})
 
+    def _make(self, meta: dict) -> None:
+        """Make the new file whole under a name of its own, then link it to `path`,
+        which fails when a file is there: two processes creating one world at once
+        (two generates, Blender and an import) never write into one half-made file,
+        and the one that comes second finds a whole world (Exists)."""
+        if self.path.exists():
+            raise Exists(f"{self.path} already exists")
+        tmp = self.path.with_name(f".{self.path.name}.{os.getpid()}-{threading.get_ident()}.new")
+        try:
+            self.db = sqlite3.connect(tmp)
+            self.db.isolation_level = None
+            self._init(meta)
+            self.db.close()  # the last connection: the WAL goes into the file
+            self.db = None
+            try:
+                os.link(tmp, self.path)
+            except FileExistsError:
+                raise Exists(f"{self.path} already exists") from None
+            except OSError:  # no hard links on this file system: a rename, checked first
+                if self.path.exists():
+                    raise Exists(f"{self.path} already exists") from None
+                os.replace(tmp, self.path)
+        except sqlite3.DatabaseError as e:
+            what = cause(e, self.path)
+            if what is None:
+                raise
+            raise VoxelError(f"{what} while creating {self.path}: nothing was made") from None
+        finally:
+            if self.db is not None:
+                self.db.close()
+                self.db = None
+            for p in (tmp, *(tmp.with_name(tmp.name + s) for s in ("-wal", "-shm", "-journal"))):
+                try:
+                    p.unlink()
+                except OSError:  # never made, or renamed into place
+                    pass
+
+    def _unmake(self) -> None:
+        """Remove the file this object made (with its -wal and -shm), unless another
+        file has taken its name since."""
+        if self.db is not None:
+            self.db.close()
+            self.db = None
+        if self._identity_at_open is not None and self._stat() != self._identity_at_open:
+            return
+        for p in (self.path, *(self.path.with_name(self.path.name + s)
+                               for s in ("-wal", "-shm", "-journal"))):
+            try:
+                p.unlink()
+            except OSError:
+                pass
+
     def _init(self, meta: dict) -> None:
         db = self.db
         db.execute(f"PRAGMA application_id={APP_ID}")
-        db.execute("PRAGMA journal_mode=WAL")
         db.execute("BEGIN")
         for statement in SCHEMA.split(";"):
             if statement.strip():

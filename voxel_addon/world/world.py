@@ -86,7 +86,11 @@ class World(Saving):
         gen = make_generator(generator, seed, params, backend)
         wf = WorldFile.create(path, seed=seed, generator=gen.name,
                               generator_version=gen.version, params=gen.params)
-        return cls(wf, gen, **kw)
+        try:
+            return cls(wf, gen, **kw)
+        except BaseException:
+            wf._unmake()  # a world that never opened leaves no file
+            raise
 
     @classmethod
     def open(cls, path, *, backend=None, readonly: bool = False, **kw) -> "World":

@@ -39,6 +39,12 @@ class Exists(VoxelError):
     """A new world's path is taken (by a file another process may have just made)."""
 
 
+class MetaMoved(VoxelError):
+    """A staged meta value was built on a value another process has replaced since
+    (a palette it added to): nothing of that save was written; `meta` holds the
+    file's value now, build on it again."""
+
+
 class WorldFile(Decoding):
     """A world file opened for reading (and writing unless `readonly`). `created`:
     this object made the file (create), so a command that fails may remove it."""
@@ -50,6 +56,7 @@ class WorldFile(Decoding):
         self._identity_at_open = None
         self._cursor = None  # read_chunk's
         self._staged: dict[str, str] = {}  # meta values written by the next save
+        self._bases: dict[str, str | None] = {}  # what a staged value was built on
         self.db = None
         self.created = False
         if self.path.is_dir():
@@ -309,12 +316,18 @@ class WorldFile(Decoding):
             self.db.execute("INSERT OR REPLACE INTO meta VALUES (?, ?)", (key, str(value)))
         self.meta[key] = str(value)
 
-    def stage_meta(self, key: str, value: str) -> None:
+    def stage_meta(self, key: str, value: str, base=False) -> None:
         """Set a meta value now (in memory) and write it with the next `save`, in
-        its transaction: a palette goes to the file with the voxels that use it."""
+        its transaction: a palette goes to the file with the voxels that use it.
+        BASE (a value or None: the key absent): the value it was built on; when the
+        file holds another by then (a second writer added to the palette), that save
+        raises MetaMoved and writes nothing, so voxels never index a palette that is
+        not the one they were made for."""
         self._writable()
         with self._lock:
             self.meta[key] = self._staged[key] = str(value)
+            if base is not False:
+                self._bases.setdefault(key, base)  # the first base: what the file held
 
     # ---- transactions, queries for the file's other tables (far.py) ----------
     def transaction(self):
@@ -487,6 +500,10 @@ class WorldFile(Decoding):
                 rows = out
             top = self.top_version()
             staged = dict(self._staged)
+            moved = self._moved_meta()
+            if moved:
+                raise MetaMoved(f"{self.path}: another program changed {', '.join(moved)} "
+                                "meanwhile; nothing was written")
             self.db.executemany("INSERT OR REPLACE INTO meta VALUES (?, ?)", staged.items())
             self.db.executemany("INSERT OR REPLACE INTO chunks VALUES (?, ?, ?, ?, ?)",
                                 [r[:5] for r in rows])
@@ -504,7 +521,28 @@ class WorldFile(Decoding):
             for k, v in staged.items():  # written: unless staged again meanwhile
                 if self._staged.get(k) == v:
                     del self._staged[k]
+                    self._bases.pop(k, None)
         return new
+
+    def _moved_meta(self) -> list[str]:
+        """Inside save's transaction: the staged keys whose stored value is no longer
+        the one they were built on; those are dropped from the stage and `meta` takes
+        the stored value (the caller builds on it again)."""
+        moved = {}
+        for k, base in list(self._bases.items()):
+            row = self.db.execute("SELECT value FROM meta WHERE key=?", (k,)).fetchone()
+            now = None if row is None else row[0]
+            if now != base:
+                moved[k] = now
+        with self._lock:
+            for k, now in moved.items():
+                self._staged.pop(k, None)
+                self._bases.pop(k, None)
+                if now is None:
+                    self.meta.pop(k, None)
+                else:
+                    self.meta[k] = now
+        return sorted(moved)
 
     def write_chunks(self, items, codec: str | None = None) -> None:
         """items: (key, blocks, data-or-None) triples."""

@@ -316,6 +316,20 @@ class WorldFile(Decoding):
             self.db.execute("INSERT OR REPLACE INTO meta VALUES (?, ?)", (key, str(value)))
         self.meta[key] = str(value)
 
+    def update_meta(self, key: str, fn) -> str:
+        """Meta KEY set to fn(the value the file holds now, or None) in a transaction of
+        its own, and returned: an addition to a palette made on what is there, not on
+        what this session read when it opened (another process may have added since)."""
+        with self.transaction() as db:
+            row = db.execute("SELECT value FROM meta WHERE key=?", (key,)).fetchone()
+            value = str(fn(None if row is None else row[0]))
+            db.execute("INSERT OR REPLACE INTO meta VALUES (?, ?)", (key, value))
+        with self._lock:
+            self.meta[key] = value
+            self._staged.pop(key, None)
+            self._bases.pop(key, None)
+        return value
+
     def stage_meta(self, key: str, value: str, base=False) -> None:
         """Set a meta value now (in memory) and write it with the next `save`, in
         its transaction: a palette goes to the file with the voxels that use it.

@@ -124,3 +124,48 @@ def test_stamp_is_one_undo_step(bpy, tmp_path):
         sc.property_unset("voxel")
         sc.property_unset("voxel_edit")
         voxel_addon.unregister()
+
+
+def test_a_stamp_adds_to_the_palette_another_process_grew(bpy, tmp_path):
+    """Blender read the palette when it opened the world; a command-line import then
+    added its colour (index 1). The stamp's colour went to index 1 too, and its
+    palette, written with the stroke, gave the other model the stamp's colour."""
+    import os
+    import subprocess
+    import voxel_addon
+    from tests import host
+    from voxel_addon.blender import session
+    from voxel_addon.core import colors
+    from voxel_addon.formats import vox
+    for me, rgb in (("red", (250, 0, 0)), ("blue", (0, 0, 250))):
+        pal = np.zeros((256, 3), np.uint8)
+        pal[1] = rgb
+        (tmp_path / f"{me}.vox").write_bytes(vox.write(np.ones((2, 2, 2), np.uint8), pal))
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    voxel_addon.register()
+    sc = bpy.context.scene
+    try:
+        sc.voxel.path, sc.voxel.seed, sc.voxel.generator = str(tmp_path / "w.sqlite"), 3, "flat"
+        assert bpy.ops.voxel.world_new() == {"FINISHED"}
+        w = session.world(sc.voxel.path)
+        w.get_block(40, 0, 100)                     # the session has read the file
+        r = subprocess.run(host.python_cmd("-m", "voxel_addon", "import", "--world",
+                                           sc.voxel.path, "--from", tmp_path / "red.vox",
+                                           "--at", 0, 0, 100),
+                           env=dict(os.environ, PYTHONPATH=str(host.ROOT), VOXEL_OPENCL="0"),
+                           capture_output=True, text=True, timeout=120, cwd=host.ROOT)
+        assert r.returncode == 0, r.stderr[-2000:]
+        assert bpy.ops.voxel.stamp("EXEC_DEFAULT", True, filepath=str(tmp_path / "blue.vox"),
+                                   location=(41, 1, 100)) == {"FINISHED"}
+        session._poll()                              # the other process's chunks
+        pal = colors.parse(w.file.meta)
+        assert pal[w.chunk_at(2, 0).data[41 & 15, 1, 100]].tolist() == [0, 0, 250]
+    finally:
+        sc.property_unset("voxel")
+        sc.property_unset("voxel_edit")
+        voxel_addon.unregister()
+    from voxel_addon.world import World
+    with World.open(tmp_path / "w.sqlite", loader=False, readonly=True) as w2:
+        pal = colors.parse(w2.file.meta)
+        assert pal[w2.chunk_at(0, 0).data[1, 1, 101]].tolist() == [250, 0, 0]
+        assert pal[w2.chunk_at(2, 0).data[41 & 15, 1, 100]].tolist() == [0, 0, 250]

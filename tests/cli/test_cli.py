@@ -84,6 +84,9 @@ def test_dump_generates_missing_neighbours_without_saving(flat_world, tmp_path):
     (("generate", "--generator", "overworld"), "uses generator"),
     (("generate", "--radius", -1), "--radius"),
     (("dump", "--chunk", 0, "x", "--out", "o.npz"), "invalid int value"),
+    (("dump", "--chunk", 1 << 62, 0, "--out", "o.npz"), "outside the world"),
+    (("generate", "--center", 0, 1 << 64), "outside the world"),
+    (("edit", "--set", -(1 << 63), 1, 100, "stone"), "outside the world"),
 ])
 def test_bad_input_is_one_line_and_changes_nothing(flat_world, args, message, tmp_path):
     before = digest(flat_world)

@@ -118,15 +118,20 @@ def test_failed_create_leaves_no_file(disk):
     secs = {0: rng.choice(np.array(["minecraft:stone", "minecraft:air", "minecraft:dirt"],
                                    object), (16, 16, 16))}
     mc.write_region(save / "region", {(x, z): mc.chunk_nbt(x, z, secs)
-                                      for x in range(4) for z in range(4)})
+                                      for x in range(8) for z in range(8)})
     try:
-        disk(40 << 10)
         w = disk.path / "w.sqlite"
-        failed(cli("import", "--world", w, "--from", save), "disk full", "w.sqlite",
-               "was removed")
-        assert files(w) == []
-        failed(cli("generate", "--world", w, "--seed", 3, "--radius", 3), "disk full")
-        assert files(w) == []
+        # no room to make the file (it is made whole under a name of its own, then
+        # linked), then room to make it but not to fill it
+        for room, words in ((40 << 10, ("while creating", "nothing was made")),
+                            (160 << 10, ("nothing was kept", "which it created, was removed"))):
+            disk(room)
+            failed(cli("import", "--world", w, "--from", save), "disk full", "w.sqlite", *words)
+            assert files(w) == [] and sorted(os.listdir(disk.path)) == ["filler"]
+            r = cli("generate", "--world", w, "--seed", 3, "--radius", 5)  # after its note
+            assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr[-3000:]
+            assert all(x in r.stderr.splitlines()[-1] for x in ("disk full", *words)), r.stderr
+            assert files(w) == [] and sorted(os.listdir(disk.path)) == ["filler"]
     finally:
         shutil.rmtree(save)
 
@@ -239,3 +244,54 @@ def test_edit_under_a_file_size_limit_builds_no_kernel(tmp_path):
            "file-size limit", "nothing of this edit was written")
     assert block(w, 1, 1, 100) == GLASS and block(w, 2, 2, 100) == 0
     assert not sqlite3.connect(w).execute("PRAGMA integrity_check").fetchone()[0] != "ok"
+
+
+def _flat(path, keys=((0, 0),)):
+    with World.create(path, seed=1, generator="flat", loader=False) as w:
+        w.generate_area(list(keys))
+
+
+OUTPUTS = {  # command -> its arguments before --out, and the file it writes
+    "dump": (("--chunk", 0, 0), "o.npz"),
+    "export": (("--box", 0, 0, 0, 16, 16, 64), "o.vox"),
+    "map": ((), "m.png"),
+    "render": (("--camera", 8, 8, 120, 0, -30, "--size", 32, 32), "r.png"),
+    "bake": (("--region", 0, 0, 16, 16), "b.glb"),
+}
+
+
+def test_an_output_that_is_a_folder_is_one_line(tmp_path):
+    """Checked before the work (render: before a GL context, bake: before bpy); the
+    message names the output, not the world."""
+    w = tmp_path / "w.sqlite"
+    _flat(w)
+    for cmd, (args, name) in OUTPUTS.items():
+        (tmp_path / name).mkdir()
+        failed(cli(cmd, "--world", w, *args, "--out", tmp_path / name), f"{name} is a folder")
+
+
+def test_outputs_on_a_full_disk_leave_no_part(tmp_path, disk):
+    """A full disk under --out: one line naming the output (not 'disk full while
+    running ... on w.sqlite'), no half file and no .part left (a half .glb or .vox
+    would pass for a finished one: bake --per tile keeps the tiles it finds)."""
+    w = tmp_path / "w.sqlite"
+    _flat(w, [(x, y) for x in range(-1, 2) for y in range(-1, 2)])
+    disk(0)
+    for cmd in ("dump", "export", "bake"):
+        args, name = OUTPUTS[cmd]
+        failed(cli(cmd, "--world", w, *args, "--out", disk.path / name),
+               f"cannot write {disk.path / name}", "disk full")
+    failed(cli("bake", "--world", w, "--region", 0, 0, 16, 16, "--per", "tile",
+               "--out", disk.path / "tiles"), "tile_0_0.glb", "disk full")
+    left = sorted(p.relative_to(disk.path).as_posix() for p in disk.path.rglob("*"))
+    assert left == ["filler", "tiles"], left
+
+
+def test_map_of_chunks_far_apart_is_refused(tmp_path):
+    """Two chunks: the picture covers the box between them, here 301 x 301 chunks,
+    more than map draws (an edit a million blocks away: a MemoryError traceback
+    asking for terabytes, or the machine); one line instead."""
+    w = tmp_path / "w.sqlite"
+    _flat(w, [(0, 0), (300, 300)])
+    failed(cli("map", "--world", w, "--out", tmp_path / "m.png"), "span 301 x 301 chunks")
+    assert not (tmp_path / "m.png").exists()

@@ -231,6 +231,19 @@ def test_region_sectors_belong_to_one_chunk(tmp_path):
         Region("r.0.0.mca", H.aliased(zlib.compress(H.good_chunk()), 2))
 
 
+def test_a_region_outside_the_world_is_refused_by_its_name(tmp_path):
+    """r.X.Z.mca names where its chunks go: past the world's reach (2^30 blocks) the
+    positions wrap in generation or overflow SQLite's integers."""
+    good = mc.region({(0, 0): H.good_chunk()}, 2)
+    assert Region("r.-2097152.2097151.mca", good).chunks()   # the edge itself is inside
+    for name in ("r.2097152.0.mca", "r.0.-2097153.mca", f"r.{1 << 60}.0.mca"):
+        (tmp_path / "region").mkdir(exist_ok=True)
+        f = tmp_path / "region" / name
+        f.write_bytes(good)
+        with pytest.raises(VoxelError, match="outside the world"):
+            minecraft.regions_of(tmp_path)
+        f.unlink()
+
 def test_nbt_lengths_are_checked_before_allocating():
     head = H.chunk_head()
     for tag, item in ((7, b""), (11, b""), (12, b""), (9, b"\x04"), (9, b"\x0a"), (9, b"\x08")):

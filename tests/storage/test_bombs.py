@@ -264,11 +264,14 @@ def test_an_rle_end_hides_no_ids(world_path, how):
         wf.close()
 
 
-@pytest.mark.parametrize("params", ['{"layers": 5}', '{"layers": [["stone", "x"]]}',
-                                    '{"layers": [[1]]}', "[1, 2", '"text"'])
-def test_damaged_generator_settings_are_one_line(world_path, params):
+@pytest.mark.parametrize("generator, params", [
+    ("flat", '{"layers": 5}'), ("flat", '{"layers": [["stone", "x"]]}'),
+    ("flat", '{"layers": [[1]]}'), ("flat", "[1, 2"), ("flat", '"text"'),
+    ("overworld", '{"sea_level": 1e999}'), ("flat", "[" * 100_000)])
+def test_damaged_generator_settings_are_one_line(world_path, generator, params):
     from voxel_addon.core.errors import VoxelError
-    World.create(world_path, seed=1, generator="flat", loader=False).close()
+    from voxel_addon.generation import for_file
+    World.create(world_path, seed=1, generator=generator, loader=False).close()
     db = sqlite3.connect(world_path)
     db.execute("UPDATE meta SET value=? WHERE key='generator_params'", (params,))
     db.commit()
@@ -276,3 +279,9 @@ def test_damaged_generator_settings_are_one_line(world_path, params):
     with pytest.raises(VoxelError) as e:
         World.open(world_path, loader=False)
     assert "\n" not in str(e.value)
+    wf = WorldFile(world_path, readonly=True)  # the CLI's map and info read it so
+    try:
+        with pytest.raises(VoxelError, match="generator settings are damaged"):
+            for_file(wf)
+    finally:
+        wf.close()

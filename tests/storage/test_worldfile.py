@@ -118,6 +118,11 @@ def test_not_a_world_file(tmp_path):
     assert p.read_bytes() == b""
     with pytest.raises(VoxelError, match="no world file"):
         WorldFile(tmp_path / "missing.sqlite")
+    (tmp_path / "folder.sqlite").mkdir()  # not 'no world file': there is something
+    for make in (lambda p: WorldFile(p), lambda p: WorldFile.create(
+            p, seed=1, generator="flat", generator_version=1)):
+        with pytest.raises(VoxelError, match="is a folder, not a world file"):
+            make(tmp_path / "folder.sqlite")
 
 
 def test_readonly_open_of_a_path_with_uri_characters(tmp_path):
@@ -132,3 +137,56 @@ def test_readonly_open_of_a_path_with_uri_characters(tmp_path):
         assert wf.seed == 4 and wf.read_chunk((0, 0)) is not None
     finally:
         wf.close()
+
+
+def _spec_only(path, tables=("meta", "block_types", "chunks")):
+    """A world as another program writes it from SPEC 3 alone: meta, block_types and
+    chunks (one zlib chunk: stone up to z 9), none of our own tables."""
+    db = sqlite3.connect(path)
+    if "meta" in tables:
+        db.execute("CREATE TABLE meta(key TEXT PRIMARY KEY, value TEXT)")
+        db.executemany("INSERT INTO meta VALUES (?, ?)", [
+            ("format_version", "1"), ("seed", "3"), ("generator", "flat"),
+            ("generator_version", "1")])
+    if "block_types" in tables:
+        db.execute("CREATE TABLE block_types(id INTEGER PRIMARY KEY, name TEXT UNIQUE NOT NULL)")
+        db.executemany("INSERT INTO block_types VALUES (?, ?)", [(0, "air"), (1, "stone")])
+    if "chunks" in tables:
+        db.execute("CREATE TABLE chunks(cx INTEGER, cy INTEGER, codec TEXT NOT NULL, "
+                   "blocks BLOB NOT NULL, data BLOB, PRIMARY KEY (cx, cy))")
+        b = np.zeros(chunk.SIZE * chunk.SIZE * chunk.HEIGHT, "<u2")
+        b[:256 * 10] = 1
+        db.execute("INSERT INTO chunks VALUES (0, 0, 'zlib', ?, NULL)",
+                   (zlib.compress(b.tobytes()),))
+    db.commit()
+    db.close()
+
+
+def test_a_file_written_to_the_spec_alone_opens_and_takes_edits(tmp_path):
+    """No edits table (SPEC 3 calls it ours): read-only it opens untouched with no
+    edits, writable it gets the table and keeps an edit."""
+    p = tmp_path / "spec.sqlite"
+    _spec_only(p)
+    before = p.read_bytes()
+    wf = WorldFile(p, readonly=True)
+    try:
+        assert wf.edit_count() == 0 and wf.edits_in((0, 0)) == []
+    finally:
+        wf.close()
+    with World.open(p, readonly=True, loader=False) as w:
+        assert w.get_block(1, 1, 9) == REGISTRY.id("stone") and w.get_block(1, 1, 10) == 0
+    assert p.read_bytes() == before
+    with World.open(p, loader=False) as w:
+        w.set_block(1, 1, 10, "glass")
+    with World.open(p, readonly=True, loader=False) as w:
+        assert w.get_block(1, 1, 10) == REGISTRY.id("glass") and w.file.edit_count() == 1
+
+
+def test_a_file_without_a_chunks_table_is_refused_untouched(tmp_path):
+    p = tmp_path / "other.sqlite"
+    _spec_only(p, tables=("meta", "block_types"))
+    before = p.read_bytes()
+    for ro in (False, True):
+        with pytest.raises(VoxelError, match="not a Voxel Worlds file .*chunks"):
+            WorldFile(p, readonly=ro)
+    assert p.read_bytes() == before and sorted(x.name for x in tmp_path.iterdir()) == [p.name]

@@ -174,6 +174,40 @@ def test_a_held_stroke_is_written_in_one_transaction(world_path):
         assert all(w.get_block(*c) == lamp for c in cells)
 
 
+def test_a_wide_stroke_is_relit_in_parts_and_written_at_once(world_path, tmp_path):
+    """Voxels 512 blocks apart in one stroke (a script's list; the undo of a long
+    drag): only the chunks around them are lit (one window over the box between
+    would light ~1,200 chunks and take ~0.6 GB), one COMMIT, the same blocks and light
+    as the voxels edited one by one in another world, and undo puts everything back."""
+    import sqlite3
+    stroke = [(0, 0, 100, "lamp_red"), (512, 7, 100, "stone"), (513, 7, 100, "glass"),
+              (0, 0, 100, "lamp_blue"), (-3, 510, 101, "glass")]
+    keys = {(x >> 4, y >> 4) for x, y, _, _ in stroke}
+    one = tmp_path / "one.sqlite"
+    with World.create(one, seed=1, generator="flat", loader=False, backend="numpy") as w1:
+        for ch in stroke:
+            edit(w1, ch)
+        want = {k: (w1.chunk_at(*k).blocks.copy(), w1.chunk_at(*k).light.copy()) for k in keys}
+    with World.create(world_path, seed=1, generator="flat", loader=False, backend="numpy") as w:
+        commits = []
+        w.file.db.set_trace_callback(
+            lambda sql: commits.append(sql) if sql.strip().upper().startswith("COMMIT") else None)
+        payloads, rec = edit(w, stroke)
+        w.settle()
+        w.file.db.set_trace_callback(None)
+        assert len(w.chunks) < 100 and len(commits) == 1
+        assert len({p.key for p in payloads}) == len(payloads) and keys <= {p.key for p in payloads}
+        assert w.get_block(0, 0, 100) == REGISTRY.id("lamp_blue")
+        for k, (b, light) in want.items():
+            assert np.array_equal(w.chunk_at(*k).blocks, b)
+            assert np.array_equal(w.chunk_at(*k).light, light), k
+        db = sqlite3.connect(world_path)
+        assert db.execute("SELECT COUNT(*) FROM edits").fetchone()[0] == 4
+        db.close()
+        assert sorted(rec.voxels) == sorted({tuple(ch[:3]) for ch in stroke})
+        undo(w, rec)
+        assert all(w.get_block(x, y, z) == 0 for x, y, z, _ in stroke)
+
 def test_payloads_only_for_what_changed(world_path):
     stone, glass, lamp = (REGISTRY.id(n) for n in ("stone", "glass", "lamp_red"))
     with World.create(world_path, seed=SEED, loader=False) as w:
@@ -210,6 +244,9 @@ def test_payloads_only_for_what_changed(world_path):
     ((1, 1, 100, "unobtainium"), "unknown block name"),
     ((1, 1, 100, 9999), "unknown block id"),
     ((1, 1, 100, "stone", 70000), "data must be"),
+    ((1 << 30, 1, 100, "stone"), "outside the world"),     # generation's int32 would wrap
+    ((1, -(1 << 30) - 1, 100, "stone"), "outside the world"),
+    ((1 << 63, 1, 100, "stone"), "outside the world"),     # past SQLite's integers
 ])
 def test_bad_edits_refused_before_anything_changes(world_path, bad, msg):
     with World.create(world_path, seed=1, generator="flat", loader=False) as w:
@@ -222,6 +259,37 @@ def test_bad_edits_refused_before_anything_changes(world_path, bad, msg):
         assert w.chunks == {} and w.file.edit_count() == 0
     assert hashlib.sha256(world_path.read_bytes()).hexdigest() == digest
 
+
+def test_a_damaged_chunk_not_yet_read_is_refused_before_anything_changes(world_path):
+    """The damage is found only when the stroke reads the chunk: a stroke (and a
+    set_blocks reaching it from a good chunk) is refused on one line, nothing
+    changed in memory or in the file."""
+    import sqlite3
+    with World.create(world_path, seed=1, generator="flat", loader=False) as w:
+        w.generate_area([(x, y) for x in range(-1, 3) for y in range(-1, 2)])
+    db = sqlite3.connect(world_path)
+    db.execute("UPDATE chunks SET blocks=X'28b52ffd00deadbeef' WHERE cx=0 AND cy=0")
+    db.commit()
+    db.close()
+
+    def rows():  # the stored chunks and edits (generated neighbours may be saved)
+        db = sqlite3.connect(world_path)
+        try:
+            return ({(r[0], r[1]): r for r in db.execute("SELECT * FROM chunks")},
+                    db.execute("SELECT * FROM edits").fetchall())
+        finally:
+            db.close()
+    before = rows()
+    with World.open(world_path, loader=False) as w:
+        with pytest.raises(VoxelError, match=r"chunk \(0, 0\).* is damaged") as e:
+            edit(w, (2, 2, 100, "glass"))
+        assert "\n" not in str(e.value)
+    with World.open(world_path, loader=False) as w:
+        with pytest.raises(VoxelError, match=r"chunk \(0, 0\).* is damaged"):
+            w.set_blocks([(-15, 1, 100), (1, 1, 100)], [REGISTRY.id("glass")] * 2)
+        assert w.get_block(-15, 1, 100) == 0 and w.file.edit_count() == 0
+    after = rows()
+    assert {k: after[0][k] for k in before[0]} == before[0] and after[1] == before[1] == []
 
 def test_closing_while_streaming_keeps_every_finished_edit(world_path):
     glass = REGISTRY.id("glass")

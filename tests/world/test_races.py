@@ -146,3 +146,113 @@ def test_overlapping_loads_generate_each_chunk_once(tmp_path):
         for k, blocks in got.items():
             assert np.array_equal(w.load([k])[k].blocks, blocks), k
         assert w.get_block(20, 5, 90) == REGISTRY.id("glass")
+
+
+_RACER = """
+import sys, time
+from pathlib import Path
+from voxel_addon import cli
+d, me, rounds = Path(sys.argv[1]), sys.argv[2], int(sys.argv[3])
+for i in range(rounds):
+    print("ready", flush=True)
+    while not (d / f"go{i}").exists():
+        time.sleep(0.0005)
+    args = (["generate", "--seed", "4", "--generator", "flat", "--radius", "0",
+             "--center", "0" if me == "a" else "16", "0"] if i % 2 == 0 else
+            ["import", "--from", str(d / "m.vox"), "--at", "0" if me == "a" else "40", "0", "100"])
+    rc = cli.main([*args, "--world", str(d / f"w{i}.sqlite")])
+    print("rc", rc, flush=True)
+"""
+
+
+def test_two_processes_creating_one_world_at_once_both_succeed(tmp_path):
+    """Two generates (or two .vox imports) into the same new file, started together:
+    the second found a half-made file ('disk I/O error', 'already exists'), and its
+    failure removed the file the first was writing, so both failed and nothing was
+    kept. A new file appears whole (WorldFile.create links it in); the one that comes
+    second opens it and extends it; a failing command removes only a file it made."""
+    from voxel_addon.formats import vox
+    grid = np.zeros((2, 2, 2), np.uint8)
+    grid[0, 0, 0] = 1
+    (tmp_path / "m.vox").write_bytes(vox.write(grid, np.full((256, 3), 200, np.uint8)))
+    rounds = 16
+    procs = [subprocess.Popen(host.python_cmd("-c", _RACER, str(tmp_path), me, str(rounds)),
+                              env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                              text=True, cwd=host.ROOT) for me in "ab"]
+    rcs = []
+    try:
+        for i in range(rounds):
+            if any(p.stdout.readline().strip() != "ready" for p in procs):
+                break
+            (tmp_path / f"go{i}").touch()
+            rcs.append([p.stdout.readline().strip() for p in procs])
+            if rcs[-1] != ["rc 0", "rc 0"]:
+                break
+    finally:
+        for p in procs:
+            p.kill()
+    errs = [p.communicate()[1][-1500:] for p in procs]
+    assert rcs == [["rc 0", "rc 0"]] * rounds, (rcs, errs)
+    for i in range(rounds):
+        with World.open(tmp_path / f"w{i}.sqlite", loader=False, readonly=True) as w:
+            if i % 2 == 0:
+                assert sorted(w.file.chunk_keys()) == [(0, 0), (1, 0)]
+            else:
+                assert w.get_block(0, 0, 100) != 0 and w.get_block(40, 0, 100) != 0
+    assert sorted(p.name for p in tmp_path.iterdir() if ".new" in p.name) == []
+
+
+_PAINTER = """
+import sys, time
+from pathlib import Path
+from voxel_addon import cli
+d, me, rounds = Path(sys.argv[1]), sys.argv[2], int(sys.argv[3])
+for i in range(rounds):
+    print("ready", flush=True)
+    while not (d / f"go{i}").exists():
+        time.sleep(0.0005)
+    rc = cli.main(["import", "--world", str(d / f"w{i}.sqlite"), "--from", str(d / f"{me}.vox"),
+                   "--at", "0" if me == "red" else "40", "0", "100"])
+    print("rc", rc, flush=True)
+"""
+
+
+def test_two_vox_imports_at_once_keep_their_colours(tmp_path):
+    """Each import adds its colour to the world's palette (meta `colors`) and stores
+    the index in its voxels: both added index 1 and the later palette overwrote the
+    earlier, so one model took the other's colour (12 of 12 rounds). A palette built
+    on a value another writer has replaced is not written (storage MetaMoved); the
+    import takes its indices again from the file's palette and writes again."""
+    from voxel_addon.core import colors
+    from voxel_addon.formats import vox
+    rounds = 8
+    grid = np.ones((3, 3, 3), np.uint8)
+    for me, rgb in (("red", (250, 0, 0)), ("blue", (0, 0, 250))):
+        pal = np.zeros((256, 3), np.uint8)
+        pal[1] = rgb
+        (tmp_path / f"{me}.vox").write_bytes(vox.write(grid, pal))
+    for i in range(rounds):
+        with World.create(tmp_path / f"w{i}.sqlite", seed=1, generator="flat", loader=False) as w:
+            w.generate_area([(x, y) for x in range(-1, 4) for y in range(-1, 2)])
+    procs = [subprocess.Popen(host.python_cmd("-c", _PAINTER, str(tmp_path), me, str(rounds)),
+                              env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                              text=True, cwd=host.ROOT) for me in ("red", "blue")]
+    rcs = []
+    try:
+        for i in range(rounds):
+            if any(p.stdout.readline().strip() != "ready" for p in procs):
+                break
+            (tmp_path / f"go{i}").touch()
+            rcs.append([p.stdout.readline().strip() for p in procs])
+    finally:
+        for p in procs:
+            p.kill()
+    errs = [p.communicate()[1][-1500:] for p in procs]
+    assert rcs == [["rc 0", "rc 0"]] * rounds, (rcs, errs)
+    shown = []
+    for i in range(rounds):
+        with World.open(tmp_path / f"w{i}.sqlite", loader=False, readonly=True) as w:
+            pal = colors.parse(w.file.meta)
+            shown.append((pal[w.chunk_at(0, 0).data[1, 1, 101]].tolist(),
+                          pal[w.chunk_at(2, 0).data[9, 1, 101]].tolist()))
+    assert shown == [([250, 0, 0], [0, 0, 250])] * rounds, shown

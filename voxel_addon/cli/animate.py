@@ -10,7 +10,7 @@ import time
 from pathlib import Path
 
 from ..core.errors import VoxelError
-from .common import Progress, add_world, note, write_whole
+from .common import Progress, add_world, note, write_out
 
 
 def add_parser(sub):
@@ -66,7 +66,7 @@ def run(args):
             shared["world"] = {"bytes": data, "digest": hashlib.sha256(data).hexdigest()}
         for sh, png in pool.map(frame_png, todo, shared=shared,
                                 progress=Progress("animate", "frames")):
-            write_whole(args.out / name(sh.frame), png)
+            write_out(args.out / name(sh.frame), png)
     note(f"animate: {len(todo)} frames of {size[0]}x{size[1]} written, "
          f"{len(shots) - len(todo)} already there, in {time.perf_counter() - t0:.1f} s")
     print(args.out)

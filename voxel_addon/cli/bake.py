@@ -4,21 +4,22 @@ from __future__ import annotations
 
 import contextlib
 import io
+import tempfile
 import threading
 import time
 from pathlib import Path
 
 from ..core.errors import VoxelError
-from .common import Progress, add_world, note, write_whole
+from .common import Progress, add_world, coord, note, out_file, write_out
 
 
 def add_parser(sub):
     from ..meshing import METHODS
     p = sub.add_parser("bake", help="bake a block region into a glTF binary (.glb) with bpy")
     add_world(p)
-    p.add_argument("--region", type=int, nargs=4, metavar=("X0", "Y0", "X1", "Y1"),
+    p.add_argument("--region", type=coord, nargs=4, metavar=("X0", "Y0", "X1", "Y1"),
                    help="half-open block columns [X0,X1) x [Y0,Y1), full height")
-    p.add_argument("--lod", type=int, nargs=4, metavar=("X", "Y", "NEAR", "FAR"),
+    p.add_argument("--lod", type=coord, nargs=4, metavar=("X", "Y", "NEAR", "FAR"),
                    help="instead of --region: the chunks within NEAR of block (X, Y) in full, "
                         "far terrain beyond out to FAR chunks, one object per level")
     p.add_argument("--out", type=Path, required=True, metavar="F.glb|DIR",
@@ -59,10 +60,7 @@ def run(args):
         return _tiles(args, hours)
     if getattr(args, "workers", None) is not None or getattr(args, "scheduler", None):
         raise VoxelError("--workers/--scheduler bake tiles: use --per tile --out DIR")
-    try:  # fail before the long work, not after it
-        args.out.parent.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise VoxelError(f"cannot create folder {args.out.parent}: {e.strerror}") from None
+    out_file(args.out, make_folder=True)  # fail before the long work, not after it
     if args.lod:
         from ..bake import lod
         lx, ly, near, far = args.lod
@@ -97,11 +95,16 @@ def run(args):
     objs = BB.build(bk, style="gltf", hours=hours, progress=progress)
     objs += BB.far_objects(far_parts, style="gltf", hours=hours)
     progress("export", 0.0)
-    # The exporter logs INFO lines to stdout; keep stdout for our own result.
-    with contextlib.redirect_stdout(io.StringIO()):
-        BB.export_glb(args.out.resolve(), objs, instances=args.instances)
-    if not args.out.is_file():
-        raise VoxelError(f"Blender's glTF exporter did not write {args.out}")
+    # The exporter logs INFO lines to stdout; keep stdout for our own result. It
+    # writes a scratch file, copied whole to --out: a full disk there is one line and
+    # leaves no half .glb (the exporter's own failure is a traceback inside Blender).
+    with tempfile.TemporaryDirectory(prefix="voxel_glb_") as d:
+        tmp = Path(d) / "bake.glb"
+        with contextlib.redirect_stdout(io.StringIO()):
+            BB.export_glb(tmp, objs, instances=args.instances)
+        if not tmp.is_file():
+            raise VoxelError(f"Blender's glTF exporter did not write {args.out}")
+        write_out(args.out, tmp)
     if args.blend:
         bpy.ops.wm.save_as_mainfile(filepath=str(args.blend.resolve()))
     note(f"bake: {len(objs)} objects, {bk.triangles + sum(p.triangles for p in far_parts)} triangles, "
@@ -141,7 +144,7 @@ def _tiles(args, hours):
                 if glb is None:
                     empty += 1
                 else:
-                    write_whole(out / f"{c['name']}.glb", glb)
+                    write_out(out / f"{c['name']}.glb", glb)
                     written += 1
     note(f"bake: {written} tiles written, {len(plan) - len(todo)} already there, {empty} empty "
          f"in {time.perf_counter() - t0:.1f} s")

@@ -6,6 +6,25 @@ import time
 from pathlib import Path
 
 
+def coord(text: str, unit: int = 1) -> int:
+    """argparse type of a horizontal block coordinate (UNIT 16: a chunk's): a whole
+    number inside the world (core.chunk.REACH), else argparse's one line."""
+    import argparse
+    from ..core.chunk import REACH
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"invalid int value: {text!r}") from None
+    if not -REACH <= v * unit < REACH:
+        raise argparse.ArgumentTypeError(
+            f"{text} is outside the world (-{REACH // unit}..{REACH // unit - 1})")
+    return v
+
+
+def chunk_coord(text: str) -> int:
+    return coord(text, 16)
+
+
 def add_world(p, help="world file (.sqlite)"):
     p.add_argument("--world", required=True, type=Path, metavar="W.sqlite", help=help)
 
@@ -40,7 +59,8 @@ class Writing:
     """Around a command that writes the world file PATH (`with Writing(path, what) as w`,
     the world opened through `w.own(...)`): on success the world is closed (saved);
     on a failure nothing more is written, a file this command created is removed
-    (with its -wal and -shm) while one that existed never is, and a full disk, a
+    (with its -wal and -shm) while one that existed, or that another process made
+    meanwhile, never is (WorldFile.created), and a full disk, a
     read-only or locked file becomes one line saying what failed and what was kept
     (core.errors.explain). `w.kept`: a function saying what is in the file so far
     (batch-wise commands), None while nothing is."""
@@ -48,6 +68,7 @@ class Writing:
     def __init__(self, path, what: str, doing: str = "saving"):
         self.path, self.what, self.doing = Path(path), what, doing
         self.new = not any(p.exists() for p in self._files())
+        self.created = False  # this command made the file (not only found none at first)
         self.world = None
         self.kept = lambda: None
 
@@ -57,6 +78,7 @@ class Writing:
 
     def own(self, world):
         self.world = world
+        self.created = self.created or world.file.created
         return world
 
     def __enter__(self):
@@ -90,7 +112,7 @@ class Writing:
         except Exception:  # noqa: BLE001 - closing a broken file: the first error is the news
             pass
         removed = False
-        if self.new:
+        if self.created:
             for p in self._files():
                 try:
                     p.unlink()
@@ -98,6 +120,8 @@ class Writing:
                 except OSError:  # gone already (or never made)
                     pass
             kept = f"nothing was kept ({self.path.name}, which it created, was removed)"
+        elif self.new and not self.path.exists():  # failed making it: nothing is there
+            kept = f"nothing was kept ({self.path.name} was not made)"
         else:
             kept = self.kept()
             kept = f"{kept}; the rest was not written" if kept else \
@@ -110,9 +134,41 @@ class Writing:
         raise err from None
 
 
-def write_whole(path: Path, data: bytes) -> None:
-    """Write under a temporary name, then rename: a killed run leaves no half file
-    under the real name, so a file that is there is complete (resumable outputs)."""
+def out_file(path: Path, make_folder: bool = False) -> Path:
+    """Check an output file's path before the work: a folder there, or a missing
+    folder above it (made with MAKE_FOLDER), is one line now, not a traceback after."""
+    from ..core.errors import VoxelError
+    if path.is_dir():
+        raise VoxelError(f"--out {path} is a folder; name a file")
+    if make_folder:
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as e:
+            raise VoxelError(f"cannot create folder {path.parent}: {e.strerror}") from None
+    elif not path.parent.is_dir():
+        raise VoxelError(f"folder {path.parent} does not exist")
+    return path
+
+
+def write_out(path: Path, data) -> None:
+    """Write an output file (DATA: bytes, or a Path to copy) under a temporary name,
+    then rename: a killed run leaves no half file under the real name, so a file
+    that is there is complete (resumable outputs). A failure (a full disk, a
+    read-only folder) is one line naming the output, never the world, and leaves
+    no part of it."""
+    from ..core.errors import VoxelError, cause
     tmp = path.with_name(f".{path.name}.part")
-    tmp.write_bytes(data)
-    tmp.replace(path)
+    try:
+        if isinstance(data, Path):
+            import shutil
+            shutil.copyfile(data, tmp)
+        else:
+            tmp.write_bytes(data)
+        tmp.replace(path)
+    except OSError as e:
+        try:
+            tmp.unlink(missing_ok=True)
+        except OSError:
+            pass
+        why = cause(e, path) or e.strerror
+        raise VoxelError(f"cannot write {path} ({why}); the world is unchanged") from None

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 
-from .common import Writing, add_world
+from .common import Writing, add_world, coord
 
 
 def add_parser(sub):
@@ -12,7 +12,7 @@ def add_parser(sub):
     add_world(p)
     g = p.add_mutually_exclusive_group(required=True)
     g.add_argument("--set", nargs=4, metavar=("X", "Y", "Z", "NAME"), help="place block NAME")
-    g.add_argument("--clear", nargs=3, type=int, metavar=("X", "Y", "Z"), help="make it air")
+    g.add_argument("--clear", nargs=3, type=coord, metavar=("X", "Y", "Z"), help="make it air")
     return p
 
 

@@ -6,14 +6,14 @@ import time
 
 from .. import cluster
 from ..core.errors import VoxelError
-from .common import Progress, Writing, add_world, note
+from .common import Progress, Writing, add_world, coord, note
 
 
 def add_parser(sub):
     from ..opencl import BACKENDS
     p = sub.add_parser("far", help="build and keep the far terrain around a point")
     add_world(p)
-    p.add_argument("--center", type=int, nargs=2, metavar=("X", "Y"), required=True,
+    p.add_argument("--center", type=coord, nargs=2, metavar=("X", "Y"), required=True,
                    help="block column at the centre of the view")
     p.add_argument("--far", type=int, required=True, metavar="N",
                    help="chunks beyond the view chunk, like render --far (1..256)")

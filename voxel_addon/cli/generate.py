@@ -5,7 +5,7 @@ import time
 
 from .. import cluster
 from ..core.errors import VoxelError
-from .common import Progress, Writing, add_world, note
+from .common import Progress, Writing, add_world, coord, note
 
 
 def add_parser(sub):
@@ -13,7 +13,7 @@ def add_parser(sub):
     p = sub.add_parser("generate", help="create or extend a world")
     add_world(p)
     p.add_argument("--seed", type=int, help="world seed (required for a new world)")
-    p.add_argument("--center", type=int, nargs=2, metavar=("X", "Y"), default=(0, 0),
+    p.add_argument("--center", type=coord, nargs=2, metavar=("X", "Y"), default=(0, 0),
                    help="block column at the centre (default 0 0)")
     p.add_argument("--radius", type=int, default=4,
                    help="chunks around the centre chunk: (2R+1)^2 chunks (default 4)")
@@ -36,10 +36,19 @@ def run(args):
     cluster.warm(args)   # before the imports below (~0.2 s)
     from ..world import World
     from ..generation import DEFAULT
+    from ..storage import Exists
     # the cluster first: an unreachable one leaves no file created or changed
     with cluster.session(args) as pool, \
             Writing(args.world, "generation", "generating into") as w:
-        if args.world.exists():
+        world = None
+        if not args.world.exists():
+            try:
+                world = w.own(World.create(args.world, seed=args.seed,
+                                           generator=args.generator or DEFAULT,
+                                           backend=args.backend, loader=False))
+            except Exists:  # another process made it just now: extend theirs
+                pass
+        if world is None:
             world = w.own(World.open(args.world, backend=args.backend, loader=False))
             if args.seed is not None and args.seed != world.seed:
                 raise VoxelError(f"{args.world} has seed {world.seed}; a world keeps its seed "
@@ -47,10 +56,6 @@ def run(args):
             if args.generator and args.generator != world.file.generator:
                 raise VoxelError(f"{args.world} uses generator {world.file.generator!r}, "
                                  f"not {args.generator!r}")
-        else:
-            world = w.own(World.create(args.world, seed=args.seed,
-                                       generator=args.generator or DEFAULT,
-                                       backend=args.backend, loader=False))
         gen = world.generator
         note(f"generator {gen.name}, backend {getattr(gen, 'backend_used', gen.backend)}")
         cx, cy = args.center[0] >> 4, args.center[1] >> 4

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from .. import cluster
 from ..core.errors import VoxelError
-from .common import Progress, Writing, add_world, note
+from .common import Progress, Writing, add_world, coord, note
 
 
 def add_parser(sub):
@@ -18,9 +18,9 @@ def add_parser(sub):
                    help="Minecraft save folder, folder of .mca files, one .mca, or a .vox")
     p.add_argument("--y-min", type=int, metavar="N",
                    help="Minecraft y that becomes z 0 (default -64 for 1.18+, else 0)")
-    p.add_argument("--at", type=int, nargs=3, metavar=("X", "Y", "Z"), default=(0, 0, 0),
+    p.add_argument("--at", type=coord, nargs=3, metavar=("X", "Y", "Z"), default=(0, 0, 0),
                    help=".vox: where the model's bounding box corner goes (default 0 0 0)")
-    p.add_argument("--area", type=int, nargs=4, metavar=("X0", "Z0", "X1", "Z1"),
+    p.add_argument("--area", type=coord, nargs=4, metavar=("X0", "Z0", "X1", "Z1"),
                    help="Minecraft: only chunks touching blocks [X0, X1) x [Z0, Z1)")
     p.add_argument("--replace", action="store_true",
                    help="Minecraft: overwrite chunks the world already has")
@@ -36,15 +36,19 @@ def add_parser(sub):
 
 
 def _open(args):
+    from ..storage import Exists
     from ..world import World
-    if args.world.exists():
-        if args.generator:
-            raise VoxelError("--generator is for a new world; this one exists")
-        return World.open(args.world, loader=False)
-    if not args.world.parent.is_dir():
-        raise VoxelError(f"folder {args.world.parent} does not exist")
-    return World.create(args.world, seed=args.seed, generator=args.generator or "empty",
-                        loader=False)
+    if not args.world.exists():
+        if not args.world.parent.is_dir():
+            raise VoxelError(f"folder {args.world.parent} does not exist")
+        try:
+            return World.create(args.world, seed=args.seed,
+                                generator=args.generator or "empty", loader=False)
+        except Exists:  # another process made it just now: import into theirs
+            pass
+    if args.generator:
+        raise VoxelError("--generator is for a new world; this one exists")
+    return World.open(args.world, loader=False)
 
 
 def run(args):

@@ -2,12 +2,13 @@
 hill-shaded) beside the generator's biome factors, so artists see where to fly."""
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
 import numpy as np
 
 from ..core.errors import VoxelError
-from .common import add_world, note
+from .common import add_world, note, out_file, write_out
 
 MAX_CHUNKS = 40000
 
@@ -28,8 +29,7 @@ def run(args):
         raise VoxelError(f"world file {args.world} does not exist")
     if args.out.suffix.lower() != ".png":
         raise VoxelError("--out must name a .png file")
-    if not args.out.parent.is_dir():
-        raise VoxelError(f"folder {args.out.parent} does not exist")
+    out_file(args.out)
     wf = WorldFile(args.world, readonly=True)
     try:
         keys = sorted(wf.chunk_keys())
@@ -39,7 +39,12 @@ def run(args):
             raise VoxelError(f"{len(keys)} chunks is more than map draws ({MAX_CHUNKS})")
         xs, ys = [k[0] for k in keys], [k[1] for k in keys]
         cx0, cy0 = min(xs), min(ys)
-        w, h = 16 * (max(xs) - cx0 + 1), 16 * (max(ys) - cy0 + 1)
+        span = (max(xs) - cx0 + 1, max(ys) - cy0 + 1)
+        if span[0] * span[1] > MAX_CHUNKS:  # the picture covers the box, gaps and all
+            raise VoxelError(f"the chunks span {span[0]} x {span[1]} chunks (x {16 * cx0}.."
+                             f"{16 * max(xs) + 15}, y {16 * cy0}..{16 * max(ys) + 15}); map "
+                             f"draws at most {MAX_CHUNKS} chunks")
+        w, h = 16 * span[0], 16 * span[1]
         top = np.zeros((w, h), np.int64)
         z = np.zeros((w, h), np.int32)
         gz = np.zeros((w, h), np.int32)
@@ -70,7 +75,9 @@ def run(args):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    plt.imsave(args.out, img)
+    buf = io.BytesIO()
+    plt.imsave(buf, img, format="png")
+    write_out(args.out, buf.getvalue())
     note(f"{len(keys)} chunks, blocks x {16 * cx0}..{16 * cx0 + w - 1}, "
          f"y {16 * cy0}..{16 * cy0 + h - 1}; left: terrain, right: biomes "
          "(ocean blue, desert tan, mountains brown, hills olive, forest green, rivers light blue)")

@@ -47,6 +47,8 @@ def run(args):
     from ..textures import png_bytes
     import numpy as np
 
+    from .common import out_file, write_out
+    out_file(args.out, make_folder=True)
     w, h = args.size
     if not (8 <= w <= 8192 and 8 <= h <= 8192):
         raise VoxelError("--size must be between 8 and 8192 pixels per side")
@@ -72,6 +74,11 @@ def run(args):
     hours = daytime.parse_time(hhmm or "12:00")
     if not 0 <= cam_args[2] <= 400:
         raise VoxelError("camera z must be between 0 and 400")
+    if not all(math.isfinite(v) for v in cam_args):
+        raise VoxelError("--camera takes finite numbers")
+    from ..core.chunk import REACH
+    if not all(-REACH <= v < REACH for v in cam_args[:2]):
+        raise VoxelError(f"camera x, y must lie inside the world (-{REACH}..{REACH})")
     far_meshes = []
     if args.scene:
         data = source.scene_area(args.scene)
@@ -105,8 +112,7 @@ def run(args):
         r.s.sea = False  # the area's edge is dry land: it fades into the haze
     img = r.render(Camera(*cam_args), hours, (w, h))
     rgba = np.dstack([img, np.full(img.shape[:2], 255, np.uint8)])
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_bytes(png_bytes(rgba))
+    write_out(args.out, png_bytes(rgba))
     st = r.stats
     print(f"{args.out}: {w}x{h}, {st['triangles']} triangles, {st['draw_calls']} draw calls")
     r.release()

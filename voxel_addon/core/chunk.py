@@ -69,6 +69,19 @@ def check_z(z: int) -> None:
         raise VoxelError(f"z={z} is outside the world (0..{HEIGHT - 1})")
 
 
+# Block columns x, y lie in [-REACH, REACH): generation computes positions in int32
+# (the kernels' and NumPy's alike), with room left for rings, far tiles and models
+# placed from there; further out a position would wrap (or not fit SQLite's int64).
+REACH = 1 << 30
+
+
+def check_xy(*values) -> None:
+    """A VoxelError for the first horizontal block coordinate outside the world."""
+    for v in values:
+        if not -REACH <= v < REACH:
+            raise VoxelError(f"x, y = {v} is outside the world (-{REACH}..{REACH - 1})")
+
+
 class Chunk:
     """Block ids plus lazily allocated small data and large data (thesis §4.1).
 

@@ -17,6 +17,7 @@ import struct
 import zlib
 from pathlib import Path
 
+from ..core.chunk import REACH
 from . import lz4
 
 SECTOR = 4096
@@ -48,6 +49,9 @@ def header(path, head, n: int) -> dict:
     pos = position(path)
     if pos is None:
         raise RegionError(f"{name}: not a region file name (r.X.Z.mca)")
+    if not all(-REACH <= 512 * v < REACH for v in pos):  # Minecraft's own end at 30M
+        raise RegionError(f"{name}: a region outside the world (blocks within "
+                          f"+-{REACH}); a damaged or hostile region file")
     if n == 0:
         return {}
     if n < 2 * SECTOR:

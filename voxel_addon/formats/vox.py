@@ -359,11 +359,12 @@ def write(grid: np.ndarray, palette: np.ndarray) -> bytes:
             for z0 in range(0, Z, MAX_SIDE):
                 pieces.append(((x0, y0, z0), grid[x0:x0 + MAX_SIDE, y0:y0 + MAX_SIDE,
                                                   z0:z0 + MAX_SIDE]))
-    body = b""
+    body = bytearray()  # grows in place: bytes += copied the whole file per model
     for _, g in pieces:
         body += _chunk(b"SIZE", struct.pack("<3i", *g.shape))
         x, y, z = np.nonzero(g)
-        xyzi = np.stack([x, y, z, g[x, y, z]], 1).astype(np.uint8)
+        xyzi = np.empty((len(x), 4), np.uint8)  # filled in place: a stack is 32 B/voxel
+        xyzi[:, 0], xyzi[:, 1], xyzi[:, 2], xyzi[:, 3] = x, y, z, g[x, y, z]
         body += _chunk(b"XYZI", _I.pack(len(xyzi)) + xyzi.tobytes())
     # scene: root nTRN 0 -> nGRP 1 -> (nTRN, nSHP) per model
     n = len(pieces)

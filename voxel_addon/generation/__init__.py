@@ -39,7 +39,12 @@ def for_file(wf, backend: str | None = None):
         version = 1 if raw in (None, "") else int(raw)
     except (TypeError, ValueError):
         raise VoxelError(f"{wf.path}: its generator version {raw!r} is not a number") from None
-    return make_generator(wf.generator, wf.seed, wf.generator_params, backend, version)
+    try:
+        return make_generator(wf.generator, wf.seed, wf.generator_params, backend, version)
+    except (ValueError, TypeError, KeyError, IndexError, AttributeError, ArithmeticError) as e:
+        # a hostile or damaged meta row: one line, not a traceback
+        raise VoxelError(f"{wf.path}: its generator settings are damaged "
+                         f"({type(e).__name__}: {e})") from None
 
 
 def default_backend() -> str:

@@ -10,6 +10,10 @@ from ..core.errors import VoxelError, cause
 FORMAT_VERSION = 1
 APP_ID = 0x564F5857  # "VOXW": marks our files in the SQLite header
 
+# The user's own changes, kept apart so a world can be regenerated with them.
+EDITS_TABLE = """CREATE TABLE IF NOT EXISTS edits(x INTEGER, y INTEGER, z INTEGER,
+    block INTEGER NOT NULL, data INTEGER NOT NULL DEFAULT 0, t REAL NOT NULL,
+    PRIMARY KEY (x, y, z))"""
 LIGHT_TABLE = """CREATE TABLE IF NOT EXISTS light(cx INTEGER, cy INTEGER, codec TEXT NOT NULL,
     light BLOB NOT NULL, PRIMARY KEY (cx, cy))"""
 SCHEMA = f"""
@@ -22,9 +26,7 @@ CREATE TABLE IF NOT EXISTS chunks(cx INTEGER, cy INTEGER, codec TEXT NOT NULL,
 -- chunk is written without light or a block in its 3x3 changes, and a missing or
 -- damaged one is only computed again (saves the light solve when reloading).
 {LIGHT_TABLE};
--- The user's own changes, kept apart so a world can be regenerated with them.
-CREATE TABLE IF NOT EXISTS edits(x INTEGER, y INTEGER, z INTEGER, block INTEGER NOT NULL,
-    data INTEGER NOT NULL DEFAULT 0, t REAL NOT NULL, PRIMARY KEY (x, y, z));
+{EDITS_TABLE};
 """
 
 # Our own table beside SPEC 3's `chunks` (whose columns stay as they are): the

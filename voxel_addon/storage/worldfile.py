@@ -29,12 +29,12 @@ import numpy as np
 
 from ..core import chunk as C
 from ..core.blocks import REGISTRY
-from ..core.errors import VoxelError
+from ..core.errors import VoxelError, cause
 from . import codecs
 from .decode import CorruptChunk, Decoding
 from .rows import Encoder
-from .schema import (APP_ID, FORMAT_VERSION, LIGHT_TABLE, SCHEMA, VERSION_TABLE,
-                     lock_timeout, open_error)
+from .schema import (APP_ID, EDITS_TABLE, FORMAT_VERSION, LIGHT_TABLE, SCHEMA,
+                     VERSION_TABLE, lock_timeout, open_error)
 from .transactions import Reading, Transaction
 
 _MANY = 64  # keys per statement of a batch read (128 parameters: any SQLite's limit)
@@ -51,8 +51,19 @@ def _sql(template: str, n: int) -> str:
     return template.format(k="(VALUES " + ", ".join(["(?, ?)"] * n) + ")")
 
 
+class Exists(VoxelError):
+    """A new world's path is taken (by a file another process may have just made)."""
+
+
+class MetaMoved(VoxelError):
+    """A staged meta value was built on a value another process has replaced since
+    (a palette it added to): nothing of that save was written; `meta` holds the
+    file's value now, build on it again."""
+
+
 class WorldFile(Decoding):
-    """A world file opened for reading (and writing unless `readonly`)."""
+    """A world file opened for reading (and writing unless `readonly`). `created`:
+    this object made the file (create), so a command that fails may remove it."""
 
     def __init__(self, path, *, readonly: bool = False, _create: dict | None = None):
         self.path = Path(path)
@@ -61,10 +72,24 @@ class WorldFile(Decoding):
         self._identity_at_open = None
         self._cursor = None  # read_chunk's
         self._staged: dict[str, str] = {}  # meta values written by the next save
-        if _create is None and not self.path.is_file():
+        self._bases: dict[str, str | None] = {}  # what a staged value was built on
+        self.db = None
+        self.created = False
+        if self.path.is_dir():
+            raise VoxelError(f"{self.path} is a folder, not a world file")
+        if _create is not None:
+            self._make(_create)
+            self.created = True
+        elif not self.path.is_file():
             raise VoxelError(f"no world file at {self.path}")
-        if _create is not None and self.path.exists():
-            raise VoxelError(f"{self.path} already exists")
+        try:
+            self._open(readonly)
+        except BaseException:
+            if self.created:  # made here, refused on opening (a full disk): not left behind
+                self._unmake()
+            raise
+
+    def _open(self, readonly: bool) -> None:
         try:
             if readonly:
                 # as_uri escapes what a URI would misread (#, ?, %, spaces) and spells
@@ -76,20 +101,30 @@ class WorldFile(Decoding):
                                           timeout=lock_timeout())
             self.db.isolation_level = None  # explicit BEGIN/COMMIT below
             self._identity_at_open = self._stat()
-            if _create is not None:
-                self._init(_create)
             # Read before any pragma that writes, so a foreign file is never touched.
             self.meta = dict(self.db.execute("SELECT key, value FROM meta"))
             file_names = dict(self.db.execute("SELECT id, name FROM block_types"))
+            tables = {r[0] for r in self.db.execute(
+                "SELECT name FROM sqlite_master WHERE type='table'")}
             self.db.execute("PRAGMA synchronous=NORMAL")
         except sqlite3.DatabaseError as e:
+            if self.db is not None:
+                self.db.close()
             raise open_error(self.path, e) from None
-        self._check_version()
-        if not readonly and _create is None:
-            self.db.execute("PRAGMA journal_mode=WAL")
-        self._map_ids(file_names)
-        self._light_table(readonly)
-        self._version_table(readonly)
+        try:
+            self._check_version()
+            if "chunks" not in tables:  # another program's file: refused before any write
+                raise VoxelError(f"{self.path} is not a Voxel Worlds file (it has no "
+                                 "chunks table)")
+            if not readonly:  # a new file too: it was made with a rollback journal (_make)
+                self.db.execute("PRAGMA journal_mode=WAL")
+            self._map_ids(file_names)
+            self._edits_table(readonly, tables)
+            self._light_table(readonly)
+            self._version_table(readonly)
+        except BaseException:
+            self.db.close()  # no handle on a file it refused (Blender goes on running)
+            raise
         # {k}: the keys' table (column1, column2 = cx, cy): one key or many (_sql)
         self._fetch_sql = (
             "SELECT k.column1, k.column2, {v}, c.codec, c.blocks, c.data, {l} FROM {{k}} k "
@@ -109,10 +144,61 @@ class WorldFile(Decoding):
                                   "generator_version": str(generator_version),
                                   "generator_params": json.dumps(params or {}, sort_keys=True)})
 
+    def _make(self, meta: dict) -> None:
+        """Make the new file whole under a name of its own, then link it to `path`,
+        which fails when a file is there: two processes creating one world at once
+        (two generates, Blender and an import) never write into one half-made file,
+        and the one that comes second finds a whole world (Exists)."""
+        if self.path.exists():
+            raise Exists(f"{self.path} already exists")
+        tmp = self.path.with_name(f".{self.path.name}.{os.getpid()}-{threading.get_ident()}.new")
+        try:
+            self.db = sqlite3.connect(tmp)
+            self.db.isolation_level = None
+            self._init(meta)
+            self.db.close()  # the last connection: the WAL goes into the file
+            self.db = None
+            try:
+                os.link(tmp, self.path)
+            except FileExistsError:
+                raise Exists(f"{self.path} already exists") from None
+            except OSError:  # no hard links on this file system: a rename, checked first
+                if self.path.exists():
+                    raise Exists(f"{self.path} already exists") from None
+                os.replace(tmp, self.path)
+        except sqlite3.DatabaseError as e:
+            what = cause(e, self.path)
+            if what is None:
+                raise
+            raise VoxelError(f"{what} while creating {self.path}: nothing was made") from None
+        finally:
+            if self.db is not None:
+                self.db.close()
+                self.db = None
+            for p in (tmp, *(tmp.with_name(tmp.name + s) for s in ("-wal", "-shm", "-journal"))):
+                try:
+                    p.unlink()
+                except OSError:  # never made, or renamed into place
+                    pass
+
+    def _unmake(self) -> None:
+        """Remove the file this object made (with its -wal and -shm), unless another
+        file has taken its name since."""
+        if self.db is not None:
+            self.db.close()
+            self.db = None
+        if self._identity_at_open is not None and self._stat() != self._identity_at_open:
+            return
+        for p in (self.path, *(self.path.with_name(self.path.name + s)
+                               for s in ("-wal", "-shm", "-journal"))):
+            try:
+                p.unlink()
+            except OSError:
+                pass
+
     def _init(self, meta: dict) -> None:
         db = self.db
         db.execute(f"PRAGMA application_id={APP_ID}")
-        db.execute("PRAGMA journal_mode=WAL")
         db.execute("BEGIN")
         for statement in SCHEMA.split(";"):
             if statement.strip():
@@ -159,6 +245,18 @@ class WorldFile(Decoding):
             self._to_file[REGISTRY.id(n)] = 0
         self._identity = all(self._to_reg[i] == i for i in file_names) and \
             len(file_names) == len(names)
+
+    def _edits_table(self, readonly: bool, tables: set) -> None:
+        """A file another program wrote to SPEC 3 alone (meta, block_types, chunks)
+        gets our edits table; read-only, an empty one of the session's own (TEMP:
+        the file is not touched) stands in for it."""
+        if "edits" in tables:
+            return
+        if readonly:
+            self.db.execute(EDITS_TABLE.replace("CREATE TABLE", "CREATE TEMP TABLE"))
+        else:
+            with self.transaction():
+                self.db.execute(EDITS_TABLE)
 
     def _light_table(self, readonly: bool) -> None:
         """Files written before the light table get it (empty: light is recomputed)."""
@@ -217,19 +315,51 @@ class WorldFile(Decoding):
 
     @property
     def generator_params(self) -> dict:
-        return json.loads(self.meta.get("generator_params") or "{}")
+        raw = self.meta.get("generator_params") or "{}"
+        try:
+            params = json.loads(raw)
+        except ValueError as e:  # RecursionError too deep: a ValueError's sibling
+            raise VoxelError(f"{self.path}: its generator settings are damaged "
+                             f"(not JSON: {e})") from None
+        except RecursionError:
+            raise VoxelError(f"{self.path}: its generator settings are damaged "
+                             "(nested too deep)") from None
+        if not isinstance(params, dict):
+            raise VoxelError(f"{self.path}: its generator settings are damaged "
+                             f"(not a JSON object: {raw[:40]!r})")
+        return params
 
     def set_meta(self, key: str, value: str) -> None:
         with self.transaction():
             self.db.execute("INSERT OR REPLACE INTO meta VALUES (?, ?)", (key, str(value)))
         self.meta[key] = str(value)
 
-    def stage_meta(self, key: str, value: str) -> None:
+    def update_meta(self, key: str, fn) -> str:
+        """Meta KEY set to fn(the value the file holds now, or None) in a transaction of
+        its own, and returned: an addition to a palette made on what is there, not on
+        what this session read when it opened (another process may have added since)."""
+        with self.transaction() as db:
+            row = db.execute("SELECT value FROM meta WHERE key=?", (key,)).fetchone()
+            value = str(fn(None if row is None else row[0]))
+            db.execute("INSERT OR REPLACE INTO meta VALUES (?, ?)", (key, value))
+        with self._lock:
+            self.meta[key] = value
+            self._staged.pop(key, None)
+            self._bases.pop(key, None)
+        return value
+
+    def stage_meta(self, key: str, value: str, base=False) -> None:
         """Set a meta value now (in memory) and write it with the next `save`, in
-        its transaction: a palette goes to the file with the voxels that use it."""
+        its transaction: a palette goes to the file with the voxels that use it.
+        BASE (a value or None: the key absent): the value it was built on; when the
+        file holds another by then (a second writer added to the palette), that save
+        raises MetaMoved and writes nothing, so voxels never index a palette that is
+        not the one they were made for."""
         self._writable()
         with self._lock:
             self.meta[key] = self._staged[key] = str(value)
+            if base is not False:
+                self._bases.setdefault(key, base)  # the first base: what the file held
 
     # ---- transactions, queries for the file's other tables (far.py) ----------
     def transaction(self):
@@ -436,6 +566,10 @@ class WorldFile(Decoding):
                 rows = out
             top = self.top_version()
             staged = dict(self._staged)
+            moved = self._moved_meta()
+            if moved:
+                raise MetaMoved(f"{self.path}: another program changed {', '.join(moved)} "
+                                "meanwhile; nothing was written")
             self.db.executemany("INSERT OR REPLACE INTO meta VALUES (?, ?)", staged.items())
             self.db.executemany("INSERT OR REPLACE INTO chunks VALUES (?, ?, ?, ?, ?)",
                                 [r[:5] for r in rows])
@@ -453,7 +587,28 @@ class WorldFile(Decoding):
             for k, v in staged.items():  # written: unless staged again meanwhile
                 if self._staged.get(k) == v:
                     del self._staged[k]
+                    self._bases.pop(k, None)
         return new
+
+    def _moved_meta(self) -> list[str]:
+        """Inside save's transaction: the staged keys whose stored value is no longer
+        the one they were built on; those are dropped from the stage and `meta` takes
+        the stored value (the caller builds on it again)."""
+        moved = {}
+        for k, base in list(self._bases.items()):
+            row = self.db.execute("SELECT value FROM meta WHERE key=?", (k,)).fetchone()
+            now = None if row is None else row[0]
+            if now != base:
+                moved[k] = now
+        with self._lock:
+            for k, now in moved.items():
+                self._staged.pop(k, None)
+                self._bases.pop(k, None)
+                if now is None:
+                    self.meta.pop(k, None)
+                else:
+                    self.meta[k] = now
+        return sorted(moved)
 
     def write_chunks(self, items, codec: str | None = None) -> None:
         """items: (key, blocks, data-or-None) triples."""

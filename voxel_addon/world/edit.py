@@ -62,7 +62,7 @@ def edit(world, changes, write: bool = True):
     drag, written together when it ends."""
     items = check(world, changes)
     world.refresh()  # another process's changes first (a pragma when there are none)
-    return _apply(world, items, write)
+    return _stroke(world, items, write)
 
 
 def write(world) -> None:
@@ -73,11 +73,45 @@ def write(world) -> None:
 def undo(world, record: Record) -> list[Payload]:
     """Put back the values before the stroke, only where a voxel still holds the
     stroke's value: what another session (or process) put there since stays."""
-    return _apply(world, _still(world, record.voxels, record.after, record.before))[0]
+    return _stroke(world, _still(world, record.voxels, record.after, record.before))[0]
 
 
 def redo(world, record: Record) -> list[Payload]:
-    return _apply(world, _still(world, record.voxels, record.before, record.after))[0]
+    return _stroke(world, _still(world, record.voxels, record.before, record.after))[0]
+
+
+# A stroke whose voxels lie further apart than this (blocks; a box is at most 32, a
+# brush 8) is applied in parts, one per TILE x TILE columns: one window over the
+# whole bounding box (the undo of a long drag, a script's list) would light and
+# gather every chunk in between, growing with the square of the distance.
+SPAN, TILE = 64, 64
+
+
+def _stroke(world, items, write=True):
+    """_apply in parts when the stroke is wide: each part relit on its own window
+    (exact: each is an incremental relight of the world as it is), held, then all
+    written in one transaction; one Record, the payloads merged."""
+    xs, ys = [it[0] for it in items], [it[1] for it in items]
+    if not items or max(max(xs) - min(xs), max(ys) - min(ys)) <= SPAN:
+        return _apply(world, items, write)
+    parts: dict = {}
+    for it in items:  # a voxel's changes stay in one part, in their order
+        parts.setdefault((it[0] // TILE, it[1] // TILE), []).append(it)
+    keys = {C.key_of(x, y) for x, y in zip(xs, ys)}
+    world.load(keys)  # a damaged chunk is refused before any part changes anything
+    bad = sorted(keys & world.corrupt.keys())
+    if bad:
+        raise VoxelError(f"chunk {bad[0]} is damaged in the file; it cannot be edited")
+    out: dict = {}
+    recs = []
+    for part in parts.values():
+        payloads, rec = _apply(world, part, write=False)
+        out.update((p.key, p) for p in payloads)  # a later part's payload is newer
+        recs.append(rec)
+    if write and world.held:
+        world.commit_behind((), ())
+    return sorted(out.values(), key=lambda p: p.key), Record(
+        *(tuple(v for r in recs for v in getattr(r, f)) for f in Record._fields))
 
 
 def _still(world, voxels, now, to) -> list:
@@ -111,6 +145,7 @@ def check(world, changes) -> list[tuple[int, int, int, int, int]]:
         x, y, z = (int(v) for v in ch[:3])
         b = ch[3]
         C.check_z(z)
+        C.check_xy(x, y)
         if isinstance(b, str):
             b = REGISTRY.id(b)
         elif not 0 <= int(b) < len(REGISTRY):
@@ -230,6 +265,9 @@ def _apply(world, items, write=True):
                                                or not world.chunks[k].has_light)
                    for k in near):
                 continue
+            bad = sorted({C.key_of(x, y) for x, y, _, _, _ in items} & world.corrupt.keys())
+            if bad:  # found damaged only now, loading it (check() knows loaded ones)
+                raise VoxelError(f"chunk {bad[0]} is damaged in the file; it cannot be edited")
             # light.update reads and writes only layers [z0, z1) of the light and
             # blocks from z0 up (the daylight of a column comes from above)
             z0, z1 = _light_layers(world, items, sight)

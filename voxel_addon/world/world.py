@@ -86,7 +86,11 @@ class World(Saving):
         gen = make_generator(generator, seed, params, backend)
         wf = WorldFile.create(path, seed=seed, generator=gen.name,
                               generator_version=gen.version, params=gen.params)
-        return cls(wf, gen, **kw)
+        try:
+            return cls(wf, gen, **kw)
+        except BaseException:
+            wf._unmake()  # a world that never opened leaves no file
+            raise
 
     @classmethod
     def open(cls, path, *, backend=None, readonly: bool = False, **kw) -> "World":
@@ -94,11 +98,7 @@ class World(Saving):
         from ..storage import WorldFile
         wf = WorldFile(path, readonly=readonly)
         try:
-            gen = for_file(wf, backend)
-        except (ValueError, TypeError, KeyError, IndexError, AttributeError) as e:
-            wf.close()  # a hostile or damaged meta row: one line, not a traceback
-            raise VoxelError(f"{path}: its generator settings are damaged "
-                             f"({type(e).__name__}: {e})") from None
+            gen = for_file(wf, backend)  # damaged settings: a VoxelError
         except BaseException:
             wf.close()
             raise
@@ -447,10 +447,14 @@ class World(Saving):
         vals = np.zeros(len(ids), np.uint16) if data is None else np.asarray(data, np.uint16)
         if len(xyz) and (xyz[:, 2].min() < 0 or xyz[:, 2].max() >= C.HEIGHT):
             raise VoxelError(f"z outside the world (0..{C.HEIGHT - 1})")
+        if len(xyz):
+            C.check_xy(int(xyz[:, :2].min()), int(xyz[:, :2].max()))
         if len(ids) and int(ids.max()) >= len(REGISTRY):
             raise VoxelError(f"unknown block id {int(ids.max())}")
         keys = np.stack([xyz[:, 0] >> 4, xyz[:, 1] >> 4], 1)
-        for k in {tuple(v) for v in keys.tolist()}:
+        touched = {tuple(v) for v in keys.tolist()}
+        self.load(touched)  # a damaged one is known once read: refused before any change
+        for k in touched:
             if k in self.corrupt:
                 raise VoxelError(f"chunk {k} is damaged in the file; it cannot be edited")
         order = np.lexsort((keys[:, 1], keys[:, 0]))

@@ -235,8 +235,11 @@ def stamp_at(context, path: str, cell) -> int:
     scene = magica.read_file(bpy.path.abspath(path))
     size = magica.vox.voxels(scene)[2]
     at = (cell[0] - int(size[0]) // 2, cell[1] - int(size[1]) // 2, cell[2])
-    xyz, data, pal = magica.stamp(scene, at, colors.parse(world.file.meta))
-    world.file.stage_meta(colors.KEY, colors.dump(pal))  # saved with the stroke; not undone
+    # the colours go to the file's palette first (not undone with the stroke), added
+    # to what it holds now: another process may have added colours since this opened
+    world.file.update_meta(colors.KEY, lambda raw: colors.dump(
+        magica.stamp(scene, at, colors.parse({colors.KEY: raw}))[2]))
+    xyz, data, _ = magica.stamp(scene, at, colors.parse(world.file.meta))
     color = np.full(len(xyz), magica.COLOR)
     return strokes.stroke(context, list(zip(*xyz.T.tolist(), color.tolist(), data.tolist())))
 

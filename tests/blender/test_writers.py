@@ -73,3 +73,26 @@ def test_a_world_path_through_a_changed_symlink_finds_the_new_world(bpy, tmp_pat
         assert session.world(str(link)).seed == 4
     finally:
         session.close_all()
+
+
+def test_a_world_cut_short_while_open_is_one_line_never_a_traceback(bpy, addon, capsys):  # noqa: F811
+    """Another program truncates the open world file: the poll says so once (not each
+    second), a stroke says nothing of it was applied, a bake names the damage."""
+    sc, path = addon, addon.voxel.path
+    assert bpy.ops.voxel.edit(location=(3, 4, 100), block="lamp_red") == {"FINISHED"}
+    session.close(path)
+    session.world(path)
+    with open(path, "r+b") as f:
+        f.truncate(1000)
+    capsys.readouterr()
+    assert session._poll() == session.POLL_S and session._poll() == session.POLL_S
+    assert capsys.readouterr().out.count("could not look for changes") == 1
+    with pytest.raises(RuntimeError) as e:
+        bpy.ops.voxel.edit(location=(6, 4, 100), block="glass")
+    msg = str(e.value)
+    assert "Traceback" not in msg and "damaged" in msg and "nothing of this stroke" in msg, msg
+    sc.voxel_bake.region_min, sc.voxel_bake.region_max = (0, 0), (16, 16)
+    with pytest.raises(RuntimeError) as e:
+        bpy.ops.voxel.bake()
+    assert "Traceback" not in str(e.value) and "damaged" in str(e.value), str(e.value)
+    session.close_all()

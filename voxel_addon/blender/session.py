@@ -91,14 +91,20 @@ def _start_polling() -> None:
         bpy.app.timers.register(_poll, first_interval=POLL_S, persistent=True)
 
 
+_poll_told: dict[str, str] = {}  # path -> the poll's last failure (said once, not each second)
+
+
 def _poll():
     """Take in what other processes wrote to the open worlds; redraw if anything."""
     got = False
     for key, w in list(_worlds.items()):
         try:
             got |= bool(w.refresh())
+            _poll_told.pop(key, None)
         except Exception as e:  # noqa: BLE001 - a poll must not kill the timer
-            print(f"Voxel Worlds: could not look for changes in {key}: {e}")
+            if _poll_told.get(key) != str(e):
+                _poll_told[key] = str(e)
+                print(f"Voxel Worlds: could not look for changes in {key}: {e}")
     if got:
         from . import liveview
         liveview.redraw()

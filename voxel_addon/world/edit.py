@@ -61,7 +61,14 @@ def edit(world, changes, write: bool = True):
     memory (shown, saved by the next `write`, flush or close): the parts of one
     drag, written together when it ends."""
     items = check(world, changes)
-    world.refresh()  # another process's changes first (a pragma when there are none)
+    try:
+        world.refresh()  # another process's changes first (a pragma when there are none)
+    except Exception as e:  # noqa: BLE001 - a damaged or vanished file: say nothing was applied
+        from ..core.errors import explain
+        err = explain(e, world.file.path, "reading")
+        if err is None:
+            raise
+        raise VoxelError(f"{err}; nothing of this stroke was applied") from None
     return _apply(world, items, write)
 
 

@@ -96,3 +96,35 @@ def test_a_world_cut_short_while_open_is_one_line_never_a_traceback(bpy, addon, 
         bpy.ops.voxel.bake()
     assert "Traceback" not in str(e.value) and "damaged" in str(e.value), str(e.value)
     session.close_all()
+
+
+def test_a_world_replaced_while_open_is_let_go_and_the_new_one_shown(bpy, addon, tmp_path):  # noqa: F811
+    """Another program moves another world over the open file: within a poll the
+    session lets ours go (its unsaved edits to the rescue file) and the next look-up
+    opens the new world; the new file reads as itself, not through our old -wal."""
+    from voxel_addon.world import World, rescue
+    path = addon.voxel.path
+    w = session.world(path)
+    assert bpy.ops.voxel.edit(location=(3, 4, 100), block="lamp_red") == {"FINISHED"}
+    w.set_block(6, 4, 100, "glass")          # not yet written (a drag's part)
+    World.create(tmp_path / "other.sqlite", seed=99, generator="flat").close()
+    os.replace(tmp_path / "other.sqlite", path)
+    session._poll()
+    assert not session.is_open(path)
+    assert [6, 4, 100, "glass", 0] in json.loads(rescue.places(path)[0].read_text())["edits"]
+    assert on_file(path, 3, 4, 100) is None   # the other world's: no chunk there
+    assert session.world(path).seed == 99
+
+
+def test_a_new_world_where_one_was_deleted_while_open_is_new(bpy, addon):  # noqa: F811
+    """The user deletes the open world's .sqlite and makes a New one at the same
+    path: the poll lets the old one go, so New makes a new world (not the deleted
+    one still in memory, whose edits would go to a file nobody sees)."""
+    sc, path = addon, addon.voxel.path
+    assert bpy.ops.voxel.edit(location=(3, 4, 100), block="lamp_red") == {"FINISHED"}
+    os.remove(path)
+    session._poll()
+    assert not session.is_open(path)
+    sc.voxel.seed = 8
+    assert bpy.ops.voxel.world_new() == {"FINISHED"}
+    assert session.world(path).seed == 8 and on_file(path, 3, 4, 100) is None

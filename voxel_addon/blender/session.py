@@ -13,7 +13,8 @@ way at once (`save_failed`), and a world whose file is gone is let go.
 
 Other processes may write the same file (another Blender, a command-line import):
 a timer polls every open world about once a second (`World.refresh`: a pragma when
-nothing changed) and redraws the viewports when it took in their chunks.
+nothing changed) and redraws the viewports when it took in their chunks. The same
+poll lets go of a world whose file was deleted, moved or replaced (a stat).
 """
 from __future__ import annotations
 
@@ -99,6 +100,10 @@ def _poll():
     got = False
     for key, w in list(_worlds.items()):
         try:
+            if w.file.db is not None and w.file.gone():
+                _let_go(key, w)
+                got = True
+                continue
             got |= bool(w.refresh())
             _poll_told.pop(key, None)
         except Exception as e:  # noqa: BLE001 - a poll must not kill the timer
@@ -109,6 +114,24 @@ def _poll():
         from . import liveview
         liveview.redraw()
     return POLL_S if _worlds else None
+
+
+def _let_go(key: str, w) -> None:
+    """The poll found the file at KEY deleted, moved or replaced by another world
+    (a copy over it): keeping ours open would show a world nobody can save to, and
+    keep our old -wal beside a file it does not belong to. Its unsaved edits go to
+    the rescue file (save_failed); the next look-up opens what is there now."""
+    from ..core.errors import VoxelError
+    try:
+        w.file.check_path()
+        return
+    except VoxelError as e:
+        if w.unsaved_edits():
+            save_failed(w, e)
+            return
+        _worlds.pop(key, None)
+        w.discard()
+        tell(f"{e}; the view shows what is at that path now")
 
 
 def save_failed(w, error: Exception) -> str:

@@ -508,5 +508,13 @@ class WorldFile(Decoding):
     def close(self) -> None:
         with self._lock:
             if self.db is not None:
+                if not self.readonly and self.gone():
+                    # SQLite leaves the -wal of a moved file when it closes: the file
+                    # put at the path (or a New world there) would read our pages as
+                    # its own. Emptied into our own (old) file first, it is harmless.
+                    try:
+                        self.db.execute("PRAGMA wal_checkpoint(TRUNCATE)")
+                    except sqlite3.Error:
+                        pass
                 self.db.close()
                 self.db = self._cursor = None

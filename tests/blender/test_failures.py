@@ -117,3 +117,12 @@ def test_export_glb_that_cannot_be_written_is_one_line_and_keeps_the_old_file(ad
     assert bpy.ops.voxel.export_glb() == {"FINISHED"}
     assert out.read_bytes()[:4] == b"glTF"
     assert sorted(p.name for p in world.parent.iterdir() if "glb" in p.name) == ["my bake.glb"]
+
+
+def test_a_failed_close_names_the_cause_and_says_no_edit_was_lost(addon, locked):
+    """Closing a world whose only unsaved data is generated terrain, on a file another
+    program holds: the cause in words, and that the user's edits are all in the file."""
+    from voxel_addon.blender import session
+    session.world(str(locked)).chunk_at(5, 5)  # generated here, not yet stored
+    msg = session.close(str(locked))
+    assert "locked by another program" in msg and "all your edits were saved" in msg, msg

@@ -195,10 +195,13 @@ def _close(key: str, w) -> str | None:
 
 
 def _save_failed(key: str, w, error: Exception) -> str:
+    from ..core.errors import cause
     from ..world import rescue
     n = len(w.unsaved_edits())
-    msg = f"could not save {key}: {error}"
-    if n:
+    msg = f"could not save {key}: {cause(error, key) or error}"
+    if not n:  # generated chunks and light only: they come back from the seed
+        msg += "; all your edits were saved before (only generated terrain was not)"
+    else:
         try:
             where = rescue.write(w)
             msg += f"; its {n} unsaved edits are in {where} and come back when it is opened again"

@@ -114,6 +114,11 @@ def test_export_glb_that_cannot_be_written_is_one_line_and_keeps_the_old_file(ad
     assert "Traceback" not in msg and "file-size limit" in msg and "unchanged" in msg, msg
     assert out.read_bytes() == b"the user's earlier export"
     assert sorted(p.name for p in world.parent.iterdir() if "glb" in p.name) == ["my bake.glb"]
+    sc.voxel_bake.glb_path = str(world.parent)  # a folder: no file name
+    with pytest.raises(RuntimeError, match="not a file name") as e:
+        bpy.ops.voxel.export_glb()
+    assert "Traceback" not in str(e.value)
+    sc.voxel_bake.glb_path = str(out)
     assert bpy.ops.voxel.export_glb() == {"FINISHED"}
     assert out.read_bytes()[:4] == b"glTF"
     assert sorted(p.name for p in world.parent.iterdir() if "glb" in p.name) == ["my bake.glb"]

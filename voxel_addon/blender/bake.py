@@ -334,7 +334,10 @@ def export_glb(path, objects, *, instances: bool = False) -> None:
         ob.select_set(False)
     for ob in objects:
         ob.select_set(True)
+    from ..core.errors import VoxelError
     path = os.fspath(path)
+    if not path or os.path.isdir(path):
+        raise VoxelError(f"{path or 'no path'} is not a file name: give the .glb a name")
     part = os.path.join(os.path.dirname(path), f".{os.path.basename(path)}.{os.getpid()}.part.glb")
     try:
         try:

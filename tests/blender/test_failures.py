@@ -1,7 +1,9 @@
 """Blender operators that write, on a world file another process holds locked (a
 real `BEGIN IMMEDIATE` in a child process, VOXEL_LOCK_TIMEOUT short): each ends with
 one ERROR report naming the failure and what was kept, never a Python traceback;
-an import that created its world file and failed removes it (issue 26)."""
+an import that created its world file and failed removes it (issue 26). Export .glb
+that cannot write is one line and keeps the earlier file; a failed close names its
+cause."""
 from __future__ import annotations
 
 import sqlite3

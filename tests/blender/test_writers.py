@@ -1,7 +1,8 @@
 """Blender and another process on one world file (issue 26), in the bpy module: the
 other process is a real `python -m voxel_addon edit`. Its edit shows up through the
 session's poll, Blender's undo leaves it alone, and a world file deleted while open
-sends the next stroke's edits to the rescue file with an error, never FINISHED."""
+sends the next stroke's edits to the rescue file with an error, never FINISHED; the
+poll lets go of a world deleted or replaced while open; a file cut short is one line."""
 from __future__ import annotations
 
 import json

@@ -129,3 +129,20 @@ def test_a_new_world_where_one_was_deleted_while_open_is_new(bpy, addon):  # noq
     sc.voxel.seed = 8
     assert bpy.ops.voxel.world_new() == {"FINISHED"}
     assert session.world(path).seed == 8 and on_file(path, 3, 4, 100) is None
+
+
+def test_undo_of_a_stroke_never_writes_into_a_world_moved_over_its_file(bpy, addon, tmp_path):  # noqa: F811
+    """Blocks removed (now air), the file replaced by another world: Ctrl+Z must not put
+    our blocks back into theirs (wherever theirs is air too), and says why."""
+    from voxel_addon.world import World
+    sc, path = addon, addon.voxel.path
+    session.world(path)
+    assert bpy.ops.voxel.edit(location=(3, 4, 100), block="stone") == {"FINISHED"}
+    assert bpy.ops.voxel.edit(location=(3, 4, 100), block="air") == {"FINISHED"}
+    with World.create(tmp_path / "other.sqlite", seed=99, generator="flat") as w:
+        w.chunk_at(0, 0)
+    os.replace(tmp_path / "other.sqlite", path)
+    session._poll()                                 # ours let go; theirs opens next
+    _undo_to(sc, 1)
+    assert on_file(path, 3, 4, 100) == "air"        # theirs, untouched
+    session.close_all()

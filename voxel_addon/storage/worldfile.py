@@ -187,6 +187,12 @@ class WorldFile(Decoding):
             return None
         return (st.st_dev, st.st_ino)
 
+    @property
+    def identity(self):
+        """(device, inode) of the file when opened: the same file reopened has it,
+        another file moved to the path has not."""
+        return self._identity_at_open
+
     def gone(self) -> bool:
         """Whether the file at `path` is no longer the one opened (deleted, moved
         away, replaced by another file)."""

@@ -1,7 +1,9 @@
 """Blender operators that write, on a world file another process holds locked (a
 real `BEGIN IMMEDIATE` in a child process, VOXEL_LOCK_TIMEOUT short): each ends with
 one ERROR report naming the failure and what was kept, never a Python traceback;
-an import that created its world file and failed removes it (issue 26)."""
+an import that created its world file and failed removes it (issue 26). Export .glb
+that cannot write is one line and keeps the earlier file; a failed close names its
+cause."""
 from __future__ import annotations
 
 import sqlite3
@@ -85,3 +87,49 @@ def test_a_failed_import_removes_the_world_it_created(addon, tmp_path):
     assert "1.13" in str(e.value) and "Traceback" not in str(e.value)
     assert sorted(p.name for p in (save / "region").iterdir()) == ["r.0.0.mca"]  # no r.0.0.sqlite*
     assert bpy.context.scene.voxel.path == ""
+
+
+def test_export_glb_that_cannot_be_written_is_one_line_and_keeps_the_old_file(addon, world):
+    """A file-size limit (as a full disk: the write fails) during Export .glb: one line,
+    the .glb there before untouched, no half-written file left beside it; once it
+    can write, the export replaces it whole."""
+    import resource
+    import signal
+    bpy = addon
+    out = world.parent / "my bake.glb"
+    out.write_bytes(b"the user's earlier export")
+    sc = bpy.context.scene
+    sc.voxel.path, sc.voxel_bake.glb_path = str(world), str(out)
+    sc.voxel_bake.region_min, sc.voxel_bake.region_max = (0, 0), (16, 16)
+    from voxel_addon.blender import session
+    session.world(str(world)).chunk_at(0, 0)  # opened and read before: only the export writes
+    old = resource.getrlimit(resource.RLIMIT_FSIZE)
+    sig = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past it fails (EFBIG)
+    resource.setrlimit(resource.RLIMIT_FSIZE, (4096, old[1]))
+    try:
+        with pytest.raises(RuntimeError) as e:
+            bpy.ops.voxel.export_glb()
+    finally:
+        resource.setrlimit(resource.RLIMIT_FSIZE, old)
+        signal.signal(signal.SIGXFSZ, sig)
+    msg = str(e.value)
+    assert "Traceback" not in msg and "file-size limit" in msg and "unchanged" in msg, msg
+    assert out.read_bytes() == b"the user's earlier export"
+    assert sorted(p.name for p in world.parent.iterdir() if "glb" in p.name) == ["my bake.glb"]
+    sc.voxel_bake.glb_path = str(world.parent)  # a folder: no file name
+    with pytest.raises(RuntimeError, match="not a file name") as e:
+        bpy.ops.voxel.export_glb()
+    assert "Traceback" not in str(e.value)
+    sc.voxel_bake.glb_path = str(out)
+    assert bpy.ops.voxel.export_glb() == {"FINISHED"}
+    assert out.read_bytes()[:4] == b"glTF"
+    assert sorted(p.name for p in world.parent.iterdir() if "glb" in p.name) == ["my bake.glb"]
+
+
+def test_a_failed_close_names_the_cause_and_says_no_edit_was_lost(addon, locked):
+    """Closing a world whose only unsaved data is generated terrain, on a file another
+    program holds: the cause in words, and that the user's edits are all in the file."""
+    from voxel_addon.blender import session
+    session.world(str(locked)).chunk_at(5, 5)  # generated here, not yet stored
+    msg = session.close(str(locked))
+    assert "locked by another program" in msg and "all your edits were saved" in msg, msg

@@ -1,7 +1,8 @@
 """Blender and another process on one world file (issue 26), in the bpy module: the
 other process is a real `python -m voxel_addon edit`. Its edit shows up through the
 session's poll, Blender's undo leaves it alone, and a world file deleted while open
-sends the next stroke's edits to the rescue file with an error, never FINISHED."""
+sends the next stroke's edits to the rescue file with an error, never FINISHED; the
+poll lets go of a world deleted or replaced while open; a file cut short is one line."""
 from __future__ import annotations
 
 import json
@@ -73,3 +74,75 @@ def test_a_world_path_through_a_changed_symlink_finds_the_new_world(bpy, tmp_pat
         assert session.world(str(link)).seed == 4
     finally:
         session.close_all()
+
+
+def test_a_world_cut_short_while_open_is_one_line_never_a_traceback(bpy, addon, capsys):  # noqa: F811
+    """Another program truncates the open world file: the poll says so once (not each
+    second), a stroke says nothing of it was applied, a bake names the damage."""
+    sc, path = addon, addon.voxel.path
+    assert bpy.ops.voxel.edit(location=(3, 4, 100), block="lamp_red") == {"FINISHED"}
+    session.close(path)
+    session.world(path)
+    with open(path, "r+b") as f:
+        f.truncate(1000)
+    capsys.readouterr()
+    assert session._poll() == session.POLL_S and session._poll() == session.POLL_S
+    assert capsys.readouterr().out.count("could not look for changes") == 1
+    with pytest.raises(RuntimeError) as e:
+        bpy.ops.voxel.edit(location=(6, 4, 100), block="glass")
+    msg = str(e.value)
+    assert "Traceback" not in msg and "damaged" in msg and "nothing of this stroke" in msg, msg
+    sc.voxel_bake.region_min, sc.voxel_bake.region_max = (0, 0), (16, 16)
+    with pytest.raises(RuntimeError) as e:
+        bpy.ops.voxel.bake()
+    assert "Traceback" not in str(e.value) and "damaged" in str(e.value), str(e.value)
+    session.close_all()
+
+
+def test_a_world_replaced_while_open_is_let_go_and_the_new_one_shown(bpy, addon, tmp_path):  # noqa: F811
+    """Another program moves another world over the open file: within a poll the
+    session lets ours go (its unsaved edits to the rescue file) and the next look-up
+    opens the new world; the new file reads as itself, not through our old -wal."""
+    from voxel_addon.world import World, rescue
+    path = addon.voxel.path
+    w = session.world(path)
+    assert bpy.ops.voxel.edit(location=(3, 4, 100), block="lamp_red") == {"FINISHED"}
+    w.set_block(6, 4, 100, "glass")          # not yet written (a drag's part)
+    World.create(tmp_path / "other.sqlite", seed=99, generator="flat").close()
+    os.replace(tmp_path / "other.sqlite", path)
+    session._poll()
+    assert not session.is_open(path)
+    assert [6, 4, 100, "glass", 0] in json.loads(rescue.places(path)[0].read_text())["edits"]
+    assert on_file(path, 3, 4, 100) is None   # the other world's: no chunk there
+    assert session.world(path).seed == 99
+
+
+def test_a_new_world_where_one_was_deleted_while_open_is_new(bpy, addon):  # noqa: F811
+    """The user deletes the open world's .sqlite and makes a New one at the same
+    path: the poll lets the old one go, so New makes a new world (not the deleted
+    one still in memory, whose edits would go to a file nobody sees)."""
+    sc, path = addon, addon.voxel.path
+    assert bpy.ops.voxel.edit(location=(3, 4, 100), block="lamp_red") == {"FINISHED"}
+    os.remove(path)
+    session._poll()
+    assert not session.is_open(path)
+    sc.voxel.seed = 8
+    assert bpy.ops.voxel.world_new() == {"FINISHED"}
+    assert session.world(path).seed == 8 and on_file(path, 3, 4, 100) is None
+
+
+def test_undo_of_a_stroke_never_writes_into_a_world_moved_over_its_file(bpy, addon, tmp_path):  # noqa: F811
+    """Blocks removed (now air), the file replaced by another world: Ctrl+Z must not put
+    our blocks back into theirs (wherever theirs is air too), and says why."""
+    from voxel_addon.world import World
+    sc, path = addon, addon.voxel.path
+    session.world(path)
+    assert bpy.ops.voxel.edit(location=(3, 4, 100), block="stone") == {"FINISHED"}
+    assert bpy.ops.voxel.edit(location=(3, 4, 100), block="air") == {"FINISHED"}
+    with World.create(tmp_path / "other.sqlite", seed=99, generator="flat") as w:
+        w.chunk_at(0, 0)
+    os.replace(tmp_path / "other.sqlite", path)
+    session._poll()                                 # ours let go; theirs opens next
+    _undo_to(sc, 1)
+    assert on_file(path, 3, 4, 100) == "air"        # theirs, untouched
+    session.close_all()

@@ -324,18 +324,39 @@ def far_objects(parts, *, style: str = "blender", collection=None, hours: float 
 
 def export_glb(path, objects, *, instances: bool = False) -> None:
     """Write `objects` (and nothing else) through Blender's glTF exporter, then the
-    alpha modes and atlas samplers (bake.glb.touch_up)."""
+    alpha modes and atlas samplers (bake.glb.touch_up). Written beside PATH and moved
+    over it when whole: a full disk leaves the previous file as it was, no half .glb.
+    A failure to write is an OSError (the exporter's RuntimeError carries only text)."""
+    import os
+    import re
     from ..bake import glb
     for ob in bpy.context.view_layer.objects:
         ob.select_set(False)
     for ob in objects:
         ob.select_set(True)
-    bpy.ops.export_scene.gltf(filepath=str(path), export_format="GLB", use_selection=True,
-                              export_vertex_color="MATERIAL", export_gpu_instances=instances,
-                              export_apply=True, export_yup=True)
-    modes = {m.name: m["voxel_alpha"] for m in bpy.data.materials
-             if m.get("voxel_alpha", "OPAQUE") != "OPAQUE"}
-    glb.touch_up(path, modes, plain="voxel_shade_")
+    from ..core.errors import VoxelError
+    path = os.fspath(path)
+    if not path or os.path.isdir(path):
+        raise VoxelError(f"{path or 'no path'} is not a file name: give the .glb a name")
+    part = os.path.join(os.path.dirname(path), f".{os.path.basename(path)}.{os.getpid()}.part.glb")
+    try:
+        try:
+            bpy.ops.export_scene.gltf(filepath=part, export_format="GLB", use_selection=True,
+                                      export_vertex_color="MATERIAL",
+                                      export_gpu_instances=instances, export_apply=True,
+                                      export_yup=True)
+        except RuntimeError as e:
+            m = re.search(r"\[Errno (\d+)\] ([^\n]*)", str(e))
+            if m is None:
+                raise
+            raise OSError(int(m[1]), m[2], path) from None
+        modes = {m.name: m["voxel_alpha"] for m in bpy.data.materials
+                 if m.get("voxel_alpha", "OPAQUE") != "OPAQUE"}
+        glb.touch_up(part, modes, plain="voxel_shade_")
+        os.replace(part, path)
+    finally:
+        if os.path.exists(part):
+            os.remove(part)
 
 
 _LOCK = threading.Lock()  # bpy is one state per process: one bake at a time

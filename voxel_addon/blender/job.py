@@ -164,7 +164,8 @@ class ModalJob:
     def make_job(self, context) -> Job:
         raise NotImplementedError
 
-    def finish(self, context, job) -> None:
+    def finish(self, context, job) -> set | None:
+        """The job is done: say so (a result set overrides FINISHED: a failed export)."""
         self.report({"INFO"}, f"{len(job.objects)} objects, {job.bake.triangles} triangles")
 
     def failed(self, context) -> None:
@@ -193,8 +194,7 @@ class ModalJob:
             if not self._failed(context, e):
                 raise
             return {"CANCELLED"}
-        self.finish(context, job)
-        return {"FINISHED"}
+        return self.finish(context, job) or {"FINISHED"}
 
     def start(self, context):
         try:
@@ -231,8 +231,7 @@ class ModalJob:
         if not done:
             return {"RUNNING_MODAL"}
         self._end(context)
-        self.finish(context, self._runner.job)
-        return {"FINISHED"}
+        return self.finish(context, self._runner.job) or {"FINISHED"}
 
     def _end(self, context):
         wm = context.window_manager

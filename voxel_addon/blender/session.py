@@ -13,7 +13,8 @@ way at once (`save_failed`), and a world whose file is gone is let go.
 
 Other processes may write the same file (another Blender, a command-line import):
 a timer polls every open world about once a second (`World.refresh`: a pragma when
-nothing changed) and redraws the viewports when it took in their chunks.
+nothing changed) and redraws the viewports when it took in their chunks. The same
+poll lets go of a world whose file was deleted, moved or replaced (a stat).
 """
 from __future__ import annotations
 
@@ -91,18 +92,46 @@ def _start_polling() -> None:
         bpy.app.timers.register(_poll, first_interval=POLL_S, persistent=True)
 
 
+_poll_told: dict[str, str] = {}  # path -> the poll's last failure (said once, not each second)
+
+
 def _poll():
     """Take in what other processes wrote to the open worlds; redraw if anything."""
     got = False
     for key, w in list(_worlds.items()):
         try:
+            if w.file.db is not None and w.file.gone():
+                _let_go(key, w)
+                got = True
+                continue
             got |= bool(w.refresh())
+            _poll_told.pop(key, None)
         except Exception as e:  # noqa: BLE001 - a poll must not kill the timer
-            print(f"Voxel Worlds: could not look for changes in {key}: {e}")
+            if _poll_told.get(key) != str(e):
+                _poll_told[key] = str(e)
+                print(f"Voxel Worlds: could not look for changes in {key}: {e}")
     if got:
         from . import liveview
         liveview.redraw()
     return POLL_S if _worlds else None
+
+
+def _let_go(key: str, w) -> None:
+    """The poll found the file at KEY deleted, moved or replaced by another world
+    (a copy over it): keeping ours open would show a world nobody can save to, and
+    keep our old -wal beside a file it does not belong to. Its unsaved edits go to
+    the rescue file (save_failed); the next look-up opens what is there now."""
+    from ..core.errors import VoxelError
+    try:
+        w.file.check_path()
+        return
+    except VoxelError as e:
+        if w.unsaved_edits():
+            save_failed(w, e)
+            return
+        _worlds.pop(key, None)
+        w.discard()
+        tell(f"{e}; the view shows what is at that path now")
 
 
 def save_failed(w, error: Exception) -> str:
@@ -166,10 +195,13 @@ def _close(key: str, w) -> str | None:
 
 
 def _save_failed(key: str, w, error: Exception) -> str:
+    from ..core.errors import cause
     from ..world import rescue
     n = len(w.unsaved_edits())
-    msg = f"could not save {key}: {error}"
-    if n:
+    msg = f"could not save {key}: {cause(error, key) or error}"
+    if not n:  # generated chunks and light only: they come back from the seed
+        msg += "; all your edits were saved before (only generated terrain was not)"
+    else:
         try:
             where = rescue.write(w)
             msg += f"; its {n} unsaved edits are in {where} and come back when it is opened again"

@@ -119,13 +119,16 @@ class Journal:
 
     def __init__(self, root: int = 0):
         self.nodes: dict[int, tuple] = {root: (None, None, None)}
+        self.files: dict[int, object] = {}  # serial -> the file's identity when made
         self.applied = root      # the stroke whose state the world files hold
         self.next = root + 1
 
-    def push(self, rec, path: str | None = None) -> int:
+    def push(self, rec, path: str | None = None, file=None) -> int:
         s = self.next
         self.next += 1
         self.nodes[s] = (self.applied, path, rec)
+        if file is not None:
+            self.files[s] = file
         self.applied = s
         return s
 
@@ -144,6 +147,7 @@ class Journal:
             keep.append(s)
         keep = set(keep)
         self.nodes = {s: n for s, n in self.nodes.items() if s in keep}
+        self.files = {s: f for s, f in self.files.items() if s in keep}
         for s, (parent, path, rec) in list(self.nodes.items()):
             if parent is not None and parent not in keep:
                 self.nodes[s] = (None, path, rec)
@@ -167,10 +171,17 @@ class Journal:
     def go(self, world_of, target: int) -> list:
         """Bring the world files to `target` (world_of(path) -> World); returns the
         payloads of every step."""
+        from ..core.errors import VoxelError
         payloads = []
         for op, s in self.route(target):
             parent, path, rec = self.nodes[s]
             w = world_of(path)
+            made = self.files.get(s)
+            if made is not None and getattr(w.file, "identity", made) != made:
+                # another file was moved to the path since: the stroke's voxels
+                # mean nothing there, and undoing them would write into it
+                raise VoxelError(f"{path} is not the file this stroke was made in "
+                                 "(replaced since): its undo is not applied there")
             payloads += undo(w, rec) if op == "undo" else redo(w, rec)
             self.applied = parent if op == "undo" else s
         return payloads
@@ -203,7 +214,7 @@ def stroke(context, changes) -> int:
     show(payloads)
     if not rec.voxels:
         return 0
-    commit(sc, rec)
+    commit(sc, rec, world)
     return len(rec.voxels)
 
 
@@ -217,11 +228,13 @@ def begin(context):
     return world
 
 
-def commit(scene, rec) -> None:
-    """Record a finished stroke: the scene's step names it (Blender's undo keeps that)."""
+def commit(scene, rec, world=None) -> None:
+    """Record a finished stroke made in WORLD: the scene's step names it (Blender's
+    undo keeps that), the journal the file it was made in."""
     import bpy
     j = journal(scene.voxel_edit.step)
-    scene.voxel_edit.step = j.push(rec, bpy.path.abspath(scene.voxel.path))
+    scene.voxel_edit.step = j.push(rec, bpy.path.abspath(scene.voxel.path),
+                                   None if world is None else world.file.identity)
     j.trim(max(32, bpy.context.preferences.edit.undo_steps) + 8)
 
 

@@ -18,6 +18,8 @@ class VoxelError(Exception):
 # SQLite primary result codes (sqlite3.h): what we can say about each
 _SQLITE = {5: "the file is locked by another program", 6: "the file is locked by another program",
            8: "the file or its folder is read-only", 10: "disk I/O error",
+           11: "the file is damaged (cut short or overwritten)",
+           26: "the file is not a world file (or is damaged)",
            13: "disk full", 14: "cannot open the file or its journal (folder missing or "
            "not writable)", 23: "permission denied"}
 _ERRNO = {errno.ENOSPC: "disk full", errno.EDQUOT: "disk quota exceeded",

@@ -52,9 +52,13 @@ def lock_timeout() -> float:
         return 30.0
 
 
+DAMAGED = (11, 26)  # SQLITE_CORRUPT, SQLITE_NOTADB: not a refusal of the moment
+
+
 def open_error(path: Path, e: sqlite3.DatabaseError) -> VoxelError:
     """A full disk, a locked or read-only file is not a damaged one: say which."""
-    what = cause(e, path)
+    damaged = (getattr(e, "sqlite_errorcode", None) or 0) & 0xFF in DAMAGED
+    what = None if damaged else cause(e, path)
     if what is not None:
         return VoxelError(f"{what} while opening {path}: nothing was written")
     return VoxelError(f"{path} is not a readable world file ({e})")

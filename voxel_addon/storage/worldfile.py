@@ -285,6 +285,12 @@ class WorldFile(Decoding):
             return None
         return (st.st_dev, st.st_ino)
 
+    @property
+    def identity(self):
+        """(device, inode) of the file when opened: the same file reopened has it,
+        another file moved to the path has not."""
+        return self._identity_at_open
+
     def gone(self) -> bool:
         """Whether the file at `path` is no longer the one opened (deleted, moved
         away, replaced by another file)."""
@@ -663,5 +669,13 @@ class WorldFile(Decoding):
     def close(self) -> None:
         with self._lock:
             if self.db is not None:
+                if not self.readonly and self.gone():
+                    # SQLite leaves the -wal of a moved file when it closes: the file
+                    # put at the path (or a New world there) would read our pages as
+                    # its own. Emptied into our own (old) file first, it is harmless.
+                    try:
+                        self.db.execute("PRAGMA wal_checkpoint(TRUNCATE)")
+                    except sqlite3.Error:
+                        pass
                 self.db.close()
                 self.db = self._cursor = None

@@ -39,7 +39,7 @@ import numpy as np
 
 from ..core import chunk as C
 from ..core.blocks import REGISTRY
-from ..core.errors import VoxelError
+from ..core.errors import VoxelError, explain
 from ..meshing import tint
 from . import build, models as mcmodels
 from .payload import Payload
@@ -61,7 +61,13 @@ def edit(world, changes, write: bool = True):
     memory (shown, saved by the next `write`, flush or close): the parts of one
     drag, written together when it ends."""
     items = check(world, changes)
-    world.refresh()  # another process's changes first (a pragma when there are none)
+    try:
+        world.refresh()  # another process's changes first (a pragma when there are none)
+    except Exception as e:  # noqa: BLE001 - a damaged or vanished file: say nothing was applied
+        err = explain(e, world.file.path, "reading")
+        if err is None:
+            raise
+        raise VoxelError(f"{err}; nothing of this stroke was applied") from None
     return _stroke(world, items, write)
 
 

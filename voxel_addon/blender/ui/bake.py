@@ -95,9 +95,15 @@ class VOXEL_OT_export_glb(ModalJob, bpy.types.Operator):
         path = bpy.path.abspath(s.glb_path)
         try:
             BB.export_glb(path, job.objects, instances=s.instances)
+        except Exception as e:  # noqa: BLE001 - a full disk or read-only folder: one line
+            from .. import session
+            if not session.refused(self, e, path, kept="the file there before is unchanged"):
+                raise
+            return {"CANCELLED"}
         finally:  # the export copy is temporary: the scene keeps only explicit bakes
             job.cancel()
         self.report({"INFO"}, f"wrote {path}")
+        return None
 
 
 class VOXEL_PT_bake(bpy.types.Panel):

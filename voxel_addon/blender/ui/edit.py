@@ -221,7 +221,7 @@ class VOXEL_OT_edit_stroke(bpy.types.Operator):
                 raise
         if not self.rec.voxels:
             return {"CANCELLED"}
-        strokes.commit(context.scene, self.rec)
+        strokes.commit(context.scene, self.rec, self.world)
         return {"FINISHED"}
 
     def cancel(self, context):

@@ -1,2 +1,4 @@
 """The SQLite world file (SPEC §3, F3): schema, codecs, edits, format checks. Depends only on core."""
-from .worldfile import FORMAT_VERSION, CorruptChunk, Exists, MetaMoved, WorldFile  # noqa: F401
+from .opening import Exists  # noqa: F401
+from .schema import FORMAT_VERSION  # noqa: F401
+from .worldfile import CorruptChunk, MetaMoved, WorldFile  # noqa: F401

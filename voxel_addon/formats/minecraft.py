@@ -155,6 +155,7 @@ class _Palettes:
         self.world, self.report = world, report
         self.colors = colors.parse(world.file.meta)
         self.states = mcstate.States(world.file)
+        self.to_file = mcstate.ToFile(self.states)
         self.ids: dict = {}
         self.keyed: dict = {}
         self.changed = False
@@ -181,10 +182,8 @@ class _Palettes:
 
     def save(self) -> None:
         """Stage the palettes (written with the next chunks, in their transaction)."""
-        if self.changed:
-            self.world.file.stage_meta(colors.KEY, colors.dump(self.colors))
-            self.changed = False
-        self.states.stage()
+        self.to_file.stage(self.colors, self.changed)
+        self.changed = False
 
 
 def plan(path, area=None) -> list[tuple[Region, int, int]]:
@@ -365,10 +364,13 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
         nonlocal pending
         fut, bio, upto = pending
         pending = None
-        kept = world.store_rows(fut.result(), replace=replace, since=start)
-        report.chunks += len(fut.result()) - len(kept)
+        rows, to = fut.result(), pal.to_file
+        # onto the file's palettes as they are when another writer added to them
+        kept = to.save(pal.colors, lambda: world.store_rows(to.rows(rows, world.file, enc),
+                                                            replace=replace, since=start))
+        report.chunks += len(rows) - len(kept)
         report.kept += len(kept)
-        mcfile.write(world.file, [(k, b) for k, b in bio if k not in set(kept)])
+        mcfile.write(world.file, [(k, b) for k, b in to.columns(bio) if k not in set(kept)])
         return upto
 
     try:

@@ -316,7 +316,8 @@ def demo_build(save: Path) -> Path:
 def dyed_save(save: Path, dye: str, axis: str, biome: str, xs=(0,)) -> Path:
     """A save whose chunks (x, 0) for x in XS hold a layer of `dye` wool over oak logs,
     most along AXIS (their block's default state), a few along the other, in BIOME;
-    a chunk of stone first (xs[0]) so that a cluster writer commits before the rest."""
+    when XS are several, a chunk of stone in plains first, so that a cluster writer
+    commits one batch before the others meet the rest."""
     other = {"x": "z", "z": "x", "y": "x"}[axis]
     logs = np.full((16, 16, 16), f"minecraft:oak_log[axis={axis}]", object)
     logs[0] = f"minecraft:oak_log[axis={other}]"
@@ -325,8 +326,9 @@ def dyed_save(save: Path, dye: str, axis: str, biome: str, xs=(0,)) -> Path:
     bio = {y: ([biome], None) for y in (4, 5)}
     chunks = {}
     for i, x in enumerate(xs):
-        secs = {4: stone} if i == 0 and len(xs) > 1 else {4: logs, 5: wool}
-        chunks[(x, 0)] = chunk_nbt(x, 0, secs, biomes=bio)
+        first = i == 0 and len(xs) > 1
+        chunks[(x, 0)] = chunk_nbt(x, 0, {4: stone} if first else {4: logs, 5: wool},
+                                   biomes={4: (["minecraft:plains"], None)} if first else bio)
     write_region(save / "region", chunks)
     return save
 

@@ -316,7 +316,9 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
     except BaseException:
         w.commit(order[pos - 1] + 1 if pos else start)  # keep what is settled
         raise
-    f.set_meta(JOB, "")
+    # done: the note cleared, unless another import's job holds it now (one at a time
+    # keeps a note: the last to commit)
+    f.update_meta(JOB, lambda raw: "" if _job(raw, sig) is not None else (raw or ""))
     if w.old and w.old == len(report.damaged) and not (report.chunks or report.unfinished):
         # nothing written: a world Minecraft never saved in 1.13+ is refused whole
         raise VoxelError(f"none of the {w.old} chunks is from Minecraft 1.13 or newer, nothing "

@@ -14,7 +14,10 @@ import keeps every finished batch, and no chunk is ever half-written. Whether a 
 is already in the file is decided again inside each batch's transaction
 (World.store_chunks), so a chunk another writer stored while the import ran is kept
 (counted in `kept`), and with replace the edits saved since the import started are
-applied over the imported one.
+applied over the imported one. The palettes (states, colours, defaults, biome
+names) go with a batch only while the file holds those they were built on: when
+another writer added to them meanwhile, the batch is mapped onto the file's and
+written again (mcstate.ToFile).
 """
 from __future__ import annotations
 

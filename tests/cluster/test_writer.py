@@ -305,3 +305,30 @@ def test_workers_reading_the_files_meet_external_and_broken_chunks(tmp_path):
     assert (rep2.chunks, rep2.external, len(rep2.damaged)) == (3, 1, 1)
     assert rep2.lines() == rep1.lines() and rep2.damaged == rep1.damaged
     assert chunks(two) == chunks(one)
+
+
+def test_import_maps_its_batches_onto_palettes_another_import_moved(tmp_path, monkeypatch):
+    """Another import adds its block states, dye colours, default states and biome
+    names between two commits, at the indices this import's next batches use: those
+    batches are mapped onto the file's palettes (not written over them), and both
+    saves' chunks show what each shows imported alone."""
+    monkeypatch.setenv("VOXEL_COMMIT", "1")
+    red = mc.dyed_save(tmp_path / "red", "red", "x", "minecraft:desert", (0, 1, 2, 3))
+    blue = mc.dyed_save(tmp_path / "blue", "blue", "z", "minecraft:jungle", (6,))
+    keys = [(x, -1) for x in (0, 1, 2, 3, 6)]
+    for name, run in (("red", lambda w: imports.run(w, cluster.Serial(), red)),
+                      ("blue", lambda w: minecraft.import_world(w, blue))):
+        with World.create(tmp_path / f"{name}.sqlite", seed=1, generator="empty",
+                          loader=False) as w:
+            run(w)
+    want = {**mc.shown(tmp_path / "red.sqlite", keys[:4]),
+            **mc.shown(tmp_path / "blue.sqlite", keys[4:])}
+    p = tmp_path / "both.sqlite"
+    progress, done = _meanwhile(p, lambda o: minecraft.import_world(o, blue))
+    with World.create(p, seed=1, generator="empty", loader=False) as w:
+        imports.run(w, cluster.Serial(), red, progress=progress, report=(rep := minecraft.Report()))
+    assert done == [1] and rep.chunks == 4
+    got = mc.shown(p, keys)
+    for k, (st, rgb, bio) in want.items():
+        assert (got[k][0] == st).all() and (got[k][1] == rgb).all(), k
+        assert (got[k][2] == bio).all(), k

@@ -310,3 +310,50 @@ def demo_build(save: Path) -> Path:
     write_region(save / "region", chunks, 2)
     level_dat(save, 3953)
     return save
+
+
+# ---- two imports into one world: saves of their own, what a world shows ----------
+def dyed_save(save: Path, dye: str, axis: str, biome: str, xs=(0,)) -> Path:
+    """A save whose chunks (x, 0) for x in XS hold a layer of `dye` wool over oak logs,
+    most along AXIS (their block's default state), a few along the other, in BIOME;
+    when XS are several, a chunk of stone in plains first, so that a cluster writer
+    commits one batch before the others meet the rest."""
+    other = {"x": "z", "z": "x", "y": "x"}[axis]
+    logs = np.full((16, 16, 16), f"minecraft:oak_log[axis={axis}]", object)
+    logs[0] = f"minecraft:oak_log[axis={other}]"
+    wool = np.full((16, 16, 16), f"minecraft:{dye}_wool", object)
+    stone = np.full((16, 16, 16), "minecraft:stone", object)
+    bio = {y: ([biome], None) for y in (4, 5)}
+    chunks = {}
+    for i, x in enumerate(xs):
+        first = i == 0 and len(xs) > 1
+        chunks[(x, 0)] = chunk_nbt(x, 0, {4: stone} if first else {4: logs, 5: wool},
+                                   biomes={4: (["minecraft:plains"], None)} if first else bio)
+    write_region(save / "region", chunks)
+    return save
+
+
+def shown(path, keys) -> dict:
+    """{key: (state of each voxel, rgb of each voxel, biome name of each column)} of
+    chunks KEYS of a world, read as the bake and the live view read them."""
+    import json
+    from voxel_addon.core import colors
+    from voxel_addon.core.blocks import REGISTRY
+    from voxel_addon.storage import minecraft as mcfile
+    from voxel_addon.world import World
+    out = {}
+    with World.open(path, loader=False, readonly=True) as w:
+        meta = w.file.meta
+        pal = np.array(json.loads(meta[mcfile.STATES]), object)
+        cst = {int(k): v for k, v in json.loads(meta.get(mcfile.COLOR_STATES) or "{}").items()}
+        dflt = mcfile.defaults(meta)
+        rgb = colors.parse(meta)
+        names = np.array(mcfile.names(meta) + [""] * 256, object)
+        color = REGISTRY.id("color")
+        for k in keys:
+            b, d = w.file.read_chunk(k)
+            d = np.zeros_like(b) if d is None else d
+            st = pal[mcfile.states(b, d, pal.tolist(), cst, color, dflt)]
+            out[k] = (st, np.where((b == color)[..., None], rgb[np.minimum(d, len(rgb) - 1)], 0),
+                      names[mcfile.read(w.file, k)])
+    return out

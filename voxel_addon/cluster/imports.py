@@ -316,7 +316,9 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
     except BaseException:
         w.commit(order[pos - 1] + 1 if pos else start)  # keep what is settled
         raise
-    f.set_meta(JOB, "")
+    # done: the note cleared, unless another import's job holds it now (one at a time
+    # keeps a note: the last to commit)
+    f.update_meta(JOB, lambda raw: "" if _job(raw, sig) is not None else (raw or ""))
     if w.old and w.old == len(report.damaged) and not (report.chunks or report.unfinished):
         # nothing written: a world Minecraft never saved in 1.13+ is refused whole
         raise VoxelError(f"none of the {w.old} chunks is from Minecraft 1.13 or newer, nothing "
@@ -363,6 +365,7 @@ class _Writer:
         from ..formats import mcstate
         self.palette = colors.parse(world.file.meta)
         self.states = mcstate.States(world.file)
+        self.to_file = mcstate.ToFile(self.states)   # commits: onto the file's palettes
         self.grown = False
         self.batch, self.biomes, self.meta = [], [], {}
         self.enc = world.file.encoder()
@@ -488,24 +491,23 @@ class _Writer:
         return self.enc.data(vals.reshape(C.SHAPE, order="F"))
 
     def commit(self, upto: int) -> None:
-        from ..core import colors
-        f = self.world.file
-        if self.grown:  # in the transaction of the chunks that use it, as in one process
-            f.stage_meta(colors.KEY, colors.dump(self.palette))
-            self.grown = False
-        self.states.stage()
+        f, to = self.world.file, self.to_file
+        # in the transaction of the chunks that use it, as in one process
+        to.stage(self.palette, self.grown)
+        self.grown = False
         if self.batch:
             for k, v in self.meta.items():
                 f.stage_meta(k, v)
             self.meta = {}
         f.stage_meta(JOB, json.dumps({"sig": self.sig, "done": upto, "since": self.since}))
         if self.batch:
-            kept = self.world.store_rows(self.batch, replace=self.replace, since=self.since)
+            kept = to.save(self.palette, lambda: self.world.store_rows(
+                to.rows(self.batch, f, self.enc), replace=self.replace, since=self.since))
             self.report.chunks += len(self.batch) - len(kept)
             self.report.kept += len(kept)
-            mcfile.write(f, [(k, b) for k, b in self.biomes if k not in set(kept)])
+            mcfile.write(f, [(k, b) for k, b in to.columns(self.biomes) if k not in set(kept)])
             self.batch, self.biomes = [], []
         else:
-            f.save()  # the staged meta alone
+            to.save(self.palette, f.save)  # the staged meta alone
         if self.progress:
             self.progress(self.done, self.total)

@@ -174,18 +174,20 @@ class States:
             self.changed.add(mcfile.NAMES)
         return i
 
-    def stage(self) -> None:
-        """Stage what changed into the world file's meta (written with the next batch)."""
+    def stage(self, put=None) -> None:
+        """Stage what changed into the world file's meta (written with the next batch);
+        `put(key, value)`: the staging (ToFile's: with the value it was built on)."""
+        put = put or self.file.stage_meta
         if KEY in self.changed:
-            self.file.stage_meta(KEY, json.dumps(self.list))
+            put(KEY, json.dumps(self.list))
             if not self.legacy:   # the mark of this encoding, with the first states
                 self.changed.add(DEFAULTS)
         if DEFAULTS in self.changed:
-            self.file.stage_meta(DEFAULTS, json.dumps(self.defaults, sort_keys=True))
+            put(DEFAULTS, json.dumps(self.defaults, sort_keys=True))
         if COLOR_KEY in self.changed:
-            self.file.stage_meta(COLOR_KEY, json.dumps({str(k): v for k, v in self.colors.items()}))
+            put(COLOR_KEY, json.dumps({str(k): v for k, v in self.colors.items()}))
         if mcfile.NAMES in self.changed:
-            self.file.stage_meta(mcfile.NAMES, json.dumps(self.biomes))
+            put(mcfile.NAMES, json.dumps(self.biomes))
         self.changed.clear()
 
     def columns(self, ch, blocks: np.ndarray, y_min: int) -> np.ndarray | None:
@@ -279,3 +281,121 @@ def columns(ch, blocks: np.ndarray, y_min: int, biome, memo: dict | None = None)
     rank[ds] = np.arange(0, 64 * len(ds), 64)
     at += rank[sy]
     return np.concatenate(rows)[at]
+
+
+PALETTES = (KEY, DEFAULTS, COLOR_KEY, mcfile.NAMES)
+
+
+class ToFile:
+    """An import's numbers (its States and colour palette, begun from the file's meta)
+    as the world file holds them. While no other writer adds to the file's palettes
+    they are the same: the import's values are staged as they are, each with the value
+    it was built on (a save finding another one raises storage.MetaMoved and writes
+    nothing). After that, `moved` reads the file's palettes again and adds the
+    import's entries to them (a state, colour or biome another writer added too is
+    shared); from then on the batches' data and biome columns are mapped onto the
+    file's numbers (`rows`, `columns`) and the file's palettes, grown as the import
+    goes, are staged. The import itself keeps its own numbers throughout (its caches,
+    a cluster's `known`, workers' blobs stay valid)."""
+
+    def __init__(self, states: States):
+        self.st, self.file = states, states.file
+        self.fs = None          # the file's States, once it moved; None: the same numbers
+        self.fpal = None        # and its colour palette
+        self.ts = self.tb = self.tc = None
+        self.same = True        # the maps are the identity
+
+    def _stage(self, key, value) -> None:
+        self.file.stage_meta(key, value, base=self.file.meta.get(key))
+
+    def stage(self, palette, grown: bool) -> None:
+        """Stage what changed (the palettes) for the next save."""
+        from ..core import colors
+        st = self.st
+        if self.fs is None:
+            if grown:
+                self._stage(colors.KEY, colors.dump(palette))
+            st.stage(self._stage)
+            return
+        n = len(self.fpal)
+        self._sync(palette)
+        if len(self.fpal) != n:
+            self._stage(colors.KEY, colors.dump(self.fpal))
+        st.changed.clear()
+        self.fs.stage(self._stage)
+
+    def moved(self, palette) -> None:
+        """After MetaMoved: the file's palettes as they are now, the import's entries
+        added (staged: written with the batch saved next)."""
+        from ..core import colors
+        self.file.reload_meta(PALETTES + (colors.KEY,))
+        self.fs = States(self.file)
+        self.fpal = colors.parse(self.file.meta)
+        self.ts, self.tb, self.tc = [], [], {}
+        self.stage(palette, False)
+
+    def _sync(self, palette) -> None:
+        st, fs = self.st, self.fs
+        ts, tb, tc = self.ts, self.tb, self.tc
+        for key in st.list[len(ts):]:
+            ts.append(fs.of_key(key))
+        for name in st.biomes[len(tb):]:
+            tb.append(fs.biome(name))
+        for c, s in st.colors.items():
+            if c not in tc:
+                self.fpal, tc[c] = fs.color(ts[s], self.fpal, palette[c])
+        if not fs.legacy:
+            names = REGISTRY.names()
+            for name, s in st.defaults.items():
+                if name not in fs.defaults and name in names:
+                    fs.defaults[name] = ts[s]
+                    fs.dflt[names.index(name)] = ts[s]
+                    fs.changed.add(DEFAULTS)
+        self.tsa = np.array(ts, np.uint16)
+        self.tba = np.array(tb, np.uint8)
+        self.tca = np.arange(max(len(palette), 1), dtype=np.uint16)
+        for c, v in tc.items():
+            self.tca[c] = v
+        ldf = self.tsa[st.dflt]
+        self.same = bool((self.tsa == np.arange(len(ts))).all()
+                         and (self.tba == np.arange(len(tb))).all()
+                         and (self.tca == np.arange(len(self.tca))).all()
+                         and (ldf == fs.dflt).all())
+
+    def data(self, blocks: np.ndarray, data: np.ndarray) -> np.ndarray:
+        """A chunk's data (the import's numbers; BLOCKS registry ids) in the file's."""
+        col = blocks == _COLOR
+        s = np.where(data != 0, data, self.st.dflt[blocks])   # each voxel's state, 0 none
+        s[col] = 0
+        v = self.tsa[s]
+        v[v == self.fs.dflt[blocks]] = 0                       # the file's default: 0
+        v[col] = self.tca[data[col]]
+        return v
+
+    def rows(self, rows, file, enc) -> list:
+        """Encoded rows (the import's numbers) in the file's: their data blobs made again."""
+        if self.same:
+            return rows
+        out = []
+        for r in rows:
+            if r[4] is None:
+                out.append(r)
+                continue
+            b, d = file.decode_row(r)
+            out.append(r[:4] + (enc.data(self.data(b, d)),) + r[5:])
+        return out
+
+    def columns(self, bio) -> list:
+        """(key, biome columns) pairs in the file's biome numbers."""
+        return bio if self.same else [(k, self.tba[c]) for k, c in bio]
+
+    def save(self, palette, write):
+        """write() (a batch's save: its rows through `rows`, made in it) and its
+        answer; tried again, on the file's palettes, while other writers move them."""
+        from ..storage import MetaMoved
+        for _ in range(16):
+            try:
+                return write()
+            except MetaMoved:
+                self.moved(palette)
+        raise VoxelError("other programs kept changing the world's palettes; try again")

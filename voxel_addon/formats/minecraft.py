@@ -14,7 +14,10 @@ import keeps every finished batch, and no chunk is ever half-written. Whether a 
 is already in the file is decided again inside each batch's transaction
 (World.store_chunks), so a chunk another writer stored while the import ran is kept
 (counted in `kept`), and with replace the edits saved since the import started are
-applied over the imported one.
+applied over the imported one. The palettes (states, colours, defaults, biome
+names) go with a batch only while the file holds those they were built on: when
+another writer added to them meanwhile, the batch is mapped onto the file's and
+written again (mcstate.ToFile).
 """
 from __future__ import annotations
 
@@ -155,6 +158,7 @@ class _Palettes:
         self.world, self.report = world, report
         self.colors = colors.parse(world.file.meta)
         self.states = mcstate.States(world.file)
+        self.to_file = mcstate.ToFile(self.states)
         self.ids: dict = {}
         self.keyed: dict = {}
         self.changed = False
@@ -181,10 +185,8 @@ class _Palettes:
 
     def save(self) -> None:
         """Stage the palettes (written with the next chunks, in their transaction)."""
-        if self.changed:
-            self.world.file.stage_meta(colors.KEY, colors.dump(self.colors))
-            self.changed = False
-        self.states.stage()
+        self.to_file.stage(self.colors, self.changed)
+        self.changed = False
 
 
 def plan(path, area=None) -> list[tuple[Region, int, int]]:
@@ -365,10 +367,13 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
         nonlocal pending
         fut, bio, upto = pending
         pending = None
-        kept = world.store_rows(fut.result(), replace=replace, since=start)
-        report.chunks += len(fut.result()) - len(kept)
+        rows, to = fut.result(), pal.to_file
+        # onto the file's palettes as they are when another writer added to them
+        kept = to.save(pal.colors, lambda: world.store_rows(to.rows(rows, world.file, enc),
+                                                            replace=replace, since=start))
+        report.chunks += len(rows) - len(kept)
         report.kept += len(kept)
-        mcfile.write(world.file, [(k, b) for k, b in bio if k not in set(kept)])
+        mcfile.write(world.file, [(k, b) for k, b in to.columns(bio) if k not in set(kept)])
         return upto
 
     try:

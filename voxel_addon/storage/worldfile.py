@@ -182,6 +182,22 @@ class WorldFile(Decoding, Opening):
             self._bases.pop(key, None)
         return value
 
+    def reload_meta(self, keys) -> None:
+        """`meta` of KEYS as the file holds them now (what is staged for them
+        dropped): after MetaMoved, to build on all of a palette's keys again, not
+        only on those that moved."""
+        keys = list(keys)
+        with self._lock:
+            got = dict(self.db.execute("SELECT key, value FROM meta WHERE key IN (%s)"
+                                       % ",".join("?" * len(keys)), keys))
+            for k in keys:
+                self._staged.pop(k, None)
+                self._bases.pop(k, None)
+                if k in got:
+                    self.meta[k] = got[k]
+                else:
+                    self.meta.pop(k, None)
+
     def stage_meta(self, key: str, value: str, base=False) -> None:
         """Set a meta value now (in memory) and write it with the next `save`, in
         its transaction: a palette goes to the file with the voxels that use it.

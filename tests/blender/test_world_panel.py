@@ -68,3 +68,19 @@ def test_world_panel_says_numpy_while_opencl_builds(bpy, cl_device, monkeypatch)
         gate.set()
         opencl._warm["thread"].join(30)
     assert backend_line() == ("info", "Generates with", "OpenCL")
+
+
+def test_a_stored_generator_keeps_its_meaning_when_generators_are_added(bpy, scene, monkeypatch):
+    """A .blend stores the enum's item number: numbered by place in the list, a
+    generator added in front of the others would turn a saved 'empty' into another."""
+    from voxel_addon import generation
+    from voxel_addon.blender.ui import world
+    scene.voxel.generator = "empty"
+    stored = scene.voxel.get("generator")  # what the .blend keeps
+    monkeypatch.setattr(generation, "GENERATORS", {"cave": "flat:FlatGenerator",
+                                                   **generation.GENERATORS})
+    monkeypatch.setitem(world.NUMBERS, "cave", max(world.NUMBERS.values()) + 1)
+    assert scene.voxel.get("generator") == stored
+    assert scene.voxel.generator == "empty"
+    numbers = [i[3] for i in world._generators(None, bpy.context)]
+    assert len(set(numbers)) == len(numbers)

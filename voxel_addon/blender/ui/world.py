@@ -6,16 +6,21 @@ import bpy
 from bpy.props import BoolProperty, EnumProperty, IntProperty, StringProperty
 
 
+# A .blend stores the chosen generator as its item's number: never renumber one; a new
+# generator takes the next free number (its place in the list does not matter).
+NUMBERS = {"flat": 0, "overworld": 1, "empty": 2}
+
+
 def _generators(self, context):
     from ...generation import GENERATORS
-    return [(n, n.capitalize(), f"{n} generator") for n in GENERATORS]
+    return [(n, n.capitalize(), f"{n} generator", NUMBERS[n]) for n in GENERATORS]
 
 
 def _default_generator() -> int:
-    """Overworld, as an index (a callback's items take an int default): a first world
+    """Overworld (a callback's items take the item's number as default): a first world
     has hills, water and trees, not a green plane."""
-    from ...generation import DEFAULT, GENERATORS
-    return list(GENERATORS).index(DEFAULT)
+    from ...generation import DEFAULT
+    return NUMBERS[DEFAULT]
 
 
 class VoxelWorldSettings(bpy.types.PropertyGroup):

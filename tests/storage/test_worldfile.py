@@ -190,3 +190,23 @@ def test_a_file_without_a_chunks_table_is_refused_untouched(tmp_path):
         with pytest.raises(VoxelError, match="not a Voxel Worlds file .*chunks"):
             WorldFile(p, readonly=ro)
     assert p.read_bytes() == before and sorted(x.name for x in tmp_path.iterdir()) == [p.name]
+
+
+def test_a_killed_creates_leftovers_are_swept_once_surely_abandoned(tmp_path):
+    """A create killed mid-way leaves its own-named new file beside the world; the next
+    create at that path removes such files once they are old, never a fresh one (a
+    create running now in another process)."""
+    import os
+    import time
+    from voxel_addon.storage import opening
+    old = [tmp_path / f".w.sqlite.{n}-1.new{s}" for n, s in ((11, ""), (11, "-wal"), (12, ""))]
+    fresh = tmp_path / ".w.sqlite.13-1.new"
+    other = tmp_path / ".v.sqlite.14-1.new"   # another world's
+    for p in (*old, fresh, other):
+        p.write_bytes(b"x")
+    t = time.time() - opening.STALE_S - 5
+    for p in (*old, other):
+        os.utime(p, (t, t))
+    WorldFile.create(tmp_path / "w.sqlite", seed=1, generator="flat", generator_version=1).close()
+    assert sorted(p.name for p in tmp_path.iterdir() if ".new" in p.name) == [other.name,
+                                                                           fresh.name]

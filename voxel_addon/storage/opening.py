@@ -4,6 +4,7 @@ older files lack added, and the file's identity (device, inode) that tells a fil
 deleted, moved or replaced while open."""
 from __future__ import annotations
 
+import glob
 import os
 import sqlite3
 import threading
@@ -21,6 +22,22 @@ class Exists(VoxelError):
     """A new world's path is taken (by a file another process may have just made)."""
 
 
+STALE_S = 600  # a new file is made in well under a second: older ones were left by a kill
+
+
+def _sweep(path) -> None:
+    """Remove what a creating process killed mid-way left beside `path` (its own-named
+    new file, with -wal, -shm, -journal), once surely abandoned (by age: a process id
+    cannot be checked safely on every platform)."""
+    now = time.time()
+    for p in path.parent.glob(f".{glob.escape(path.name)}.*.new*"):
+        try:
+            if now - p.stat().st_mtime > STALE_S:
+                p.unlink()
+        except OSError:  # gone meanwhile, or not ours to remove
+            pass
+
+
 class Opening:
     """WorldFile's creation and checks; it needs `path`, `db`, `meta`, `readonly`,
     `transaction()` and `_identity_at_open` of WorldFile."""
@@ -32,6 +49,7 @@ class Opening:
         and the one that comes second finds a whole world (Exists)."""
         if self.path.exists():
             raise Exists(f"{self.path} already exists")
+        _sweep(self.path)
         tmp = self.path.with_name(f".{self.path.name}.{os.getpid()}-{threading.get_ident()}.new")
         try:
             self.db = sqlite3.connect(tmp)

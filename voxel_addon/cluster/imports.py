@@ -6,8 +6,11 @@ same data values, the same blobs bit for bit); it commits in batches through
 World.store_rows (each chunk decided inside the transaction, as the one-process
 import: a chunk another writer stored meanwhile is kept unless --replace, and with
 --replace the edits saved since the import started are applied again), the palette
-and how far it got (meta `import_job`) in the same transaction, so a run killed
-and started again does only what is missing.
+how far it got (meta `import_job`) and the chunks' biome rows in the same
+transaction, so a run killed and started again does only what is missing and no
+chunk is left without its biomes. `import_job` keeps one note per unfinished import
+(a JSON list of {sig, done, since}; older files: one such object), so two imports
+into one world, both killed, both resume.
 
 Hostile input: a worker decodes with the per-chunk limits (region.MAX_NBT,
 anvil.CHUNK_TAGS; a chunk past the tag limit refuses the import) and reports what
@@ -215,7 +218,8 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
     f = world.file
     todo = minecraft.plan(path, area)
     sig = _signature(minecraft.regions_of(path), y_min, area, replace)
-    job = _job(f.meta.get(JOB), sig)
+    got = f.query("SELECT value FROM meta WHERE key=?", (JOB,))  # as the file holds it now
+    job = _job(got[0][0] if got else None, sig)
     have = {minecraft.to_key(cx, cz) for _, cx, cz in todo} & set(f.chunk_keys())
     if job is None and have and not replace:
         raise VoxelError(f"{len(have)} of the {len(todo)} chunks are already in "
@@ -288,7 +292,7 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
             yield chunks, dict(w.known)
             j += n
 
-    f.set_meta(JOB, json.dumps({"sig": sig, "done": start, "since": since}))
+    f.update_meta(JOB, lambda raw: _noted(raw, sig, start, since))
     w = _Writer(world, report, sig, progress, len(plan) + len(local), budget)
     w.replace, w.since = replace, since
     w.meta = {mcfile.Y_MIN: str(report.y_min)}    # staged with the first batch, as in one process
@@ -316,9 +320,8 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
     except BaseException:
         w.commit(order[pos - 1] + 1 if pos else start)  # keep what is settled
         raise
-    # done: the note cleared, unless another import's job holds it now (one at a time
-    # keeps a note: the last to commit)
-    f.update_meta(JOB, lambda raw: "" if _job(raw, sig) is not None else (raw or ""))
+    # done: this import's note dropped (other imports' stay)
+    f.update_meta(JOB, lambda raw: _noted(raw, sig))
     if w.old and w.old == len(report.damaged) and not (report.chunks or report.unfinished):
         # nothing written: a world Minecraft never saved in 1.13+ is refused whole
         raise VoxelError(f"none of the {w.old} chunks is from Minecraft 1.13 or newer, nothing "
@@ -326,15 +329,33 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
     return computed
 
 
+def _jobs(raw) -> list:
+    """The notes of meta `import_job`: a list of {sig, done, since}, or (older files,
+    one import at a time) one such object; damaged: none."""
+    try:
+        got = json.loads(raw) if raw else []
+    except ValueError:
+        return []
+    got = [got] if isinstance(got, dict) else got
+    return [j for j in got if isinstance(j, dict)] if isinstance(got, list) else []
+
+
 def _job(raw, sig):
     """The unfinished job of the same import (same files, same options), or None."""
-    try:
-        job = json.loads(raw) if raw else None
-    except ValueError:
-        return None
-    ok = isinstance(job, dict) and job.get("sig") == sig and isinstance(job.get("done"), int) \
-        and isinstance(job.get("since", 0.0), (int, float))
-    return job if ok else None
+    for job in _jobs(raw):
+        if job.get("sig") == sig and isinstance(job.get("done"), int) \
+                and isinstance(job.get("since", 0.0), (int, float)):
+            return job
+    return None
+
+
+def _noted(raw, sig, done=None, since=None) -> str:
+    """RAW (the notes) with this import's note set to DONE and SINCE, or dropped
+    (DONE None); the other imports' notes as they are ("" when none is left)."""
+    jobs = [j for j in _jobs(raw) if j.get("sig") != sig]
+    if done is not None:
+        jobs.append({"sig": sig, "done": done, "since": since})
+    return json.dumps(jobs) if jobs else ""
 
 
 def _first_version(todo, budget):
@@ -499,15 +520,22 @@ class _Writer:
             for k, v in self.meta.items():
                 f.stage_meta(k, v)
             self.meta = {}
-        f.stage_meta(JOB, json.dumps({"sig": self.sig, "done": upto, "since": self.since}))
+
+        def also(db, written=()):
+            """In the batch's transaction: the biome rows of the chunks written (in
+            the file's numbers, made again when the palettes moved) and the note of
+            how far this import got, the other imports' notes as the file holds them."""
+            mcfile.put(db, [(k, b) for k, b in to.columns(self.biomes) if k in written])
+            mcfile.update(db, JOB, lambda raw: _noted(raw, self.sig, upto, self.since))
+
         if self.batch:
             kept = to.save(self.palette, lambda: self.world.store_rows(
-                to.rows(self.batch, f, self.enc), replace=self.replace, since=self.since))
+                to.rows(self.batch, f, self.enc), replace=self.replace, since=self.since,
+                also=also))
             self.report.chunks += len(self.batch) - len(kept)
             self.report.kept += len(kept)
-            mcfile.write(f, [(k, b) for k, b in to.columns(self.biomes) if k not in set(kept)])
             self.batch, self.biomes = [], []
         else:
-            to.save(self.palette, f.save)  # the staged meta alone
+            to.save(self.palette, lambda: f.save(also=also))  # the staged meta alone
         if self.progress:
             self.progress(self.done, self.total)

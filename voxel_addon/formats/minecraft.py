@@ -9,15 +9,15 @@ formats/budget.py) refuses the import with one line. What can be checked is chec
 before the first write: region headers and level.dat (when the files are listed),
 chunks already in the world, a level.dat from before 1.13; a world whose chunks are
 all from before 1.13 is refused having written nothing. Chunks go to the file in
-batches, each one transaction (with the palette colours they use): an interrupted
-import keeps every finished batch, and no chunk is ever half-written. Whether a chunk
-is already in the file is decided again inside each batch's transaction
-(World.store_chunks), so a chunk another writer stored while the import ran is kept
-(counted in `kept`), and with replace the edits saved since the import started are
-applied over the imported one. The palettes (states, colours, defaults, biome
-names) go with a batch only while the file holds those they were built on: when
-another writer added to them meanwhile, the batch is mapped onto the file's and
-written again (mcstate.ToFile).
+batches, each one transaction (with the palettes they use and their biome rows): an
+interrupted import keeps every finished batch, and no chunk is ever half-written
+(nor without its biomes). Whether a chunk is already in the file is decided again
+inside each batch's transaction (World.store_chunks), so a chunk another writer
+stored while the import ran is kept (counted in `kept`), and with replace the edits
+saved since the import started are applied over the imported one. The palettes
+(states, colours, defaults, biome names) go with a batch only while the file holds
+those they were built on: when another writer added to them meanwhile, the batch is
+mapped onto the file's and written again (mcstate.ToFile).
 """
 from __future__ import annotations
 
@@ -368,12 +368,14 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
         fut, bio, upto = pending
         pending = None
         rows, to = fut.result(), pal.to_file
-        # onto the file's palettes as they are when another writer added to them
-        kept = to.save(pal.colors, lambda: world.store_rows(to.rows(rows, world.file, enc),
-                                                            replace=replace, since=start))
+        # the biome rows of the chunks written, in their transaction (mapped onto the
+        # file's palettes as they are when another writer added to them)
+        kept = to.save(pal.colors, lambda: world.store_rows(
+            to.rows(rows, world.file, enc), replace=replace, since=start,
+            also=lambda db, written: mcfile.put(db, [(k, b) for k, b in to.columns(bio)
+                                                     if k in written])))
         report.chunks += len(rows) - len(kept)
         report.kept += len(kept)
-        mcfile.write(world.file, [(k, b) for k, b in to.columns(bio) if k not in set(kept)])
         return upto
 
     try:

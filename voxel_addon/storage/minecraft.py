@@ -42,13 +42,25 @@ def names(meta: dict) -> list[str]:
 
 def write(wf, rows) -> None:
     """ROWS: (key, (16, 16) uint8 [lx, ly]) pairs, in one transaction."""
+    with wf.transaction() as db:
+        put(db, rows)
+
+
+def put(db, rows) -> None:
+    """`write` inside the caller's transaction (an import's: with the chunks)."""
     rows = [(int(k[0]), int(k[1]), zlib.compress(np.asarray(a, np.uint8).tobytes(order="F")))
             for k, a in rows]
-    if not rows:
-        return
-    with wf.transaction() as db:
+    if rows:
         db.execute(SCHEMA)
         db.executemany("INSERT OR REPLACE INTO mc_biomes VALUES (?, ?, ?)", rows)
+
+
+def update(db, key: str, fn) -> None:
+    """Meta KEY set to fn(the value stored, or None) inside the caller's transaction
+    (an import's note with its batch, on what other imports noted meanwhile)."""
+    row = db.execute("SELECT value FROM meta WHERE key=?", (key,)).fetchone()
+    db.execute("INSERT OR REPLACE INTO meta VALUES (?, ?)",
+               (key, str(fn(None if row is None else row[0]))))
 
 
 def read(wf, key) -> np.ndarray | None:

@@ -389,7 +389,7 @@ class WorldFile(Decoding, Opening):
         workers) make the very rows this file would."""
         return Encoder(codec or codecs.default(), None if self._identity else self._to_file)
 
-    def save(self, rows=(), edits=(), stale_light=(), resolve=None) -> dict:
+    def save(self, rows=(), edits=(), stale_light=(), resolve=None, also=None) -> dict:
         """Encoded chunk rows (from encode_chunk) and (x, y, z, block, data) edits in
         registry ids, written in one transaction: after it returns they survive a kill.
         A row's light (its 6th value) replaces the stored one, None drops it;
@@ -400,8 +400,10 @@ class WorldFile(Decoding, Opening):
         of each row's chunk and returns the row to write: the same, another one (a
         merge: read the stored chunk with read_chunk, encode the result; the light of
         its 3x3 is dropped) or None (keep the stored one). Returns {key: version} of
-        the rows written."""
-        with self.transaction():
+        the rows written. `also(db, keys written)`: more writes of the same
+        transaction, after the rows (an import's biome rows and resume note: a kill
+        leaves all of them or none)."""
+        with self.transaction() as db:
             stale_light = [tuple(k) for k in stale_light]
             if resolve is not None:
                 out = []
@@ -432,6 +434,8 @@ class WorldFile(Decoding, Opening):
             self.db.executemany("INSERT OR REPLACE INTO edits VALUES (?, ?, ?, ?, ?, ?)",
                                 [(x, y, z, int(self._to_file[b]), d, now)
                                  for x, y, z, b, d in edits])
+            if also is not None:
+                also(db, written)
             new = {k: v for k, v in self.versions_since(top) if k in written}
         with self._lock:
             for k, v in staged.items():  # written: unless staged again meanwhile

@@ -282,11 +282,11 @@ class Saving:
         return self.store_rows(rows, items, replace=replace, since=since)
 
     def store_rows(self, rows, items=None, *, replace: bool = True,
-                   since: float | None = None) -> list:
+                   since: float | None = None, also=None) -> list:
         """store_chunks for rows encoded elsewhere (WorldFile.encoder: a cluster
         worker), decided the same way; `items` {key: (blocks, data)} their arrays
         when at hand, else a row is decoded only where arrays are needed (edits to
-        apply again, an active copy). Returns the keys kept."""
+        apply again, an active copy); `also`: WorldFile.save's. Returns the keys kept."""
         self.writable()
         rows = {(int(r[0]), int(r[1])): r for r in rows}
         arrays = dict(items or {})
@@ -315,7 +315,8 @@ class Saving:
             return self.file.encode_chunk(key, b, d)
 
         with self._flush_lock:
-            new = self.file.save(list(rows.values()), stale_light=stale, resolve=resolve)
+            new = self.file.save(list(rows.values()), stale_light=stale, resolve=resolve,
+                                 also=also)
             with self._lock:
                 for k, got in final.items():
                     mine = self._mine.get(k)

@@ -30,6 +30,7 @@ from ..core import chunk as C
 from ..core.errors import VoxelError
 from . import codecs
 from .decode import CorruptChunk, Decoding
+from .meta import Meta, MetaMoved
 from .opening import Opening
 from .rows import Encoder
 from .schema import lock_timeout, open_error
@@ -49,13 +50,7 @@ def _sql(template: str, n: int) -> str:
     return template.format(k="(VALUES " + ", ".join(["(?, ?)"] * n) + ")")
 
 
-class MetaMoved(VoxelError):
-    """A staged meta value was built on a value another process has replaced since
-    (a palette it added to): nothing of that save was written; `meta` holds the
-    file's value now, build on it again."""
-
-
-class WorldFile(Decoding, Opening):
+class WorldFile(Decoding, Opening, Meta):
     """A world file opened for reading (and writing unless `readonly`). `created`:
     this object made the file (create), so a command that fails may remove it."""
 
@@ -146,70 +141,6 @@ class WorldFile(Decoding, Opening):
     @property
     def generator(self) -> str:
         return self.meta["generator"]
-
-    @property
-    def generator_params(self) -> dict:
-        raw = self.meta.get("generator_params") or "{}"
-        try:
-            params = json.loads(raw)
-        except ValueError as e:  # RecursionError too deep: a ValueError's sibling
-            raise VoxelError(f"{self.path}: its generator settings are damaged "
-                             f"(not JSON: {e})") from None
-        except RecursionError:
-            raise VoxelError(f"{self.path}: its generator settings are damaged "
-                             "(nested too deep)") from None
-        if not isinstance(params, dict):
-            raise VoxelError(f"{self.path}: its generator settings are damaged "
-                             f"(not a JSON object: {raw[:40]!r})")
-        return params
-
-    def set_meta(self, key: str, value: str) -> None:
-        with self.transaction():
-            self.db.execute("INSERT OR REPLACE INTO meta VALUES (?, ?)", (key, str(value)))
-        self.meta[key] = str(value)
-
-    def update_meta(self, key: str, fn) -> str:
-        """Meta KEY set to fn(the value the file holds now, or None) in a transaction of
-        its own, and returned: an addition to a palette made on what is there, not on
-        what this session read when it opened (another process may have added since)."""
-        with self.transaction() as db:
-            row = db.execute("SELECT value FROM meta WHERE key=?", (key,)).fetchone()
-            value = str(fn(None if row is None else row[0]))
-            db.execute("INSERT OR REPLACE INTO meta VALUES (?, ?)", (key, value))
-        with self._lock:
-            self.meta[key] = value
-            self._staged.pop(key, None)
-            self._bases.pop(key, None)
-        return value
-
-    def reload_meta(self, keys) -> None:
-        """`meta` of KEYS as the file holds them now (what is staged for them
-        dropped): after MetaMoved, to build on all of a palette's keys again, not
-        only on those that moved."""
-        keys = list(keys)
-        with self._lock:
-            got = dict(self.db.execute("SELECT key, value FROM meta WHERE key IN (%s)"
-                                       % ",".join("?" * len(keys)), keys))
-            for k in keys:
-                self._staged.pop(k, None)
-                self._bases.pop(k, None)
-                if k in got:
-                    self.meta[k] = got[k]
-                else:
-                    self.meta.pop(k, None)
-
-    def stage_meta(self, key: str, value: str, base=False) -> None:
-        """Set a meta value now (in memory) and write it with the next `save`, in
-        its transaction: a palette goes to the file with the voxels that use it.
-        BASE (a value or None: the key absent): the value it was built on; when the
-        file holds another by then (a second writer added to the palette), that save
-        raises MetaMoved and writes nothing, so voxels never index a palette that is
-        not the one they were made for."""
-        self._writable()
-        with self._lock:
-            self.meta[key] = self._staged[key] = str(value)
-            if base is not False:
-                self._bases.setdefault(key, base)  # the first base: what the file held
 
     # ---- transactions, queries for the file's other tables (far.py) ----------
     def transaction(self):
@@ -443,26 +374,6 @@ class WorldFile(Decoding, Opening):
                     del self._staged[k]
                     self._bases.pop(k, None)
         return new
-
-    def _moved_meta(self) -> list[str]:
-        """Inside save's transaction: the staged keys whose stored value is no longer
-        the one they were built on; those are dropped from the stage and `meta` takes
-        the stored value (the caller builds on it again)."""
-        moved = {}
-        for k, base in list(self._bases.items()):
-            row = self.db.execute("SELECT value FROM meta WHERE key=?", (k,)).fetchone()
-            now = None if row is None else row[0]
-            if now != base:
-                moved[k] = now
-        with self._lock:
-            for k, now in moved.items():
-                self._staged.pop(k, None)
-                self._bases.pop(k, None)
-                if now is None:
-                    self.meta.pop(k, None)
-                else:
-                    self.meta[k] = now
-        return sorted(moved)
 
     def write_chunks(self, items, codec: str | None = None) -> None:
         """items: (key, blocks, data-or-None) triples."""

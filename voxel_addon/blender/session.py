@@ -14,7 +14,8 @@ way at once (`save_failed`), and a world whose file is gone is let go.
 Other processes may write the same file (another Blender, a command-line import):
 a timer polls every open world about once a second (`World.refresh`: a pragma when
 nothing changed) and redraws the viewports when it took in their chunks. The same
-poll lets go of a world whose file was deleted, moved or replaced (a stat).
+poll lets go of a world whose file was deleted, moved or replaced (a stat), or
+found damaged (cut short, overwritten: the view stops drawing it and says so).
 """
 from __future__ import annotations
 
@@ -107,6 +108,11 @@ def _poll():
             got |= bool(w.refresh())
             _poll_told.pop(key, None)
         except Exception as e:  # noqa: BLE001 - a poll must not kill the timer
+            from ..core.errors import damaged
+            if damaged(e):
+                _let_go_damaged(key, w, e)
+                got = True
+                continue
             if _poll_told.get(key) != str(e):
                 _poll_told[key] = str(e)
                 print(f"Voxel Worlds: could not look for changes in {key}: {e}")
@@ -132,6 +138,31 @@ def _let_go(key: str, w) -> None:
         _worlds.pop(key, None)
         w.discard()
         tell(f"{e}; the view shows what is at that path now")
+
+
+def _let_go_damaged(key: str, w, error: Exception) -> None:
+    """The poll found the file at KEY damaged (cut short, overwritten by other
+    bytes): the view would draw on from memory a world that can be neither read
+    nor saved. Its unsaved edits go to the rescue file (applied when a good file is
+    opened there again) and the world is let go: the next look-up opens the file
+    anew and says it is not readable (the View panel, a stroke: one line)."""
+    from ..core.errors import VoxelError, cause
+    e = VoxelError(f"the world file {key} was damaged while it was open "
+                   f"({cause(error) or error}); nothing more is written to it")
+    if w.unsaved_edits():
+        _save_failed(key, w, e)
+        if unsaved.get(key) is w:  # not rescued: memory is all there is
+            _worlds.pop(key, None)
+            return
+        w.forget_unsaved()
+    else:
+        tell(str(e))
+    _worlds.pop(key, None)
+    _poll_told.pop(key, None)
+    try:
+        w.discard()
+    except Exception:  # noqa: BLE001 - a damaged file may refuse even its close
+        pass
 
 
 def save_failed(w, error: Exception) -> str:

@@ -74,8 +74,15 @@ def run(gui):
             except RuntimeError as e:  # the operator's ERROR report
                 return str(e)
 
-    def settled(name):  # a few polls and redraws, then the screenshot
-        yield from until(lambda: False, 2.5)
+    def moved():  # the view goes on: the stream reads and makes chunks as the file changes
+        r3.view_location = (r3.view_location[0] + 64.0, 8.0, 64.0)
+        area.tag_redraw()
+        yield 0.05
+        area.tag_redraw()
+        yield 0.05
+
+    def settled(name):  # a few polls (a damaged header is believed at its second) and redraws
+        yield from until(lambda: False, 3.0)
         yield from gui.screenshot(name)
         res[name] = view()
 
@@ -86,6 +93,8 @@ def run(gui):
 
     # -- replaced: another world moved over the open file
     os.link(path, p["old"])  # the old file stays reachable: nothing more may go into it
+    yield from moved()
+    res["loading"] = [LIVE.feed.stream.queued, LIVE.stats["wanted"] - LIVE.stats["drawn"]]
     os.replace(p["b"], path)
     yield from shown(p["seed_b"])
     yield from gui.screenshot("replaced")
@@ -95,6 +104,7 @@ def run(gui):
     os.link(path, p["new"])  # (read by the test once Blender is gone)
 
     # -- deleted
+    yield from moved()
     os.remove(path)
     yield from settled("deleted")
     res["deleted"]["stroke"] = stroke(B, "glass")
@@ -105,6 +115,7 @@ def run(gui):
     yield from shown(p["seed_c"])
     res["back"] = view()
     yield from gui.screenshot("back")
+    yield from moved()
     with open(path, "r+b") as f:
         f.truncate(1000)
     yield from settled("damaged")

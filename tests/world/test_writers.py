@@ -170,6 +170,27 @@ def test_a_file_gone_while_open_fails_the_next_save(path, tmp_path, how):
     w.discard()
 
 
+def test_a_file_damaged_while_open_shows_in_its_header(path):
+    """WorldFile.damage_seen reads the file's header (a read through the connection
+    may be served by its -wal): cut short, overwritten by other bytes, or whole."""
+    w = World.open(path, loader=False)
+    try:
+        edit(w, (1, 1, 100, STONE))   # (its pages in the -wal now)
+        assert w.file.damage_seen() is None and not w.file.gone()
+        size = os.path.getsize(path)
+        with open(path, "r+b") as f:
+            f.truncate(size - 4096)
+        assert w.file.damage_seen() == "cut short"
+        with open(path, "r+b") as f:
+            f.truncate(50)
+        assert w.file.damage_seen() == "cut short"
+        with open(path, "r+b") as f:
+            f.write(b"x" * 200)
+        assert w.file.damage_seen() == "overwritten"
+    finally:
+        w.discard()
+
+
 def test_store_chunks_keeps_or_merges_per_chunk(path):
     """An import decides per chunk at write time: without replace a stored chunk is
     kept; with replace, edits saved since the import started survive."""

@@ -14,7 +14,8 @@ way at once (`save_failed`), and a world whose file is gone is let go.
 Other processes may write the same file (another Blender, a command-line import):
 a timer polls every open world about once a second (`World.refresh`: a pragma when
 nothing changed) and redraws the viewports when it took in their chunks. The same
-poll lets go of a world whose file was deleted, moved or replaced (a stat).
+poll lets go of a world whose file was deleted, moved or replaced (a stat), or
+found damaged (cut short, overwritten: the view stops drawing it and says so).
 """
 from __future__ import annotations
 
@@ -93,10 +94,12 @@ def _start_polling() -> None:
 
 
 _poll_told: dict[str, str] = {}  # path -> the poll's last failure (said once, not each second)
+_suspect: dict[str, str] = {}  # path -> the damage its header showed at the last poll
 
 
 def _poll():
     """Take in what other processes wrote to the open worlds; redraw if anything."""
+    from ..core.errors import damaged
     got = False
     for key, w in list(_worlds.items()):
         try:
@@ -104,9 +107,22 @@ def _poll():
                 _let_go(key, w)
                 got = True
                 continue
+            how = w.file.damage_seen() if w.file.db is not None else None
+            if how is not None and _suspect.get(key) == how:  # (twice: see damage_seen)
+                _let_go_damaged(key, w, how)
+                got = True
+                continue
+            if how is None:
+                _suspect.pop(key, None)
+            else:
+                _suspect[key] = how
             got |= bool(w.refresh())
             _poll_told.pop(key, None)
         except Exception as e:  # noqa: BLE001 - a poll must not kill the timer
+            if damaged(e):
+                _let_go_damaged(key, w, "cut short or overwritten")
+                got = True
+                continue
             if _poll_told.get(key) != str(e):
                 _poll_told[key] = str(e)
                 print(f"Voxel Worlds: could not look for changes in {key}: {e}")
@@ -132,6 +148,46 @@ def _let_go(key: str, w) -> None:
         _worlds.pop(key, None)
         w.discard()
         tell(f"{e}; the view shows what is at that path now")
+
+
+def _let_go_damaged(key: str, w, how: str) -> str:
+    """The file at KEY was found damaged (HOW: cut short, overwritten): the view
+    would draw on from memory a world that can be neither read nor saved. Its
+    unsaved edits go to the rescue file (applied when a whole file is opened there
+    again) and the world is let go: the next look-up opens the file anew and says
+    it is not readable (the View panel, a stroke: one line). Returns the message."""
+    from ..core.errors import VoxelError
+    what = f"the file was damaged ({how}) while it was open; nothing more is written to it"
+    msg = f"the world file {key}: {what}"
+    _worlds.pop(key, None)
+    _poll_told.pop(key, None)
+    _suspect.pop(key, None)
+    if w.unsaved_edits():
+        msg = _save_failed(key, w, VoxelError(what))  # (says where they went)
+        if unsaved.get(key) is w:  # not rescued: memory is all there is (close retries)
+            return msg
+        w.forget_unsaved()
+    else:
+        tell(msg)
+    try:
+        w.discard()
+    except Exception:  # noqa: BLE001 - a damaged file may refuse even its close
+        pass
+    return msg
+
+
+def broken(w, error: Exception) -> str | None:
+    """A read or write of the open world W (the view's stream, a stroke) failed:
+    when ERROR says its file is damaged, W is let go as the poll would
+    (_let_go_damaged) and the one-line message returned; else None."""
+    from ..core.errors import damaged
+    if not damaged(error):
+        return None
+    key = next((k for k, x in _worlds.items() if x is w), None)
+    if key is None:  # let go already (by the poll, another redraw)
+        return (f"the world file {w.file.path}: the file was damaged (cut short or "
+                "overwritten) while it was open; nothing more is written to it")
+    return _let_go_damaged(key, w, "cut short or overwritten")
 
 
 def save_failed(w, error: Exception) -> str:

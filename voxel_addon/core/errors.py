@@ -45,6 +45,15 @@ def cause(e: BaseException, path=None) -> str | None:
     return None
 
 
+def damaged(e: BaseException) -> bool:
+    """Whether E says the file itself is damaged (SQLITE_CORRUPT, SQLITE_NOTADB: cut
+    short or overwritten), not refused for the moment (locked, disk full): trying
+    again will not help."""
+    import sqlite3
+    return isinstance(e, sqlite3.DatabaseError) and \
+        (getattr(e, "sqlite_errorcode", None) or 0) & 0xFF in (11, 26)
+
+
 def _why_not_writable(path) -> str | None:
     """Which of file system, folder and file says no (SQLite only says read-only)."""
     import stat

@@ -197,6 +197,30 @@ class Opening:
         return now is None or (self._identity_at_open is not None
                                and now != self._identity_at_open)
 
+    def damage_seen(self) -> str | None:
+        """How the file at `path` is no longer a whole SQLite file, from its 100-byte
+        header: "overwritten" (not SQLite's) or "cut short" (shorter than the pages
+        its header counts); None when it looks whole or cannot be read. Reading
+        through our connection may not notice (the pages it wants may be in the
+        -wal). Another process's checkpoint may be caught between the header and
+        the file's growth: ask again before believing a "cut short"."""
+        try:
+            with open(self.path, "rb") as f:
+                head = f.read(100)
+                size = os.fstat(f.fileno()).st_size
+        except OSError:
+            return None
+        if len(head) < 100:
+            return "cut short"
+        if head[:16] != b"SQLite format 3\x00":
+            return "overwritten"
+        page = int.from_bytes(head[16:18], "big")
+        pages = int.from_bytes(head[28:32], "big")
+        # (the page count is valid while the change counter matches version-valid-for)
+        if pages and head[24:28] == head[92:96] and size < pages * (65536 if page == 1 else page):
+            return "cut short"
+        return None
+
     def check_path(self) -> None:
         """A VoxelError when the file at `path` is no longer the one opened (deleted,
         moved away, replaced): writing on would put the edits where nobody sees them.

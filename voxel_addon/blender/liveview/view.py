@@ -230,11 +230,24 @@ class LiveView:
         except VoxelError as e:
             self.error = str(e)
         except Exception as e:  # keep drawing Blender; say it once in the panel and console
-            if self.error is None:
+            said = self._file_failed(e)
+            if said is None and self.error is None:
                 traceback.print_exc()
-            self.error = f"voxel view failed: {e}"
+            self.error = said or f"voxel view failed: {e}"
         for fn in list(self.overlays):
             fn(context)
+
+    def _file_failed(self, e) -> str | None:
+        """The shown world's file refused a read or write of the stream (a damaged
+        file: let go by the session, the next frame opens it anew; a full disk) as
+        one line for the panel, or None (a bug: its traceback goes to the console)."""
+        from ...core.errors import explain
+        f = self.feed
+        said = None if f is None else session.broken(f.world, e)
+        if said is None:
+            err = explain(e, None if f is None else f.world.file.path, "reading or saving")
+            said = None if err is None else str(err)
+        return said
 
     def _frame(self, context, scene, vv, path):
         import gpu

@@ -136,6 +136,22 @@ class VOXEL_OT_render_view(bpy.types.Operator):
         return {"FINISHED"}
 
 
+def problem_lines(context, text: str) -> list[str]:
+    """The live view's problem as the View panel shows it: the world file's folder
+    left out (the File field names it) and wrapped to the sidebar's width (Blender
+    cuts a long label in its middle: a damaged file's message lost what went wrong)."""
+    import os
+    import textwrap
+    path = context.scene.voxel.path
+    if path:
+        for p in (bpy.path.abspath(path), os.path.realpath(bpy.path.abspath(path))):
+            text = text.replace(os.path.dirname(p) + os.sep, "")
+    scale = context.preferences.system.ui_scale
+    region = context.region
+    width = region.width / scale if region is not None and region.width > 1 else 300
+    return textwrap.wrap(text, max(24, int((width - 60) / 6.5))) or [text]
+
+
 class VOXEL_PT_view(bpy.types.Panel):
     bl_idname = "VOXEL_PT_view"
     bl_label = "View"
@@ -153,7 +169,8 @@ class VOXEL_PT_view(bpy.types.Panel):
         if v.show:
             problem = LIVE.problem(context)
             if problem:
-                col.label(text=problem, icon="ERROR")
+                for i, line in enumerate(problem_lines(context, problem)):
+                    col.label(text=line, icon="ERROR" if i == 0 else "BLANK1")
             else:
                 st = LIVE.stats
                 col.label(text=chunks_line(st))

@@ -26,8 +26,6 @@ Blender's own history can no longer reach (`Journal.trim`).
 """
 from __future__ import annotations
 
-import os
-
 
 # ---- the world side: world/edit.py does the work -----------------------------
 STATS = {"edits": 0, "voxels": 0, "ms": 0.0, "last_ms": 0.0, "done": 0.0,

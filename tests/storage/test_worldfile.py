@@ -210,3 +210,21 @@ def test_a_killed_creates_leftovers_are_swept_once_surely_abandoned(tmp_path):
     WorldFile.create(tmp_path / "w.sqlite", seed=1, generator="flat", generator_version=1).close()
     assert sorted(p.name for p in tmp_path.iterdir() if ".new" in p.name) == [other.name,
                                                                            fresh.name]
+
+
+def test_a_new_world_appears_in_wal_mode(tmp_path, monkeypatch):
+    """The file linked into place is already in WAL mode (header bytes 18-19 = 2):
+    switching a published file took an exclusive lock, and a second process opening the
+    new world at that moment failed 'database is locked' (tests/world/test_races.py's
+    two creates at once, ~1 round in 25)."""
+    import os
+    from voxel_addon.storage import opening
+    seen = []
+    real_link = os.link
+
+    def link(src, dst):  # the file as it is published
+        seen.append(open(src, "rb").read(20)[18:20])
+        real_link(src, dst)
+    monkeypatch.setattr(opening.os, "link", link)
+    WorldFile.create(tmp_path / "w.sqlite", seed=1, generator="flat", generator_version=1).close()
+    assert seen == [b"\x02\x02"]

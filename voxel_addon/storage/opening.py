@@ -38,6 +38,21 @@ def _sweep(path) -> None:
             pass
 
 
+def wal(db, timeout: float) -> None:
+    """PRAGMA journal_mode=WAL, waiting out another opener's switch of the same file
+    (an older file in rollback mode opened by two at once: one of them is refused at
+    once, SQLite's busy handler does not wait on that lock)."""
+    end = time.monotonic() + timeout
+    while True:
+        try:
+            db.execute("PRAGMA journal_mode=WAL")
+            return
+        except sqlite3.OperationalError as e:
+            if "locked" not in str(e) or time.monotonic() > end:
+                raise
+            time.sleep(0.02)
+
+
 class Opening:
     """WorldFile's creation and checks; it needs `path`, `db`, `meta`, `readonly`,
     `transaction()` and `_identity_at_open` of WorldFile."""
@@ -54,6 +69,10 @@ class Opening:
         try:
             self.db = sqlite3.connect(tmp)
             self.db.isolation_level = None
+            # in WAL mode before anyone sees it: switching a linked file's journal
+            # takes an exclusive lock that a second opener of a new world met as
+            # 'database is locked' (two creates at once, 1 round in ~25)
+            self.db.execute("PRAGMA journal_mode=WAL")
             self._init(meta)
             self.db.close()  # the last connection: the WAL goes into the file
             self.db = None

@@ -31,7 +31,7 @@ from ..core.errors import VoxelError
 from . import codecs
 from .decode import CorruptChunk, Decoding
 from .meta import Meta, MetaMoved
-from .opening import Opening
+from .opening import Opening, wal
 from .rows import Encoder
 from .schema import lock_timeout, open_error
 from .transactions import Reading, Transaction
@@ -105,8 +105,8 @@ class WorldFile(Decoding, Opening, Meta):
             if "chunks" not in tables:  # another program's file: refused before any write
                 raise VoxelError(f"{self.path} is not a Voxel Worlds file (it has no "
                                  "chunks table)")
-            if not readonly:  # a new file too: it was made with a rollback journal (_make)
-                self.db.execute("PRAGMA journal_mode=WAL")
+            if not readonly:  # files made by other programs or versions: rollback mode
+                wal(self.db, lock_timeout())
             self._map_ids(file_names)
             self._edits_table(readonly, tables)
             self._light_table(readonly)

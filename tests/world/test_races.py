@@ -148,6 +148,29 @@ def test_overlapping_loads_generate_each_chunk_once(tmp_path):
         assert w.get_block(20, 5, 90) == REGISTRY.id("glass")
 
 
+def _lockstep(tmp_path, script, names, rounds):
+    """Run SCRIPT in one process per name (argv: tmp_path, name, rounds); round i
+    starts in all of them at once when tmp_path/go{i} appears; every round of every
+    process must print 'rc 0' (the first failing round stops the run)."""
+    procs = [subprocess.Popen(host.python_cmd("-c", script, str(tmp_path), me, str(rounds)),
+                              env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                              text=True, cwd=host.ROOT) for me in names]
+    rcs = []
+    try:
+        for i in range(rounds):
+            if any(p.stdout.readline().strip() != "ready" for p in procs):
+                break
+            (tmp_path / f"go{i}").touch()
+            rcs.append([p.stdout.readline().strip() for p in procs])
+            if set(rcs[-1]) != {"rc 0"}:
+                break
+    finally:
+        for p in procs:
+            p.kill()
+    errs = [p.communicate()[1][-1500:] for p in procs]
+    assert rcs == [["rc 0"] * len(procs)] * rounds, (rcs, errs)
+
+
 _RACER = """
 import sys, time
 from pathlib import Path
@@ -176,23 +199,7 @@ def test_two_processes_creating_one_world_at_once_both_succeed(tmp_path):
     grid[0, 0, 0] = 1
     (tmp_path / "m.vox").write_bytes(vox.write(grid, np.full((256, 3), 200, np.uint8)))
     rounds = 16
-    procs = [subprocess.Popen(host.python_cmd("-c", _RACER, str(tmp_path), me, str(rounds)),
-                              env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                              text=True, cwd=host.ROOT) for me in "ab"]
-    rcs = []
-    try:
-        for i in range(rounds):
-            if any(p.stdout.readline().strip() != "ready" for p in procs):
-                break
-            (tmp_path / f"go{i}").touch()
-            rcs.append([p.stdout.readline().strip() for p in procs])
-            if rcs[-1] != ["rc 0", "rc 0"]:
-                break
-    finally:
-        for p in procs:
-            p.kill()
-    errs = [p.communicate()[1][-1500:] for p in procs]
-    assert rcs == [["rc 0", "rc 0"]] * rounds, (rcs, errs)
+    _lockstep(tmp_path, _RACER, "ab", rounds)
     for i in range(rounds):
         with World.open(tmp_path / f"w{i}.sqlite", loader=False, readonly=True) as w:
             if i % 2 == 0:
@@ -234,21 +241,7 @@ def test_two_vox_imports_at_once_keep_their_colours(tmp_path):
     for i in range(rounds):
         with World.create(tmp_path / f"w{i}.sqlite", seed=1, generator="flat", loader=False) as w:
             w.generate_area([(x, y) for x in range(-1, 4) for y in range(-1, 2)])
-    procs = [subprocess.Popen(host.python_cmd("-c", _PAINTER, str(tmp_path), me, str(rounds)),
-                              env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                              text=True, cwd=host.ROOT) for me in ("red", "blue")]
-    rcs = []
-    try:
-        for i in range(rounds):
-            if any(p.stdout.readline().strip() != "ready" for p in procs):
-                break
-            (tmp_path / f"go{i}").touch()
-            rcs.append([p.stdout.readline().strip() for p in procs])
-    finally:
-        for p in procs:
-            p.kill()
-    errs = [p.communicate()[1][-1500:] for p in procs]
-    assert rcs == [["rc 0", "rc 0"]] * rounds, (rcs, errs)
+    _lockstep(tmp_path, _PAINTER, ("red", "blue"), rounds)
     shown = []
     for i in range(rounds):
         with World.open(tmp_path / f"w{i}.sqlite", loader=False, readonly=True) as w:
@@ -296,21 +289,7 @@ def test_two_minecraft_imports_at_once_keep_their_states_colours_and_biomes(tmp_
     for i in range(rounds):
         with World.create(tmp_path / f"w{i}.sqlite", seed=1, generator="empty", loader=False):
             pass
-    procs = [subprocess.Popen(host.python_cmd("-c", _IMPORTER, str(tmp_path), me, str(rounds)),
-                              env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                              text=True, cwd=host.ROOT) for me in _DYES]
-    rcs = []
-    try:
-        for i in range(rounds):
-            if any(p.stdout.readline().strip() != "ready" for p in procs):
-                break
-            (tmp_path / f"go{i}").touch()
-            rcs.append([p.stdout.readline().strip() for p in procs])
-    finally:
-        for p in procs:
-            p.kill()
-    errs = [p.communicate()[1][-1500:] for p in procs]
-    assert rcs == [["rc 0", "rc 0"]] * rounds, (rcs, errs)
+    _lockstep(tmp_path, _IMPORTER, list(_DYES), rounds)
     bad = []
     for i in range(rounds):
         got = mc.shown(tmp_path / f"w{i}.sqlite", list(want))

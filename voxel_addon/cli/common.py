@@ -156,19 +156,5 @@ def write_out(path: Path, data) -> None:
     that is there is complete (resumable outputs). A failure (a full disk, a
     read-only folder) is one line naming the output, never the world, and leaves
     no part of it."""
-    from ..core.errors import VoxelError, cause
-    tmp = path.with_name(f".{path.name}.part")
-    try:
-        if isinstance(data, Path):
-            import shutil
-            shutil.copyfile(data, tmp)
-        else:
-            tmp.write_bytes(data)
-        tmp.replace(path)
-    except OSError as e:
-        try:
-            tmp.unlink(missing_ok=True)
-        except OSError:
-            pass
-        why = cause(e, path) or e.strerror
-        raise VoxelError(f"cannot write {path} ({why}); the world is unchanged") from None
+    from ..core.files import write_whole
+    write_whole(path, data, "; the world is unchanged")

@@ -18,7 +18,8 @@ import numpy as np
 from ..core import chunk as C
 from ..core import colors
 from ..core.blocks import REGISTRY
-from ..core.errors import VoxelError, cause
+from ..core.errors import VoxelError
+from ..core.files import write_whole
 from . import vox
 
 COLOR = REGISTRY.id("color")
@@ -157,15 +158,6 @@ def export_vox(world, box, out) -> dict:
     full = np.zeros((256, 3), np.uint8)
     full[1:len(qpal) + 1] = qpal
     data = vox.write(grid, full)
-    tmp = Path(out).with_name(f".{Path(out).name}.part")  # no half file under the name
-    try:
-        tmp.write_bytes(data)
-        tmp.replace(out)
-    except OSError as e:
-        try:
-            tmp.unlink(missing_ok=True)
-        except OSError:  # a read-only folder: nothing was made either
-            pass
-        raise VoxelError(f"cannot write {out} ({cause(e, out) or e.strerror})") from None
+    write_whole(out, data)
     return {"voxels": int(counts.sum()), "colors": int(len(qpal)), "exact": len(ucol) <= 255,
             "models": -(-grid.shape[0] // 256) * -(-grid.shape[1] // 256) * -(-grid.shape[2] // 256)}

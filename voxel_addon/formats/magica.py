@@ -62,21 +62,18 @@ def import_vox(world, path, at=(0, 0, 0)) -> dict:
 def place(world, scene: vox.Scene, at=(0, 0, 0)) -> dict:
     """Place a read scene into `world`, its bounding box corner at `at`, kept like
     edits and written in one transaction; returns a small report."""
-    from ..storage import MetaMoved
-    for _ in range(16):
+    from ..storage.meta import while_moved
+
+    def attempt():
         base = world.file.meta.get(colors.KEY)
         xyz, data, pal = stamp(scene, at, colors.parse(world.file.meta))
         world.set_blocks(xyz, np.full(len(xyz), COLOR, np.uint16), data)
         # written with the voxels, unless another writer added colours meanwhile:
         # then the indices again, from the palette the file holds now
         world.file.stage_meta(colors.KEY, colors.dump(pal), base=base)
-        try:
-            world.flush()
-            break
-        except MetaMoved:
-            continue
-    else:
-        raise VoxelError("other programs kept changing the world's colours; try again")
+        world.flush()
+        return xyz
+    xyz = while_moved(attempt, "colours")
     lo = xyz.min(0).tolist() if len(xyz) else list(at)
     hi = (xyz.max(0) + 1).tolist() if len(xyz) else list(at)
     return {"voxels": int(len(xyz)), "models": len(scene.models),

@@ -392,10 +392,5 @@ class ToFile:
     def save(self, palette, write):
         """write() (a batch's save: its rows through `rows`, made in it) and its
         answer; tried again, on the file's palettes, while other writers move them."""
-        from ..storage import MetaMoved
-        for _ in range(16):
-            try:
-                return write()
-            except MetaMoved:
-                self.moved(palette)
-        raise VoxelError("other programs kept changing the world's palettes; try again")
+        from ..storage.meta import while_moved
+        return while_moved(write, "palettes", lambda: self.moved(palette))

@@ -14,6 +14,19 @@ class MetaMoved(VoxelError):
     file's value now, build on it again."""
 
 
+def while_moved(attempt, what: str, moved=None):
+    """attempt() (a save of staged meta with its base) and its answer, made again
+    while another writer keeps moving the values it was built on (MetaMoved; moved()
+    first, when given): a one-line VoxelError naming WHAT after 16 tries."""
+    for _ in range(16):
+        try:
+            return attempt()
+        except MetaMoved:
+            if moved is not None:
+                moved()
+    raise VoxelError(f"other programs kept changing the world's {what}; try again")
+
+
 class Meta:
     """WorldFile's meta half; it needs `path`, `db`, `meta`, `_lock`, `_staged`,
     `_bases`, `transaction()` and `_writable()` of WorldFile."""

@@ -5,7 +5,7 @@ import os
 import sqlite3
 from pathlib import Path
 
-from ..core.errors import VoxelError, cause
+from ..core.errors import VoxelError, cause, damaged
 
 FORMAT_VERSION = 1
 APP_ID = 0x564F5857  # "VOXW": marks our files in the SQLite header
@@ -52,13 +52,9 @@ def lock_timeout() -> float:
         return 30.0
 
 
-DAMAGED = (11, 26)  # SQLITE_CORRUPT, SQLITE_NOTADB: not a refusal of the moment
-
-
 def open_error(path: Path, e: sqlite3.DatabaseError) -> VoxelError:
     """A full disk, a locked or read-only file is not a damaged one: say which."""
-    damaged = (getattr(e, "sqlite_errorcode", None) or 0) & 0xFF in DAMAGED
-    what = None if damaged else cause(e, path)
+    what = None if damaged(e) else cause(e, path)
     if what is not None:
         return VoxelError(f"{what} while opening {path}: nothing was written")
     return VoxelError(f"{path} is not a readable world file ({e})")

@@ -197,9 +197,8 @@ class Renderer:
         self._walls_dirty = True
 
     def _edges(self, meshes: dict) -> None:
-        for k, m in meshes.items():
+        for (k, m), e in zip(meshes.items(), walls.edges_many(list(meshes.values()))):
             k = (int(k[0]), int(k[1]))
-            e = walls.edges(m)
             cm = getattr(m, "models", None)
             self.edges[k] = e if cm is None else walls.raise_to(e, model_edges(cm, k))
 

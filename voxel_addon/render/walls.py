@@ -41,23 +41,56 @@ def edges(mesh) -> np.ndarray:
     columns from its mesh's top faces: x = 0 and x = 15 (along y), y = 0 and y = 15
     (along x); rows 4-7 the texture layer of the top block's side there, 8-11 of its
     filler's."""
-    out = np.zeros((12, 16), np.uint16)
-    q = getattr(mesh, "quads", None)
-    if q is None or not len(q):
+    return edges_many([mesh])[0]
+
+
+def edges_many(meshes) -> np.ndarray:
+    """edges() of many meshes at once, (n, 12, 16): a whole view's chunks in a few NumPy
+    calls (one call per chunk cost ~0.13 ms, most of set_meshes)."""
+    n = len(meshes)
+    out = np.zeros((n, 12, 16), np.uint16)
+    qs = [getattr(m, "quads", None) for m in meshes]
+    at = [i for i, q in enumerate(qs) if q is not None and len(q)]
+    if not at:
         return out
-    q = q[(q["face"] == TOP) & _SOLID[np.minimum(q["block"], len(_SOLID) - 1)]]
-    x, y, w, h = (q[k].astype(np.int32) for k in ("x", "y", "w", "h"))
-    top = q["z"].astype(np.int32) + 1
-    for row, on, lo, n in ((0, x == 0, y, h), (1, x + w == 16, y, h),
-                           (2, y == 0, x, w), (3, y + h == 16, x, w)):
-        if on.any():
-            cover = (_I >= lo[on, None]) & (_I < (lo + n)[on, None])
-            h = np.where(cover, top[on, None], 0)
-            out[row] = h.max(0)
-            at = h.argmax(0)  # the quad that gives the column its top
-            b = q["block"][on][at]
-            out[4 + row] = np.where(out[row] > 0, _SIDE[b], 0)
-            out[8 + row] = np.where(out[row] > 0, _FILL[b], 0)
+    # joined as bytes (a structured concatenate checks the fields array by array)
+    dt = qs[at[0]].dtype
+    if all(qs[i].dtype == dt for i in at):
+        q = np.concatenate([np.ascontiguousarray(qs[i]).view(np.uint8).reshape(-1)
+                            for i in at]).view(dt)
+    else:
+        q = np.concatenate([qs[i] for i in at])
+    starts = np.cumsum([0] + [len(qs[i]) for i in at])
+    idx = np.flatnonzero(q["face"] == TOP)
+    t = q[idx]
+    x, y, w, h = (t[k].astype(np.int64) for k in ("x", "y", "w", "h"))
+    keep = np.flatnonzero(_SOLID[np.minimum(t["block"], len(_SOLID) - 1)]
+                          & ((x == 0) | (x + w == 16) | (y == 0) | (y + h == 16)))
+    idx, x, y, w, h = idx[keep], x[keep], y[keep], w[keep], h[keep]
+    chunk = np.array(at, np.int64)[np.searchsorted(starts, idx, "right") - 1]
+    top = q["z"][idx].astype(np.int64) + 1
+    block = q["block"][idx]
+    # each quad's run of border columns, per side: (quad, row, first column, length)
+    sides = [(np.flatnonzero(on), row, lo, ln) for row, on, lo, ln in (
+        (0, x == 0, y, h), (1, x + w == 16, y, h), (2, y == 0, x, w), (3, y + h == 16, x, w))]
+    k = np.concatenate([s[0] for s in sides])
+    row = np.concatenate([np.full(len(s[0]), s[1]) for s in sides])
+    lo = np.concatenate([s[2][s[0]] for s in sides])
+    ln = np.concatenate([s[3][s[0]] for s in sides])
+    # one entry per (quad, column) it covers
+    rep = np.repeat(np.arange(len(k)), ln)
+    col = lo[rep] + np.arange(len(rep)) - np.repeat(np.cumsum(ln) - ln, ln)
+    k, row = k[rep], row[rep]
+    cell = (chunk[k] * 4 + row) * 16 + col
+    # per cell the highest top; of equal tops the quad first in the mesh (as argmax)
+    order = np.lexsort((k, -top[k], cell))
+    first = np.ones(len(order), bool)
+    first[1:] = cell[order][1:] != cell[order][:-1]
+    win = order[first]
+    c, r, cc, b = chunk[k[win]], row[win], col[win], block[k[win]]
+    out[c, r, cc] = top[k[win]]
+    out[c, 4 + r, cc] = _SIDE[b]
+    out[c, 8 + r, cc] = _FILL[b]
     return out
 
 

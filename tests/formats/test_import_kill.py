@@ -97,7 +97,8 @@ def test_replace_resumes_and_other_options_meet_the_unfinished_import(ref, tmp_p
     before = K.chunks(w)
     r = K.run(w, save, "--y-min", -60)
     line = r.stderr.strip()
-    assert r.returncode == 2 and "\n" not in line and "unfinished import" in line, r.stderr
+    assert r.returncode == 2 and "\n" not in line, r.stderr
+    assert "unfinished import of these region files with --y-min -60 --replace:" in line, line
     assert K.chunks(w) == before
     _resumed(w, save, 32, *opts)
     _same(w, full)

@@ -4,6 +4,8 @@ negative chunks, every compression type, both folder layouts, old versions, the
 report, --replace, --area, Status, y-min."""
 from __future__ import annotations
 
+import os
+
 import sqlite3
 
 import numpy as np
@@ -202,8 +204,14 @@ def test_interrupted_import_keeps_finished_batches_and_resumes(tmp_path):
         rep = minecraft.import_world(world, tmp_path, progress=lambda d, t: calls.append(d),
                                      cancelled=lambda: True)
     assert rep.chunks == minecraft.BATCH and calls == [minecraft.BATCH]
+    f = tmp_path / "region" / "r.0.0.mca"
+    t = f.stat().st_mtime_ns
     with World.open(w, loader=False) as world:
         assert world.file.chunk_count() == minecraft.BATCH
+        os.utime(f, ns=(t + 10**9, t + 10**9))   # the game saved it since: another import
+        with pytest.raises(VoxelError, match="unfinished import .* before the game saved"):
+            minecraft.import_world(world, tmp_path)
+        os.utime(f, ns=(t, t))
         rep = minecraft.import_world(world, tmp_path, say=said.append)
     assert said == [f"resuming an interrupted import: {minecraft.BATCH} of 40 chunks already "
                     "imported"]

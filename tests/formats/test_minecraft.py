@@ -192,7 +192,7 @@ def test_interrupted_import_keeps_finished_batches_and_resumes(tmp_path):
 
     def rows(path):
         with sqlite3.connect(path) as db:
-            return (db.execute("SELECT cx, cy, blocks, data FROM chunks ORDER BY cx, cy").fetchall(),
+            return (db.execute("SELECT * FROM chunks ORDER BY cx, cy").fetchall(),
                     dict(db.execute("SELECT key, value FROM meta WHERE key LIKE 'mc_%'")))
 
     want = tmp_path / "want.sqlite"

@@ -15,13 +15,13 @@ interrupted import keeps every finished batch, and no chunk is ever half-written
 (formats/job.py, meta `import_job`, as a cluster's import), so the same import run
 again after a kill, a Ctrl-C, a full disk or a power cut does only what is missing and
 ends with the world an uninterrupted one makes (the same rows: it goes on from the
-palettes the batches written so far committed). Whether a chunk is already in the file is decided again
-inside each batch's transaction (World.store_chunks), so a chunk another writer
-stored while the import ran is kept (counted in `kept`), and with replace the edits
-saved since the import started are applied over the imported one. The palettes
-(states, colours, defaults, biome names) go with a batch only while the file holds
-those they were built on: when another writer added to them meanwhile, the batch is
-mapped onto the file's and written again (mcstate.ToFile).
+palettes the batches written so far committed). Whether a chunk is already in the
+file is decided again inside each batch's transaction (World.store_chunks), so a
+chunk another writer stored while the import ran is kept (counted in `kept`), and
+with replace the edits saved since the import started are applied over the imported
+one. The palettes (states, colours, defaults, biome names) go with a batch only
+while the file holds those they were built on: when another writer added to them
+meanwhile, the batch is mapped onto the file's and written again (mcstate.ToFile).
 """
 from __future__ import annotations
 

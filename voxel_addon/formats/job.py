@@ -4,22 +4,25 @@ killed mid-way (kill -9, Ctrl-C, a full disk, a power cut) does only what is mis
 when the same command runs again.
 
 The note is a JSON list, one {sig, done, since, src, files, options} per unfinished
-import (older files: one such object, the last three missing), so two imports into one
-world, both killed, both resume. `sig` names the import: its region files (path, size,
-mtime), --y-min, --area and --replace; `src` the region files' paths, `files` their
-state (size, mtime), `options` the import's options as the command line spells them
-(what an import refused over the unfinished one's chunks says). Every batch's transaction sets its
-note's `done` (chunks of the plan settled, in plan order) with the batch's chunks,
-biome rows and palettes; the import's end drops the note. On resume, without --replace
-every chunk of the plan already in the file is ours (the first run refused to start
-over any), so it is skipped; with --replace the plan's first `done` chunks are.
-`since` is the first run's start: edits saved since then survive a replace.
---resources is not part of an import's name (it is kept in the meta, the last given
-wins): the same command with other resources resumes.
+import (older files: one such object, the last three missing), so two imports into
+one world, both killed, both resume. `sig` names the import: its region files (path,
+size, mtime), --y-min, --area and --replace; `src` the region files' paths, `files`
+their state (size, mtime), `options` the import's options as the command line spells
+them (what an import refused over the unfinished one's chunks says). Every batch's
+transaction sets its note's `done` (chunks of the plan settled, in plan order) with
+the batch's chunks, biome rows and palettes; the import's end drops the note. On
+resume, without --replace every chunk of the plan already in the file is ours (the
+first run refused to start over any), so it is skipped; with --replace the plan's
+first `done` chunks are. `since` is the first run's start: edits saved since then
+survive a replace.
 
-The same files with other options (--area, --y-min, --replace), or changed since (the
-game saved them again), are another import: a fresh one where none of its chunks is in
-the world (or with --replace), else refused with one line naming the unfinished one."""
+Not part of an import's name: --resources (kept in the meta, the last given wins: the
+same command with other resources resumes) and --workers/--scheduler (a run in one
+process resumes one killed on a cluster and the other way round, the same rows either
+way). The same files with other --area, --y-min or --replace, or changed since (the
+game saved them again), are another import: a fresh one where none of its chunks is
+in the world (or with --replace), else refused with one line naming the unfinished
+one."""
 from __future__ import annotations
 
 import hashlib

@@ -295,3 +295,22 @@ def test_map_of_chunks_far_apart_is_refused(tmp_path):
     _flat(w, [(0, 0), (300, 300)])
     failed(cli("map", "--world", w, "--out", tmp_path / "m.png"), "span 301 x 301 chunks")
     assert not (tmp_path / "m.png").exists()
+
+
+def test_a_command_refusing_a_damaged_chunk_says_it_once(tmp_path):
+    """A command that fails on a damaged chunk prints its one error line, not the
+    loader's "(shown as missing)" warning before it; one that goes on without the
+    chunk (an edit beside it: the neighbour is lit as missing) keeps the warning."""
+    w = tmp_path / "w.sqlite"
+    _flat(w, [(x, y) for x in range(-1, 3) for y in range(-1, 2)])
+    with sqlite3.connect(w) as db:
+        db.execute("UPDATE chunks SET blocks=X'deadbeef' WHERE cx=0 AND cy=0")
+    db.close()
+    failed(cli("dump", "--world", w, "--chunk", 0, 0, "--out", tmp_path / "o.npz"),
+           "chunk (0, 0)", "damaged")
+    failed(cli("map", "--world", w, "--out", tmp_path / "m.png"), "chunk (0, 0)", "damaged")
+    failed(cli("edit", "--world", w, "--set", 2, 2, 100, "glass"), "chunk (0, 0)",
+           "cannot be edited")
+    r = cli("edit", "--world", w, "--set", 18, 2, 100, "glass")
+    assert r.returncode == 0 and "(shown as missing)" in r.stderr, r.stderr[-3000:]
+    assert block(w, 18, 2, 100) == GLASS

@@ -1,5 +1,6 @@
 """The cluster import's writer (cluster/imports.py) SIGKILLed at a commit point and
-run again: a batch's chunks, biome rows, palettes and note (meta `import_job`) are one
+run again: a batch's chunks, biome rows, palettes and note (meta `import_job`,
+formats/job.py, the one-process import's too) are one
 transaction, so the resumed import leaves every chunk with its biome rows and equals
 an uninterrupted one; two imports into one world, both killed, both resume (one
 note each; an older file's single note is read too)."""
@@ -54,6 +55,7 @@ def test_killed_then_resumed_keeps_every_chunks_biomes(saves, tmp_path):
     r = K.run(w, a, cluster=True)
     assert r.returncode == 0, r.stderr
     assert _computed(r.stderr) == N * N - done and K.imported(r.stdout) == N * N - done
+    assert f"resuming an interrupted import: {done} of {N * N} chunks" in r.stderr  # one process's
     assert K.chunks(w) == K.chunks(want) and K.biomes(w) == K.biomes(want)
     assert K.meta(w) == K.meta(want) and not _note(w)
 

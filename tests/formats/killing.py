@@ -1,6 +1,7 @@
 """A real `python -m voxel_addon import` process SIGKILLed at a commit point: inside
 the Nth write of biome rows (storage/minecraft.py `put`), after the batch's chunk rows
-and before its COMMIT, the moment a kill must not split a batch. CLUSTER: the
+and before its COMMIT, the moment a kill must not split a batch (`sig` SIGINT: a
+Ctrl-C there instead, raised as KeyboardInterrupt right after `put`). CLUSTER: the
 command's cluster writer (cluster/imports.py) with its tasks in the same process
 (cluster.Serial, the workers' own functions), so no Dask cluster starts."""
 from __future__ import annotations
@@ -20,12 +21,13 @@ from contextlib import contextmanager
 from voxel_addon import cluster
 from voxel_addon.storage import minecraft as mcfile
 at, calls, put = int(os.environ.get("KILL_AT", "0")), [0], mcfile.put
+sig = getattr(signal, os.environ.get("KILL_SIG") or "SIGKILL")
 
 def dying(db, rows):
     put(db, rows)
     calls[0] += 1
     if calls[0] == at:
-        os.kill(os.getpid(), signal.SIGKILL)
+        os.kill(os.getpid(), sig)
 
 mcfile.put = dying
 if os.environ.get("CLUSTER"):
@@ -38,8 +40,8 @@ sys.exit(main(sys.argv[1:]))
 """
 
 
-def run(world, src, *extra, kill_at=0, cluster=False, commit=2):
-    env = dict(os.environ, PYTHONPATH=str(ROOT), KILL_AT=str(kill_at),
+def run(world, src, *extra, kill_at=0, cluster=False, commit=2, sig="SIGKILL"):
+    env = dict(os.environ, PYTHONPATH=str(ROOT), KILL_AT=str(kill_at), KILL_SIG=sig,
                VOXEL_COMMIT=str(commit), CLUSTER="1" if cluster else "")
     return subprocess.run([sys.executable, "-c", CHILD, "import", "--world", str(world),
                            "--from", str(src), *map(str, extra)],

@@ -4,6 +4,8 @@ negative chunks, every compression type, both folder layouts, old versions, the
 report, --replace, --area, Status, y-min."""
 from __future__ import annotations
 
+import os
+
 import sqlite3
 
 import numpy as np
@@ -177,18 +179,45 @@ def test_unpack_matches_a_plain_loop():
             assert np.array_equal(anvil.unpack(longs, n, spanning), idx)
 
 
-def test_interrupted_import_keeps_finished_batches(tmp_path):
+def test_interrupted_import_keeps_finished_batches_and_resumes(tmp_path):
+    """A cancelled import (Blender's Cancel, the CLI's Ctrl-C) keeps its batches; the
+    same import again resumes (formats/job.py): the rows an uninterrupted one writes.
+    The save mixes versions: y_min follows the plan's first chunk (1.16: 0), not the
+    first one the resumed run reads (1.21: -64)."""
     secs = {0: np.full((16, 16, 16), "minecraft:stone", object)}
-    body = mc.chunk_nbt(0, 0, secs)
-    mc.write_region(tmp_path / "region", {(x, z): body for x in range(8) for z in range(5)}, 3)
+    secs[1] = np.where(np.arange(16)[:, None, None] < 3, "minecraft:oak_planks", secs[0])
+    chunks = {(x, z): mc.chunk_nbt(x, z, secs) for x in range(8) for z in range(5)}
+    chunks[(0, 0)] = mc.chunk_nbt(0, 0, secs, 2586)
+    mc.write_region(tmp_path / "region", chunks, 3)
+
+    def rows(path):
+        with sqlite3.connect(path) as db:
+            return (db.execute("SELECT * FROM chunks ORDER BY cx, cy").fetchall(),
+                    dict(db.execute("SELECT key, value FROM meta WHERE key LIKE 'mc_%'")))
+
+    want = tmp_path / "want.sqlite"
+    with World.create(want, seed=0, generator="empty", loader=False) as world:
+        assert minecraft.import_world(world, tmp_path).y_min == 0
     w = tmp_path / "w.sqlite"
-    calls = []
+    calls, said = [], []
     with World.create(w, seed=0, generator="empty", loader=False) as world:
         rep = minecraft.import_world(world, tmp_path, progress=lambda d, t: calls.append(d),
                                      cancelled=lambda: True)
     assert rep.chunks == minecraft.BATCH and calls == [minecraft.BATCH]
+    f = tmp_path / "region" / "r.0.0.mca"
+    t = f.stat().st_mtime_ns
     with World.open(w, loader=False) as world:
         assert world.file.chunk_count() == minecraft.BATCH
+        os.utime(f, ns=(t + 10**9, t + 10**9))   # the game saved it since: another import
+        with pytest.raises(VoxelError, match="unfinished import .* before the game saved"):
+            minecraft.import_world(world, tmp_path)
+        os.utime(f, ns=(t, t))
+        rep = minecraft.import_world(world, tmp_path, say=said.append)
+    assert said == [f"resuming an interrupted import: {minecraft.BATCH} of 40 chunks already "
+                    "imported"]
+    assert rep.chunks == 40 - minecraft.BATCH and rep.resumed == minecraft.BATCH
+    assert rep.y_min == 0 and rows(w) == rows(want)
+    with World.open(w, loader=False) as world:   # finished: an import again is refused
         with pytest.raises(VoxelError, match="replace"):
             minecraft.import_world(world, tmp_path)
         assert minecraft.import_world(world, tmp_path, replace=True).chunks == 40

@@ -63,7 +63,8 @@ class Writing:
     meanwhile, never is (WorldFile.created), and a full disk, a
     read-only or locked file becomes one line saying what failed and what was kept
     (core.errors.explain). `w.kept`: a function saying what is in the file so far
-    (batch-wise commands), None while nothing is."""
+    (batch-wise commands), None while nothing is; `w.rest`: what follows "the rest was
+    not written" (a resumable command: how to finish it)."""
 
     def __init__(self, path, what: str, doing: str = "saving"):
         self.path, self.what, self.doing = Path(path), what, doing
@@ -71,6 +72,7 @@ class Writing:
         self.created = False  # this command made the file (not only found none at first)
         self.world = None
         self.kept = lambda: None
+        self.rest = ""
 
     def _files(self) -> list[Path]:
         return [self.path] + [self.path.with_name(self.path.name + s)
@@ -124,7 +126,7 @@ class Writing:
             kept = f"nothing was kept ({self.path.name} was not made)"
         else:
             kept = self.kept()
-            kept = f"{kept}; the rest was not written" if kept else \
+            kept = f"{kept}; the rest was not written{self.rest}" if kept else \
                 f"nothing of this {self.what} was written; the world is unchanged"
         err = explain(e, self.path, doing, kept)
         if err is e and removed:

@@ -23,7 +23,8 @@ def add_parser(sub):
     p.add_argument("--area", type=coord, nargs=4, metavar=("X0", "Z0", "X1", "Z1"),
                    help="Minecraft: only chunks touching blocks [X0, X1) x [Z0, Z1)")
     p.add_argument("--replace", action="store_true",
-                   help="Minecraft: overwrite chunks the world already has")
+                   help="Minecraft: overwrite chunks the world already has (an interrupted "
+                        "import needs none: the same command again resumes it)")
     p.add_argument("--resources", action="append", metavar="JAR_OR_PACK",
                    help="Minecraft: the game's client .jar (or 'minecraft': the newest in "
                         "the launcher folders) and resource packs (.zip or folders) laid "
@@ -87,15 +88,19 @@ def run(args):
         else:
             rep = minecraft.Report()
             w.kept = lambda: f"{rep.chunks} chunks were written and kept" if rep.chunks else None
-            if pool is None:
-                minecraft.import_world(world, src, y_min=args.y_min, area=args.area,
-                                       replace=args.replace, progress=Progress("importing"),
-                                       report=rep, resources=resources)
-            else:
-                from ..cluster import imports
-                computed = imports.run(world, pool, src, y_min=args.y_min, area=args.area,
-                                       replace=args.replace, progress=Progress("importing"),
-                                       report=rep, resources=resources)
+            w.rest = "; the same command again imports it"   # resumes (formats/job.py)
+            kw = dict(y_min=args.y_min, area=args.area, replace=args.replace,
+                      progress=Progress("importing"), report=rep, resources=resources, say=note)
+            try:
+                if pool is None:
+                    minecraft.import_world(world, src, **kw)
+                else:
+                    from ..cluster import imports
+                    computed = imports.run(world, pool, src, **kw)
+            except KeyboardInterrupt:   # the batches written stay (Writing), and a note
+                note(f"{rep.chunks} chunks were written and kept; the same command again "
+                     "imports the rest")
+                raise
     if is_vox:
         note(f"{r['voxels']} voxels from {r['models']} models ({r['instances']} placed) "
              f"into box {' '.join(map(str, r['box']))} in {time.perf_counter() - t0:.2f} s")

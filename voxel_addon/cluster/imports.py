@@ -6,34 +6,26 @@ same data values, the same blobs bit for bit); it commits in batches through
 World.store_rows (each chunk decided inside the transaction, as the one-process
 import: a chunk another writer stored meanwhile is kept unless --replace, and with
 --replace the edits saved since the import started are applied again), the palette
-how far it got (meta `import_job`) and the chunks' biome rows in the same
-transaction, so a run killed and started again does only what is missing and no
-chunk is left without its biomes. `import_job` keeps one note per unfinished import
-(a JSON list of {sig, done, since}; older files: one such object), so two imports
-into one world, both killed, both resume.
+how far it got (formats/job.py: meta `import_job`, the one-process import's note too)
+and the chunks' biome rows in the same transaction, so a run killed and started again
+does only what is missing and no chunk is left without its biomes.
 
 Hostile input: a worker decodes with the per-chunk limits (region.MAX_NBT,
 anvil.CHUNK_TAGS; a chunk past the tag limit refuses the import) and reports what
 it decoded; the writer charges the import's budget.Budget with that in the same
 order, so a spent budget refuses the import at the chunk the one-process import
-would.
-
-On resume: without --replace every chunk of the plan already in the file is ours
-(the first run refused to start over any), so it is skipped; with --replace the
-plan's first `done` chunks are."""
+would."""
 from __future__ import annotations
 
-import hashlib
 import json
 from pathlib import Path
 
 import numpy as np
 
 from ..core.errors import VoxelError
-from ..formats.budget import Exceeded
 from ..storage import minecraft as mcfile
 from . import knob, tail, task_size
-from .imports_writer import JOB, _job, _noted, _Writer
+from .imports_writer import _Writer
 
 COMMIT = 64  # chunks per transaction
 
@@ -197,42 +189,21 @@ def read(item, shared):
     return out
 
 
-def _signature(files, y_min, area, replace) -> str:
-    h = hashlib.sha256(json.dumps([y_min, area and list(area), bool(replace)]).encode())
-    for f in files:
-        st = f.stat()
-        h.update(f"{f.resolve()}\0{st.st_size}\0{st.st_mtime_ns}\0".encode())
-    return h.hexdigest()[:16]
-
-
 def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=None,
-        report=None, resources=None) -> int:
+        report=None, resources=None, say=None) -> int:
     """Like formats.minecraft.import_world, `report` (a minecraft.Report) filled as it
-    goes; returns how many chunks the workers read."""
+    goes, `say` told when it resumes; returns how many chunks the workers read."""
     import pickle
-    import time
     from ..formats import anvil, minecraft
     from ..formats.budget import Budget
+    from ..formats.job import Job
     from ..formats.region import External, RegionError
     world.writable()
     f = world.file
     todo = minecraft.plan(path, area)
-    sig = _signature(minecraft.regions_of(path), y_min, area, replace)
-    got = f.query("SELECT value FROM meta WHERE key=?", (JOB,))  # as the file holds it now
-    job = _job(got[0][0] if got else None, sig)
-    have = {minecraft.to_key(cx, cz) for _, cx, cz in todo} & set(f.chunk_keys())
-    if job is None and have and not replace:
-        raise VoxelError(f"{len(have)} of the {len(todo)} chunks are already in "
-                         f"{f.path} (imported before, or generated); "
-                         "import with --replace (Blender: Replace) to overwrite them")
-    start = job["done"] if job else 0
-    # edits saved from the first run's start on survive a replace (store_rows)
-    since = job.get("since", time.time()) if job else time.time()
-
-    def skip(i, key):
-        if job is None:
-            return False
-        return key in have if not replace else i < start
+    keys = [minecraft.to_key(cx, cz) for _, cx, cz in todo]
+    job = Job(f, minecraft.regions_of(path), keys, y_min=y_min, area=area, replace=replace)
+    start, skip = job.start, job.skip
 
     # a local cluster's workers read the region files themselves: the chunks' bytes
     # then pass through neither this process nor the scheduler
@@ -241,7 +212,7 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
     # workers that read the file themselves find those too, as they read it)
     plan, local = [], {}
     for i, (reg, cx, cz) in enumerate(todo):
-        if skip(i, minecraft.to_key(cx, cz)):
+        if skip(i, keys[i]):
             continue
         try:
             if not near:
@@ -260,8 +231,9 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
                          "or newer first")
     budget = Budget.of_input(sum(r.stored for r in {id(t[0]): t[0] for t in todo}.values()))
     if version is None:
-        version = _first_version(todo, budget)
+        version = minecraft.first_version(todo, budget)
     report = minecraft.Report() if report is None else report
+    report.resumed = job.skipped
     report.version = version
     report.y_min = y_min if y_min is not None else (
         (-64 if version >= anvil.V_NO_LEVEL else 0) if version is not None else 0)
@@ -292,9 +264,10 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
             yield chunks, dict(w.known)
             j += n
 
-    f.update_meta(JOB, lambda raw: _noted(raw, sig, start, since))
-    w = _Writer(world, report, sig, progress, len(plan) + len(local), budget)
-    w.replace, w.since = replace, since
+    if say and job.resumed:
+        say(job.line(len(todo)))
+    job.begin()
+    w = _Writer(world, report, job, progress, len(plan) + len(local), budget)
     w.meta = {mcfile.Y_MIN: str(report.y_min)}    # staged with the first batch, as in one process
     if resources is not None:
         w.meta[mcfile.RESOURCES] = json.dumps([str(r) for r in resources])
@@ -320,26 +293,11 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
     except BaseException:
         w.commit(order[pos - 1] + 1 if pos else start)  # keep what is settled
         raise
-    # done: this import's note dropped (other imports' stay)
-    f.update_meta(JOB, lambda raw: _noted(raw, sig))
-    if w.old and w.old == len(report.damaged) and not (report.chunks or report.unfinished):
+    job.end()   # done: this import's note dropped (other imports' stay)
+    if w.old and w.old == len(report.damaged) and not (report.chunks or report.unfinished
+                                                       or job.skipped):
         # nothing written: a world Minecraft never saved in 1.13+ is refused whole
         raise VoxelError(f"none of the {w.old} chunks is from Minecraft 1.13 or newer, nothing "
                          f"was imported ({report.damaged[0]})")
     return computed
 
-
-def _first_version(todo, budget):
-    """DataVersion of the first readable chunk (what the one-process import uses);
-    what it decodes is charged to the import's budget (a hostile file is refused)."""
-    from ..formats import anvil, nbt
-    from ..formats.region import RegionError
-    for reg, cx, cz in todo:
-        try:
-            return anvil.read(reg.payload(cx, cz, budget), budget).version
-        except Exceeded as e:
-            raise VoxelError(f"{reg.path.name} chunk ({cx}, {cz}): {e}; import refused") \
-                from None
-        except (RegionError, anvil.ChunkError, nbt.NbtError):
-            continue
-    return None

@@ -1,10 +1,8 @@
 """The writer of a cluster `import` (cluster/imports.py): results settled in plan
 order into the report, the palettes and batches of rows, committed with the batch's
-biome rows and this import's resume note (meta `import_job`: one note per unfinished
-import) in one transaction."""
+biome rows and this import's resume note (formats/job.py, meta `import_job`) in one
+transaction."""
 from __future__ import annotations
-
-import json
 
 import numpy as np
 
@@ -12,46 +10,13 @@ from ..core.errors import VoxelError
 from ..formats.budget import Exceeded
 from ..storage import minecraft as mcfile
 
-JOB = "import_job"
-
-
-def _jobs(raw) -> list:
-    """The notes of meta `import_job`: a list of {sig, done, since}, or (older files,
-    one import at a time) one such object; damaged: none."""
-    try:
-        got = json.loads(raw) if raw else []
-    except ValueError:
-        return []
-    got = [got] if isinstance(got, dict) else got
-    return [j for j in got if isinstance(j, dict)] if isinstance(got, list) else []
-
-
-def _job(raw, sig):
-    """The unfinished job of the same import (same files, same options), or None."""
-    for job in _jobs(raw):
-        if job.get("sig") == sig and isinstance(job.get("done"), int) \
-                and isinstance(job.get("since", 0.0), (int, float)):
-            return job
-    return None
-
-
-def _noted(raw, sig, done=None, since=None) -> str:
-    """RAW (the notes) with this import's note set to DONE and SINCE, or dropped
-    (DONE None); the other imports' notes as they are ("" when none is left)."""
-    jobs = [j for j in _jobs(raw) if j.get("sig") != sig]
-    if done is not None:
-        jobs.append({"sig": sig, "done": done, "since": since})
-    return json.dumps(jobs) if jobs else ""
-
-
-
 class _Writer:
     """Results in plan order into the report, the palette and batches of rows."""
 
-    def __init__(self, world, report, sig, progress, total, budget):
+    def __init__(self, world, report, job, progress, total, budget):
         from ..core import colors
-        self.world, self.report, self.sig, self.budget = world, report, sig, budget
-        self.replace, self.since, self.old = False, None, 0
+        self.world, self.report, self.job, self.budget = world, report, job, budget
+        self.replace, self.since, self.old = job.replace, job.since, 0
         self.progress, self.total, self.done = progress, total, 0
         from ..core.blocks import REGISTRY
         from ..formats import mcstate
@@ -197,7 +162,7 @@ class _Writer:
             the file's numbers, made again when the palettes moved) and the note of
             how far this import got, the other imports' notes as the file holds them."""
             mcfile.put(db, [(k, b) for k, b in to.columns(self.biomes) if k in written])
-            mcfile.update(db, JOB, lambda raw: _noted(raw, self.sig, upto, self.since))
+            self.job.note(db, upto)
 
         if self.batch:
             kept = to.save(self.palette, lambda: self.world.store_rows(

@@ -11,20 +11,23 @@ chunks already in the world, a level.dat from before 1.13; a world whose chunks 
 all from before 1.13 is refused having written nothing. Chunks go to the file in
 batches, each one transaction (with the palettes they use and their biome rows): an
 interrupted import keeps every finished batch, and no chunk is ever half-written
-(nor without its biomes). Whether a chunk is already in the file is decided again
-inside each batch's transaction (World.store_chunks), so a chunk another writer
-stored while the import ran is kept (counted in `kept`), and with replace the edits
-saved since the import started are applied over the imported one. The palettes
-(states, colours, defaults, biome names) go with a batch only while the file holds
-those they were built on: when another writer added to them meanwhile, the batch is
-mapped onto the file's and written again (mcstate.ToFile).
+(nor without its biomes); each batch's transaction also notes how far the import got
+(formats/job.py, meta `import_job`, as a cluster's import), so the same import run
+again after a kill, a Ctrl-C, a full disk or a power cut does only what is missing and
+ends with the world an uninterrupted one makes (the same rows: it goes on from the
+palettes the batches written so far committed). Whether a chunk is already in the
+file is decided again inside each batch's transaction (World.store_chunks), so a
+chunk another writer stored while the import ran is kept (counted in `kept`), and
+with replace the edits saved since the import started are applied over the imported
+one. The palettes (states, colours, defaults, biome names) go with a batch only
+while the file holds those they were built on: when another writer added to them
+meanwhile, the batch is mapped onto the file's and written again (mcstate.ToFile).
 """
 from __future__ import annotations
 
 import gzip
 import json
 import os
-import time
 from collections import Counter, deque
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -37,6 +40,7 @@ from ..core.errors import VoxelError
 from ..storage import minecraft as mcfile
 from . import anvil, mapping, mcstate, nbt, region
 from .budget import Budget, Exceeded
+from .job import Job
 from .convert import convert
 from .region import MAX_NBT, External, Region, RegionError, decompress
 
@@ -60,10 +64,13 @@ class Report:
     blocks: dict = field(default_factory=dict)  # mc name -> [block, how, count]
     y_min: int = 0
     version: int | None = None
+    resumed: int = 0                     # chunks an interrupted run of this import had done
 
     def lines(self) -> list[str]:
         out = [f"{self.chunks} chunks imported (y_min {self.y_min}"
                f"{'' if self.version is None else f', DataVersion {self.version}'})"]
+        if self.resumed:
+            out.append(f"resumed: {self.resumed} chunks were imported by an interrupted run")
         if self.unfinished:
             out.append("skipped, not finished by Minecraft: " + ", ".join(
                 f"{n} {s or '?'}" for s, n in self.unfinished.most_common()))
@@ -208,15 +215,17 @@ def plan(path, area=None) -> list[tuple[Region, int, int]]:
 
 
 def import_world(world, path, *, y_min=None, area=None, replace=False, progress=None,
-                 cancelled=None, report: Report | None = None, resources=None) -> Report:
+                 cancelled=None, report: Report | None = None, resources=None,
+                 say=None) -> Report:
     """Import the chunks of a save folder / region files into `world` (see the
     module docstring). `progress(done, total)`; `cancelled()` -> True stops after
-    the batch in hand (what was written stays); `report` is filled as it goes (what
-    is in the file when it fails). `resources`: the resource stack's paths (checked
-    by the caller), kept in the world's meta for renders, bakes and the live view."""
+    the batch in hand (what was written stays, and the same import resumes); `report`
+    is filled as it goes (what is in the file when it fails). `resources`: the
+    resource stack's paths (checked by the caller), kept in the world's meta for
+    renders, bakes and the live view. `say(line)`: told when the import resumes."""
     report = Report() if report is None else report
     for done, total in steps(world, path, report, y_min=y_min, area=area, replace=replace,
-                             resources=resources):
+                             resources=resources, say=say):
         if progress:
             progress(done, total)
         if cancelled is not None and cancelled():
@@ -325,18 +334,31 @@ def _charged(got, reg, cx, cz, budget):
     return anvil.read(payload, budget, fast=False)
 
 
+def first_version(todo, budget):
+    """DataVersion of the first readable chunk of TODO (what the import's y_min
+    follows without a level.dat); what it decodes is charged to the import's budget
+    (a hostile file is refused)."""
+    for reg, cx, cz in todo:
+        try:
+            return anvil.read(reg.payload(cx, cz, budget), budget).version
+        except Exceeded as e:
+            raise VoxelError(f"{reg.path.name} chunk ({cx}, {cz}): {e}; import refused") \
+                from None
+        except (RegionError, anvil.ChunkError, nbt.NbtError):
+            continue
+    return None
+
+
 def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
-          resources=None):
+          resources=None, say=None):
     """The import as a generator of (chunks done, total), one step per batch written,
-    filling `report`. Closing it early keeps every batch written so far."""
-    start = time.time()  # edits saved from now on survive a replace (store_chunks)
+    filling `report`. Closing it early keeps every batch written so far; the same
+    import run again resumes (formats/job.py: `say(line)` is told so)."""
     todo = plan(path, area)
-    keys = {to_key(cx, cz) for _, cx, cz in todo}
-    have = keys & set(world.file.chunk_keys())
-    if have and not replace:
-        raise VoxelError(f"{len(have)} of the {len(keys)} chunks are already in "
-                         f"{world.file.path} (imported before, or generated); "
-                         "import with --replace (Blender: Replace) to overwrite them")
+    keys = [to_key(cx, cz) for _, cx, cz in todo]
+    # refuses chunks in the file unless resumed or replaced; `since`: edits saved from
+    # the first run's start on survive a replace (store_chunks)
+    job = Job(world.file, regions_of(path), keys, y_min=y_min, area=area, replace=replace)
     version = level_version(path) if Path(path).is_dir() else None
     if version is not None and version < anvil.V_FLATTENING:  # refused before any write
         raise VoxelError(f"{Path(path).name}: level.dat has DataVersion {version}, before 1.13 "
@@ -344,6 +366,25 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
                          "or newer first")
     old = 0  # chunks from before 1.13: skipped like damaged ones, unless all are
     budget = Budget.of_input(sum(r.stored for r in {id(t[0]): t[0] for t in todo}.values()))
+    total = len(todo)
+    if job.resumed:
+        # the chunks done are not read again (their palettes are the file's); y_min
+        # follows the plan's first chunk, as in the run resumed
+        report.resumed = job.skipped
+        if say:
+            say(job.line(total))
+        if job.skipped and version is None:
+            version = first_version(todo, budget)
+        if version is not None:
+            report.version = version
+            report.y_min = y_min if y_min is not None else (
+                -64 if version >= anvil.V_NO_LEVEL else 0)
+            world.file.stage_meta(mcfile.Y_MIN, str(report.y_min))
+        at = [i for i, k in enumerate(keys) if not job.skip(i, k)]
+        todo = [todo[i] for i in at]
+    else:
+        at = range(total)
+    job.begin()
     pal = _Palettes(world, report)
     if resources is not None:   # written with the first batch
         world.file.stage_meta(mcstate.RESOURCES, json.dumps([str(r) for r in resources]))
@@ -370,16 +411,19 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
         rows, to = fut.result(), pal.to_file
         # the biome rows of the chunks written, in their transaction (mapped onto the
         # file's palettes as they are when another writer added to them)
+        def also(db, written):   # and how far the import got (formats/job.py)
+            mcfile.put(db, [(k, b) for k, b in to.columns(bio) if k in written])
+            job.note(db, upto)
+
         kept = to.save(pal.colors, lambda: world.store_rows(
-            to.rows(rows, world.file, enc), replace=replace, since=start,
-            also=lambda db, written: mcfile.put(db, [(k, b) for k, b in to.columns(bio)
-                                                     if k in written])))
+            to.rows(rows, world.file, enc), replace=replace, since=job.since, also=also))
         report.chunks += len(rows) - len(kept)
         report.kept += len(kept)
         return upto
 
     try:
-        for done, (reg, cx, cz) in enumerate(todo, 1):
+        for n, (reg, cx, cz) in enumerate(todo, 1):
+            done = at[n - 1] + 1   # chunks of the plan settled with this one
             while nxt < len(todo) and len(ahead) < 2:
                 ahead.append(ex.submit(_scan, ex_rows.submit(_inflate, todo[nxt:nxt + GROUP])))
                 nxt += GROUP
@@ -415,15 +459,15 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
                     batch.append((key, blocks, data))
                     if cols is not None:
                         biomes.append((key, cols))
-            if len(batch) >= BATCH or (done == len(todo) and batch):
+            if len(batch) >= BATCH or (n == len(todo) and batch):
                 upto = flush() if pending else None
                 pal.save()   # staged for this batch's transaction, as before
                 pending = (ex_rows.submit(_rows, enc, batch, blank), biomes, done)
                 batch, biomes = [], []
                 if upto is not None:
-                    yield upto, len(todo)
+                    yield upto, total
         if pending:
-            yield flush(), len(todo)
+            yield flush(), total
     except GeneratorExit:   # closed at a yield: the sequential import had written
         raise               # up to that batch, not the one converted since
     except BaseException:
@@ -433,10 +477,12 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
     finally:
         ex.shutdown(wait=True, cancel_futures=True)
         ex_rows.shutdown(wait=True, cancel_futures=True)
-    if old and old == len(report.damaged) and not (report.chunks or report.unfinished):
+    job.end()   # done: this import's note dropped (other imports' stay)
+    if old and old == len(report.damaged) and not (report.chunks or report.unfinished
+                                                   or report.resumed):
         # nothing written: a world Minecraft never saved in 1.13+ is refused whole
         raise VoxelError(f"none of the {old} chunks is from Minecraft 1.13 or newer, nothing "
                          f"was imported ({report.damaged[0]})")
     if report.version is None:
         report.y_min = y_min if y_min is not None else 0
-    yield len(todo), len(todo)
+    yield total, total

@@ -98,16 +98,19 @@ def _stroke(world, items, write=True):
     (exact: each is an incremental relight of the world as it is), held, then all
     written in one transaction; one Record, the payloads merged."""
     xs, ys = [it[0] for it in items], [it[1] for it in items]
+    keys = {C.key_of(x, y) for x, y in zip(xs, ys)}
+    # a damaged chunk is refused before any part changes anything, on one line (no
+    # "shown as missing" warning: nothing goes on without it); its neighbours, lit
+    # around the stroke, are shown as missing
+    world.load(keys, warn=False)
+    bad = sorted(keys & world.corrupt.keys())
+    if bad:
+        raise VoxelError(f"chunk {bad[0]} is damaged in the file; it cannot be edited")
     if not items or max(max(xs) - min(xs), max(ys) - min(ys)) <= SPAN:
         return _apply(world, items, write)
     parts: dict = {}
     for it in items:  # a voxel's changes stay in one part, in their order
         parts.setdefault((it[0] // TILE, it[1] // TILE), []).append(it)
-    keys = {C.key_of(x, y) for x, y in zip(xs, ys)}
-    world.load(keys)  # a damaged chunk is refused before any part changes anything
-    bad = sorted(keys & world.corrupt.keys())
-    if bad:
-        raise VoxelError(f"chunk {bad[0]} is damaged in the file; it cannot be edited")
     out: dict = {}
     recs = []
     for part in parts.values():
@@ -125,7 +128,7 @@ def _still(world, voxels, now, to) -> list:
     (after taking in what other processes wrote)."""
     world.writable()
     world.refresh()
-    world.load({C.key_of(x, y) for x, y, _ in voxels})
+    world.load({C.key_of(x, y) for x, y, _ in voxels}, warn=False)   # chunk_at refuses
     out = []
     with world.locked():
         for (x, y, z), n, t in zip(voxels, now, to):

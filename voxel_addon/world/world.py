@@ -246,17 +246,20 @@ class World(Saving):
         return out
 
     # ---- loading, generating ------------------------------------------------
-    def _activate(self, keys) -> list[Chunk]:
-        """Make `keys` active and return them; a corrupt one raises CorruptChunk."""
-        got = self.load(keys)
+    def _activate(self, keys, warn: bool = False) -> list[Chunk]:
+        """Make `keys` active and return them; a corrupt one raises CorruptChunk (the
+        caller's error: no warning unless WARN, the loader thread's)."""
+        got = self.load(keys, warn=warn)
         for k in keys:
             if k not in got:
                 raise CorruptChunk(self.corrupt[k])
         return [got[k] for k in keys]
 
-    def load(self, keys, hot: bool = False) -> dict:
+    def load(self, keys, hot: bool = False, warn: bool = True) -> dict:
         """Make `keys` active (load, or generate + apply stored edits); returns
-        {key: Chunk} without the corrupt ones (shown as missing). `hot`: the caller
+        {key: Chunk} without the corrupt ones (shown as missing: a warning is logged
+        once per chunk; WARN False where the caller refuses a corrupt one with its own
+        error instead, so a command that fails says it once). `hot`: the caller
         hands the light on (a stream's batch: its payloads) and compacts the chunks
         after, so light read from the file stays an array (packed here, it would be
         rebuilt for the payload at once); blocks read from the file too, until the
@@ -271,17 +274,17 @@ class World(Saving):
         out: dict = {}
         pending = [k for k in dict.fromkeys(map(tuple, keys)) if k not in self.corrupt]
         try:
-            self._load(pending, out, hot)
+            self._load(pending, out, hot, warn)
         finally:  # generated here: installed now, or thrown away
             for k in pending:
                 self._made.pop(k, None)
         return out
 
-    def _load(self, pending, out, hot: bool) -> None:
+    def _load(self, pending, out, hot: bool, warn: bool = True) -> None:
         while pending:
             with self._lock:
                 epochs = {k: self._evictions.get(k, 0) for k in pending}
-            found, vers = self._fetch([k for k in pending if k not in self.chunks], hot)
+            found, vers = self._fetch([k for k in pending if k not in self.chunks], hot, warn)
             retry = []
             with self._lock:
                 now = time.monotonic()
@@ -301,7 +304,7 @@ class World(Saving):
                     out[k] = c
             pending = retry
 
-    def _fetch(self, keys, hot: bool = False) -> tuple[dict, dict]:
+    def _fetch(self, keys, hot: bool = False, warn: bool = True) -> tuple[dict, dict]:
         """New Chunk objects for keys: from an unsaved snapshot, the file, or the
         generator; and the stored version each stands on ({key: version}; None for
         a snapshot: its own stays)."""
@@ -331,7 +334,7 @@ class World(Saving):
             else:
                 found[key] = got
         for key, msg in bad:
-            self._report_corrupt(key, msg)
+            self._report_corrupt(key, msg, warn)
         for key in read:
             got = found.get(key)
             if got is not None:
@@ -370,12 +373,13 @@ class World(Saving):
             data = C.put(blocks, data, x & 15, y & 15, z, b, d)
         return blocks, data
 
-    def _report_corrupt(self, key, msg: str) -> None:
+    def _report_corrupt(self, key, msg: str, warn: bool = True) -> None:
         with self._lock:
             if key in self.corrupt:
                 return
             self.corrupt[key] = msg
-        log.warning("%s (shown as missing)", msg)
+        if warn:
+            log.warning("%s (shown as missing)", msg)
 
     def _loader(self) -> None:
         while True:
@@ -389,7 +393,7 @@ class World(Saving):
                     keys.append(self._queue.popitem(last=False)[0])
             try:
                 if keys:
-                    self._activate(keys)
+                    self._activate(keys, warn=True)   # the UI goes on without it
                 self.unload_idle()
             except BaseException as e:  # kept for the UI to show; the thread goes on
                 self.loader_error = e
@@ -453,7 +457,8 @@ class World(Saving):
             raise VoxelError(f"unknown block id {int(ids.max())}")
         keys = np.stack([xyz[:, 0] >> 4, xyz[:, 1] >> 4], 1)
         touched = {tuple(v) for v in keys.tolist()}
-        self.load(touched)  # a damaged one is known once read: refused before any change
+        self.load(touched, warn=False)  # a damaged one is known once read: refused
+        # before any change
         for k in touched:
             if k in self.corrupt:
                 raise VoxelError(f"chunk {k} is damaged in the file; it cannot be edited")

@@ -2,8 +2,9 @@
 MagicaVoxel (.vox) (issue 21). The imports write into the scene's world file (Voxel
 panel › World; a new one beside the source when none is set) and run as modal jobs
 like File › Import › Voxel World: progress in the status bar, Esc stops. A stopped
-Minecraft import keeps the batches already in the file (as the command line does);
-a .vox goes in as one transaction, so Esc before it leaves the world as it was."""
+Minecraft import keeps the batches already in the file (as the command line does),
+and the same import again resumes it (formats/job.py); a .vox goes in as one
+transaction, so Esc before it leaves the world as it was."""
 from __future__ import annotations
 
 import os

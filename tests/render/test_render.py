@@ -136,6 +136,33 @@ def test_water_shows_what_is_behind_it(gl):
         assert tint(imgs[u, 2]) > tint(imgs[u, 0]) + 5
 
 
+def test_empty_peel_layers_are_skipped_without_changing_the_picture(gl, monkeypatch):
+    """Peel layers are drawn and shaded only behind a layer that got samples (the
+    device's counters, conditional rendering): the same picture as every layer run."""
+    from voxel_addon.render.device import mgl
+    b = floor()
+    for y0 in (10, 20):  # two water boxes in a row: four surfaces along the view
+        b[12:20, y0:y0 + 4, 61:64] = R.id("water")
+    side, top = Camera(16, 2, 64, 90, -8), Camera(16, 16, 80, 0, -89)  # 4 layers, 1
+    pics = {}
+    for skip in (False, True):
+        if skip:
+            monkeypatch.undo()
+        else:  # a device without counters runs every layer
+            monkeypatch.setattr(mgl.MglDevice, "counter", lambda self, key: None)
+        for layers in (1, 3):
+            r = renderer(gl, b, peel_layers=layers, shadows=False)
+            pics[skip, layers] = r.render(side, 12.0, SIZE).astype(int)
+            # the top view right after the side view: layers left empty in this frame
+            # keep nothing of the frame before
+            pics[skip, layers, "top"] = r.render(top, 12.0, SIZE).astype(int)
+            r.release()
+    assert abs(pics[False, 3] - pics[False, 1]).mean() > 0.5, "layers 2-3 are in view"
+    assert abs(pics[False, 3] - pics[False, 3, "top"]).mean() > 0.5
+    for k in pics:
+        assert (pics[k] == pics[(False, *k[1:])]).all(), k
+
+
 def test_debug_views_differ(gl):
     b = floor(top="grass")
     b[12:20, 20:24, 61:66] = R.id("stone")

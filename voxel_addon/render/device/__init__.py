@@ -137,6 +137,23 @@ class Device:
         """The triangles of one index set of a trimesh."""
         raise NotImplementedError
 
+    # -- counting drawn samples, and skipping draws where none were (a device without
+    # queries, as Blender's gpu module, returns None and always draws)
+    def counter(self, key):
+        """The samples-passed counter named key (made once, kept by the device), or None."""
+        return None
+
+    @contextmanager
+    def counting(self, counter):
+        """Count the samples that pass in the draws inside (counter None: nothing)."""
+        yield
+
+    @contextmanager
+    def only_if(self, counter):
+        """The draws inside run only where counting() last counted a sample: decided on
+        the GPU, the CPU waits for nothing (None: they always run)."""
+        yield
+
     def read(self, tex: Texture) -> np.ndarray:
         """A 2D texture's pixels (h, w, components), rows bottom first: uint8 for the
         8-bit formats, uint16 for r16, float32 otherwise."""

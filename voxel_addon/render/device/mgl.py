@@ -45,6 +45,7 @@ class MglDevice(Device):
         self.version = 430 if ctx.version_code >= 430 else 410
         self._progs: dict = {}
         self._fs: dict = {}         # program -> attribute-less VAO (fullscreen triangle)
+        self._counters: dict = {}   # key -> samples-passed query (counter())
         self._ibo, self._ibo_q, self._ibos = None, 0, []
         self._block = ctx.buffer(reserve=glsl.frame_layout()[1])
         # moderngl binds its last bound framebuffer again after making one: that is
@@ -151,6 +152,28 @@ class MglDevice(Device):
         self._ibo, self._ibos = None, []
 
     # ------------------------------------------------------------------ drawing
+    def counter(self, key):
+        q = self._counters.get(key)
+        if q is None:
+            q = self._counters[key] = self.ctx.query(samples=True)
+        return q
+
+    @contextmanager
+    def counting(self, counter):
+        if counter is None:
+            yield
+            return
+        with counter:
+            yield
+
+    @contextmanager
+    def only_if(self, counter):
+        if counter is None:
+            yield
+            return
+        with counter.crender:  # glBeginConditionalRender (no wait)
+            yield
+
     @contextmanager
     def begin(self, target, state=State(), clear=False):
         fbo = target.obj if target is not None else self.ctx.detect_framebuffer()

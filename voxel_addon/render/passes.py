@@ -89,8 +89,8 @@ class Peel(Transparency):
         self.draws, self.shades = draws, shades
         self.layers = len(draws)
         # a layer nothing was drawn into is not shaded, and the layers behind it are not
-        # drawn: each such pass cost as much as a full one on an H200 (4.8 ms at 1080p),
-        # and the second and third layers are empty in most views
+        # drawn: the second and third layers are empty in most views, and on llvmpipe
+        # such a pass cost as much as a full one (bench/README.md: the H200 section)
         dev = draws[0].dev if draws else None
         for i, (d, sh) in enumerate(zip(draws, shades)):
             d.count = sh.when = dev.counter(("peel", i))

@@ -471,8 +471,7 @@ def test_patched_remesh_reads_only_what_it_gathers(world_path):
                 x, y = cx + int(rng.integers(-1, 2)), cy + int(rng.integers(-1, 2))
                 stroke.append((x, y, top(w, x, y) + int(rng.integers(-1, 2)),
                                int(rng.choice(PALETTE)), 0))
-            buf = getattr(E._scratch, "blocks_exact", None)
-            if buf is not None:
+            for buf in getattr(E._scratch, "exact", {}).values():
                 buf[...] = rng.choice(PALETTE, size=buf.shape)
             edit(w, stroke)
             for x, y, z, b, d in stroke:

@@ -288,7 +288,8 @@ def _apply(world, items, write=True):
                 need = near
                 continue
             w0 = part or win
-            blocks = _gather(world, w0.x0, w0.y0, w0.x1, w0.y1, "blocks", z0, writes=top)
+            blocks = _gather(world, w0.x0, w0.y0, w0.x1, w0.y1, "blocks", z0, writes=top,
+                             name=part and "blocks_part")
             lit = _gather(world, w0.x0, w0.y0, w0.x1, w0.y1, "light", z0, z1)
             opened = None if sight is None else _opened(world, sight, blocks, win, items, z0)
             data = {C.key_of(x, y): world.chunks[C.key_of(x, y)].data for x, y, *_ in items}

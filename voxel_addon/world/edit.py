@@ -332,7 +332,7 @@ def _apply(world, items, write=True):
             for k in sorted(relit | remeshed):
                 c = world.chunks[k]
                 v = world.pver[k] = world.tick()
-                payloads.append(Payload(k, c.mesh, c.light, v))
+                payloads.append(Payload(k, c.mesh, c.light_kept(), v))
                 fresh.pop(k, None)
         break
     else:

@@ -359,8 +359,9 @@ def _needed(world, items, win, near, sight) -> set:
     if sight is not None or len(items) != 1:
         return near
     with world.locked():
-        if any(world.chunks.get(k) is None for k in near):
-            return near
+        got = [world.chunks.get(k) for k in near]
+        if None in got or all(c.has_light and c.mesh is not None for c in got):
+            return near   # (all lit: nothing to leave out)
         part = _part(world, items, win)
     if part is None:
         return near

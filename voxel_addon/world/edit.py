@@ -11,7 +11,8 @@ and after (id, data) of every voxel that really changed. `undo(world, record)` a
 `redo(world, record)` apply it back or again the same way and return payloads.
 
 Light: the chunks around the stroke must have final light; those that do not (not
-streamed yet) are lit first in one batch (build.light_and_mesh). Then each voxel is
+streamed yet) are lit first in one batch (build.light_and_mesh) — for a one-voxel
+stroke relit on its part only those its part and remesh read (_needed). Then each voxel is
 relit with light.update on a window holding every voxel's relight box (a darkening
 edit clears and refills only the light that moved), which equals a full solve
 (tests); a one-voxel stroke without lamps first on the columns near it (_part).
@@ -256,8 +257,9 @@ def _part(world, items, win) -> _Window | None:
 
 
 def _apply(world, items, write=True):
-    """The stroke in named steps, all under the world's lock once its 3x3 is lit:
-    set the voxels, remesh, relight, keep what changed, hand out payloads, write."""
+    """The stroke in named steps, all under the world's lock once its 3x3 is lit
+    (or what its part reads: _needed): set the voxels, relight, remesh, keep what
+    changed, hand out payloads, write."""
     if not items:
         return [], Record((), (), ())
     near = _around({C.key_of(x, y) for x, y, _, _, _ in items}, 1)

@@ -10,7 +10,7 @@ from voxel_addon import light, meshing
 from voxel_addon.core.blocks import REGISTRY
 from voxel_addon.core.errors import VoxelError
 from voxel_addon.generation import make_generator
-from voxel_addon.world import Stream, World
+from voxel_addon.world import Stream, World, build
 from voxel_addon.world.edit import Record, edit, redo, undo, write
 
 SEED = 7
@@ -360,6 +360,7 @@ def test_relight_window_keeps_air_above_the_chunks(world_path):
     model: dict = {}
     stone, glass = REGISTRY.id("stone"), REGISTRY.id("glass")
     with World.create(world_path, seed=SEED, loader=False) as w:
+        build.light_and_mesh(w, 0, 0, 3, 3)   # a one-voxel stroke lights only its part
         # the first two windows share no chunk: the second reads the buffer where
         # the first wrote its stone
         for x, y, b, dz in ((6, 7, stone, 120), (40, 41, 0, 0), (24, 40, glass, 1),
@@ -401,6 +402,40 @@ def test_one_voxel_strokes_relit_in_part_then_whole(world_path, monkeypatch):
     assert calls[False] >= 3 and calls[True] >= 1, calls
 
 
+def test_a_voxel_at_the_lit_edge_lights_only_what_its_part_reads(world_path):
+    """Next to chunks not lit yet (the edge of the streamed area) a one-voxel stroke
+    relit on its part (edit._needed) lights only the chunks that part and its remesh
+    read; where its light leaves the part, the stroke is backed out, the 3x3 lit and
+    the stroke applied again: every lit chunk equals the full solve either way."""
+    stone = REGISTRY.id("stone")
+    model: dict = {}
+    with World.create(world_path, seed=SEED, loader=False) as w:
+        w.load([(x, y) for y in range(-1, 4) for x in range(-1, 4)])
+        x, y = 24, 24                                   # chunk (1, 1), its middle
+        z = top(w, x, y)
+        # a capped shaft down into a dark room, not relit
+        dug = [(x, y, zz, 0) for zz in range(z - 10, z + 1)] + [(x, y, z + 1, stone)] + [
+            (i, j, zz, 0) for i in range(18, 31) for j in range(18, 31)
+            for zz in range(z - 14, z - 10)]
+        for vx, vy, vz, b in dug:
+            w.set_block(vx, vy, vz, b)
+            model[(vx, vy, vz)] = (b, 0)
+        build.light_and_mesh(w, 1, 1, 2, 2)             # only chunk (1, 1) lit
+        zs = top(w, 25, 26)
+        edit(w, (25, 26, zs + 1, stone))                # stays near: nothing more lit
+        model[(25, 26, zs + 1)] = (stone, 0)
+        assert [k for k, c in w.chunks.items() if c.has_light] == [(1, 1)]
+        assert check_against_full(w, world_path, model, 0, 0, 3, 3) == 1
+        payloads, rec = edit(w, (x, y, z + 1, 0))       # daylight fills the room
+        model[(x, y, z + 1)] = (0, 0)
+        assert rec == Record(((x, y, z + 1),), ((stone, 0),), ((0, 0),))
+        assert (1, 1) in {p.key for p in payloads}
+        assert all(w.chunks[(i, j)].has_light for i in range(3) for j in range(3))
+        assert check_against_full(w, world_path, model, 0, 0, 3, 3) == 9
+    with World.open(world_path) as w:                   # written once, as it is now
+        assert w.chunk_at(1, 1).get(8, 8, z + 1) == 0
+
+
 def test_coloured_voxels_mesh_by_colour(world_path):
     """The `color` block's faces follow its data through streaming (build) and edits:
     two neighbours of different colours are two quads, the same colour one."""
@@ -436,8 +471,7 @@ def test_patched_remesh_reads_only_what_it_gathers(world_path):
                 x, y = cx + int(rng.integers(-1, 2)), cy + int(rng.integers(-1, 2))
                 stroke.append((x, y, top(w, x, y) + int(rng.integers(-1, 2)),
                                int(rng.choice(PALETTE)), 0))
-            buf = getattr(E._scratch, "blocks_exact", None)
-            if buf is not None:
+            for buf in getattr(E._scratch, "exact", {}).values():
                 buf[...] = rng.choice(PALETTE, size=buf.shape)
             edit(w, stroke)
             for x, y, z, b, d in stroke:

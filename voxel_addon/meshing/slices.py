@@ -10,6 +10,7 @@ on the old ones (tested against both backends).
 """
 from __future__ import annotations
 
+import threading
 from bisect import bisect_right
 
 import numpy as np
@@ -26,8 +27,7 @@ _SAME = (FLAGS & 4) != 0          # hidden toward the same block
 _X = (FLAGS & 16) != 0
 _HASH = (FLAGS & 32) != 0
 _SHAPE = _X | _HASH
-_L = {k: v.tolist() for k, v in (("side", _WANT_SIDE), ("z", _WANT_Z), ("opaque", _OPAQUE),
-                                       ("same", _SAME), ("shape", _SHAPE))}
+_SHAPE_L = _SHAPE.tolist()
 _NPASS = len(PASSES)
 _AX = AXIS.astype(np.int64)
 _AX[6:] = 3                          # X/# planes: no slice axis
@@ -115,12 +115,7 @@ def _affected(W, cells, before, rh):
         was = {}
         for c, b in zip(cells, before):
             was.setdefault(c, int(b))       # the first old value of a cell counts
-    ws, wz, opq, same, shape = (_L[k] for k in ("side", "z", "opaque", "same", "shape"))
-
-    def key(a, b, d):
-        return a if (wz if d >= 4 else ws)[a] and not opq[b] and not (same[a] and a == b) \
-            else 0
-
+    shape, T, nf = _SHAPE_L, _T_LIST, _NF   # face key of a toward b: T[(a + NF z) * NF + b]
     slices, shapes = {}, set()     # slice code -> its first and last changed rows
     item = W.item
     for v in cells:
@@ -136,9 +131,11 @@ def _affected(W, cells, before, rh):
         for d in range(6):
             a = d >> 1
             m, n = d + 1, (d ^ 1) + 1   # v's neighbour in direction d, and the other
+            zf = nf if d >= 4 else 0
             for c, i, j in ((v, 0, m), (around[n], n, 0)):
                 if 0 <= c[0] < 16 and 0 <= c[1] < 16 and 0 <= c[2] < 256 and (
-                        was is None or key(old[i], old[j], d) != key(new[i], new[j], d)):
+                        was is None or T[(old[i] + zf) * nf + old[j]]
+                        != T[(new[i] + zf) * nf + new[j]]):
                     code = (d * 256 + c[a]) * 256 + (c[2] // rh if a < 2 else 0)
                     row = c[0] if a == 1 else c[1]
                     lo, hi = slices.get(code, (row, row))
@@ -166,9 +163,9 @@ def _quads(W, slices, seeds, olds, shapes, rh):
     stops: dict = {}
     if meta:
         U = max(rh, 16)
-        # rows from each slice's first changed one (those above stay air: no keys)
-        A = np.zeros((len(meta), 16, U), np.int32)
-        B = np.zeros_like(A)                    # outside the world: air
+        # rows from each slice's first changed one (those above stay air: no keys);
+        # column U stays air: its key 0 ends each row
+        A, B, K = _rows(len(meta), U + 1)   # B: outside the world air
         for i, (d, s, z0, v, *_) in enumerate(meta):
             n = s + 1 + (1 if d & 1 else -1)
             if d < 2:
@@ -186,9 +183,7 @@ def _quads(W, slices, seeds, olds, shapes, rh):
             A[len(meta) - flat:] += _NF
         A *= _NF
         A += B
-        K = np.zeros((len(meta), 16, U + 1), np.uint16)  # a zero column ends each row
-        K[:, :, :U] = _T_ALL[A]
-        _rects(K, meta, out, stops)
+        _rects(np.take(_T_ALL, A, out=K), meta, out, stops)
     for c in sorted(shapes):
         rest, z = divmod(c, 256)
         x, y = divmod(rest, 16)
@@ -196,6 +191,23 @@ def _quads(W, slices, seeds, olds, shapes, rh):
         faces = (6, 7) if _X[b] else (8, 9, 10, 11) if _HASH[b] else ()
         out += [(x, y, z, f, 1, 1, b) for f in faces]
     return out, stops
+
+
+_SCRATCH = threading.local()
+
+
+def _rows(n, u):
+    """(A, B, K) for n slices of 16 rows of u columns: A and B zeroed (intp: the
+    key table's take needs no converted copy), K for the keys; views of this
+    thread's scratch arrays. Fresh arrays here cost ~18 page faults a call in a
+    big process (~45 us: more than their work)."""
+    ab, k = getattr(_SCRATCH, "ab", None), getattr(_SCRATCH, "k", None)
+    if ab is None or ab.shape[1] < n or ab.shape[3] != u:
+        ab = _SCRATCH.ab = np.zeros((2, max(n, 16), 16, u), np.intp)
+        k = _SCRATCH.k = np.empty((max(n, 16), 16, u), np.uint16)
+    ab = ab[:, :n]
+    ab[...] = 0
+    return ab[0], ab[1], k[:n]
 
 
 def _table(want):
@@ -209,6 +221,7 @@ def _table(want):
 _NF = len(FLAGS)
 # side keys at a * NF + b, z keys at (NF + a) * NF + b (a z slice's A is offset by NF)
 _T_ALL = np.concatenate([_table(_WANT_SIDE), _table(_WANT_Z)])
+_T_LIST = _T_ALL.tolist()
 
 
 def _rects(K, meta, out, stops):

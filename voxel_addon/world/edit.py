@@ -11,7 +11,8 @@ and after (id, data) of every voxel that really changed. `undo(world, record)` a
 `redo(world, record)` apply it back or again the same way and return payloads.
 
 Light: the chunks around the stroke must have final light; those that do not (not
-streamed yet) are lit first in one batch (build.light_and_mesh). Then each voxel is
+streamed yet) are lit first in one batch (build.light_and_mesh) — for a one-voxel
+stroke relit on its part only those its part and remesh read (_needed). Then each voxel is
 relit with light.update on a window holding every voxel's relight box (a darkening
 edit clears and refills only the light that moved), which equals a full solve
 (tests); a one-voxel stroke without lamps first on the columns near it (_part).
@@ -259,20 +260,26 @@ def _part(world, items, win) -> _Window | None:
 
 
 def _apply(world, items, write=True):
-    """The stroke in named steps, all under the world's lock once its 3x3 is lit:
-    set the voxels, remesh, relight, keep what changed, hand out payloads, write."""
+    """The stroke in named steps, all under the world's lock once its 3x3 is lit
+    (or what its part reads: _needed): set the voxels, relight, remesh, keep what
+    changed, hand out payloads, write."""
     if not items:
         return [], Record((), (), ())
     near = _around({C.key_of(x, y) for x, y, _, _, _ in items}, 1)
     win = _window(items)
     sight = mcmodels.sight(world)   # None without a resource stack
     fresh: dict = {}
+    need = _needed(world, items, win, near, sight)
     for _ in range(8):  # a chunk unloaded between lighting and locking: light again
-        fresh.update({p.key: p for p in _ensure_lit(world, near)})
+        fresh.update({p.key: p for p in _ensure_lit(world, need)})
         with world.locked():
+            if need is not near and any(k not in world.corrupt and world.chunks.get(k) is None
+                                        for k in near):
+                need = near   # (the remesh reads the 3x3's blocks)
+                continue
             if any(k not in world.corrupt and (world.chunks.get(k) is None
                                                or not world.chunks[k].has_light)
-                   for k in near):
+                   for k in need):
                 continue
             bad = sorted({C.key_of(x, y) for x, y, _, _, _ in items} & world.corrupt.keys())
             if bad:  # found damaged only now, loading it (check() knows loaded ones)
@@ -282,13 +289,35 @@ def _apply(world, items, write=True):
             z0, z1 = _light_layers(world, items, sight)
             top = max(z for _, _, z, _, _ in items) + 1   # the stroke's writes, below
             part = None if sight is not None else _part(world, items, win)
+            if part is None and need is not near:   # (the voxel changed meanwhile)
+                need = near
+                continue
             w0 = part or win
-            blocks = _gather(world, w0.x0, w0.y0, w0.x1, w0.y1, "blocks", z0, writes=top)
+            blocks = _gather(world, w0.x0, w0.y0, w0.x1, w0.y1, "blocks", z0, writes=top,
+                             name=part and "blocks_part")
             lit = _gather(world, w0.x0, w0.y0, w0.x1, w0.y1, "light", z0, z1)
             opened = None if sight is None else _opened(world, sight, blocks, win, items, z0)
+            data = {C.key_of(x, y): world.chunks[C.key_of(x, y)].data for x, y, *_ in items}
             first, last, steps = _set_voxels(world, items)
             if not last:
                 return sorted(fresh.values()), Record((), (), ())
+            if opened is not None:   # the light sees the blocks the full solve sees
+                blocks[opened] = 0
+            relit = _relight(world, blocks, lit, steps, near, w0, (z0, z1), sight,
+                             part is not None)
+            if relit is None and need is not near and any(
+                    k not in world.corrupt and (world.chunks.get(k) is None
+                                                or not world.chunks[k].has_light)
+                    for k in near):
+                # the light leaves the part and the 3x3 is not all lit: the stroke
+                # back out (nothing else changed yet), the 3x3 lit, then again
+                for (x, y, z), (b, d) in first.items():
+                    c = world.chunks[C.key_of(x, y)]
+                    C.put(c.blocks, c.data, x & 15, y & 15, z, b, d)
+                for k, a in data.items():
+                    world.chunks[k].data = a
+                need = near
+                continue
             per: dict = {}
             for v in last:
                 per.setdefault(C.key_of(v[0], v[1]), {})[v] = last[v]
@@ -297,10 +326,6 @@ def _apply(world, items, write=True):
             for k, vox in per.items():  # the rows go to the file through commit/hold
                 world.blocks_changed(k, vox, edits=False, tick=t, relit=True)
             remeshed = _remesh(world, last, win, first)
-            if opened is not None:   # the light sees the blocks the full solve sees
-                blocks[opened] = 0
-            relit = _relight(world, blocks, lit, steps, near, w0, (z0, z1), sight,
-                             part is not None)
             if relit is None:   # the light reads past the part: on the whole window
                 blocks = _gather(world, win.x0, win.y0, win.x1, win.y1, "blocks", z0,
                                  writes=top)
@@ -312,7 +337,7 @@ def _apply(world, items, write=True):
             for k in sorted(relit | remeshed):
                 c = world.chunks[k]
                 v = world.pver[k] = world.tick()
-                payloads.append(Payload(k, c.mesh, c.light, v))
+                payloads.append(Payload(k, c.mesh, c.light_kept(), v))
                 fresh.pop(k, None)
         break
     else:
@@ -326,6 +351,27 @@ def _apply(world, items, write=True):
     voxels = [v for v in last if first[v] != last[v]]
     rec = Record(tuple(voxels), tuple(first[v] for v in voxels), tuple(last[v] for v in voxels))
     return sorted(payloads + list(fresh.values())), rec
+
+
+def _needed(world, items, win, near, sight) -> set:
+    """The chunks a stroke must find lit first: a one-voxel stroke relit on its part
+    (_part) reads and writes only the light of the chunks its part covers and remeshes
+    the chunks of `win.remesh`, so an edit next to chunks not lit yet (the edge of
+    the streamed area) lights only those (4-9 ms less); the whole 3x3 (NEAR) where
+    the light leaves the part (_apply then lights it and applies the stroke again),
+    for other strokes, or while a chunk of the 3x3 is not loaded (the remesh reads
+    its neighbours' blocks)."""
+    if sight is not None or len(items) != 1:
+        return near
+    with world.locked():
+        got = [world.chunks.get(k) for k in near]
+        if None in got or all(c.has_light and c.mesh is not None for c in got):
+            return near   # (all lit: nothing to leave out)
+        part = _part(world, items, win)
+    if part is None:
+        return near
+    return {(cx, cy) for cx in range(part.x0 >> 4, ((part.x1 - 1) >> 4) + 1)
+            for cy in range(part.y0 >> 4, ((part.y1 - 1) >> 4) + 1)} | win.remesh
 
 
 def _opened(world, sight, blocks, win, items, z0):

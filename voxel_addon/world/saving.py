@@ -99,7 +99,11 @@ class Saving:
             if self._writer is None:
                 from concurrent.futures import ThreadPoolExecutor
                 self._writer = ThreadPoolExecutor(1, thread_name_prefix="voxel-writer")
-            self._behind = self._writer.submit(self.commit)
+            self._behind = self._writer.submit(self._commit_behind)
+
+    def _commit_behind(self) -> None:
+        self.commit()
+        C.make_spares()   # the next edit's new light arrays, faulted in here
 
     def settle(self) -> None:
         """Wait for the writer thread's commit (commit_behind) and raise its error

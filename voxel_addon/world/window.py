@@ -10,39 +10,48 @@ from ..core import chunk as C
 
 S = C.SIZE
 SCRATCH = threading.local()  # per-thread window buffers (gather)
+EXACT_KEPT = 4  # shapes of exact buffers kept per thread (gather)
 
 
 def gather(world, x0, y0, x1, y1, attr, z0=0, z1=C.HEIGHT, exact=False, fill=True,
-           writes=0):
+           writes=0, name=None):
     """Voxel columns [x0, x1) x [y0, y1) of active chunks' `attr` as one array
     (zeros where a chunk or its array is missing). Call with the world's lock held.
     The array is a view of this thread's scratch buffer for `attr`, valid until the
     next call: a fresh 1.3 MB array per edit costs page faults (~0.5 ms in a big
     process). Only layers [z0, z1) are filled; the others hold stale values.
     `exact`: a Fortran-contiguous buffer of just this shape (the mesher's input; the
-    last one is kept: a single voxel's chunk, mostly). `fill=False`: the buffer
-    alone, its values stale (the caller fills what it reads, cross).
+    last EXACT_KEPT shapes are kept: one chunk, two side by side either way, 2x2 —
+    a click on a chunk's edge remeshes two, and a new 0.3 MB buffer each time the
+    shape changed cost page faults: up to 0.25 ms of such a click). `fill=False`:
+    the buffer alone, its values stale (the caller fills what it reads, cross).
 
     Blocks to the world's top (the relight's window): the air above the chunks'
     highest non-air section is copied only where the buffer may not hold zeros
     already (~2/3 of a surface window's layers; the copy is most of a window's
     cost). `writes`: the caller writes non-zero values into the window below this
-    layer only (the stroke's voxels), so the buffer stays known to be air above."""
+    layer only (the stroke's voxels), so the buffer stays known to be air above.
+    `name`: another buffer than `attr`'s (an edit's part window: its own, so a
+    lower window after a whole one zeroes the layers between only over its 11 x 11
+    columns, not the whole buffer's 31 x 31)."""
     w, h = x1 - x0, y1 - y0
     if exact:
-        name = attr + "_exact"
-        out = getattr(SCRATCH, name, None)
-        if out is None or out.shape[:2] != (w, h):
-            out = C.empty(width=w, depth=h)
-            setattr(SCRATCH, name, out)
+        bufs = getattr(SCRATCH, "exact", None)
+        if bufs is None:
+            bufs = SCRATCH.exact = {}
+        out = bufs.get((attr, w, h))
+        if out is None:
+            if len(bufs) >= EXACT_KEPT:
+                del bufs[next(iter(bufs))]   # the oldest shape
+            out = bufs[(attr, w, h)] = C.empty(width=w, depth=h)
     else:
-        buf = getattr(SCRATCH, attr, None)
+        name = name or attr
+        buf = getattr(SCRATCH, name, None)
         if buf is None or buf.shape[0] < w or buf.shape[1] < h:
             n = max(w, h, 0 if buf is None else max(buf.shape[:2]))
             buf = C.empty(width=n, depth=n)
-            setattr(SCRATCH, attr, buf)
-            if attr == "blocks":
-                SCRATCH.air = 0
+            setattr(SCRATCH, name, buf)
+            setattr(SCRATCH, "air_" + name, 0)
         out = buf[:w, :h]
     if fill and attr == "blocks" and not exact and z1 == C.HEIGHT:
         top = z0
@@ -51,11 +60,11 @@ def gather(world, x0, y0, x1, y1, attr, z0=0, z1=C.HEIGHT, exact=False, fill=Tru
                 c = world.chunks.get((cx, cy))
                 if c is not None:
                     top = max(top, c.air_from(z0))
-        air = SCRATCH.air   # buf[:, :, air:] holds zeros
+        air = getattr(SCRATCH, "air_" + name)   # buf[:, :, air:] holds zeros
         if top < air:
             buf[:, :, top:air] = 0
         copy_into(world, out, x0, y0, x0, y0, x1, y1, attr, z0, top)
-        SCRATCH.air = max(top, writes)
+        setattr(SCRATCH, "air_" + name, max(top, writes))
     elif fill:
         copy_into(world, out, x0, y0, x0, y0, x1, y1, attr, z0, z1)
     return out

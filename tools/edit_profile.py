@@ -23,7 +23,6 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from voxel_addon import light  # noqa: E402
 from voxel_addon.bench import world as bw  # noqa: E402
-from voxel_addon.core.blocks import REGISTRY  # noqa: E402
 from voxel_addon.world import World  # noqa: E402
 from voxel_addon.world import edit as E  # noqa: E402
 from voxel_addon.world import remesh as RM  # noqa: E402
@@ -64,19 +63,8 @@ def main() -> None:
     rows = []
     with World.create(tmp / "edits.sqlite", seed=bw.SEED) as w:
         s, _, _ = bw._stream(w, 8)
-        rng = np.random.default_rng(3)   # bench/world.py _edits: the same clicks
-        lamps = [REGISTRY.id(n) for n in ("lamp_red", "lamp_green", "lamp_blue", "glowstone")
-                 if n in REGISTRY.names()]
-        solid = [REGISTRY.id(n) for n in ("stone", "glass", "planks", "dirt")
-                 if n in REGISTRY.names()]
-        for i in range(120):
-            x, y = int(rng.integers(-120, 120)), int(rng.integers(-120, 120))
-            c = w.chunk_at(x >> 4, y >> 4)
-            z = int(np.flatnonzero(c.blocks[x & 15, y & 15])[-1])
+        for i, change in enumerate(bw.clicks(w, 120)):  # the bench's clicks
             kind = i % 3
-            change = ((x, y, z, 0) if kind == 0 else
-                      (x, y, z + 1, int(rng.choice(lamps))) if kind == 1 else
-                      (x, y, z + 1, int(rng.choice(solid))))
             mark = {k: len(v) for k, v in STEPS.items()}
             c0, p0 = time.thread_time(), _faults()
             E.edit(w, change)

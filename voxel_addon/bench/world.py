@@ -139,21 +139,27 @@ def run(ctx):
     yield ("stream_reload_view32_cpu_s", cpu, "s", "process CPU time of the same (all threads)")
 
 
-def _edits(ctx, w):
-    """Single-block edits near the surface (clear, lamp, solid), the stream idle."""
+def clicks(w, n: int):
+    """The bench's n single-block edits near the surface of world w, in turn: clear,
+    lamp, solid (also tools/edit_profile.py's)."""
     rng = np.random.default_rng(3)
     lamps = [REGISTRY.id(n) for n in ("lamp_red", "lamp_green", "lamp_blue", "glowstone")
              if n in REGISTRY.names()] or [REGISTRY.id("lamp_red")]
     solid = [REGISTRY.id(n) for n in ("stone", "glass", "planks", "dirt") if n in REGISTRY.names()]
-    times, cpus = [], []
-    for i in range(40 if ctx.quick else 120):
+    for i in range(n):
         x, y = int(rng.integers(-120, 120)), int(rng.integers(-120, 120))
         c = w.chunk_at(x >> 4, y >> 4)
         z = int(np.flatnonzero(c.blocks[x & 15, y & 15])[-1])
         kind = i % 3
-        change = ((x, y, z, 0) if kind == 0 else
-                  (x, y, z + 1, int(rng.choice(lamps))) if kind == 1 else
-                  (x, y, z + 1, int(rng.choice(solid))))
+        yield ((x, y, z, 0) if kind == 0 else
+               (x, y, z + 1, int(rng.choice(lamps))) if kind == 1 else
+               (x, y, z + 1, int(rng.choice(solid))))
+
+
+def _edits(ctx, w):
+    """Single-block edits near the surface (clear, lamp, solid), the stream idle."""
+    times, cpus = [], []
+    for change in clicks(w, 40 if ctx.quick else 120):
         c, t = time.thread_time(), time.perf_counter()
         payloads, _ = edit(w, change)
         times.append(time.perf_counter() - t)

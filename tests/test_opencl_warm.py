@@ -206,3 +206,44 @@ def test_the_warm_up_ends_a_helper_that_takes_too_long(monkeypatch):
     build._finish(p)
     assert p.poll() is not None and time.monotonic() - t0 < 10
     build._finish(None)  # no helper: nothing to wait for
+
+
+_EXIT_CHILD = r'''
+import sys, time
+from pathlib import Path
+from voxel_addon import opencl
+out = Path(sys.argv[1])
+
+def job():  # a step under way when the interpreter ends: a real build, then a launch
+    time.sleep(0.5)
+    import numpy as np, pyopencl as cl
+    ctx, q, _ = opencl.context()
+    prg = opencl.build("__kernel void twice(__global int *a) "
+                       "{ a[get_global_id(0)] *= 2; }")
+    a = np.arange(64, dtype=np.int32)
+    buf = cl.Buffer(ctx, cl.mem_flags.READ_WRITE | cl.mem_flags.COPY_HOST_PTR, hostbuf=a)
+    prg.twice(q, a.shape, None, buf)
+    cl.enqueue_copy(q, a, buf)
+    out.write_text(f"job {int(a[-1])}")
+
+def later():
+    out.write_text(out.read_text() + ", later")
+
+assert opencl.warm(job, later=later)
+print("main ends", flush=True)
+'''
+
+
+def test_the_exit_waits_for_the_warm_up_step_and_starts_no_other(cl_device, tmp_path):
+    """A process that ends while a warm-up builds or runs a kernel in its thread
+    aborted in pocl ("terminate called ...", status 134: a script or a Blender quitting
+    seconds after Show). The exit now waits for the step under way (the job) and
+    starts no other (its later part)."""
+    import subprocess
+    import sys
+    out = tmp_path / "out.txt"
+    r = subprocess.run([sys.executable, "-c", _EXIT_CHILD, str(out)], capture_output=True,
+                       text=True, timeout=120)
+    assert r.returncode == 0 and "terminate" not in r.stderr, r.stderr[-2000:]
+    assert r.stdout.strip() == "main ends"
+    assert out.read_text() == "job 126"  # the job ended; the later part never began

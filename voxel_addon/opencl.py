@@ -16,6 +16,11 @@ runs the kernels a caller will want) in a background thread; until it ends the
 default backend (`pick(None)`) is NumPy, so the first results come from the NumPy
 twins (bit-identical by design) while the kernels build, then OpenCL takes over;
 a job that builds several kernel families hands each over once built (`ready`).
+
+At the interpreter's exit (`_at_exit`) those background threads stop between their
+steps and the step under way is waited for: a process that ended while pocl compiled
+or ran a kernel in another thread aborted ("terminate called without an active
+exception", exit status 134), e.g. a script or a Blender quitting seconds after Show.
 """
 from __future__ import annotations
 
@@ -26,6 +31,9 @@ from functools import lru_cache
 from . import resources
 
 _lock = threading.Lock()
+_exiting = threading.Event()
+_background: list = []   # threads that use OpenCL on their own (warm, the far prebuild)
+EXIT_WAIT_S = 60.0       # the longest an exit waits for them (a cold build: seconds)
 
 
 class NoOpenCL(RuntimeError):
@@ -245,6 +253,37 @@ def _is_pocl() -> bool:
     return "pocl" in text or "portable computing" in text
 
 
+# ---- background threads and the process's exit -------------------------------------
+class Exiting(Exception):
+    """Raised in a background thread's wait once the interpreter exits: it stops."""
+
+
+def exiting() -> bool:
+    """Whether the interpreter is exiting: background work starts nothing new."""
+    return _exiting.is_set()
+
+
+def background(target, name: str) -> threading.Thread:
+    """Start TARGET in a daemon thread that the process's exit waits for (it checks
+    `exiting()` between its steps)."""
+    t = threading.Thread(target=target, daemon=True, name=name)
+    _background[:] = [x for x in _background if x.is_alive()] + [t]
+    t.start()
+    return t
+
+
+def _at_exit() -> None:
+    import time
+    _exiting.set()
+    end = time.monotonic() + EXIT_WAIT_S
+    for t in list(_background):
+        t.join(max(0.0, end - time.monotonic()))
+
+
+import atexit  # noqa: E402  (beside what it guards)
+atexit.register(_at_exit)
+
+
 # ---- warming up in the background ---------------------------------------------------
 _warm = {"thread": None, "took": None, "error": None, "ended_at": None,
          "later_took": None, "later_error": None, "ready": {}}
@@ -276,7 +315,7 @@ def warm(job, name: str = "voxel-opencl-warm", later=None) -> bool:
         finally:
             _warm["took"] = time.perf_counter() - t0
             _warm["ended_at"] = time.monotonic()
-        if later is not None:
+        if later is not None and not exiting():
             t0 = time.perf_counter()
             _yield_cpu()
             try:
@@ -287,13 +326,12 @@ def warm(job, name: str = "voxel-opencl-warm", later=None) -> bool:
             finally:
                 _warm["later_took"] = time.perf_counter() - t0
 
-    t = threading.Thread(target=run, daemon=True, name=name)
     with _ctx_lock:
-        if warming():
+        if warming() or exiting():
             return False
-        _warm.update(thread=t, took=None, error=None, ended_at=None, later_took=None,
+        _warm.update(thread=None, took=None, error=None, ended_at=None, later_took=None,
                      later_error=None, ready={})
-        t.start()
+        _warm["thread"] = background(run, name)
     return True
 
 

@@ -72,6 +72,8 @@ def warm(world, opened: bool = False) -> bool:
                 meshing.build_chunks(blocks[15:-15, 15:-15], (0, 0), backend="opencl")
             opencl.ready("meshing")
             opencl._yield_cpu()  # the stream's threads come first now
+            if opencl.exiting():
+                return
             with trace.span("warm.generate"):
                 if hasattr(g, "warm_opencl"):
                     g.warm_opencl(keys)
@@ -96,6 +98,9 @@ def warm(world, opened: bool = False) -> bool:
             raise
         # the stream generates with OpenCL from now on, while meshing's kernels build
         opencl.ready("generation")
+        if opencl.exiting():  # (the process ends: its exit waits for this thread)
+            _finish(helper, 0.0)
+            return
         blocks = C.paste(zip(keys, arrays), -1, -1, 2, 2)
         with trace.span("warm.helper", started=helper is not None):
             _finish(helper)
@@ -110,10 +115,11 @@ def warm(world, opened: bool = False) -> bool:
         # work-group build queued in front of the stream's kernels held the whole view
         # back by 1.5-2 s (issue 28's timeline): wait until the streams have all they want
         end = time.monotonic() + LATER_WAIT_S
-        while time.monotonic() < end and (
+        while time.monotonic() < end and not opencl.exiting() and (
                 any(not s.idle for s in list(world.streams)) or opened and not world.streams):
             time.sleep(0.1)
-        surface()
+        if not opencl.exiting():
+            surface()
 
     started = opencl.warm(job, later=later if surface is not None else None)
     if started:
@@ -157,7 +163,7 @@ def prebuild(g, world=None) -> bool:
         except Exception:  # noqa: BLE001 - surface() builds it (and raises) when used
             pass
 
-    threading.Thread(target=run, daemon=True, name="voxel-far-prebuild").start()
+    opencl.background(run, "voxel-far-prebuild")
     return True
 
 
@@ -189,12 +195,14 @@ def _after_warm_up(world=None) -> None:
     and WORLD's streams (if any) have all they want, or LATER_WAIT_S after that job."""
     import time
     from .. import opencl
-    while opencl.warming():
+    while opencl.warming() and not opencl.exiting():
         time.sleep(0.05)
     end = time.monotonic() + LATER_WAIT_S
-    while world is not None and time.monotonic() < end and \
+    while world is not None and time.monotonic() < end and not opencl.exiting() and \
             any(not s.idle for s in list(world.streams)):
         time.sleep(0.1)
+    if opencl.exiting():
+        raise opencl.Exiting()  # the prebuild stops here (its caller: nothing built)
 
 
 LATER_WAIT_S = 60.0  # the far prebuild waits at most this long for busy streams

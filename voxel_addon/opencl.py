@@ -17,10 +17,8 @@ default backend (`pick(None)`) is NumPy, so the first results come from the NumP
 twins (bit-identical by design) while the kernels build, then OpenCL takes over;
 a job that builds several kernel families hands each over once built (`ready`).
 
-At the interpreter's exit (`_at_exit`) those background threads stop between their
-steps and the step under way is waited for: a process that ended while pocl compiled
-or ran a kernel in another thread aborted ("terminate called without an active
-exception", exit status 134), e.g. a script or a Blender quitting seconds after Show.
+The interpreter's exit waits for those background threads' step under way and they
+start no other (`background`, core/ending.py).
 """
 from __future__ import annotations
 
@@ -31,9 +29,6 @@ from functools import lru_cache
 from . import resources
 
 _lock = threading.Lock()
-_exiting = threading.Event()
-_background: list = []   # threads that use OpenCL on their own (warm, the far prebuild)
-EXIT_WAIT_S = 60.0       # the longest an exit waits for them (a cold build: seconds)
 
 
 class NoOpenCL(RuntimeError):
@@ -253,35 +248,15 @@ def _is_pocl() -> bool:
     return "pocl" in text or "portable computing" in text
 
 
-# ---- background threads and the process's exit -------------------------------------
-class Exiting(Exception):
-    """Raised in a background thread's wait once the interpreter exits: it stops."""
-
-
-def exiting() -> bool:
-    """Whether the interpreter is exiting: background work starts nothing new."""
-    return _exiting.is_set()
-
-
+# ---- background threads ---------------------------------------------------------------
 def background(target, name: str) -> threading.Thread:
-    """Start TARGET in a daemon thread that the process's exit waits for (it checks
-    `exiting()` between its steps)."""
+    """Start TARGET in a daemon thread that uses OpenCL on its own; the interpreter's
+    exit waits for it (core/ending.py: it checks `ending.exiting()` between steps)."""
+    from .core import ending
     t = threading.Thread(target=target, daemon=True, name=name)
-    _background[:] = [x for x in _background if x.is_alive()] + [t]
+    ending.wait_at_exit(t)
     t.start()
     return t
-
-
-def _at_exit() -> None:
-    import time
-    _exiting.set()
-    end = time.monotonic() + EXIT_WAIT_S
-    for t in list(_background):
-        t.join(max(0.0, end - time.monotonic()))
-
-
-import atexit  # noqa: E402  (beside what it guards)
-atexit.register(_at_exit)
 
 
 # ---- warming up in the background ---------------------------------------------------
@@ -301,6 +276,7 @@ def warm(job, name: str = "voxel-opencl-warm", later=None) -> bool:
     happen. pyopencl lets go of the GIL while pocl compiles, so the NumPy work on
     other threads goes on (2 cores: they share the CPU)."""
     import time
+    from .core import ending
     if warming() or not available():
         return False
 
@@ -315,7 +291,7 @@ def warm(job, name: str = "voxel-opencl-warm", later=None) -> bool:
         finally:
             _warm["took"] = time.perf_counter() - t0
             _warm["ended_at"] = time.monotonic()
-        if later is not None and not exiting():
+        if later is not None and not ending.exiting():
             t0 = time.perf_counter()
             _yield_cpu()
             try:
@@ -327,7 +303,7 @@ def warm(job, name: str = "voxel-opencl-warm", later=None) -> bool:
                 _warm["later_took"] = time.perf_counter() - t0
 
     with _ctx_lock:
-        if warming() or exiting():
+        if warming() or ending.exiting():
             return False
         _warm.update(thread=None, took=None, error=None, ended_at=None, later_took=None,
                      later_error=None, ready={})

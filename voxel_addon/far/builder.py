@@ -18,6 +18,7 @@ import threading
 import time
 from collections import deque
 
+from ..core import ending
 from ..core.errors import VoxelError
 from ..storage import CorruptChunk
 from ..storage.far import FarStore
@@ -65,6 +66,7 @@ class Builder:
         self._ready: deque = deque()
         self._tick = 0
         self._stop = False
+        ending.close_at_exit(self)  # (a worker in a kernel at exit aborted the process)
         self._thread = threading.Thread(target=self._run, name="voxel-far", daemon=True)
         self._thread.start()
 

@@ -16,6 +16,7 @@ import weakref
 import numpy as np
 
 from ..core import chunk as C
+from ..core import ending
 from . import models as mcmodels
 from .payload import Payload
 
@@ -72,7 +73,7 @@ def warm(world, opened: bool = False) -> bool:
                 meshing.build_chunks(blocks[15:-15, 15:-15], (0, 0), backend="opencl")
             opencl.ready("meshing")
             opencl._yield_cpu()  # the stream's threads come first now
-            if opencl.exiting():
+            if ending.exiting():
                 return
             with trace.span("warm.generate"):
                 if hasattr(g, "warm_opencl"):
@@ -98,7 +99,7 @@ def warm(world, opened: bool = False) -> bool:
             raise
         # the stream generates with OpenCL from now on, while meshing's kernels build
         opencl.ready("generation")
-        if opencl.exiting():  # (the process ends: its exit waits for this thread)
+        if ending.exiting():  # (the process ends: its exit waits for this thread)
             _finish(helper, 0.0)
             return
         blocks = C.paste(zip(keys, arrays), -1, -1, 2, 2)
@@ -115,10 +116,10 @@ def warm(world, opened: bool = False) -> bool:
         # work-group build queued in front of the stream's kernels held the whole view
         # back by 1.5-2 s (issue 28's timeline): wait until the streams have all they want
         end = time.monotonic() + LATER_WAIT_S
-        while time.monotonic() < end and not opencl.exiting() and (
+        while time.monotonic() < end and not ending.exiting() and (
                 any(not s.idle for s in list(world.streams)) or opened and not world.streams):
             time.sleep(0.1)
-        if not opencl.exiting():
+        if not ending.exiting():
             surface()
 
     started = opencl.warm(job, later=later if surface is not None else None)
@@ -195,14 +196,14 @@ def _after_warm_up(world=None) -> None:
     and WORLD's streams (if any) have all they want, or LATER_WAIT_S after that job."""
     import time
     from .. import opencl
-    while opencl.warming() and not opencl.exiting():
+    while opencl.warming() and not ending.exiting():
         time.sleep(0.05)
     end = time.monotonic() + LATER_WAIT_S
-    while world is not None and time.monotonic() < end and not opencl.exiting() and \
+    while world is not None and time.monotonic() < end and not ending.exiting() and \
             any(not s.idle for s in list(world.streams)):
         time.sleep(0.1)
-    if opencl.exiting():
-        raise opencl.Exiting()  # the prebuild stops here (its caller: nothing built)
+    if ending.exiting():
+        raise ending.Exiting()  # the prebuild stops here (its caller: nothing built)
 
 
 LATER_WAIT_S = 60.0  # the far prebuild waits at most this long for busy streams

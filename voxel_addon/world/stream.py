@@ -30,6 +30,7 @@ from collections import deque
 import numpy as np
 
 from .. import opencl
+from ..core import ending
 from ..core.errors import VoxelError
 from . import build
 
@@ -72,6 +73,7 @@ class Stream:
         self._kept = (None, 0.0)  # view chunk and time of the last full _maintain
         self._area = (None, [])   # (view chunk, distance) and the keys in range
         world.streams.add(self)
+        ending.close_at_exit(self)  # (a worker in a kernel at exit aborted the process)
         self._threads = [threading.Thread(target=self._run, args=(be,), daemon=True,
                                           name=f"voxel-stream-{i}")
                          for i, be in enumerate(self._worker_backends)]

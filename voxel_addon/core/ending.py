@@ -1,0 +1,51 @@
+"""What the interpreter's exit does for the add-on (atexit): the streams and far
+builders still open stop after the batch under way, and the background threads that
+run OpenCL (the warm-up, the far prebuild: opencl.background) end the step under way
+and start no other. A process that ended while pocl compiled or ran a kernel in
+another thread aborted ("terminate called without an active exception", exit status
+134): a script, or a Blender quitting seconds after Show."""
+from __future__ import annotations
+
+import atexit
+import threading
+import time
+import weakref
+
+WAIT_S = 60.0  # the longest the exit waits for background threads (a cold build: seconds)
+_exiting = threading.Event()
+_open: weakref.WeakSet = weakref.WeakSet()   # objects whose close() the exit calls
+_threads: list = []                          # threads the exit waits for
+
+
+class Exiting(Exception):
+    """Raised in a background thread's wait once the interpreter exits: it stops."""
+
+
+def exiting() -> bool:
+    """Whether the interpreter is exiting: background work starts nothing new."""
+    return _exiting.is_set()
+
+
+def close_at_exit(obj) -> None:
+    """Call obj.close() at exit if obj is still alive then (its threads stop)."""
+    _open.add(obj)
+
+
+def wait_at_exit(thread: threading.Thread) -> None:
+    """Wait for THREAD at exit (it checks `exiting()` between its steps)."""
+    _threads[:] = [t for t in _threads if t.is_alive()] + [thread]
+
+
+def _at_exit() -> None:
+    _exiting.set()
+    for obj in list(_open):
+        try:
+            obj.close()
+        except Exception:  # noqa: BLE001 - the exit goes on; the rest still closes
+            pass
+    end = time.monotonic() + WAIT_S
+    for t in list(_threads):
+        t.join(max(0.0, end - time.monotonic()))
+
+
+atexit.register(_at_exit)

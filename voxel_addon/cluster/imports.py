@@ -234,9 +234,7 @@ def run(world, pool, path, *, y_min=None, area=None, replace=False, progress=Non
         version = minecraft.first_version(todo, budget)
     report = minecraft.Report() if report is None else report
     report.resumed = job.skipped
-    report.version = version
-    report.y_min = y_min if y_min is not None else (
-        (-64 if version >= anvil.V_NO_LEVEL else 0) if version is not None else 0)
+    report.take_version(version, y_min)
     shared = {"y_min": report.y_min, "encoder": f.encoder()}
     if near:
         regs = {id(t[0]): t[0] for t in todo}.values()

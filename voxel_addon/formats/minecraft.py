@@ -66,6 +66,13 @@ class Report:
     version: int | None = None
     resumed: int = 0                     # chunks an interrupted run of this import had done
 
+    def take_version(self, version, y_min=None) -> None:
+        """The import's DataVersion, and the Minecraft y that becomes z 0: Y_MIN when
+        given, else -64 from 1.18 on and 0 before (0 without a version)."""
+        self.version = version
+        self.y_min = y_min if y_min is not None else (
+            -64 if version is not None and version >= anvil.V_NO_LEVEL else 0)
+
     def lines(self) -> list[str]:
         out = [f"{self.chunks} chunks imported (y_min {self.y_min}"
                f"{'' if self.version is None else f', DataVersion {self.version}'})"]
@@ -376,9 +383,7 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
         if job.skipped and version is None:
             version = first_version(todo, budget)
         if version is not None:
-            report.version = version
-            report.y_min = y_min if y_min is not None else (
-                -64 if version >= anvil.V_NO_LEVEL else 0)
+            report.take_version(version, y_min)
             world.file.stage_meta(mcfile.Y_MIN, str(report.y_min))
         at = [i for i, k in enumerate(keys) if not job.skip(i, k)]
         todo = [todo[i] for i in at]
@@ -445,9 +450,7 @@ def steps(world, path, report: Report, *, y_min=None, area=None, replace=False,
                 ch = None
             if ch is not None:
                 if report.version is None:
-                    report.version = version if version is not None else ch.version
-                    report.y_min = y_min if y_min is not None else (
-                        -64 if report.version >= anvil.V_NO_LEVEL else 0)
+                    report.take_version(version if version is not None else ch.version, y_min)
                     world.file.stage_meta(mcfile.Y_MIN, str(report.y_min))
                 if ch.status not in anvil.DONE:
                     report.unfinished[ch.status] += 1

@@ -115,25 +115,34 @@ class Passes:
             setattr(cls, name, f)
 
 
-def _profile(gl, rows: dict, small: bool) -> None:
-    """Each pass's GL ms (median of 5 frames) and each effect switched off, at 1920x1080,
-    on the ocean and the landscape scenes: where a frame's time goes."""
-    from voxel_addon.bench.render import VARIANTS
+def _scene(gl, name: str):
+    """(renderer, its settings maker, camera, hours) of a reference scene as each tree's
+    CLI renders it (the generator's sea level where the tree has one; no sea where the
+    area's edge is dry)."""
     from voxel_addon.light import daytime
     from voxel_addon.meshing import scenes
     from voxel_addon.render import Camera, Settings, source
     from voxel_addon.render.pipeline import Renderer
+    sc, a = scenes.SCENES[name], source.scene_area(name)
+    sea = source.scene_sea_level(name) if hasattr(source, "scene_sea_level") else None
+    r = Renderer(gl, Settings() if sea is None else Settings(sea_level=sea))
+    r.set_area(a.blocks, a.light, a.cx0, a.cy0, ring=True, light_at=a.light_at)
+    if sea is not None and hasattr(source, "open_sea") and not source.open_sea(r):
+        sea = -1
+
+    def settings():
+        return Settings() if sea is None else Settings(sea_level=sea)
+    r.s = settings()
+    return r, settings, Camera(*sc.camera), daytime.parse_time(sc.time)
+
+
+def _profile(gl, rows: dict, small: bool) -> None:
+    """Each pass's GL ms (median of 5 frames) and each effect switched off, at 1920x1080,
+    on the ocean and the landscape scenes: where a frame's time goes."""
+    from voxel_addon.bench.render import VARIANTS
     size, n = ((320, 180), 1) if small else ((1920, 1080), 5)
     for name in ("ocean", "landscape"):
-        sc, a = scenes.SCENES[name], source.scene_area(name)
-        sea = source.scene_sea_level(name) if hasattr(source, "scene_sea_level") else None
-        base = Settings() if sea is None else Settings(sea_level=sea)
-        r = Renderer(gl, base)
-        r.set_area(a.blocks, a.light, a.cx0, a.cy0, ring=True, light_at=a.light_at)
-        if sea is not None and hasattr(source, "open_sea") and not source.open_sea(r):
-            sea, base = -1, Settings(sea_level=-1)
-        r.s = base
-        cam, hours = Camera(*sc.camera), daytime.parse_time(sc.time)
+        r, settings, cam, hours = _scene(gl, name)
         P = Passes(gl)
         try:
             r.draw(cam, hours, size)
@@ -147,7 +156,7 @@ def _profile(gl, rows: dict, small: bool) -> None:
                 f[i][1] for f in frames)
         for vname, eff in VARIANTS:
             try:
-                r.s = (Settings() if sea is None else Settings(sea_level=sea)).with_effects(eff)
+                r.s = settings().with_effects(eff)
             except Exception:  # an effect this tree does not have
                 continue
             rows[f"var_{name}_{vname}_ms"] = _best(gl, r, cam, hours, size, max(1, n - 2))[0]
@@ -163,17 +172,10 @@ def child(out: Path, small: bool) -> None:
     gl = _gl()
     rows = {"renderer": gl.info.get("GL_RENDERER", "?"), "version": gl.info.get("GL_VERSION")}
     sizes, n = (((160, 90), (320, 180)), 1) if small else (SIZES, 5)
-    for name, sc in scenes.SCENES.items():
-        a = source.scene_area(name)
-        sea = source.scene_sea_level(name) if hasattr(source, "scene_sea_level") else None
-        s = Settings() if sea is None else Settings(sea_level=sea)
-        r = Renderer(gl, s)
-        r.set_area(a.blocks, a.light, a.cx0, a.cy0, ring=True, light_at=a.light_at)
-        if sea is not None and hasattr(source, "open_sea") and not source.open_sea(r):
-            r.s = Settings(sea_level=-1)  # as each tree's CLI renders the scene
-        hours = daytime.parse_time(sc.time)
+    for name in scenes.SCENES:
+        r, _, cam, hours = _scene(gl, name)
         for w, h in sizes:
-            rows[f"gpu_{name}_{w}x{h}_ms"] = _best(gl, r, Camera(*sc.camera), hours, (w, h), n)[0]
+            rows[f"gpu_{name}_{w}x{h}_ms"] = _best(gl, r, cam, hours, (w, h), n)[0]
         r.release()
     a = source.scene_area("landscape")
     tiles = [[build_chunk(a.blocks[16 * i:16 * i + 18, 16 * j:16 * j + 18], backend=None)

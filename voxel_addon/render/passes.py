@@ -90,11 +90,13 @@ class Peel(Transparency):
         self.layers = len(draws)
         # a layer nothing was drawn into is not shaded, and the layers behind it are not
         # drawn: the second and third layers are empty in most views, and on llvmpipe
-        # such a pass cost as much as a full one (bench/README.md: the H200 section)
-        dev = draws[0].dev if draws else None
+        # such a pass cost as much as a full one (bench/README.md: the H200 section).
+        # Not the first: it holds what made the frame peel at all, and counting its
+        # samples cost llvmpipe ~25 % of a frame without effects (a lost fast path)
         for i, (d, sh) in enumerate(zip(draws, shades)):
-            d.count = sh.when = dev.counter(("peel", i))
-            d.when = draws[i - 1].count if i else None
+            if i:
+                d.count = sh.when = d.dev.counter(("peel", i))
+                d.when = draws[i - 1].count
 
     def geometry(self, view, stats):
         for p in self.draws:

@@ -3,7 +3,9 @@ builders still open stop after the batch under way, and the background threads t
 run OpenCL (the warm-up, the far prebuild: opencl.background) end the step under way
 and start no other. A process that ended while pocl compiled or ran a kernel in
 another thread aborted ("terminate called without an active exception", exit status
-134): a script, or a Blender quitting seconds after Show."""
+134): a script, or a Blender quitting seconds after Show. Then the worlds still open
+save what their user changed (world.World.at_exit): a script that set blocks and
+ended without close() lost them."""
 from __future__ import annotations
 
 import atexit
@@ -15,6 +17,7 @@ WAIT_S = 60.0  # the longest the exit waits for background threads (a cold build
 _exiting = threading.Event()
 _open: weakref.WeakSet = weakref.WeakSet()   # objects whose close() the exit calls
 _threads: list = []                          # threads the exit waits for
+_last: weakref.WeakSet = weakref.WeakSet()   # objects whose at_exit() runs after those
 
 
 class Exiting(Exception):
@@ -29,6 +32,12 @@ def exiting() -> bool:
 def close_at_exit(obj) -> None:
     """Call obj.close() at exit if obj is still alive then (its threads stop)."""
     _open.add(obj)
+
+
+def save_at_exit(obj) -> None:
+    """Call obj.at_exit() at exit if obj is still alive then, once the objects of
+    close_at_exit are closed and the waited threads ended (nothing uses it any more)."""
+    _last.add(obj)
 
 
 def wait_at_exit(thread: threading.Thread) -> None:
@@ -46,6 +55,11 @@ def _at_exit() -> None:
     end = time.monotonic() + WAIT_S
     for t in list(_threads):
         t.join(max(0.0, end - time.monotonic()))
+    for obj in list(_last):
+        try:
+            obj.at_exit()
+        except Exception:  # noqa: BLE001 - at_exit says what failed itself; the rest saves
+            pass
 
 
 atexit.register(_at_exit)

@@ -80,3 +80,25 @@ def restore(world) -> tuple[int, list[Path]]:
     for p in found:
         p.unlink()
     return len(last), found
+
+
+def at_exit(world, error: Exception) -> None:
+    """The interpreter exits and WORLD could not save (World.at_exit): one line on
+    stderr, and its unsaved edits written where `restore` finds them, unless the
+    world's folder is gone with its file (a temporary folder cleaned up: nobody opens
+    it again)."""
+    import sys
+    from ..core.errors import cause
+    path = world.file.path
+    n = len(world.unsaved_edits())
+    if not n:
+        return  # generated terrain and light only: they come back from the seed
+    msg = f"could not save {path}: {cause(error, path) or error}"
+    if not Path(os.path.realpath(path)).parent.is_dir():
+        msg += f"; its folder is gone with its {n} unsaved edits"
+    else:
+        try:
+            msg += f"; its {n} unsaved edits are in {write(world)} (Blender applies them when it opens the world)"
+        except OSError as e:
+            msg += f"; its {n} unsaved edits could not be written anywhere ({e})"
+    print(f"Voxel Worlds: {msg}", file=sys.stderr, flush=True)

@@ -50,6 +50,26 @@ class Saving:
         self.flush(only=keys)
         return len(keys)
 
+    def at_exit(self) -> None:
+        """The interpreter exits with this world open (core/ending.py): what its user
+        changed (edits, blocks set, chunks with own changes) is written, not the
+        generated terrain and light (they come back from the seed), so the exit is
+        quick. A write that fails is said on stderr in one line, the edits kept as
+        a failed save in Blender keeps them (world/rescue.py)."""
+        if self.file.db is None:
+            return
+        self._stop_threads()
+        try:
+            with self._lock:
+                own = list(self._mine)
+                idle = not (own or self._saving or self._edits or self._stale)
+            if not idle:  # (a script that only read waits for no other writer's lock)
+                self.flush(only=own)
+        except Exception as e:  # noqa: BLE001 - the exit goes on: say it, keep what we can
+            from . import rescue
+            rescue.at_exit(self, e)
+        self.file.close()
+
     def flush(self, only=None) -> None:
         """Write every changed chunk (or those of `only` and the unloaded ones) and
         every pending edit in one transaction."""

@@ -31,6 +31,7 @@ from collections import OrderedDict
 import numpy as np
 
 from ..core import chunk as C
+from ..core import ending
 from ..core.blocks import REGISTRY
 from ..core.chunk import Chunk
 from ..core.errors import VoxelError
@@ -76,6 +77,8 @@ class World(Saving):
         if loader:
             self._thread = threading.Thread(target=self._loader, name="voxel-loader", daemon=True)
             self._thread.start()
+        if not self.readonly:
+            ending.save_at_exit(self)  # a script that ends without close() keeps its blocks
 
     # ---- opening ----------------------------------------------------------
     @classmethod

@@ -125,6 +125,26 @@ def test_newer_world_is_refused(tmp_path):
     assert digest(p) == before
 
 
+@pytest.mark.parametrize("key, value, message", [
+    ("seed", "abc", "seed 'abc' is no whole number"), ("seed", None, "no seed"),
+    ("generator", None, "no generator"), ("generator_version", "x", "'x' is not a number")])
+def test_damaged_meta_rows_are_one_line_in_info_too(tmp_path, key, value, message):
+    import sqlite3
+    from voxel_addon.world import World
+    p = tmp_path / "w.sqlite"
+    World.create(p, seed=1, generator="flat", loader=False).close()
+    db = sqlite3.connect(p)
+    db.execute("DELETE FROM meta WHERE key=?", (key,))
+    if value is not None:
+        db.execute("INSERT INTO meta VALUES (?, ?)", (key, value))
+    db.commit()
+    db.close()
+    before = digest(p)
+    r = cli("info", "--world", p)  # (it printed a KeyError's or ValueError's traceback)
+    assert r.returncode == 2 and message in r.stderr, r.stderr[-2000:]
+    assert len(r.stderr.strip().splitlines()) == 1 and digest(p) == before
+
+
 def test_a_command_builds_its_own_parser_only():
     """`import ...` does not import what other commands' options list (meshing,
     render); the whole parser still lists every command."""

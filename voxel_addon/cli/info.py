@@ -23,7 +23,7 @@ def run(args):
             "format_version": int(m["format_version"]),
             "seed": wf.seed,
             "generator": wf.generator,
-            "generator_version": int(m.get("generator_version", 0)),
+            "generator_version": wf.generator_version,
             "generator_params": wf.generator_params,
             "chunks": wf.chunk_count(),
             "edits": wf.edit_count(),

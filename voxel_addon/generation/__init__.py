@@ -34,11 +34,7 @@ def for_file(wf, backend: str | None = None):
     terrain whatever the newest version is. The one place that reads that version:
     World.open, the CLI and the cluster workers (the World's generator) go through it.
     A file without one predates versions: version 1, what it was made with."""
-    raw = wf.meta.get("generator_version")
-    try:
-        version = 1 if raw in (None, "") else int(raw)
-    except (TypeError, ValueError):
-        raise VoxelError(f"{wf.path}: its generator version {raw!r} is not a number") from None
+    version = wf.generator_version  # (damaged settings: a VoxelError)
     try:
         return make_generator(wf.generator, wf.seed, wf.generator_params, backend, version)
     except (ValueError, TypeError, KeyError, IndexError, AttributeError, ArithmeticError) as e:

@@ -31,6 +31,35 @@ class Meta:
     """WorldFile's meta half; it needs `path`, `db`, `meta`, `_lock`, `_staged`,
     `_bases`, `transaction()` and `_writable()` of WorldFile."""
 
+    # a hostile or damaged meta row is a one-line VoxelError here, never a
+    # KeyError or ValueError further up (info, the generator, Blender's panel)
+    @property
+    def seed(self) -> int:
+        raw = self.meta.get("seed")
+        try:
+            return int(raw)
+        except (TypeError, ValueError):
+            what = "no seed" if raw is None else f"seed {raw[:40]!r} is no whole number"
+            raise VoxelError(f"{self.path}: its generator settings are damaged ({what})") from None
+
+    @property
+    def generator(self) -> str:
+        raw = self.meta.get("generator")
+        if not raw:
+            raise VoxelError(f"{self.path}: its generator settings are damaged (no generator)")
+        return raw
+
+    @property
+    def generator_version(self) -> int:
+        """The version of its generator the world was made with; a file without one
+        predates versions: 1, what it was made with."""
+        raw = self.meta.get("generator_version")
+        try:
+            return 1 if raw in (None, "") else int(raw)
+        except (TypeError, ValueError):
+            raise VoxelError(f"{self.path}: its generator version {raw[:40]!r} is not a "
+                             "number") from None
+
     @property
     def generator_params(self) -> dict:
         raw = self.meta.get("generator_params") or "{}"

@@ -133,15 +133,6 @@ class WorldFile(Decoding, Opening, Meta):
                                   "generator_version": str(generator_version),
                                   "generator_params": json.dumps(params or {}, sort_keys=True)})
 
-    # ---- properties -------------------------------------------------------
-    @property
-    def seed(self) -> int:
-        return int(self.meta["seed"])
-
-    @property
-    def generator(self) -> str:
-        return self.meta["generator"]
-
     # ---- transactions, queries for the file's other tables (far.py) ----------
     def transaction(self):
         """`with wf.transaction() as db:` one write transaction (BEGIN IMMEDIATE: no

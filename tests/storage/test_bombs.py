@@ -154,6 +154,25 @@ def test_hostile_tables_give_one_line_or_are_left_out(world_path):
         WorldFile(world_path, readonly=True)
 
 
+def test_chunk_rows_keyed_outside_the_world_are_left_out(world_path):
+    # a text or real key made `map` sort mixed types (a TypeError's traceback); a key
+    # far outside the world made it refuse a span no chunk of the world has
+    with World.create(world_path, seed=1, generator="flat", loader=False) as w:
+        w.generate_area([(0, 0), (1, -1)])
+    db = sqlite3.connect(world_path)
+    for key in [("a", 0), (2.5, 0), (1, 0.5), (1 << 40, 0), (0, -(1 << 26) - 1), (0, 1 << 26)]:
+        db.execute("INSERT INTO chunks SELECT ?, ?, codec, blocks, data FROM chunks "
+                   "WHERE cx=0 AND cy=0", key)
+    db.commit()
+    db.close()
+    wf = WorldFile(world_path, readonly=True)
+    try:
+        assert sorted(wf.chunk_keys()) == [(0, 0), (1, -1)] and wf.chunk_count() == 2
+        assert wf.chunks_in(-5, -5, 5, 5) == {(0, 0), (1, -1)}
+    finally:
+        wf.close()
+
+
 def test_block_ids_beyond_the_table_are_a_damaged_chunk(world_path):
     with World.create(world_path, seed=1, generator="flat", loader=False) as w:
         w.generate_area([(0, 0)])

@@ -36,6 +36,10 @@ from .rows import Encoder
 from .schema import lock_timeout, open_error
 from .transactions import Reading, Transaction
 
+_R = C.REACH // C.SIZE
+# a chunk row keyed by whole numbers inside the world (chunk_keys)
+_KEYED = (f"typeof(cx) = 'integer' AND typeof(cy) = 'integer' AND cx BETWEEN {-_R} AND {_R - 1} "
+          f"AND cy BETWEEN {-_R} AND {_R - 1}")
 _MANY = 64  # keys per statement of a batch read (128 parameters: any SQLite's limit)
 _READ_MANY = ("SELECT k.column1, k.column2, c.codec, c.blocks, c.data FROM {k} k "
               "LEFT JOIN chunks c ON c.cx = k.column1 AND c.cy = k.column2")
@@ -174,12 +178,14 @@ class WorldFile(Decoding, Opening, Meta):
 
     # ---- chunks -----------------------------------------------------------
     def chunk_keys(self) -> list[tuple[int, int]]:
+        """Keys of the stored chunks; rows keyed outside the world or by no whole
+        numbers (a hostile file: text, reals) are left out, as they are when read."""
         with self._lock:
-            return [tuple(r) for r in self.db.execute("SELECT cx, cy FROM chunks")]
+            return [tuple(r) for r in self.db.execute(f"SELECT cx, cy FROM chunks WHERE {_KEYED}")]
 
     def chunk_count(self) -> int:
         with self._lock:
-            return self.db.execute("SELECT COUNT(*) FROM chunks").fetchone()[0]
+            return self.db.execute(f"SELECT COUNT(*) FROM chunks WHERE {_KEYED}").fetchone()[0]
 
     def has_chunk(self, key) -> bool:
         with self._lock:
@@ -404,7 +410,7 @@ class WorldFile(Decoding, Opening, Meta):
     def chunks_in(self, cx0, cy0, cx1, cy1) -> set:
         """Keys of the stored chunks in [cx0, cx1] x [cy0, cy1]."""
         return {tuple(r) for r in self.query(
-            "SELECT cx, cy FROM chunks WHERE cx BETWEEN ? AND ? AND cy BETWEEN ? AND ?",
+            f"SELECT cx, cy FROM chunks WHERE cx BETWEEN ? AND ? AND cy BETWEEN ? AND ? AND {_KEYED}",
             (cx0, cx1, cy0, cy1))}
 
     def edit_count(self) -> int:

@@ -210,7 +210,7 @@ def test_cli_bake(small_world, validate, tmp_path):
     for bad, msg in ((["--region", "5", "0", "5", "9"], "empty region"),
                      (["--region", "0", "0", "4", "4", "--time", "25:99"], ""),
                      (["--region", "0", "0", "4", "4", "--world", str(tmp_path / "no.sqlite")],
-                      "does not exist"),
+                      "no world file"),
                      (["--region", "0", "0", "4", "4", "--out", "/proc/no/b.glb"], "cannot create folder")):
         args = ["--world", str(small_world), "--out", str(tmp_path / "b.glb")] + bad
         r = subprocess.run(python_cmd("-m", "voxel_addon", "bake", *args), cwd=ROOT,

@@ -111,6 +111,29 @@ def test_missing_or_unreadable_file(tmp_path, content):
     assert r.returncode == 2 and "--seed is needed" in r.stderr
 
 
+@pytest.mark.parametrize("kind, words", [
+    ("folder", "is a folder"), ("fifo", "is a pipe"), ("dangling", "symbolic link to nothing"),
+    ("loop", "symbolic link to nothing")])
+def test_a_world_path_that_holds_no_file_says_what_is_there(tmp_path, kind, words, capsys):
+    # a pipe or a dangling link was 'no world file' (generate --seed: it cannot be
+    # made there either), a folder 'does not exist' for map and bake
+    from voxel_addon.cli import main
+    from voxel_addon.formats import vox
+    p = tmp_path / "w.sqlite"
+    {"folder": p.mkdir, "fifo": lambda: os.mkfifo(p),
+     "dangling": lambda: p.symlink_to(tmp_path / "gone" / "w.sqlite"),
+     "loop": lambda: p.symlink_to(p)}[kind]()
+    (tmp_path / "x.vox").write_bytes(vox.write(np.ones((2, 2, 2), np.uint8), vox.default_palette()))
+    for args in (("generate", "--seed", 1, "--radius", 0), ("info",),
+                 ("map", "--out", tmp_path / "m.png"), ("far", "--center", 0, 0, "--far", 1),
+                 ("bake", "--region", 0, 0, 4, 4, "--out", tmp_path / "b.glb"),
+                 ("import", "--from", tmp_path / "x.vox")):
+        assert main([args[0], "--world", str(p), *map(str, args[1:])]) == 2
+        err = capsys.readouterr().err
+        assert words in err and len(err.strip().splitlines()) == 1, (args, err)
+    assert os.path.lexists(p) and not (tmp_path / "gone").exists()
+
+
 def test_newer_world_is_refused(tmp_path):
     import sqlite3
     p = tmp_path / "w.sqlite"

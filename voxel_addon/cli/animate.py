@@ -36,8 +36,8 @@ def run(args):
     from .. import cluster
     from ..render import source
     from ..world import World
-    if not args.world.is_file():
-        raise VoxelError(f"no world file at {args.world}")
+    from ..storage import check_path
+    check_path(args.world)
     if not args.blend.is_file():
         raise VoxelError(f"no .blend at {args.blend}")
     if args.frames and args.frames[1] < args.frames[0]:

@@ -46,8 +46,8 @@ def run(args):
     from .. import bake
     from ..world import World
     from ..light import daytime
-    if not args.world.exists():
-        raise VoxelError(f"world file {args.world} does not exist")
+    from ..storage import check_path
+    check_path(args.world)
     hours = daytime.parse_time(args.time)
     if (args.region is None) == (args.lod is None):
         raise VoxelError("give --region X0 Y0 X1 Y1 or --lod X Y NEAR FAR (one of them)")

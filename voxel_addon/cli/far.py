@@ -33,8 +33,8 @@ def run(args):
         raise VoxelError(f"--far must be between 1 and {grid.FAR_MAX} chunks (got {args.far})")
     if not 0 <= args.near < args.far:
         raise VoxelError(f"--near must be between 0 and --far - 1 (got {args.near})")
-    if not args.world.is_file():
-        raise VoxelError(f"no world file at {args.world}")
+    from ..storage import check_path
+    check_path(args.world)
     cluster.check_writable(args)
     from ..cluster import far
     with cluster.session(args) as pool, \

@@ -24,9 +24,8 @@ def add_parser(sub):
 
 def run(args):
     from ..generation import for_file, topview
-    from ..storage import WorldFile
-    if not args.world.is_file():
-        raise VoxelError(f"world file {args.world} does not exist")
+    from ..storage import WorldFile, check_path
+    check_path(args.world)
     if args.out.suffix.lower() != ".png":
         raise VoxelError("--out must name a .png file")
     out_file(args.out)

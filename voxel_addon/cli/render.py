@@ -68,8 +68,9 @@ def run(args):
         hhmm = hhmm or sc.time
     elif args.world is None or cam_args is None:
         raise VoxelError("render needs --world and --camera (or --scene)")
-    elif not args.world.is_file():
-        raise VoxelError(f"no world file at {args.world}")
+    else:
+        from ..storage import check_path
+        check_path(args.world)
     # every cheap check before the slow part (loading, lighting, meshing)
     hours = daytime.parse_time(hhmm or "12:00")
     if not 0 <= cam_args[2] <= 400:

@@ -2,4 +2,4 @@
 from .opening import Exists  # noqa: F401
 from .schema import FORMAT_VERSION  # noqa: F401
 from .meta import MetaMoved  # noqa: F401
-from .worldfile import CorruptChunk, WorldFile  # noqa: F401
+from .worldfile import CorruptChunk, WorldFile, check_path  # noqa: F401

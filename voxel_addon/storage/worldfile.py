@@ -54,6 +54,25 @@ def _sql(template: str, n: int) -> str:
     return template.format(k="(VALUES " + ", ".join(["(?, ?)"] * n) + ")")
 
 
+def check_path(path, exists: bool = True) -> None:
+    """A one-line VoxelError when PATH can hold no world file (a folder, a pipe or
+    device, a link to nothing or a loop of links) or, with EXISTS, holds none: what
+    is there said in words ('no world file' for a pipe or a dangling link misled)."""
+    import os
+    p = Path(path)
+    if p.is_dir():
+        raise VoxelError(f"{p} is a folder, not a world file")
+    if p.is_file():
+        return
+    if p.is_symlink():
+        raise VoxelError(f"{p} is a symbolic link to nothing (or a loop of links), "
+                         "not a world file")
+    if os.path.lexists(p):
+        raise VoxelError(f"{p} is a pipe, a device or a socket, not a world file")
+    if exists:
+        raise VoxelError(f"no world file at {p}")
+
+
 class WorldFile(Decoding, Opening, Meta):
     """A world file opened for reading (and writing unless `readonly`). `created`:
     this object made the file (create), so a command that fails may remove it."""
@@ -68,13 +87,10 @@ class WorldFile(Decoding, Opening, Meta):
         self._bases: dict[str, str | None] = {}  # what a staged value was built on
         self.db = None
         self.created = False
-        if self.path.is_dir():
-            raise VoxelError(f"{self.path} is a folder, not a world file")
+        check_path(self.path, exists=_create is None)
         if _create is not None:
             self._make(_create)
             self.created = True
-        elif not self.path.is_file():
-            raise VoxelError(f"no world file at {self.path}")
         try:
             self._open(readonly)
         except BaseException:

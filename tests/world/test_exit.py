@@ -115,3 +115,30 @@ def test_a_script_that_changed_nothing_exits_without_waiting_for_another_writer(
         db.execute("ROLLBACK")
         db.close()
     assert r.returncode == 0 and not r.stderr, r.stderr[-2000:]  # generated chunks: not saved
+
+
+_FORK = r'''
+import os, sqlite3, sys
+from voxel_addon.world import World
+w = World.create(sys.argv[1], seed=3, backend="numpy", loader=False)  # (no thread: no
+w.set_block(5, 5, 120, "glass")                   # warning about forking one on 3.12)
+pid = os.fork()
+if pid == 0:
+    sys.exit(0)  # a forked child's normal exit runs the atexit handlers it inherited
+os.waitpid(pid, 0)
+db = sqlite3.connect(sys.argv[1])
+print("edits after the child:", db.execute("SELECT COUNT(*) FROM edits").fetchone()[0], flush=True)
+db.close()
+'''
+
+
+def test_a_forked_childs_exit_leaves_its_parents_world_alone(tmp_path):
+    # the child would write with its parent's SQLite connection (unsafe across a
+    # fork) or wait forever on a lock another thread held at the fork
+    path = tmp_path / "w.sqlite"
+    r = subprocess.run([sys.executable, "-c", _FORK, str(path)], capture_output=True,
+                       text=True, timeout=60)
+    assert r.returncode == 0 and not r.stderr, r.stderr[-2000:]
+    assert "edits after the child: 0" in r.stdout, r.stdout
+    with World.open(path, backend="numpy", loader=False) as w:  # the parent's own exit saved
+        assert REGISTRY[w.get_block(5, 5, 120)].name == "glass"

@@ -13,6 +13,7 @@ made again. Imports (`store_chunks`) decide per chunk inside the transaction too
 """
 from __future__ import annotations
 
+import os
 import time
 
 from ..core import chunk as C
@@ -56,8 +57,8 @@ class Saving:
         generated terrain and light (they come back from the seed), so the exit is
         quick. A write that fails is said on stderr in one line, the edits kept as
         a failed save in Blender keeps them (world/rescue.py)."""
-        if self.file.db is None:
-            return
+        if self.file.db is None or self.pid != os.getpid():
+            return  # (a forked child's exit: its parent's connection and locks, not its own)
         self._stop_threads()
         try:
             with self._lock:

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import itertools
 import logging
+import os
 import threading
 import time
 import weakref
@@ -77,6 +78,7 @@ class World(Saving):
         if loader:
             self._thread = threading.Thread(target=self._loader, name="voxel-loader", daemon=True)
             self._thread.start()
+        self.pid = os.getpid()  # the process that saves it at exit
         if not self.readonly:
             ending.save_at_exit(self)  # a script that ends without close() keeps its blocks
 

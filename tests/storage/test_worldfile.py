@@ -139,7 +139,7 @@ def test_readonly_open_of_a_path_with_uri_characters(tmp_path):
         wf.close()
 
 
-def _spec_only(path, tables=("meta", "block_types", "chunks")):
+def _spec_only(path, tables=("meta", "block_types", "chunks"), key=", PRIMARY KEY (cx, cy)"):
     """A world as another program writes it from SPEC 3 alone: meta, block_types and
     chunks (one zlib chunk: stone up to z 9), none of our own tables."""
     db = sqlite3.connect(path)
@@ -153,7 +153,7 @@ def _spec_only(path, tables=("meta", "block_types", "chunks")):
         db.executemany("INSERT INTO block_types VALUES (?, ?)", [(0, "air"), (1, "stone")])
     if "chunks" in tables:
         db.execute("CREATE TABLE chunks(cx INTEGER, cy INTEGER, codec TEXT NOT NULL, "
-                   "blocks BLOB NOT NULL, data BLOB, PRIMARY KEY (cx, cy))")
+                   f"blocks BLOB NOT NULL, data BLOB{key})")
         b = np.zeros(chunk.SIZE * chunk.SIZE * chunk.HEIGHT, "<u2")
         b[:256 * 10] = 1
         db.execute("INSERT INTO chunks VALUES (0, 0, 'zlib', ?, NULL)",
@@ -190,6 +190,27 @@ def test_a_file_without_a_chunks_table_is_refused_untouched(tmp_path):
         with pytest.raises(VoxelError, match="not a Voxel Worlds file .*chunks"):
             WorldFile(p, readonly=ro)
     assert p.read_bytes() == before and sorted(x.name for x in tmp_path.iterdir()) == [p.name]
+
+
+def test_a_chunks_table_without_a_key_is_refused_untouched(tmp_path):
+    # every save added a row beside the old one (INSERT OR REPLACE replaces nothing
+    # without a key): the file grew, reads picked one of them
+    p = tmp_path / "nokey.sqlite"
+    _spec_only(p, key="")
+    before = p.read_bytes()
+    for ro in (False, True):
+        with pytest.raises(VoxelError, match="chunks table has no key on cx, cy"):
+            WorldFile(p, readonly=ro)
+    assert p.read_bytes() == before
+    db = sqlite3.connect(p)  # a unique index of another program's making is a key
+    db.execute('CREATE UNIQUE INDEX "by ""key""" ON chunks(cy, cx)')
+    db.commit()
+    db.close()
+    with World.open(p, loader=False) as w:
+        w.set_block(1, 1, 10, "glass")
+    db = sqlite3.connect(p)
+    assert db.execute("SELECT COUNT(*) FROM chunks").fetchone()[0] == 1
+    db.close()
 
 
 def test_a_killed_creates_leftovers_are_swept_once_surely_abandoned(tmp_path):

@@ -125,6 +125,9 @@ class WorldFile(Decoding, Opening, Meta):
             if "chunks" not in tables:  # another program's file: refused before any write
                 raise VoxelError(f"{self.path} is not a Voxel Worlds file (it has no "
                                  "chunks table)")
+            if not self._chunks_keyed():  # every write would add a row, reads pick one
+                raise VoxelError(f"{self.path} is not a readable world file (its chunks "
+                                 "table has no key on cx, cy)")
             if not readonly:  # files made by other programs or versions: rollback mode
                 wal(self.db, lock_timeout())
             self._map_ids(file_names)
@@ -146,6 +149,16 @@ class WorldFile(Decoding, Opening, Meta):
             if self._has_light else "")
 
     # ---- creation and checks -------------------------------------------------
+    def _chunks_keyed(self) -> bool:
+        """Whether the chunks table holds one row per (cx, cy) (SPEC: its primary
+        key; a unique index another program made counts too)."""
+        for _, name, unique, *_ in self.db.execute("PRAGMA index_list(chunks)").fetchall():
+            quoted = name.replace('"', '""')
+            cols = {r[2] for r in self.db.execute(f'PRAGMA index_info("{quoted}")')}
+            if unique and cols == {"cx", "cy"}:
+                return True
+        return False
+
     @classmethod
     def create(cls, path, *, seed: int, generator: str, generator_version: int,
                params: dict | None = None) -> "WorldFile":

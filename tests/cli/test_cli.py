@@ -200,3 +200,35 @@ def test_a_minecraft_import_loads_no_meshing_nor_resource_packs(tmp_path):
     for m in ("voxel_addon.meshing", "voxel_addon.opencl", "voxel_addon.world.stream",
               "voxel_addon.world.payload", "voxel_addon.mcres.pack", "'uuid'"):
         assert m not in mods, m
+
+
+def test_ctrl_c_in_generate_says_what_it_kept(tmp_path):
+    # it said only 'interrupted': whether anything was written, and that the same
+    # command finishes it, was the user's guess
+    import signal
+    import sqlite3
+    import time
+    p = tmp_path / "w.sqlite"
+    assert cli("generate", "--world", p, "--seed", 1, "--radius", 0, "--backend", "numpy").returncode == 0
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.Popen([sys.executable, "-m", "voxel_addon", "generate", "--world", str(p),
+                             "--radius", "30", "--backend", "numpy"],
+                            stderr=subprocess.PIPE, text=True, env=env)
+    db = sqlite3.connect(p)
+    try:
+        end = time.monotonic() + 60
+        while db.execute("SELECT COUNT(*) FROM chunks").fetchone()[0] < 40 and time.monotonic() < end:
+            time.sleep(0.02)
+        proc.send_signal(signal.SIGINT)
+        err = proc.communicate(timeout=60)[1]
+        stored = db.execute("SELECT COUNT(*) FROM chunks").fetchone()[0] - 1
+    finally:
+        proc.kill()
+        db.close()
+    assert proc.returncode == 130 and "Traceback" not in err, err[-2000:]
+    kept = [ln for ln in err.replace("\r", "\n").splitlines() if "were written and kept" in ln]
+    assert len(kept) == 1 and "the same command again generates the rest" in kept[0], err
+    said = int(kept[0].split()[0])  # a batch stored as the signal came may be left uncounted
+    assert 32 <= said <= stored <= said + 32 and stored < 61 * 61 - 1, (said, stored)
+    r = cli("generate", "--world", p, "--radius", 2, "--backend", "numpy")
+    assert r.returncode == 0 and "already present" in r.stderr

@@ -71,12 +71,17 @@ def run(args):
             show(n, total)
         w.kept = lambda: f"{done[0]} of {done[1]} new chunks were written and kept" \
             if done[0] else None
-        if pool is None:
-            made = world.generate_area(keys, progress)
-        else:
-            from ..cluster import generate
-            made, computed = generate.run(world, pool, keys, args.backend, progress)
-            note(f"workers computed {computed} chunks")
+        try:
+            if pool is None:
+                made = world.generate_area(keys, progress)
+            else:
+                from ..cluster import generate
+                made, computed = generate.run(world, pool, keys, args.backend, progress)
+                note(f"workers computed {computed} chunks")
+        except KeyboardInterrupt:  # the batches written stay (Writing): say so
+            note(f"{w.kept() or 'no new chunks were written'}; the same command again "
+                 "generates the rest")
+            raise
         dt = time.perf_counter() - t0
         note(f"{made} new chunks in {dt:.2f} s, {len(keys) - made} already present; "
              f"{world.file.chunk_count()} chunks in {args.world}")

@@ -142,3 +142,54 @@ def test_a_forked_childs_exit_leaves_its_parents_world_alone(tmp_path):
     assert "edits after the child: 0" in r.stdout, r.stdout
     with World.open(path, backend="numpy", loader=False) as w:  # the parent's own exit saved
         assert REGISTRY[w.get_block(5, 5, 120)].name == "glass"
+
+
+_DROPPED = r'''
+import sys
+from voxel_addon.world import World
+for i, p in enumerate(sys.argv[1:]):  # each world dropped unclosed when the next opens
+    w = World.create(p, seed=3, backend="numpy", loader=False)
+    w.set_blocks([[1, 2, 100], [40, -3, 101]], [1, 1])
+    w.set_block(5, 5, 120, "glass")
+    if i == 0:
+        w.flush()  # saved: nothing keeps it alive any more
+        w.set_block(5, 5, 121, "glass")
+del w
+import gc
+gc.collect()
+'''
+
+
+def test_worlds_dropped_without_close_are_saved_at_exit(tmp_path):
+    # without a loader thread nothing kept a dropped world alive: garbage-collected,
+    # its blocks were gone before the exit could save them
+    paths = [tmp_path / f"w{i}.sqlite" for i in range(3)]
+    r = subprocess.run([sys.executable, "-c", _DROPPED, *map(str, paths)],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0 and not r.stderr, r.stderr[-2000:]
+    for p in paths:
+        with World.open(p, backend="numpy", loader=False) as w:
+            names = [REGISTRY[w.get_block(*v)].name for v in [(1, 2, 100), (40, -3, 101),
+                                                               (5, 5, 120)]]
+            assert names == ["stone", "stone", "glass"], (p, names)
+            if p == paths[0]:
+                assert REGISTRY[w.get_block(5, 5, 121)].name == "glass"
+
+
+def test_a_saved_world_is_not_kept_alive():
+    import gc
+    import weakref
+    import tempfile
+    from voxel_addon.core import ending
+    with tempfile.TemporaryDirectory() as d:
+        w = World.create(f"{d}/w.sqlite", seed=3, backend="numpy", loader=False)
+        w.set_block(1, 1, 100, "glass")
+        assert w in ending._kept
+        w.flush()
+        assert w not in ending._kept
+        w.set_block(1, 1, 101, "glass")
+        w.close()
+        ref = weakref.ref(w)
+        del w
+        gc.collect()
+        assert ref() is None  # closed: nothing holds it

@@ -18,6 +18,7 @@ _exiting = threading.Event()
 _open: weakref.WeakSet = weakref.WeakSet()   # objects whose close() the exit calls
 _threads: list = []                          # threads the exit waits for
 _last: weakref.WeakSet = weakref.WeakSet()   # objects whose at_exit() runs after those
+_kept: set = set()   # those of _last with something to save: alive until then
 
 
 class Exiting(Exception):
@@ -34,10 +35,17 @@ def close_at_exit(obj) -> None:
     _open.add(obj)
 
 
-def save_at_exit(obj) -> None:
+def save_at_exit(obj, keep: bool = False) -> None:
     """Call obj.at_exit() at exit if obj is still alive then, once the objects of
-    close_at_exit are closed and the waited threads ended (nothing uses it any more)."""
+    close_at_exit are closed and the waited threads ended (nothing uses it any more).
+    KEEP: obj holds something to save, so it stays alive until the exit even when
+    its user drops it (a script's world opened in a loop without close()); False
+    again once saved."""
     _last.add(obj)
+    if keep:
+        _kept.add(obj)
+    else:
+        _kept.discard(obj)
 
 
 def wait_at_exit(thread: threading.Thread) -> None:
@@ -55,7 +63,7 @@ def _at_exit() -> None:
     end = time.monotonic() + WAIT_S
     for t in list(_threads):
         t.join(max(0.0, end - time.monotonic()))
-    for obj in list(_last):
+    for obj in list(_last):  # (the kept ones are in it too)
         try:
             obj.at_exit()
         except Exception:  # noqa: BLE001 - at_exit says what failed itself; the rest saves

@@ -17,6 +17,7 @@ import os
 import time
 
 from ..core import chunk as C
+from ..core import ending
 from ..storage import CorruptChunk
 
 BATCH = 32  # chunks generated per loader step: amortises kernel launches
@@ -70,6 +71,7 @@ class Saving:
             from . import rescue
             rescue.at_exit(self, e)
         self.file.close()
+        self._unkeep()
 
     def flush(self, only=None) -> None:
         """Write every changed chunk (or those of `only` and the unloaded ones) and
@@ -185,6 +187,15 @@ class Saving:
                 if self._saving.get(k) is snap:
                     del self._saving[k]
                 self._stored(k, new.get(k), snap[4], merged.get(k))
+            if not (self._mine or self._edits or self._saving):
+                self._unkeep()
+
+    def _unkeep(self) -> None:
+        """Nothing of its user's left to save: the world no longer stays alive for
+        the exit (World.blocks_changed keeps it)."""
+        if self._kept:
+            self._kept = False
+            ending.save_at_exit(self, keep=False)
 
     def _snapshot(self, key, blocks, data, light) -> tuple:
         """What _saving holds for a chunk: (blocks, data, light, stored version it

@@ -75,10 +75,11 @@ class World(Saving):
         self._stop = False
         self.loader_error: BaseException | None = None
         self._thread = None
+        self.pid = os.getpid()  # the process that saves it at exit
+        self._kept = False      # kept alive for the exit: own changes not saved yet
         if loader:
             self._thread = threading.Thread(target=self._loader, name="voxel-loader", daemon=True)
             self._thread.start()
-        self.pid = os.getpid()  # the process that saves it at exit
         if not self.readonly:
             ending.save_at_exit(self)  # a script that ends without close() keeps its blocks
 
@@ -218,6 +219,9 @@ class World(Saving):
             self._mine.setdefault(key, {}).update(voxels)
             if edits:
                 self._edits.update(voxels)
+            if not self._kept:  # alive until saved, even when its user drops it unclosed
+                self._kept = True
+                ending.save_at_exit(self, keep=True)
         self.bver[key] = self.tick() if tick is None else tick
         if not relit:
             self.drop_light(key)
@@ -417,6 +421,7 @@ class World(Saving):
         if self.file.db is not None:
             self.flush()
             self.file.close()
+        self._unkeep()
 
     def _stop_threads(self) -> None:
         for s in list(self.streams):
@@ -434,6 +439,7 @@ class World(Saving):
         is gone: nothing can be written; the unsaved edits were rescued first)."""
         self._stop_threads()
         self.file.close()
+        self._unkeep()
 
     def forget_unsaved(self) -> None:
         """Drop the unsaved edits from the list of edits to save (they were kept

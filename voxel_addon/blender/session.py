@@ -247,7 +247,11 @@ def _close(key: str, w) -> str | None:
         w.close()
         return None
     except Exception as e:  # noqa: BLE001 - any failure to save must reach the user
-        return _save_failed(key, w, e)
+        msg = _save_failed(key, w, e)
+        if unsaved.get(key) is not w:  # rescued (or only terrain lost): closed unsaved,
+            w.forget_unsaved()         # as the user was told (the interpreter's exit
+            w.discard()                # would save it: World.at_exit)
+        return msg
 
 
 def _save_failed(key: str, w, error: Exception) -> str:

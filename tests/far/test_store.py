@@ -60,6 +60,24 @@ def test_chunk_writes_dirty_the_tiles_over_them(tmp_path):
         assert got == {(9, -2, 0)}
 
 
+def test_dirty_rows_naming_no_chunk_are_dropped(tmp_path):
+    # a hostile file's far_dirty row of text or reals made `far` a TypeError's
+    # traceback (tiles_of computed with them); now dropped with the good ones
+    path = tmp_path / "w.sqlite"
+    with World.create(path, seed=SEED, backend="numpy", loader=False) as w:
+        store = FarStore(w.file, signature(w.generator))
+        w.generate_area([(0, 0)])
+        db = sqlite3.connect(path)
+        db.executemany("INSERT INTO far_dirty VALUES (?, ?)",
+                       [("a", 0), (2.5, 1), (1 << 40, 0), (0, 1 << 26)])
+        db.commit()
+        seen = []
+        store.take_dirty(lambda cs: seen.extend(cs) or set())
+        assert seen == [(0, 0)]
+        assert db.execute("SELECT COUNT(*) FROM far_dirty").fetchone()[0] == 0
+        db.close()
+
+
 def test_other_generator_clears(tmp_path):
     path = tmp_path / "w.sqlite"
     with World.create(path, seed=SEED, backend="numpy", loader=False) as w:

@@ -19,6 +19,7 @@ import sqlite3
 
 import numpy as np
 
+from ..core import chunk as C
 from . import codecs
 
 SCHEMA = (
@@ -176,7 +177,10 @@ class FarStore:
                                                  (limit,))]
             if not rows:
                 return set()
-            keys = set(tiles_of(rows))
+            r = C.REACH // C.SIZE  # a row naming no chunk (a hostile file: text, reals,
+            good = [k for k in rows  # far away) is dropped with the rest, never used
+                    if all(type(v) is int and -r <= v < r for v in k)]
+            keys = set(tiles_of(good)) if good else set()
             with self.wf.transaction() as db:
                 db.executemany("DELETE FROM far_dirty WHERE cx=? AND cy=?", rows)
                 db.executemany("DELETE FROM far_tiles WHERE level=? AND tx=? AND ty=?",

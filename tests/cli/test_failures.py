@@ -270,6 +270,24 @@ def test_an_output_that_is_a_folder_is_one_line(tmp_path):
         failed(cli(cmd, "--world", w, *args, "--out", tmp_path / name), f"{name} is a folder")
 
 
+def test_an_output_that_is_the_world_file_is_refused(tmp_path):
+    """A typo naming the world as --out: dump replaced the world with its .npz (the
+    others only by their suffix: a world named like their output went too)."""
+    import hashlib
+    w = tmp_path / "w.sqlite"
+    _flat(w)
+    before = hashlib.sha256(w.read_bytes()).hexdigest()
+    failed(cli("dump", "--world", w, "--chunk", 0, 0, "--out", w), "is the world file itself")
+    failed(cli("dump", "--world", w, "--chunk", 0, 0, "--out", f"{w}-wal"), "world file itself")
+    assert hashlib.sha256(w.read_bytes()).hexdigest() == before
+    for cmd, (args, name) in OUTPUTS.items():
+        named = tmp_path / name  # a world named like the output: no suffix check stops it
+        _flat(named)
+        failed(cli(cmd, "--world", named, *args, "--out", named), "is the world file itself")
+        with World.open(named, readonly=True, loader=False) as opened:
+            assert opened.file.chunk_count() == 1
+
+
 def test_outputs_on_a_full_disk_leave_no_part(tmp_path, disk):
     """A full disk under --out: one line naming the output (not 'disk full while
     running ... on w.sqlite'), no half file and no .part left (a half .glb or .vox

@@ -60,7 +60,7 @@ def run(args):
         return _tiles(args, hours)
     if getattr(args, "workers", None) is not None or getattr(args, "scheduler", None):
         raise VoxelError("--workers/--scheduler bake tiles: use --per tile --out DIR")
-    out_file(args.out, make_folder=True)  # fail before the long work, not after it
+    out_file(args.out, make_folder=True, world=args.world)  # fail before the long work, not after it
     if args.lod:
         from ..bake import lod
         lx, ly, near, far = args.lod

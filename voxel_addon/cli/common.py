@@ -136,12 +136,15 @@ class Writing:
         raise err from None
 
 
-def out_file(path: Path, make_folder: bool = False) -> Path:
+def out_file(path: Path, make_folder: bool = False, world=None) -> Path:
     """Check an output file's path before the work: a folder there, or a missing
-    folder above it (made with MAKE_FOLDER), is one line now, not a traceback after."""
+    folder above it (made with MAKE_FOLDER), is one line now, not a traceback after;
+    so is the file of WORLD (or its journal) there: a typo would write over the world."""
     from ..core.errors import VoxelError
     if path.is_dir():
         raise VoxelError(f"--out {path} is a folder; name a file")
+    if world is not None and _is_world(path, Path(world)):
+        raise VoxelError(f"--out {path} is the world file itself; name another file")
     if make_folder:
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
@@ -150,6 +153,21 @@ def out_file(path: Path, make_folder: bool = False) -> Path:
     elif not path.parent.is_dir():
         raise VoxelError(f"folder {path.parent} does not exist")
     return path
+
+
+def _is_world(path: Path, world: Path) -> bool:
+    """Whether PATH is WORLD's file or one of its journals (links and hard links
+    followed)."""
+    import os
+    for p in [world] + [world.with_name(world.name + s) for s in ("-wal", "-shm", "-journal")]:
+        if os.path.realpath(path) == os.path.realpath(p):
+            return True
+        try:
+            if os.path.samefile(path, p):
+                return True
+        except OSError:  # one of them is not there
+            pass
+    return False
 
 
 def write_out(path: Path, data) -> None:

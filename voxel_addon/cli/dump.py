@@ -25,7 +25,7 @@ def chunk_light(blocks3x3: np.ndarray) -> np.ndarray:
 def run(args):
     from ..world import World
     cx, cy = args.chunk
-    out_file(args.out)
+    out_file(args.out, world=args.world)
     with World.open(args.world, readonly=True, loader=False) as world:
         world.chunk_at(cx, cy)  # a damaged chunk is an error here, not air (neighbours: air)
         b3 = world.region_blocks(cx - 1, cy - 1, cx + 2, cy + 2)

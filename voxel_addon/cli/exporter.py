@@ -22,7 +22,7 @@ def run(args):
     from ..world import World
     if args.out.suffix.lower() != ".vox":
         raise VoxelError(f"--out {args.out}: the file name must end in .vox")
-    out_file(args.out)
+    out_file(args.out, world=args.world)
     with World.open(args.world, readonly=True, loader=False) as world:
         r = magica.export_vox(world, args.box, args.out)
     note(f"{r['voxels']} voxels, {r['colors']} colours"

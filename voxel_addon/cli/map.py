@@ -28,7 +28,7 @@ def run(args):
     check_path(args.world)
     if args.out.suffix.lower() != ".png":
         raise VoxelError("--out must name a .png file")
-    out_file(args.out)
+    out_file(args.out, world=args.world)
     wf = WorldFile(args.world, readonly=True)
     try:
         keys = sorted(wf.chunk_keys())

@@ -48,7 +48,7 @@ def run(args):
     import numpy as np
 
     from .common import out_file, write_out
-    out_file(args.out, make_folder=True)
+    out_file(args.out, make_folder=True, world=args.world)
     w, h = args.size
     if not (8 <= w <= 8192 and 8 <= h <= 8192):
         raise VoxelError("--size must be between 8 and 8192 pixels per side")

@@ -13,6 +13,7 @@ import pytest
 import zstandard
 
 from voxel_addon.core import chunk
+from voxel_addon.core.blocks import REGISTRY
 from voxel_addon.storage import CorruptChunk, WorldFile, codecs
 from voxel_addon.world import World
 
@@ -188,6 +189,33 @@ def test_block_ids_beyond_the_table_are_a_damaged_chunk(world_path):
             wf.read_chunk((0, 0))
     finally:
         wf.close()
+
+
+def test_an_id_whose_name_is_gone_from_the_table_is_a_damaged_chunk(world_path):
+    # stone's row moved to another id (another program's INSERT OR REPLACE): its
+    # voxels read as air, and an edit wrote the chunk back without them
+    from voxel_addon.core.errors import VoxelError
+    with World.create(world_path, seed=1, generator="flat", loader=False) as w:
+        w.generate_area([(0, 0)])
+        stone = w.file.file_ids[REGISTRY.id("stone")]
+        assert stone in np.asarray(w.file.read_chunk((0, 0))[0])
+    db = sqlite3.connect(world_path)
+    db.execute("INSERT OR REPLACE INTO block_types VALUES (7000, 'stone')")
+    db.commit()
+    before = db.execute("SELECT blocks FROM chunks WHERE cx=0 AND cy=0").fetchone()
+    db.close()
+    wf = WorldFile(world_path, readonly=True)
+    try:
+        with pytest.raises(CorruptChunk, match="missing from block_types"):
+            wf.read_chunk((0, 0))
+    finally:
+        wf.close()
+    with World.open(world_path, loader=False) as w:
+        with pytest.raises(VoxelError, match="missing from block_types"):
+            w.set_block(1, 1, 100, "glass")
+    db = sqlite3.connect(world_path)
+    assert db.execute("SELECT blocks FROM chunks WHERE cx=0 AND cy=0").fetchone() == before
+    db.close()
 
 
 @pytest.mark.parametrize("identity", [True, False])

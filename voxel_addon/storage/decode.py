@@ -29,7 +29,8 @@ class CorruptChunk(VoxelError):
 
 class Decoding:
     """WorldFile's decoding half: needs `path`, `_identity` (the file's ids are the
-    registry's) and `_to_reg` (file id -> registry id)."""
+    registry's), `_to_reg` (file id -> registry id) and `_unnamed` (None, or True
+    for the file ids below its largest that have no name)."""
 
     def _fetched(self, key, row, packed: bool = False):
         _, _, v, codec, blob, dblob, lcodec, lblob = row  # (cx, cy, ...)
@@ -56,7 +57,8 @@ class Decoding:
             ok = layers == 0 or below.item(_ARGMAX(below)) < len(self._to_reg)
         else:
             try:
-                blocks, ok = self._to_reg[blocks], True
+                ok = self._unnamed is None or not self._unnamed[blocks].any()
+                blocks = self._to_reg[blocks]
             except IndexError:
                 ok = False
         if not ok:

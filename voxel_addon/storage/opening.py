@@ -161,6 +161,12 @@ class Opening:
             self._to_file[REGISTRY.id(n)] = fid
         for n in missing if self.readonly else ():  # never written back: map to air
             self._to_file[REGISTRY.id(n)] = 0
+        # ids below the largest with no name (a row deleted by another program): a
+        # chunk using one is damaged, as one past the table (read as air, an edit
+        # wrote the chunk back without them)
+        named = np.zeros(len(self._to_reg), bool)
+        named[list(file_names)] = True
+        self._unnamed = None if named.all() else ~named
         self._identity = all(self._to_reg[i] == i for i in file_names) and \
             len(file_names) == len(names)
 

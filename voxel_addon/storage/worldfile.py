@@ -39,6 +39,11 @@ from .transactions import Reading, Transaction
 _MANY = 64  # keys per statement of a batch read (128 parameters: any SQLite's limit)
 _READ_MANY = ("SELECT k.column1, k.column2, c.codec, c.blocks, c.data FROM {k} k "
               "LEFT JOIN chunks c ON c.cx = k.column1 AND c.cy = k.column2")
+# a batch that is every chunk of a box (columns cx, one run of cy): an index range per
+# column. A VALUES table of 32 keys costs SQLite ~300k instructions to compile, once
+# per connection and batch size (~30 us warm, more on a cold pass); this ~1/3 of it,
+# and it runs ~8 % faster (issue 29)
+_BOX = "SELECT cx, cy, codec, blocks, data FROM chunks WHERE cx IN ({xs}) AND cy BETWEEN ? AND ?"
 
 
 @functools.lru_cache(maxsize=256)
@@ -48,6 +53,14 @@ def _sql(template: str, n: int) -> str:
     if n == 0:
         return template.format(k="(SELECT ? AS column1, ? AS column2)")
     return template.format(k="(VALUES " + ", ".join(["(?, ?)"] * n) + ")")
+
+
+@functools.lru_cache(maxsize=_MANY)
+def _box_sql(n: int) -> str:
+    return _BOX.format(xs=", ".join("?" * n))
+
+
+_NONE = (None,) * 5  # read_many's row of a chunk the file does not have
 
 
 class WorldFile(Decoding, Opening, Meta):
@@ -248,10 +261,12 @@ class WorldFile(Decoding, Opening, Meta):
         same memory again: 32 fresh 128 KB arrays kept cost page faults, ~4x the
         read). Keys: (cx, cy) tuples of ints."""
         keys = list(keys)
-        rows = self._rows(_READ_MANY, keys)
+        rows = self._box_rows(keys)
+        if rows is None:
+            rows = self._rows(_READ_MANY, keys)
         decode = self._decode
         for k in keys:
-            _, _, codec, blob, dblob = rows[k]
+            _, _, codec, blob, dblob = rows.get(k, _NONE)
             if codec is None:
                 yield k, None
                 continue
@@ -260,6 +275,17 @@ class WorldFile(Decoding, Opening, Meta):
             except CorruptChunk as e:
                 got = e
             yield k, got
+
+    def _box_rows(self, keys: list) -> dict | None:
+        """{(cx, cy): row} of read_many's keys when they are each chunk of a box
+        once (columns xs, rows y0..y1), read by one statement; None otherwise."""
+        xs, ys = {k[0] for k in keys}, {k[1] for k in keys}
+        if not 0 < len(xs) <= _MANY or len(xs) * len(ys) != len(keys) \
+                or max(ys) - min(ys) + 1 != len(ys) or len(set(keys)) != len(keys):
+            return None
+        with self._lock:
+            return {(r[0], r[1]): r for r in self.db.execute(
+                _box_sql(len(xs)), (*xs, min(ys), max(ys)))}
 
     def _rows(self, template: str, keys: list) -> dict:
         """{(cx, cy): its row (cx, cy first)} of TEMPLATE's statement for every key,

@@ -202,3 +202,41 @@ def test_read_many_of_a_box_is_read_chunk_of_each(world_path):
         assert worldfile._box_sql(3).count("?") == 5
     finally:
         wf.close()
+
+
+def test_read_many_never_writes_an_array_kept(world_path):
+    """read_many decodes into the array of the chunk before the last when the caller
+    let it go: whatever the caller keeps (the pair, the array, a view of it, a
+    buffer over it) still holds its own chunk after the loop (oracle: read_chunk)."""
+    keys = [(x, y) for x in range(4) for y in range(4)]
+    with World.create(world_path, seed=1, generator="flat", loader=False) as w:
+        w.generate_area(keys)
+        for i, (x, y) in enumerate(keys):  # every chunk differs from every other
+            w.set_block(16 * x + i % 16, 16 * y + i // 16, 30 + i, "glass")
+    wf = WorldFile(world_path, readonly=True)
+    try:
+        kept, bases = {}, set()
+        for n, (k, got) in enumerate(wf.read_many(keys)):
+            bases.add(id(got[0].base))
+            how = n % 5
+            if how == 1:
+                kept[k] = got
+            elif how == 2:
+                kept[k] = got[0]
+            elif how == 3:
+                kept[k] = got[0][:, :, :64]  # a view keeps its base
+            elif how == 4:
+                kept[k] = np.asarray(memoryview(got[0].base))  # a buffer too
+        assert len(bases) < len(keys)  # dropped arrays were used again
+        for k, v in kept.items():
+            want = wf.read_chunk(k)[0]
+            if isinstance(v, tuple):
+                v = v[0]
+            if v.shape == chunk.SHAPE:
+                assert np.array_equal(v, want)
+            elif v.shape == want.shape[::-1]:
+                assert np.array_equal(v.T, want)
+            else:
+                assert np.array_equal(v, want[:, :, :64])
+    finally:
+        wf.close()

@@ -38,11 +38,12 @@ class Decoding:
         blocks, data = self._decode(key, codec, blob, dblob, packed)
         return blocks, data, self._decode_light(lcodec, lblob, packed), v
 
-    def _decode(self, key, codec, blob, dblob, packed: bool = False):
+    def _decode(self, key, codec, blob, dblob, packed: bool = False, out=None):
         # PACKED: keep the frame as read (what it decodes to is the chunk's blocks as
-        # is: the file's ids are the registry's); decoded only to check it
+        # is: the file's ids are the registry's); decoded only to check it. OUT: a
+        # (HEIGHT, SIZE, SIZE) uint16 C-order array nobody else holds (read_many's)
         frame = packed and self._identity and codecs.framed(codec, blob, _BYTES)
-        blocks = _scratch() if frame else np.empty(_ZYX, np.uint16)
+        blocks = _scratch() if frame else np.empty(_ZYX, np.uint16) if out is None else out
         try:  # into new (HEIGHT, SIZE, SIZE) C-order arrays: .T is the chunk's shape
             zeros = _ours(blob, _N, blocks) if codec == "zstd" else -1
             if zeros < 0:  # not encode()'s frame: the general path

@@ -19,6 +19,7 @@ from __future__ import annotations
 import functools
 import json
 import sqlite3
+import sys
 import threading
 import time
 from itertools import chain
@@ -61,6 +62,7 @@ def _box_sql(n: int) -> str:
 
 
 _NONE = (None,) * 5  # read_many's row of a chunk the file does not have
+_ZYX, _refs = (C.HEIGHT, C.SIZE, C.SIZE), sys.getrefcount  # read_many's arrays
 
 
 class WorldFile(Decoding, Opening, Meta):
@@ -257,21 +259,26 @@ class WorldFile(Decoding, Opening, Meta):
         """(key, read_chunk(key)) of each of `keys`, a damaged chunk's CorruptChunk in
         place of its pair: the rows read at one instant (a statement per 64 keys: one
         per chunk cost ~1-2 of a read's ~20 us, issue 29), each decoded only when the
-        loop asks for it (a caller that drops each array before the next gets the
-        same memory again: 32 fresh 128 KB arrays kept cost page faults, ~4x the
-        read). Keys: (cx, cy) tuples of ints."""
+        loop asks for it (32 fresh 128 KB arrays kept cost page faults, ~4x the
+        read). A chunk decodes into the array of the one before the last when the
+        caller let that go (nothing but this loop holds it: its refcount), else into
+        a new one: an array kept is never written again. Keys: (cx, cy) tuples of ints."""
         keys = list(keys)
         rows = self._box_rows(keys)
         if rows is None:
             rows = self._rows(_READ_MANY, keys)
-        decode = self._decode
+        decode, ring, i = self._decode, [None, None], 0
         for k in keys:
             _, _, codec, blob, dblob = rows.get(k, _NONE)
             if codec is None:
                 yield k, None
                 continue
+            buf = ring[i]  # held by ring, buf and the call's argument only: let go
+            if buf is None or _refs(buf) > 3:
+                buf = ring[i] = np.empty(_ZYX, np.uint16)
+            i ^= 1
             try:
-                got = decode(k, codec, blob, dblob)
+                got = decode(k, codec, blob, dblob, out=buf)
             except CorruptChunk as e:
                 got = e
             yield k, got

@@ -267,15 +267,16 @@ class WorldFile(Decoding, Opening, Meta):
         rows = self._box_rows(keys)
         if rows is None:
             rows = self._rows(_READ_MANY, keys)
-        decode, ring, i = self._decode, [None, None], 0
+        decode, ring, i, free = self._decode, [None, None], 0, 0
         for k in keys:
             _, _, codec, blob, dblob = rows.get(k, _NONE)
             if codec is None:
                 yield k, None
                 continue
-            buf = ring[i]  # held by ring, buf and the call's argument only: let go
-            if buf is None or _refs(buf) > 3:
+            buf = ring[i]  # let go: counted as when only ring and buf held it
+            if buf is None or _refs(buf) > free:
                 buf = ring[i] = np.empty(_ZYX, np.uint16)
+                free = _refs(buf)  # measured, not assumed (interpreters count apart)
             i ^= 1
             try:
                 got = decode(k, codec, blob, dblob, out=buf)

@@ -166,3 +166,77 @@ def test_read_many_is_read_chunk_of_each(world_path, monkeypatch):
         assert isinstance(got[(2, 0)], CorruptChunk) and got[(5, 5)] is None
     finally:
         wf.close()
+
+
+def test_read_many_of_a_box_is_read_chunk_of_each(world_path):
+    """A batch that is every chunk of a box (columns of one run of cy) is one range
+    statement: the same pairs as read_chunk, in the keys' order, absent chunks None
+    and a damaged one its error; keys that are not a box (a hole, a repeat) too."""
+    from voxel_addon.storage import worldfile
+    with World.create(world_path, seed=1, generator="flat", loader=False) as w:
+        w.generate_area([(x, y) for x in (-1, 0, 2) for y in (3, 4, 5)] + [(0, 6), (1, 4)])
+        for x, y in ((-1, 3), (0, 4), (2, 5), (0, 6)):
+            w.set_block(16 * x + 5, 16 * y + 7, 40 + x + y, "glass")
+    db = sqlite3.connect(world_path)
+    db.execute("UPDATE chunks SET blocks=? WHERE cx=2 AND cy=3", (b"junk",))
+    db.execute("DELETE FROM chunks WHERE cx=-1 AND cy=4")
+    db.commit()
+    db.close()
+    wf = WorldFile(world_path, readonly=True)
+    box = [(x, y) for y in (5, 3, 4) for x in (2, -1, 0)]  # cx need not be a run
+    try:
+        for keys, is_box in ((box, True), (box[:-1], False), (box + box[:1], False),
+                             ([(x, y) for x in range(-1, 3) for y in (3, 4)], True)):
+            assert (wf._box_rows(keys) is not None) == is_box
+            got = list(wf.read_many(keys))
+            assert [k for k, _ in got] == keys
+            for k, g in got:
+                if k == (2, 3):
+                    assert isinstance(g, CorruptChunk)
+                elif wf.read_chunk(k) is None:
+                    assert g is None and k in ((-1, 4), (1, 3))
+                else:
+                    want = wf.read_chunk(k)
+                    assert np.array_equal(g[0], want[0]) and g[1] is None and \
+                        g[0].shape == chunk.SHAPE
+        assert worldfile._box_sql(3).count("?") == 5
+    finally:
+        wf.close()
+
+
+def test_read_many_never_writes_an_array_kept(world_path):
+    """read_many decodes into the array of the chunk before the last when the caller
+    let it go: whatever the caller keeps (the pair, the array, a view of it, a
+    buffer over it) still holds its own chunk after the loop (oracle: read_chunk)."""
+    keys = [(x, y) for x in range(4) for y in range(4)]
+    with World.create(world_path, seed=1, generator="flat", loader=False) as w:
+        w.generate_area(keys)
+        for i, (x, y) in enumerate(keys):  # every chunk differs from every other
+            w.set_block(16 * x + i % 16, 16 * y + i // 16, 30 + i, "glass")
+    wf = WorldFile(world_path, readonly=True)
+    try:
+        kept, bases = {}, set()
+        for n, (k, got) in enumerate(wf.read_many(keys)):
+            bases.add(id(got[0].base))
+            how = n % 5
+            if how == 1:
+                kept[k] = got
+            elif how == 2:
+                kept[k] = got[0]
+            elif how == 3:
+                kept[k] = got[0][:, :, :64]  # a view keeps its base
+            elif how == 4:
+                kept[k] = np.asarray(memoryview(got[0].base))  # a buffer too
+        assert len(bases) < len(keys)  # dropped arrays were used again
+        for k, v in kept.items():
+            want = wf.read_chunk(k)[0]
+            if isinstance(v, tuple):
+                v = v[0]
+            if v.shape == chunk.SHAPE:
+                assert np.array_equal(v, want)
+            elif v.shape == want.shape[::-1]:
+                assert np.array_equal(v.T, want)
+            else:
+                assert np.array_equal(v, want[:, :, :64])
+    finally:
+        wf.close()

@@ -112,6 +112,34 @@ def zero_tail(blob) -> int:
 
 _HEAD = _MAGIC + b"\xa0"  # single segment, a 4-byte content size, no checksum
 _FIRST, _LAST = struct.Struct("<5s4xI"), struct.Struct("<I")
+_SIZED = struct.Struct("<5sII")  # _FIRST with the content size
+
+
+def decode_ours(blob, count: int, out: np.ndarray) -> int:
+    """decode_u16 into OUT and zero_tail in one, for a frame with encode()'s header
+    declaring 2 * `count` bytes (every chunk this program writes): the zero bytes it
+    ends with, or -1 for any other blob (nothing written: decode_u16 decides). Its
+    frame_content_size, the second header read and three calls cost ~0.4 of a
+    chunk read's ~16 us (issue 29). Raises ValueError on a damaged frame."""
+    if type(blob) is not bytes or len(blob) < 16 or not _WHOLE:
+        return -1
+    head, size, h = _SIZED.unpack_from(blob)
+    if head != _HEAD or size != 2 * count:
+        return -1
+    try:
+        d = _local.d
+    except AttributeError:
+        d = _local.d = _zstd_pair()[1]
+    try:  # zstd stops at the size the frame declares
+        n = d.stream_reader(blob).readinto(out)
+    except _zstd.ZstdError as e:
+        raise ValueError(str(e)) from None
+    if n != size:
+        raise ValueError(f"decoded {n} bytes, expected {size}")
+    t = _LAST.unpack_from(blob, len(blob) - 4)[0]  # as zero_tail: the last block
+    if h & 0xFFFFFF != (len(blob) - 16) << 3 | 4 or t >> 24 or t & 7 != 3:
+        return 0
+    return (t & 0xFFFFFF) >> 3
 
 
 def decode_u16(codec: str, blob, count: int, out: np.ndarray | None = None) -> np.ndarray:

@@ -14,7 +14,7 @@ _ZYX = (C.HEIGHT, C.SIZE, C.SIZE)  # linear order as C order: .T is the chunk's 
 _ARGMAX = np.ndarray.argmax
 _LAYER = C.SIZE * C.SIZE
 _N, _BYTES = C.VOLUME, 2 * C.VOLUME
-_u16, _tail = codecs.decode_u16, codecs.zero_tail
+_u16, _tail, _ours = codecs.decode_u16, codecs.zero_tail, codecs.decode_ours
 
 
 def _scratch() -> np.ndarray:
@@ -39,12 +39,17 @@ class Decoding:
         blocks, data = self._decode(key, codec, blob, dblob, packed)
         return blocks, data, self._decode_light(lcodec, lblob, packed), v
 
-    def _decode(self, key, codec, blob, dblob, packed: bool = False):
+    def _decode(self, key, codec, blob, dblob, packed: bool = False, out=None):
         # PACKED: keep the frame as read (what it decodes to is the chunk's blocks as
-        # is: the file's ids are the registry's); decoded only to check it
+        # is: the file's ids are the registry's); decoded only to check it. OUT: a
+        # (HEIGHT, SIZE, SIZE) uint16 C-order array nobody else holds (read_many's)
         frame = packed and self._identity and codecs.framed(codec, blob, _BYTES)
+        blocks = _scratch() if frame else np.empty(_ZYX, np.uint16) if out is None else out
         try:  # into new (HEIGHT, SIZE, SIZE) C-order arrays: .T is the chunk's shape
-            blocks = _u16(codec, blob, _N, _scratch() if frame else np.empty(_ZYX, np.uint16))
+            zeros = _ours(blob, _N, blocks) if codec == "zstd" else -1
+            if zeros < 0:  # not encode()'s frame: the general path
+                blocks = _u16(codec, blob, _N, blocks)
+                zeros = _tail(blob) if codec == "zstd" else 0
             data = None if dblob is None else _u16(codec, dblob, _N).reshape(_ZYX).T
         except ValueError as e:
             raise CorruptChunk(f"chunk ({key[0]}, {key[1]}) in {self.path} is damaged ({e}); "
@@ -52,7 +57,7 @@ class Decoding:
         # checked always: tables are indexed by id (the lookup checks what it maps);
         # not the layers of zeros (air) a frame says it ends with: ~70 % of a chunk
         if self._identity:
-            layers = -(-(_N - (_tail(blob) >> 1)) // _LAYER)
+            layers = -(-(_N - (zeros >> 1)) // _LAYER)
             below = blocks[:layers]
             ok = layers == 0 or below.item(_ARGMAX(below)) < len(self._to_reg)
         else:

@@ -19,6 +19,7 @@ from __future__ import annotations
 import functools
 import json
 import sqlite3
+import sys
 import threading
 import time
 from itertools import chain
@@ -43,6 +44,11 @@ _KEYED = (f"typeof(cx) = 'integer' AND typeof(cy) = 'integer' AND cx BETWEEN {-_
 _MANY = 64  # keys per statement of a batch read (128 parameters: any SQLite's limit)
 _READ_MANY = ("SELECT k.column1, k.column2, c.codec, c.blocks, c.data FROM {k} k "
               "LEFT JOIN chunks c ON c.cx = k.column1 AND c.cy = k.column2")
+# a batch that is every chunk of a box (columns cx, one run of cy): an index range per
+# column. A VALUES table of 32 keys costs SQLite ~300k instructions to compile, once
+# per connection and batch size (~30 us warm, more on a cold pass); this ~1/3 of it,
+# and it runs ~8 % faster (issue 29)
+_BOX = "SELECT cx, cy, codec, blocks, data FROM chunks WHERE cx IN ({xs}) AND cy BETWEEN ? AND ?"
 
 
 @functools.lru_cache(maxsize=256)
@@ -52,6 +58,15 @@ def _sql(template: str, n: int) -> str:
     if n == 0:
         return template.format(k="(SELECT ? AS column1, ? AS column2)")
     return template.format(k="(VALUES " + ", ".join(["(?, ?)"] * n) + ")")
+
+
+@functools.lru_cache(maxsize=_MANY)
+def _box_sql(n: int) -> str:
+    return _BOX.format(xs=", ".join("?" * n))
+
+
+_NONE = (None,) * 5  # read_many's row of a chunk the file does not have
+_ZYX, _refs = (C.HEIGHT, C.SIZE, C.SIZE), sys.getrefcount  # read_many's arrays
 
 
 def check_path(path, exists: bool = True) -> None:
@@ -270,22 +285,41 @@ class WorldFile(Decoding, Opening, Meta):
         """(key, read_chunk(key)) of each of `keys`, a damaged chunk's CorruptChunk in
         place of its pair: the rows read at one instant (a statement per 64 keys: one
         per chunk cost ~1-2 of a read's ~20 us, issue 29), each decoded only when the
-        loop asks for it (a caller that drops each array before the next gets the
-        same memory again: 32 fresh 128 KB arrays kept cost page faults, ~4x the
-        read). Keys: (cx, cy) tuples of ints."""
+        loop asks for it (32 fresh 128 KB arrays kept cost page faults, ~4x the
+        read). A chunk decodes into the array of the one before the last when the
+        caller let that go (nothing but this loop holds it: its refcount), else into
+        a new one: an array kept is never written again. Keys: (cx, cy) tuples of ints."""
         keys = list(keys)
-        rows = self._rows(_READ_MANY, keys)
-        decode = self._decode
+        rows = self._box_rows(keys)
+        if rows is None:
+            rows = self._rows(_READ_MANY, keys)
+        decode, ring, i, free = self._decode, [None, None], 0, 0
         for k in keys:
-            _, _, codec, blob, dblob = rows[k]
+            _, _, codec, blob, dblob = rows.get(k, _NONE)
             if codec is None:
                 yield k, None
                 continue
+            buf = ring[i]  # let go: counted as when only ring and buf held it
+            if buf is None or _refs(buf) > free:
+                buf = ring[i] = np.empty(_ZYX, np.uint16)
+                free = _refs(buf)  # measured, not assumed (interpreters count apart)
+            i ^= 1
             try:
-                got = decode(k, codec, blob, dblob)
+                got = decode(k, codec, blob, dblob, out=buf)
             except CorruptChunk as e:
                 got = e
             yield k, got
+
+    def _box_rows(self, keys: list) -> dict | None:
+        """{(cx, cy): row} of read_many's keys when they are each chunk of a box
+        once (columns xs, rows y0..y1), read by one statement; None otherwise."""
+        xs, ys = {k[0] for k in keys}, {k[1] for k in keys}
+        if not 0 < len(xs) <= _MANY or len(xs) * len(ys) != len(keys) \
+                or max(ys) - min(ys) + 1 != len(ys) or len(set(keys)) != len(keys):
+            return None
+        with self._lock:
+            return {(r[0], r[1]): r for r in self.db.execute(
+                _box_sql(len(xs)), (*xs, min(ys), max(ys)))}
 
     def _rows(self, template: str, keys: list) -> dict:
         """{(cx, cy): its row (cx, cy first)} of TEMPLATE's statement for every key,

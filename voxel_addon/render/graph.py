@@ -21,6 +21,10 @@ DEBUG_DEFINE = {"none": 0, "albedo": 1, "normal": 2, "depth": 3, "light": 4,
                 "aggregation": 5, "culling": 0}
 SHADED = ("none", "culling")  # views with sky, shadows, SSAO and god rays
 DEPTH_LESS = State("less", True, True)
+# frame switches the shading programs are built for (constants in them: glsl.py's
+# CONST_name). On llvmpipe and lavapipe a shader pays for every branch at every pixel,
+# whatever a uniform says: the sea, clouds or walls switched off cost the whole price.
+FIXED = ("clouds", "cloud_shadows", "sea", "water_fx", "ssr", "walls", "ortho", "starry", "far_water")
 
 
 @dataclass(frozen=True)
@@ -40,6 +44,7 @@ class Switches:
     fill_holes: bool
     oit: bool
     models: bool = False  # Minecraft model quads shown (models.py): their passes too
+    fixed: tuple = ()     # the frame's values of FIXED, in its order
 
 
 class Graph:
@@ -57,8 +62,9 @@ def build(dev, T, sw: Switches, blocks, vol, walls, sprites=None) -> Graph:
     ms, dbg = sw.samples, DEBUG_DEFINE[sw.debug]
     cut = {"ALPHA_TEST": 1, "MSAA_ALPHA": sw.msaa_alpha}
     g = {"SAMPLES": ms, "SMOOTH_MAG": sw.smooth_mag, "DEBUG_AGG": sw.debug == "aggregation"}
+    fixed = {f"CONST_{k}": int(v) for k, v in zip(FIXED, sw.fixed)}
     d = {"SAMPLES": ms, "PER_SAMPLE": sw.per_sample, "SHADOWS": sw.shadows,
-         "FOG": sw.fog and sw.debug == "none", "DEBUG": dbg}
+         "FOG": sw.fog and sw.debug == "none", "DEBUG": dbg, **fixed}
     parts = [("opaque", {}), ("cutout", cut), ("cutout2", cut)]
     tex = blocks.bindings()
     blend = [("blend", {})]
@@ -71,7 +77,7 @@ def build(dev, T, sw: Switches, blocks, vol, walls, sprites=None) -> Graph:
         return dev.program("block.vert", "block.frag", defines)
 
     def full(frag, defines=None):
-        return dev.program("fullscreen.vert", frag, defines)
+        return dev.program("fullscreen.vert", frag, {**fixed, **(defines or {})})
 
     sm = {"shadow_map": T.shadow} if sw.shadows else {}
 

@@ -3,7 +3,9 @@
 // shadow map, fog); the opaque layer also closes the shown area's outer wall
 // (include/walls.glsl).
 // Defines: SAMPLES, PER_SAMPLE, SHADOWS, LAYER (peel layer: premultiplied alpha
-// out), FOG, FILL_HOLES (T-junction holes), DEBUG (1 albedo, 2 normal, 3 depth,
+// out), COVERED (a layer drawn with its depth as the depth buffer, test "greater":
+// only its covered pixels run; its depth read from the peel pass's copy, a colour
+// texture), FOG, FILL_HOLES (T-junction holes), DEBUG (1 albedo, 2 normal, 3 depth,
 // 4 light, 5 aggregation).
 #include "include/common.glsl"
 #include "include/shade.glsl"
@@ -11,7 +13,8 @@
 #include "include/walls.glsl"
 #endif
 
-//@ sampler gdepth2D g_depth
+//@ sampler gdepth2D g_depth    if !defined(COVERED)
+//@ sampler gsampler2D g_depth  if COVERED
 //@ sampler gsampler2D g_albedo
 //@ sampler gsampler2D g_normal
 //@ out 0 vec4 out_color
@@ -31,7 +34,7 @@ Frag fetch(ivec2 c, int s) {
 
 void main() {
     ivec2 c = ivec2(gl_FragCoord.xy);
-#ifdef LAYER
+#if defined(LAYER) && !defined(COVERED)
     // most of a peel layer is empty (the second and third: all of it, mostly): those
     // pixels read only their depths and leave. On a GPU, this heavy shader runs few
     // threads at once, so each texture read it waits for is slow (an empty layer's

@@ -21,6 +21,7 @@ DEBUG_DEFINE = {"none": 0, "albedo": 1, "normal": 2, "depth": 3, "light": 4,
                 "aggregation": 5, "culling": 0}
 SHADED = ("none", "culling")  # views with sky, shadows, SSAO and god rays
 DEPTH_LESS = State("less", True, True)
+COVERED = State("greater", False)  # a fullscreen pass (COVERED) where the depth holds a surface
 # frame switches the shading programs are built for (constants in them: glsl.py's
 # CONST_name). On llvmpipe and lavapipe a shader pays for every branch at every pixel,
 # whatever a uniform says: the sea, clouds or walls switched off cost the whole price.
@@ -101,15 +102,18 @@ def build(dev, T, sw: Switches, blocks, vol, walls, sprites=None) -> Graph:
             Pass(dev, T.layer_fb[0], full("oit_resolve.frag", {"SAMPLES": ms}),
                  accum=T.accum, reveal=T.reveal))
     else:  # no blending, the nearest remaining layer each time
-        layer = full("deferred.frag", {**d, "LAYER": 1}) if sw.layers else None
+        cov = T.covered  # (targets.py: a layer shaded only where it has a surface)
+        layer = full("deferred.frag", {**d, "LAYER": 1, "COVERED": cov}) if sw.layers else None
         G.transparency = Peel(
-            [GeometryPass(dev, p.target, [(n, block({**g, **x, "PEEL": i + 1})) for n, x in blend],
+            [GeometryPass(dev, p.target, [(n, block({**g, **x, "PEEL": i + 1, "ZCOPY": cov}))
+                                          for n, x in blend],
                           State("less", True, False), opaque_depth=T.g.depth,
                           prev_depth=T.peel[i - 1].depth if i else T.g.depth,
                           **({"opaque_normal": T.g.normal} if i == 0 else {}), **tex)
              for i, p in enumerate(T.peel[:sw.layers])],
-            [Pass(dev, f, layer, clear=True, ssr_color=T.opaque, ssr_front=T.front, **gbuf(p))
-             for f, p in zip(T.layer_fb[:sw.layers], T.peel)])
+            [Pass(dev, f, layer, COVERED if cov else State(), clear=True, ssr_color=T.opaque,
+                  ssr_front=T.front, **{**gbuf(p), **({"g_depth": p.zcopy} if cov else {})})
+             for f, p in zip(T.layer_zfb if cov else T.layer_fb[:sw.layers], T.peel)])
     post = []
     if sw.ssao:
         post += [Pass(dev, T.ao_fb[0], full("ssao.frag"), front=T.front),

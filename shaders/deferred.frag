@@ -3,9 +3,8 @@
 // shadow map, fog); the opaque layer also closes the shown area's outer wall
 // (include/walls.glsl).
 // Defines: SAMPLES, PER_SAMPLE, SHADOWS, LAYER (peel layer: premultiplied alpha
-// out), COVERED (a layer drawn with its depth as the depth buffer, test "greater":
-// only its covered pixels run; its depth read from the peel pass's copy, a colour
-// texture), FOG, FILL_HOLES (T-junction holes), DEBUG (1 albedo, 2 normal, 3 depth,
+// out), COVERED (a layer drawn against its coverage, cover.frag: only pixels with a
+// surface run), FOG, FILL_HOLES (T-junction holes), DEBUG (1 albedo, 2 normal, 3 depth,
 // 4 light, 5 aggregation).
 #include "include/common.glsl"
 #include "include/shade.glsl"
@@ -13,8 +12,7 @@
 #include "include/walls.glsl"
 #endif
 
-//@ sampler gdepth2D g_depth    if !defined(COVERED)
-//@ sampler gsampler2D g_depth  if COVERED
+//@ sampler gdepth2D g_depth
 //@ sampler gsampler2D g_albedo
 //@ sampler gsampler2D g_normal
 //@ out 0 vec4 out_color

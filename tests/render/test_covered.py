@@ -1,10 +1,11 @@
-"""Peel layers shaded only where they have a surface (render/targets.py COVERED: the
-layer's depth as the shading pass's depth buffer, test "greater", its depth read from
-the peel pass's colour copy): the same frames as shading every pixel of every layer,
-with water and glass stacked three layers deep, and the layers behind."""
+"""Peel layers shaded only where they have a surface (render/targets.py COVERED: each
+layer's coverage as a one-sample depth buffer, shaders/cover.frag, and its lighting
+drawn on the far plane against it, test "greater"): the same frames as lighting every
+pixel of every layer, water and glass stacked three layers deep, with and without MSAA."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from voxel_addon.core import chunk
 from voxel_addon.core.blocks import REGISTRY as R
@@ -24,10 +25,10 @@ def _stacked():
     return b
 
 
-def _frames(gl, layers=3):
+def _frames(gl, msaa, layers=3):
     from voxel_addon.render.pipeline import Renderer
     b = _stacked()
-    r = Renderer(gl, Settings(msaa=1, dof=False, peel_layers=layers))
+    r = Renderer(gl, Settings(msaa=msaa, dof=False, peel_layers=layers))
     r.set_area(b, solve(b), 0, 0)
     out = []
     try:
@@ -38,13 +39,14 @@ def _frames(gl, layers=3):
     return out
 
 
-def test_covered_layers_draw_what_every_pixel_draws(gl, monkeypatch):
-    fast = _frames(gl)
+@pytest.mark.parametrize("msaa", [1, 2])
+def test_covered_layers_draw_what_every_pixel_draws(gl, monkeypatch, msaa):
+    fast = _frames(gl, msaa)
     monkeypatch.setattr(targets, "COVERED", False)
-    slow = _frames(gl)
+    slow = _frames(gl, msaa)
     for a, b in zip(fast, slow):
         d = np.abs(a - b)
         assert d.max() <= 2, d.max()
     # the control: the second and third layers show (a layer left black would differ)
-    one = _frames(gl, layers=1)
+    one = _frames(gl, msaa, layers=1)
     assert max(np.abs(a - b).mean() for a, b in zip(one, slow)) > 1.0

@@ -104,16 +104,18 @@ def build(dev, T, sw: Switches, blocks, vol, walls, sprites=None) -> Graph:
     else:  # no blending, the nearest remaining layer each time
         cov = T.covered  # (targets.py: a layer shaded only where it has a surface)
         layer = full("deferred.frag", {**d, "LAYER": 1, "COVERED": cov}) if sw.layers else None
+        peel = T.peel[:sw.layers]
         G.transparency = Peel(
-            [GeometryPass(dev, p.target, [(n, block({**g, **x, "PEEL": i + 1, "ZCOPY": cov}))
-                                          for n, x in blend],
+            [GeometryPass(dev, p.target, [(n, block({**g, **x, "PEEL": i + 1})) for n, x in blend],
                           State("less", True, False), opaque_depth=T.g.depth,
                           prev_depth=T.peel[i - 1].depth if i else T.g.depth,
                           **({"opaque_normal": T.g.normal} if i == 0 else {}), **tex)
-             for i, p in enumerate(T.peel[:sw.layers])],
+             for i, p in enumerate(peel)],
             [Pass(dev, f, layer, COVERED if cov else State(), clear=True, ssr_color=T.opaque,
-                  ssr_front=T.front, **{**gbuf(p), **({"g_depth": p.zcopy} if cov else {})})
-             for f, p in zip(T.layer_zfb if cov else T.layer_fb[:sw.layers], T.peel)])
+                  ssr_front=T.front, **gbuf(p))
+             for f, p in zip(T.layer_zfb if cov else T.layer_fb, peel)],
+            [Pass(dev, f, full("cover.frag", {"SAMPLES": ms}), State("less", True), clear=True,
+                  g_depth=p.depth) for f, p in zip(T.cover_fb, peel)] if cov else None)
     post = []
     if sw.ssao:
         post += [Pass(dev, T.ao_fb[0], full("ssao.frag"), front=T.front),

@@ -18,21 +18,18 @@ class Shape:
 
 COVERED = True  # (tests switch it off: the same frames the long way)
 
-class GBuffer:
-    """Depth, albedo, normal (+ glow in alpha): a geometry pass's outputs; with zcopy
-    the depth again in a colour texture (a peel layer: block.frag ZCOPY)."""
 
-    def __init__(self, dev, size, samples, zcopy: bool = False):
+class GBuffer:
+    """Depth, albedo, normal (+ glow in alpha): a geometry pass's outputs."""
+
+    def __init__(self, dev, size, samples):
         self.depth = dev.texture(size, "depth", samples=samples)
         self.albedo = dev.texture(size, "rgba8", samples=samples)
         self.normal = dev.texture(size, "rgba8", samples=samples)
-        self.zcopy = dev.texture(size, "r32f", samples=samples) if zcopy else None
-        self.target = dev.target([self.albedo, self.normal] + ([self.zcopy] if zcopy else []),
-                                 self.depth)
+        self.target = dev.target([self.albedo, self.normal], self.depth)
 
     def parts(self):
-        return [self.target, self.depth, self.albedo, self.normal] + (
-            [self.zcopy] if self.zcopy is not None else [])
+        return [self.target, self.depth, self.albedo, self.normal]
 
 
 class Targets:
@@ -49,11 +46,11 @@ class Targets:
         self.out = dev.texture(size, "rgba8")              # the final image
         self.out_fb = dev.target([self.out])
         self.layers, self.layer_fb = [], []               # shaded peel layers (OIT: one)
-        # without MSAA a peel layer is shaded only where it has a surface: its colour
-        # with the layer's depth as the depth buffer (llvmpipe and lavapipe run a
-        # fullscreen pass's whole shader at every pixel, covered or not)
-        self.covered = ms == 1 and COVERED
-        self.layer_zfb = []
+        # a peel layer is shaded only where it has a surface: against a one-sample depth
+        # of its coverage (cover.frag; llvmpipe and lavapipe run a fullscreen pass's
+        # whole shader at every pixel, covered or not)
+        self.covered = COVERED
+        self.cover, self.cover_fb, self.layer_zfb = [], [], []
         self.ao = self.ao_fb = self.blur = self.blur_fb = None
         self.shadow = self.shadow_fb = None
         self.accum = self.reveal = self.oit_fb = None
@@ -66,13 +63,14 @@ class Targets:
         """Add the targets of these effects that are not made yet."""
         dev, size = self.dev, self.size
         while len(self.peel) < layers:
-            self.peel.append(GBuffer(dev, size, self.samples, zcopy=self.covered))
+            self.peel.append(GBuffer(dev, size, self.samples))
         while len(self.layers) < max(layers, 1 if self.shape.oit else 0):  # OIT: layer 0
             self.layers.append(dev.texture(size, "rgba16f"))
             self.layer_fb.append(dev.target([self.layers[-1]]))
-        while self.covered and len(self.layer_zfb) < layers:
-            i = len(self.layer_zfb)
-            self.layer_zfb.append(dev.target([self.layers[i]], self.peel[i].depth))
+        while self.covered and len(self.cover) < layers:
+            self.cover.append(dev.texture(size, "depth"))
+            self.cover_fb.append(dev.target([], self.cover[-1]))
+            self.layer_zfb.append(dev.target([self.layers[len(self.cover) - 1]], self.cover[-1]))
         if ssao and self.ao is None:
             self.ao = [dev.texture(size, "r8"), dev.texture(size, "r8")]
             self.ao_fb = [dev.target([t]) for t in self.ao]
@@ -91,16 +89,15 @@ class Targets:
     def _textures(self):
         for x in (self.g, *self.peel):
             yield from (x.depth, x.albedo, x.normal)
-            if x.zcopy is not None:
-                yield x.zcopy
         for x in (self.opaque, self.front, self.comp, self.out, *self.layers, *(self.ao or ()),
-                  *(self.blur or ()), self.shadow, self.accum, self.reveal):
+                  *(self.blur or ()), *self.cover, self.shadow, self.accum, self.reveal):
             if x is not None:
                 yield x
 
     def release(self) -> None:
         fbs = [self.g.target, *(p.target for p in self.peel), self.shaded, self.comp_fb,
-               self.out_fb, *self.layer_fb, *self.layer_zfb, *(self.ao_fb or ()), *(self.blur_fb or ()),
+               self.out_fb, *self.layer_fb, *self.cover_fb, *self.layer_zfb, *(self.ao_fb or ()),
+               *(self.blur_fb or ()),
                self.shadow_fb, self.oit_fb]
         self.dev.release(*fbs)
         self.dev.release(*self._textures())

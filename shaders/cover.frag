@@ -1,0 +1,16 @@
+// A peel layer's coverage as a one-sample depth buffer (fullscreen.vert): each pixel's
+// nearest sample of the layer, 1 where none is covered. The layer's shading pass
+// (deferred.frag COVERED) draws on the far plane against it with the test "greater",
+// so only pixels with a surface run its shader: llvmpipe and lavapipe run a fullscreen
+// pass's whole shader at every pixel, covered or not, and a GPU skips them early.
+#include "include/common.glsl"
+
+//@ sampler gdepth2D g_depth
+//@ depth_write
+
+void main() {
+    ivec2 c = ivec2(gl_FragCoord.xy);
+    float d = 1.0;
+    for (int s = 0; s < SAMPLES; s++) d = min(d, FETCH(g_depth, c, s).r);
+    gl_FragDepth = d;
+}

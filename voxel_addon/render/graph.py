@@ -12,7 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from .device import State
-from .passes import GeometryPass, Pass, Peel
+from .passes import Chain, GeometryPass, Pass, Peel
 from . import oit
 
 # a debug view's DEBUG define in the shaders (include/shade.glsl); "culling" draws the
@@ -22,6 +22,7 @@ DEBUG_DEFINE = {"none": 0, "albedo": 1, "normal": 2, "depth": 3, "light": 4,
 SHADED = ("none", "culling")  # views with sky, shadows, SSAO and god rays
 DEPTH_LESS = State("less", True, True)
 COVERED = State("greater", False)  # a fullscreen pass (COVERED) where the depth holds a surface
+UNCOVERED = State("lequal", False)  # and where it holds none (SKY)
 # frame switches the shading programs are built for (constants in them: glsl.py's
 # CONST_name). On llvmpipe and lavapipe a shader pays for every branch at every pixel,
 # whatever a uniform says: the sea, clouds or walls switched off cost the whole price.
@@ -46,6 +47,8 @@ class Switches:
     oit: bool
     models: bool = False  # Minecraft model quads shown (models.py): their passes too
     fixed: tuple = ()     # the frame's values of FIXED, in its order
+    sky: bool = False     # the opaque layer lit in two parts by its coverage, the sky in the
+                          # second (one sample, a camera inside the area: pipeline.py)
 
 
 class Graph:
@@ -92,8 +95,19 @@ def build(dev, T, sw: Switches, blocks, vol, walls, sprites=None) -> Graph:
         DEPTH_LESS, **tex) if sw.shadows else None
     G.g = GeometryPass(dev, T.g.target, [(n, block({**g, **x})) for n, x in parts], DEPTH_LESS,
                        **tex)
-    G.shade = Pass(dev, T.shaded, full("deferred.frag", {**d, "FILL_HOLES": sw.fill_holes}),
-                   clear=True, wall_tops=walls, tex=tex["tex"], **gbuf(T.g))
+    shade = {**d, "FILL_HOLES": sw.fill_holes}
+    if sw.sky:  # pixels with a surface, then the others (holes, the wall, the sky, the sea)
+        # (llvmpipe and lavapipe run a fullscreen pass's whole shader at every pixel)
+        G.shade = Chain([
+            Pass(dev, T.cover_g_fb, full("cover.frag", {"SAMPLES": ms}), State("less", True),
+                 clear=True, g_depth=T.g.depth),
+            Pass(dev, T.shaded_z, full("deferred.frag", {**shade, "COVERED": 1}), COVERED,
+                 clear=True, wall_tops=walls, tex=tex["tex"], **gbuf(T.g)),
+            Pass(dev, T.shaded_z, full("deferred.frag", {**shade, "SKY": 1}), UNCOVERED,
+                 wall_tops=walls, tex=tex["tex"], **gbuf(T.g))])
+    else:
+        G.shade = Pass(dev, T.shaded, full("deferred.frag", shade), clear=True, wall_tops=walls,
+                       tex=tex["tex"], **gbuf(T.g))
     if sw.oit:  # resolved into layer 0: the composite blends it as one peel layer
         G.transparency = oit.OIT(
             GeometryPass(dev, T.oit_fb, [(n, block({**g, **d, **x, "OIT": 1})) for n, x in blend],
@@ -123,7 +137,8 @@ def build(dev, T, sw: Switches, blocks, vol, walls, sprites=None) -> Graph:
                  Pass(dev, T.ao_fb[0], full("blur.frag", {"VERTICAL": 1}), src=T.ao[1])]
     # composite: sky, layers, god rays
     post.append(Pass(dev, T.comp_fb, full("composite.frag", {
-        "LAYERS": G.transparency.layers, "SSAO": sw.ssao, "GODRAYS": sw.godrays}),
+        "LAYERS": G.transparency.layers, "SSAO": sw.ssao, "GODRAYS": sw.godrays,
+        "SKY_DONE": sw.sky}),
         opaque=T.opaque, front=T.front, **({"ao": T.ao[0]} if sw.ssao else {}),
         **{f"layer{i}": x for i, x in enumerate(T.layers)}))
     if sw.dof:  # distance blur

@@ -31,6 +31,20 @@ class Pass:
         return [self.prog] if self.prog is not None else []
 
 
+class Chain:
+    """Passes that make one step of the frame, run in order."""
+
+    def __init__(self, passes: list):
+        self.passes = passes
+
+    def run(self) -> None:
+        for p in self.passes:
+            p.run()
+
+    def programs(self) -> list:
+        return [x for p in self.passes for x in p.programs()]
+
+
 class GeometryPass(Pass):
     """Draws Geometry batches: `progs` is [(part name, program)] in drawing order;
     double-sided plants (cutout2) are drawn without face culling."""

@@ -15,7 +15,7 @@ from ..core import chunk
 from ..core.blocks import REGISTRY
 from . import camera as cam
 from . import far as far_mod
-from . import graph, shadow, sky, walls
+from . import graph, shadow, sky, targets, walls
 from .blocktex import BlockTextures
 from .far import FarRing, near_edge
 from .device import Device
@@ -301,7 +301,6 @@ class Renderer:
         sun_px, sun_vis, sun_r = _sun_on_screen(vp, draw_cam, sp["light_dir"], w, h, s.fov)
         gods = s.godrays and shaded and sun_vis
         dof = s.dof and s.debug == "none" and not camera.ortho  # parallel rays: no blur
-        T = self._targets(w, h, (layers, ssao, dof, shadows))
         F = self.frame
         fog_end = (s.distance + 0.5) * 16.0  # thick by the nearest edge of the shown area
         far = None
@@ -345,9 +344,13 @@ class Renderer:
         # the frame's switches are the programs' constants (graph.FIXED): on llvmpipe and
         # lavapipe a shader runs every branch for every pixel, so an effect switched off
         # at run time still cost its whole price (bench/README.md: issue 29)
+        b = F.values["area_box"]  # (graph.Switches.sky: from inside, the sky only where no surface)
+        split = (targets.COVERED and s.debug == "none" and not draw_cam.ortho and min(s.msaa, self.dev.max_samples) <= 1
+                 and b[0] <= draw_cam.x < b[2] and b[1] <= draw_cam.y < b[3])
+        T = self._targets(w, h, (layers, ssao, dof, shadows, split))
         sw = graph.Switches(T.samples, s.debug, shadows, layers, ssao, gods, dof, s.smooth_mag,
                             s.msaa_alpha, s.per_sample, s.fog, s.fill_holes, use_oit, models,
-                            tuple(bool(F.values[k]) for k in graph.FIXED))
+                            tuple(bool(F.values[k]) for k in graph.FIXED), split)
         G = self._graphs.get(sw)
         if G is None:
             G = self._graphs[sw] = graph.build(self.dev, T, sw, self.blocks, self.vol.tex,

@@ -5,9 +5,9 @@
 // Defines: SAMPLES, PER_SAMPLE, SHADOWS, LAYER (peel layer: premultiplied alpha
 // out), COVERED (drawn against the coverage of its G-buffer, cover.frag: only pixels
 // with a surface run; the opaque layer's other pixels are SKY's), SKY (the opaque
-// layer's pixels with no surface, from a camera inside the area: the holes' fill,
-// the outer wall, else the sky or the sea behind, which the composite then leaves:
-// its SKY_DONE), FOG, FILL_HOLES (T-junction holes), DEBUG (1 albedo, 2 normal, 3 depth,
+// layer's other pixels, from a camera inside the area: those with no surface (the
+// holes' fill, the outer wall) and those in the fade band, with the sky or the sea
+// behind them, which the composite then leaves: its SKY_DONE), FOG, FILL_HOLES (T-junction holes), DEBUG (1 albedo, 2 normal, 3 depth,
 // 4 light, 5 aggregation).
 #include "include/common.glsl"
 #include "include/shade.glsl"
@@ -135,12 +135,12 @@ void main() {
     acc /= float(shaded);
 #endif
 #ifdef SKY
-    if (hits == 0) {  // what is behind: the sea, else the sky (composite.frag's, SKY_DONE)
+    {   // what is behind: the sea, else the sky (composite.frag's, SKY_DONE)
         vec3 dir = ray_dir(v_uv);
         float t = sea_hit(cam_pos, dir);
-        acc = vec4(t > 0.0 ? sea_color(cam_pos, cam_pos + dir * t)
-                   : background(cam_pos, dir, sun_visible ? distance(gl_FragCoord.xy, sun_px) : 1e9,
-                                sun_radius), 1.0);
+        vec3 bg = t > 0.0 ? sea_color(cam_pos, cam_pos + dir * t)
+            : background(cam_pos, dir, sun_visible ? distance(gl_FragCoord.xy, sun_px) : 1e9, sun_radius);
+        acc = vec4(acc.rgb + bg * (1.0 - acc.a), 1.0);
     }
 #endif
     out_color = acc;

@@ -68,7 +68,8 @@ def _tunnel():
 def _inside(gl, cams):
     from voxel_addon.render.pipeline import Renderer
     b = _tunnel()
-    r = Renderer(gl, Settings(msaa=1, dof=False, sea_level=62))
+    # (distance 1: the area's far side fades into the sky, shade.glsl's edge_fade)
+    r = Renderer(gl, Settings(msaa=1, dof=False, sea_level=62, distance=1))
     r.set_area(b, solve(b)[1:-1, 1:-1], 0, 0, ring=True, closed=False)
     out = []
     try:
@@ -89,9 +90,9 @@ INSIDE = [((14, 9, 70, 180, -35), 12.0), ((3, 8, 45, 160, 10), 12.0), ((16, 18, 
 
 def test_the_sky_drawn_where_no_surface_is_what_the_composite_drew(gl, monkeypatch):
     """From inside the area without MSAA the opaque layer is lit in two passes by its
-    coverage, the second drawing the holes' fill, the outer wall and the sky or sea
-    behind (graph.Switches.sky): the same frames as one pass and the sky in the
-    composite."""
+    coverage, the second drawing the holes' fill, the outer wall, the fade band and
+    the sky or sea behind (graph.Switches.sky): the same frames as one pass and the
+    sky in the composite."""
     fast = _inside(gl, INSIDE)
     monkeypatch.setattr(targets, "COVERED", False)
     slow = _inside(gl, INSIDE)

@@ -48,7 +48,7 @@ class Switches:
     models: bool = False  # Minecraft model quads shown (models.py): their passes too
     fixed: tuple = ()     # the frame's values of FIXED, in its order
     sky: bool = False     # the opaque layer lit in two parts by its coverage, the sky in the
-                          # second (one sample, a camera inside the area: pipeline.py)
+                          # second (one sample, a camera inside the area, no SSAO: pipeline.py)
 
 
 class Graph:
@@ -99,8 +99,8 @@ def build(dev, T, sw: Switches, blocks, vol, walls, sprites=None) -> Graph:
     if sw.sky:  # pixels with a surface, then the others (holes, the wall, the sky, the sea)
         # (llvmpipe and lavapipe run a fullscreen pass's whole shader at every pixel)
         G.shade = Chain([
-            Pass(dev, T.cover_g_fb, full("cover.frag", {"SAMPLES": ms}), State("less", True),
-                 clear=True, g_depth=T.g.depth),
+            Pass(dev, T.cover_g_fb, full("cover.frag", {"SAMPLES": ms, "FADE": 1}),
+                 State("less", True), clear=True, g_depth=T.g.depth),
             Pass(dev, T.shaded_z, full("deferred.frag", {**shade, "COVERED": 1}), COVERED,
                  clear=True, wall_tops=walls, tex=tex["tex"], **gbuf(T.g)),
             Pass(dev, T.shaded_z, full("deferred.frag", {**shade, "SKY": 1}), UNCOVERED,

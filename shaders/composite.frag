@@ -1,7 +1,8 @@
 // First global pass (§5.4): sky (with clouds, or the sea beyond the shown area:
 // include/sky.glsl background) behind the opaque layer, peel layers back to front,
 // SSAO, god rays sampled across the whole sun disc (fixes fig. 5.23).
-// Defines: LAYERS (0..3), SSAO, GODRAYS.
+// Defines: LAYERS (0..3), SSAO, GODRAYS, SKY_DONE (the opaque layer holds the sky and
+// the sea behind already: deferred.frag SKY, a camera inside the area).
 #include "include/eye.glsl"
 #include "include/sky.glsl"
 
@@ -41,6 +42,10 @@ void main() {
     vec3 ro = ortho ? world_pos(inv_vp, v_uv, 0.0) : cam_pos;
     vec4 o = texture(opaque, v_uv);
     float front_d = texture(front, v_uv).r;
+#ifdef SKY_DONE
+    const bool sea_front = false;  // (from inside the area the sea is never in front)
+    vec3 sea_c = vec3(0.0), sky = vec3(0.0);
+#else
     // the sea: behind what does not cover the pixel, and beyond the shown area in front
     // of what of the area lies below its surface (one evaluation for both)
     float t = sea_hit(ro, dir);
@@ -56,6 +61,7 @@ void main() {
     vec3 sky = sea_behind ? sea_c : o.a < 0.999
         ? background(ro, bg, sun_visible ? distance(gl_FragCoord.xy, sun_px) : 1e9, sun_radius)
         : vec3(0.0);
+#endif
 #ifdef SSAO
     o.rgb *= pow(texture(ao, v_uv).r, 2.2);  // a factor on screen, as the light levels
 #endif

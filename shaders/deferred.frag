@@ -3,7 +3,11 @@
 // shadow map, fog); the opaque layer also closes the shown area's outer wall
 // (include/walls.glsl).
 // Defines: SAMPLES, PER_SAMPLE, SHADOWS, LAYER (peel layer: premultiplied alpha
-// out), FOG, FILL_HOLES (T-junction holes), DEBUG (1 albedo, 2 normal, 3 depth,
+// out), COVERED (drawn against the coverage of its G-buffer, cover.frag: only pixels
+// with a surface run; the opaque layer's other pixels are SKY's), SKY (the opaque
+// layer's other pixels, from a camera inside the area: those with no surface (the
+// holes' fill, the outer wall) and those in the fade band, with the sky or the sea
+// behind them, which the composite then leaves: its SKY_DONE), FOG, FILL_HOLES (T-junction holes), DEBUG (1 albedo, 2 normal, 3 depth,
 // 4 light, 5 aggregation).
 #include "include/common.glsl"
 #include "include/shade.glsl"
@@ -31,7 +35,7 @@ Frag fetch(ivec2 c, int s) {
 
 void main() {
     ivec2 c = ivec2(gl_FragCoord.xy);
-#ifdef LAYER
+#if defined(LAYER) && !defined(COVERED)
     // most of a peel layer is empty (the second and third: all of it, mostly): those
     // pixels read only their depths and leave. On a GPU, this heavy shader runs few
     // threads at once, so each texture read it waits for is slow (an empty layer's
@@ -45,15 +49,19 @@ void main() {
     float dmin = 1e9;
     vec3 nsum = vec3(0.0);
     int hits = 0;
-#ifndef LAYER
+#if !defined(LAYER) && !defined(COVERED)
     // the shown area's outer wall where the meshes have none (include/walls.glsl): the
     // ray's one wall point, once per pixel, in place of what is behind it. From inside
     // the area a ray only meets it where nothing is drawn (it left through the ground or
     // a cave), so only those pixels look for it there.
     vec3 wp = vec3(0.0), wn = vec3(0.0);
     int row = 0;
+#ifdef SKY
+    bool outside = false;  // (SKY: a camera inside the area)
+#else
     bool outside = ortho || any(lessThan(cam_pos.xy, area_box.xy))
                          || any(greaterThanEqual(cam_pos.xy, area_box.zw));
+#endif
     bool wall = walls && (outside || FETCH(g_depth, c, 0).r >= 1.0)
                 && wall_hit(v_uv, wp, wn, row);
     float wall_d = wall ? eye_dist(wp) : 1e9;
@@ -92,7 +100,7 @@ void main() {
                                     : vec4(0.0);
 #endif
 #endif
-#if defined(FILL_HOLES) && !defined(LAYER)
+#if defined(FILL_HOLES) && !defined(LAYER) && !defined(COVERED)
         // T-junction holes: a lone background sample amid geometry takes a neighbour's data
         if (f.depth >= 1.0) {
             int n = 0; Frag best = f;
@@ -108,7 +116,7 @@ void main() {
         vec4 albedo = f.albedo;
         vec3 n = f.n;
         float glow = f.glow;
-#ifndef LAYER
+#if !defined(LAYER) && !defined(COVERED)
         if (wall && (f.depth >= 1.0 || wall_d < eye_dist(p) - 1e-3)) {
             p = wp; albedo = wall_c; n = wn; glow = 0.0;
             f.depth = 0.0;  // (drawn)
@@ -125,6 +133,15 @@ void main() {
     }
 #if SAMPLES > 1 && defined(PER_SAMPLE)
     acc /= float(shaded);
+#endif
+#ifdef SKY
+    {   // what is behind: the sea, else the sky (composite.frag's, SKY_DONE)
+        vec3 dir = ray_dir(v_uv);
+        float t = sea_hit(cam_pos, dir);
+        vec3 bg = t > 0.0 ? sea_color(cam_pos, cam_pos + dir * t)
+            : background(cam_pos, dir, sun_visible ? distance(gl_FragCoord.xy, sun_px) : 1e9, sun_radius);
+        acc = vec4(acc.rgb + bg * (1.0 - acc.a), 1.0);
+    }
 #endif
     out_color = acc;
 #ifndef LAYER

@@ -100,7 +100,7 @@ float haze(vec3 e, vec3 p) {
 // the sun around sky_pole), a round point a pixel wide at a random place in its cell;
 // few are bright. vx_mix is the generators' hash (include/noise.glsl).
 vec3 stars(vec3 d) {
-    if (sky_stars <= 0.0 || d.z <= 0.0) return vec3(0.0);
+    if (!starry || d.z <= 0.0) return vec3(0.0);
     vec3 u = normalize(cross(sky_pole, sun_dir));
     vec3 v = cross(sky_pole, u);
     vec3 q = vec3(dot(d, u), dot(d, v), dot(d, sky_pole));

@@ -63,6 +63,8 @@
 //@ frame bool walls            // close the shown area's outer wall (include/walls.glsl)
 //@ frame int wall_layer        // its texture (stone's, in the block textures)
 //@ frame bool ssr              // water reflects the scene on screen (include/ssr.glsl)
+//@ frame bool starry           // stars are out (sky_stars > 0): the programs are built for it
+//@ frame bool far_water        // far terrain drawn with water_fx: its water is opaque (shade.glsl)
 //@ frame mat4 far_inv_vp        // far terrain's projection, inverted (render/far.py)
 //@ frame float far_split        // 0: one depth range; 0.5: far terrain's depths from here on
 //@ frame float sea_from        // the sea covers what is below it only this far out (far terrain)

@@ -125,7 +125,7 @@ vec4 shade_surface(vec4 albedo, vec3 p, vec3 n, float glow, float spare) {
     // colour of the water over its floor, deep water's where deep) and the sky's
     // reflection. Its albedo alone made it a flat blue, another colour than the near
     // water and the sea plane beside it, and dark under a bright dusk sky.
-    if (water && water_fx) {
+    if (water && far_water) {
         vec3 v = eye_dir(p);
         vec3 m = water_normal(p, n, eye_dist(p));
         float f = fresnel(0.02, max(dot(-v, m), 0.12));

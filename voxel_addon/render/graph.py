@@ -12,7 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from .device import State
-from .passes import GeometryPass, Pass, Peel
+from .passes import Chain, GeometryPass, Pass, Peel
 from . import oit
 
 # a debug view's DEBUG define in the shaders (include/shade.glsl); "culling" draws the
@@ -21,6 +21,12 @@ DEBUG_DEFINE = {"none": 0, "albedo": 1, "normal": 2, "depth": 3, "light": 4,
                 "aggregation": 5, "culling": 0}
 SHADED = ("none", "culling")  # views with sky, shadows, SSAO and god rays
 DEPTH_LESS = State("less", True, True)
+COVERED = State("greater", False)  # a fullscreen pass (COVERED) where the depth holds a surface
+UNCOVERED = State("lequal", False)  # and where it holds none (SKY)
+# frame switches the shading programs are built for (constants in them: glsl.py's
+# CONST_name). On llvmpipe and lavapipe a shader pays for every branch at every pixel,
+# whatever a uniform says: the sea, clouds or walls switched off cost the whole price.
+FIXED = ("clouds", "cloud_shadows", "sea", "water_fx", "ssr", "walls", "ortho", "starry", "far_water")
 
 
 @dataclass(frozen=True)
@@ -40,6 +46,9 @@ class Switches:
     fill_holes: bool
     oit: bool
     models: bool = False  # Minecraft model quads shown (models.py): their passes too
+    fixed: tuple = ()     # the frame's values of FIXED, in its order
+    sky: bool = False     # the opaque layer lit in two parts by its coverage, the sky in the
+                          # second (one sample, a camera inside the area, no SSAO: pipeline.py)
 
 
 class Graph:
@@ -57,8 +66,9 @@ def build(dev, T, sw: Switches, blocks, vol, walls, sprites=None) -> Graph:
     ms, dbg = sw.samples, DEBUG_DEFINE[sw.debug]
     cut = {"ALPHA_TEST": 1, "MSAA_ALPHA": sw.msaa_alpha}
     g = {"SAMPLES": ms, "SMOOTH_MAG": sw.smooth_mag, "DEBUG_AGG": sw.debug == "aggregation"}
+    fixed = {f"CONST_{k}": int(v) for k, v in zip(FIXED, sw.fixed)}
     d = {"SAMPLES": ms, "PER_SAMPLE": sw.per_sample, "SHADOWS": sw.shadows,
-         "FOG": sw.fog and sw.debug == "none", "DEBUG": dbg}
+         "FOG": sw.fog and sw.debug == "none", "DEBUG": dbg, **fixed}
     parts = [("opaque", {}), ("cutout", cut), ("cutout2", cut)]
     tex = blocks.bindings()
     blend = [("blend", {})]
@@ -71,7 +81,7 @@ def build(dev, T, sw: Switches, blocks, vol, walls, sprites=None) -> Graph:
         return dev.program("block.vert", "block.frag", defines)
 
     def full(frag, defines=None):
-        return dev.program("fullscreen.vert", frag, defines)
+        return dev.program("fullscreen.vert", frag, {**fixed, **(defines or {})})
 
     sm = {"shadow_map": T.shadow} if sw.shadows else {}
 
@@ -85,8 +95,19 @@ def build(dev, T, sw: Switches, blocks, vol, walls, sprites=None) -> Graph:
         DEPTH_LESS, **tex) if sw.shadows else None
     G.g = GeometryPass(dev, T.g.target, [(n, block({**g, **x})) for n, x in parts], DEPTH_LESS,
                        **tex)
-    G.shade = Pass(dev, T.shaded, full("deferred.frag", {**d, "FILL_HOLES": sw.fill_holes}),
-                   clear=True, wall_tops=walls, tex=tex["tex"], **gbuf(T.g))
+    shade = {**d, "FILL_HOLES": sw.fill_holes}
+    if sw.sky:  # pixels with a surface, then the others (holes, the wall, the sky, the sea)
+        # (llvmpipe and lavapipe run a fullscreen pass's whole shader at every pixel)
+        G.shade = Chain([
+            Pass(dev, T.cover_g_fb, full("cover.frag", {"SAMPLES": ms, "FADE": 1}),
+                 State("less", True), clear=True, g_depth=T.g.depth),
+            Pass(dev, T.shaded_z, full("deferred.frag", {**shade, "COVERED": 1}), COVERED,
+                 clear=True, wall_tops=walls, tex=tex["tex"], **gbuf(T.g)),
+            Pass(dev, T.shaded_z, full("deferred.frag", {**shade, "SKY": 1}), UNCOVERED,
+                 wall_tops=walls, tex=tex["tex"], **gbuf(T.g))])
+    else:
+        G.shade = Pass(dev, T.shaded, full("deferred.frag", shade), clear=True, wall_tops=walls,
+                       tex=tex["tex"], **gbuf(T.g))
     if sw.oit:  # resolved into layer 0: the composite blends it as one peel layer
         G.transparency = oit.OIT(
             GeometryPass(dev, T.oit_fb, [(n, block({**g, **d, **x, "OIT": 1})) for n, x in blend],
@@ -95,15 +116,20 @@ def build(dev, T, sw: Switches, blocks, vol, walls, sprites=None) -> Graph:
             Pass(dev, T.layer_fb[0], full("oit_resolve.frag", {"SAMPLES": ms}),
                  accum=T.accum, reveal=T.reveal))
     else:  # no blending, the nearest remaining layer each time
-        layer = full("deferred.frag", {**d, "LAYER": 1}) if sw.layers else None
+        cov = T.covered  # (targets.py: a layer shaded only where it has a surface)
+        layer = full("deferred.frag", {**d, "LAYER": 1, "COVERED": cov}) if sw.layers else None
+        peel = T.peel[:sw.layers]
         G.transparency = Peel(
             [GeometryPass(dev, p.target, [(n, block({**g, **x, "PEEL": i + 1})) for n, x in blend],
                           State("less", True, False), opaque_depth=T.g.depth,
                           prev_depth=T.peel[i - 1].depth if i else T.g.depth,
                           **({"opaque_normal": T.g.normal} if i == 0 else {}), **tex)
-             for i, p in enumerate(T.peel[:sw.layers])],
-            [Pass(dev, f, layer, clear=True, ssr_color=T.opaque, ssr_front=T.front, **gbuf(p))
-             for f, p in zip(T.layer_fb[:sw.layers], T.peel)])
+             for i, p in enumerate(peel)],
+            [Pass(dev, f, layer, COVERED if cov else State(), clear=True, ssr_color=T.opaque,
+                  ssr_front=T.front, **gbuf(p))
+             for f, p in zip(T.layer_zfb if cov else T.layer_fb, peel)],
+            [Pass(dev, f, full("cover.frag", {"SAMPLES": ms}), State("less", True), clear=True,
+                  g_depth=p.depth) for f, p in zip(T.cover_fb, peel)] if cov else None)
     post = []
     if sw.ssao:
         post += [Pass(dev, T.ao_fb[0], full("ssao.frag"), front=T.front),
@@ -111,7 +137,8 @@ def build(dev, T, sw: Switches, blocks, vol, walls, sprites=None) -> Graph:
                  Pass(dev, T.ao_fb[0], full("blur.frag", {"VERTICAL": 1}), src=T.ao[1])]
     # composite: sky, layers, god rays
     post.append(Pass(dev, T.comp_fb, full("composite.frag", {
-        "LAYERS": G.transparency.layers, "SSAO": sw.ssao, "GODRAYS": sw.godrays}),
+        "LAYERS": G.transparency.layers, "SSAO": sw.ssao, "GODRAYS": sw.godrays,
+        "SKY_DONE": sw.sky}),
         opaque=T.opaque, front=T.front, **({"ao": T.ao[0]} if sw.ssao else {}),
         **{f"layer{i}": x for i, x in enumerate(T.layers)}))
     if sw.dof:  # distance blur

@@ -31,6 +31,20 @@ class Pass:
         return [self.prog] if self.prog is not None else []
 
 
+class Chain:
+    """Passes that make one step of the frame, run in order."""
+
+    def __init__(self, passes: list):
+        self.passes = passes
+
+    def run(self) -> None:
+        for p in self.passes:
+            p.run()
+
+    def programs(self) -> list:
+        return [x for p in self.passes for x in p.programs()]
+
+
 class GeometryPass(Pass):
     """Draws Geometry batches: `progs` is [(part name, program)] in drawing order;
     double-sided plants (cutout2) are drawn without face culling."""
@@ -83,10 +97,12 @@ class Transparency:
 class Peel(Transparency):
     """Depth peeling (the default: exact up to its layers): per layer a geometry pass
     into a peel G-buffer (the nearest blend surface behind the previous layer, in
-    front of the opaque depth), each lit by deferred.frag (LAYER) into its layer."""
+    front of the opaque depth), each lit by deferred.frag (LAYER) into its layer; with
+    `covers`, each layer's coverage first (cover.frag), so the lighting runs only
+    where the layer has a surface (COVERED)."""
 
-    def __init__(self, draws: list[GeometryPass], shades: list[Pass]):
-        self.draws, self.shades = draws, shades
+    def __init__(self, draws: list[GeometryPass], shades: list[Pass], covers: list | None = None):
+        self.draws, self.shades, self.covers = draws, shades, covers or []
         self.layers = len(draws)
         # a layer nothing was drawn into is not shaded, and the layers behind it are not
         # drawn: the second and third layers are empty in most views, and on llvmpipe
@@ -97,14 +113,19 @@ class Peel(Transparency):
             if i:
                 d.count = sh.when = d.dev.counter(("peel", i))
                 d.when = draws[i - 1].count
+                if self.covers:
+                    self.covers[i].when = sh.when
 
     def geometry(self, view, stats):
         for p in self.draws:
             p.draw(view, stats)
 
     def shade(self, view, stats):
-        for p in self.shades:
+        for i, p in enumerate(self.shades):
+            if self.covers:
+                self.covers[i].run()
             p.run()
 
     def programs(self):
-        return [x for p in self.draws for x in p.programs()] + [p.prog for p in self.shades]
+        return [x for p in self.draws for x in p.programs()] + [
+            p.prog for p in (*self.shades, *self.covers)]

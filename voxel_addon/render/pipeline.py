@@ -15,7 +15,7 @@ from ..core import chunk
 from ..core.blocks import REGISTRY
 from . import camera as cam
 from . import far as far_mod
-from . import graph, shadow, sky, walls
+from . import graph, shadow, sky, targets, walls
 from .blocktex import BlockTextures
 from .far import FarRing, near_edge
 from .device import Device
@@ -301,14 +301,6 @@ class Renderer:
         sun_px, sun_vis, sun_r = _sun_on_screen(vp, draw_cam, sp["light_dir"], w, h, s.fov)
         gods = s.godrays and shaded and sun_vis
         dof = s.dof and s.debug == "none" and not camera.ortho  # parallel rays: no blur
-        T = self._targets(w, h, (layers, ssao, dof, shadows))
-        sw = graph.Switches(T.samples, s.debug, shadows, layers, ssao, gods, dof, s.smooth_mag,
-                            s.msaa_alpha, s.per_sample, s.fog, s.fill_holes, use_oit, models)
-        G = self._graphs.get(sw)
-        if G is None:
-            G = self._graphs[sw] = graph.build(self.dev, T, sw, self.blocks, self.vol.tex,
-                                               self.walls.tex, self.models.tex)
-
         F = self.frame
         fog_end = (s.distance + 0.5) * 16.0  # thick by the nearest edge of the shown area
         far = None
@@ -323,16 +315,12 @@ class Renderer:
             F.set(far_inv_vp=far_inv, far_split=far_mod.SPLIT)
         else:
             F.set(far_inv_vp=_EYE, far_split=0.0)
-        cast = None
+        light_vp = None
         if shadows:
             light_vp, texel, bias = shadow.fit(camera, sp["light_dir"], self.area,
                                                s.shadow_fade, s.shadow_size)
             F.set(shadow_vp=light_vp, shadow_mat=shadow.BIAS @ light_vp, shadow_texel=texel,
                   shadow_bias=bias)
-            cast = geo.batches(geo.cull(light_vp, keep=True), [n for n in G.shadow.names if n in PASSES],
-                               "shadow")
-            if models:
-                cast = {**cast, **self.models.batches(G.shadow.names, light_vp)}
         for k in ("zenith", "horizon", "halo", "disc"):  # debug views: black where no surface
             F.set(**{f"sky_{k}": sp[k] if shaded else (0.0, 0.0, 0.0)})
         F.set(**sky_values(s, sp, hours, shaded, camera, self.area, h,
@@ -352,6 +340,28 @@ class Renderer:
               # (far terrain continues the ground beyond the area: no wall there)
               walls=s.walls and self.area is not None and far is None, wall_layer=self.walls.stone_layer(),
               **self.vol.frame_values())
+        F.set(starry=F.values["sky_stars"] > 0.0, far_water=F.values["water_fx"] and far is not None)
+        # the frame's switches are the programs' constants (graph.FIXED): on llvmpipe and
+        # lavapipe a shader runs every branch for every pixel, so an effect switched off
+        # at run time still cost its whole price (bench/README.md: issue 29)
+        b = F.values["area_box"]  # (graph.Switches.sky: from inside, the sky only where no surface)
+        # (SSAO darkens the opaque layer's colour, which then holds the sky in the fade band)
+        split = (targets.COVERED and s.debug == "none" and not draw_cam.ortho and not ssao and min(s.msaa, self.dev.max_samples) <= 1
+                 and b[0] <= draw_cam.x < b[2] and b[1] <= draw_cam.y < b[3])
+        T = self._targets(w, h, (layers, ssao, dof, shadows, split))
+        sw = graph.Switches(T.samples, s.debug, shadows, layers, ssao, gods, dof, s.smooth_mag,
+                            s.msaa_alpha, s.per_sample, s.fog, s.fill_holes, use_oit, models,
+                            tuple(bool(F.values[k]) for k in graph.FIXED), split)
+        G = self._graphs.get(sw)
+        if G is None:
+            G = self._graphs[sw] = graph.build(self.dev, T, sw, self.blocks, self.vol.tex,
+                                               self.walls.tex, self.models.tex)
+        cast = None
+        if shadows:
+            cast = geo.batches(geo.cull(light_vp, keep=True), [n for n in G.shadow.names if n in PASSES],
+                               "shadow")
+            if models:
+                cast = {**cast, **self.models.batches(G.shadow.names, light_vp)}
         self.dev.frame(F.pack())
         fr = Frame(T, G, view, cast, layers, use_oit)
         fr.far = far

@@ -16,6 +16,9 @@ class Shape:
     oit: bool            # weighted blended OIT's accumulation targets
 
 
+COVERED = True  # (tests switch it off: the same frames the long way)
+
+
 class GBuffer:
     """Depth, albedo, normal (+ glow in alpha): a geometry pass's outputs."""
 
@@ -43,6 +46,12 @@ class Targets:
         self.out = dev.texture(size, "rgba8")              # the final image
         self.out_fb = dev.target([self.out])
         self.layers, self.layer_fb = [], []               # shaded peel layers (OIT: one)
+        # a peel layer is shaded only where it has a surface: against a one-sample depth
+        # of its coverage (cover.frag; llvmpipe and lavapipe run a fullscreen pass's
+        # whole shader at every pixel, covered or not)
+        self.covered = COVERED
+        self.cover, self.cover_fb, self.layer_zfb = [], [], []
+        self.cover_g = self.cover_g_fb = self.shaded_z = None  # the opaque layer's (graph.py)
         self.ao = self.ao_fb = self.blur = self.blur_fb = None
         self.shadow = self.shadow_fb = None
         self.accum = self.reveal = self.oit_fb = None
@@ -51,14 +60,23 @@ class Targets:
             self.reveal = dev.texture(size, "r16f", samples=ms)
             self.oit_fb = dev.target([self.accum, self.reveal], self.g.depth)
 
-    def need(self, layers: int, ssao: bool, dof: bool, shadows: bool) -> None:
-        """Add the targets of these effects that are not made yet."""
+    def need(self, layers: int, ssao: bool, dof: bool, shadows: bool, sky: bool = False) -> None:
+        """Add the targets of these effects that are not made yet (sky: the opaque
+        layer's coverage, graph.py)."""
         dev, size = self.dev, self.size
+        if sky and self.cover_g is None:
+            self.cover_g = dev.texture(size, "depth")
+            self.cover_g_fb = dev.target([], self.cover_g)
+            self.shaded_z = dev.target([self.opaque, self.front], self.cover_g)
         while len(self.peel) < layers:
             self.peel.append(GBuffer(dev, size, self.samples))
         while len(self.layers) < max(layers, 1 if self.shape.oit else 0):  # OIT: layer 0
             self.layers.append(dev.texture(size, "rgba16f"))
             self.layer_fb.append(dev.target([self.layers[-1]]))
+        while self.covered and len(self.cover) < layers:
+            self.cover.append(dev.texture(size, "depth"))
+            self.cover_fb.append(dev.target([], self.cover[-1]))
+            self.layer_zfb.append(dev.target([self.layers[len(self.cover) - 1]], self.cover[-1]))
         if ssao and self.ao is None:
             self.ao = [dev.texture(size, "r8"), dev.texture(size, "r8")]
             self.ao_fb = [dev.target([t]) for t in self.ao]
@@ -78,13 +96,15 @@ class Targets:
         for x in (self.g, *self.peel):
             yield from (x.depth, x.albedo, x.normal)
         for x in (self.opaque, self.front, self.comp, self.out, *self.layers, *(self.ao or ()),
-                  *(self.blur or ()), self.shadow, self.accum, self.reveal):
+                  *(self.blur or ()), *self.cover, self.cover_g, self.shadow, self.accum,
+                  self.reveal):
             if x is not None:
                 yield x
 
     def release(self) -> None:
         fbs = [self.g.target, *(p.target for p in self.peel), self.shaded, self.comp_fb,
-               self.out_fb, *self.layer_fb, *(self.ao_fb or ()), *(self.blur_fb or ()),
+               self.out_fb, *self.layer_fb, *self.cover_fb, *self.layer_zfb, self.cover_g_fb,
+               self.shaded_z, *(self.ao_fb or ()), *(self.blur_fb or ()),
                self.shadow_fb, self.oit_fb]
         self.dev.release(*fbs)
         self.dev.release(*self._textures())

@@ -38,7 +38,7 @@ _SAMPLER = {"sampler2D": "FLOAT_2D", "sampler2DArray": "FLOAT_2D_ARRAY", "sample
 _TYPE = {"float": "FLOAT", "vec2": "VEC2", "vec3": "VEC3", "vec4": "VEC4", "mat4": "MAT4",
          "int": "INT", "ivec2": "IVEC2", "ivec3": "IVEC3", "ivec4": "IVEC4", "uint": "UINT",
          "uvec2": "UVEC2", "uvec3": "UVEC3", "uvec4": "UVEC4", "bool": "BOOL"}
-_DEPTH = {None: "NONE", "less": "LESS", "lequal": "LESS_EQUAL"}
+_DEPTH = {None: "NONE", "less": "LESS", "lequal": "LESS_EQUAL", "greater": "GREATER"}
 _QUAL = {"smooth": "smooth", "flat": "flat", "noperspective": "no_perspective"}
 SOFTWARE = ("llvmpipe", "lavapipe", "softpipe", "swiftshader", "swrast")
 RETIRE = 4  # frames a released object stays referenced (draws may still use it)

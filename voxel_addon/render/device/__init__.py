@@ -25,7 +25,7 @@ FORMATS = {"rgba8": (4, 1), "srgba8": (4, 1), "rgba16f": (4, 2), "rgba32f": (4, 
 @dataclass(frozen=True)
 class State:
     """Fixed-function state of a pass."""
-    depth: str | None = None   # None: no depth test; "less" or "lequal"
+    depth: str | None = None   # None: no depth test; "less", "lequal" or "greater"
     write: bool = True         # depth writes (with a depth test)
     cull: bool = False         # back faces dropped (counter-clockwise fronts)
     blend: str | None = None   # None, or "add": ONE, ONE

@@ -14,7 +14,7 @@ from . import FORMATS, Device, State, Target, Texture
 
 _DTYPE = {"rgba8": "f1", "rgba16f": "f2", "rgba32f": "f4", "r8": "f1", "r16": "nu2",
           "r16f": "f2", "r32f": "f4"}
-_DEPTH = {None: None, "less": "<", "lequal": "<="}
+_DEPTH = {None: None, "less": "<", "lequal": "<=", "greater": ">"}
 _READ = {"rgba8": np.uint8, "r8": np.uint8, "rgba16f": np.float16, "r16f": np.float16,
          "rgba32f": np.float32, "r32f": np.float32, "depth": np.float32, "r16": np.uint16}
 

@@ -115,6 +115,21 @@ _FIRST, _LAST = struct.Struct("<5s4xI"), struct.Struct("<I")
 _SIZED = struct.Struct("<5sII")  # _FIRST with the content size
 
 
+def _read_into(blob, out: np.ndarray, size: int) -> None:
+    """A whole zstd frame of `size` bytes decoded into OUT (this thread's context);
+    ValueError when it is damaged or holds another size."""
+    try:
+        d = _local.d
+    except AttributeError:
+        d = _local.d = _zstd_pair()[1]
+    try:  # zstd stops at the size the frame declares
+        n = d.stream_reader(blob).readinto(out)
+    except _zstd.ZstdError as e:
+        raise ValueError(str(e)) from None
+    if n != size:
+        raise ValueError(f"decoded {n} bytes, expected {size}")
+
+
 def decode_ours(blob, count: int, out: np.ndarray) -> int:
     """decode_u16 into OUT and zero_tail in one, for a frame with encode()'s header
     declaring 2 * `count` bytes (every chunk this program writes): the zero bytes it
@@ -126,16 +141,7 @@ def decode_ours(blob, count: int, out: np.ndarray) -> int:
     head, size, h = _SIZED.unpack_from(blob)
     if head != _HEAD or size != 2 * count:
         return -1
-    try:
-        d = _local.d
-    except AttributeError:
-        d = _local.d = _zstd_pair()[1]
-    try:  # zstd stops at the size the frame declares
-        n = d.stream_reader(blob).readinto(out)
-    except _zstd.ZstdError as e:
-        raise ValueError(str(e)) from None
-    if n != size:
-        raise ValueError(f"decoded {n} bytes, expected {size}")
+    _read_into(blob, out, size)
     t = _LAST.unpack_from(blob, len(blob) - 4)[0]  # as zero_tail: the last block
     if h & 0xFFFFFF != (len(blob) - 16) << 3 | 4 or t >> 24 or t & 7 != 3:
         return 0
@@ -155,16 +161,7 @@ def decode_u16(codec: str, blob, count: int, out: np.ndarray | None = None) -> n
         if whole:
             if out is None:
                 out = np.empty(count, np.uint16)
-            try:
-                d = _local.d
-            except AttributeError:
-                d = _local.d = _zstd_pair()[1]
-            try:  # zstd stops at the size the frame declares
-                n = d.stream_reader(blob).readinto(out)
-            except _zstd.ZstdError as e:
-                raise ValueError(str(e)) from None
-            if n != 2 * count:
-                raise ValueError(f"decoded {n} bytes, expected {2 * count}")
+            _read_into(blob, out, 2 * count)
             return out
     got = np.frombuffer(decode(codec, blob, 2 * count), "<u2")
     if out is None:

@@ -8,6 +8,8 @@
 // decodes it once per shaded sample, not per fragment of every overdrawn layer);
 // water (its glow texels are 1, render/blocktex.py; other glow stays below) is marked
 // by glow 1 and, as the nearest peeled layer, takes its colour and opacity from its depth.
+// ZCOPY (a one-sample peel layer): its depth also into a colour target, which the
+// layer's lighting reads while its depth buffer keeps that pass to covered pixels.
 #include "include/common.glsl"
 #include "include/frame.glsl"
 #include "include/eye.glsl"
@@ -26,6 +28,7 @@
 //@ out 1 vec4 out_reveal           if OIT  // r: sum of -log(1 - alpha)
 //@ out 0 vec4 out_albedo           if !defined(OIT) && !defined(SHADOW)
 //@ out 1 vec4 out_normal           if !defined(OIT) && !defined(SHADOW)
+//@ out 2 vec4 out_depth            if ZCOPY  // (peel, one sample) its depth: read where it is bound
 
 // Texels with no sampler state (Blender's gpu module binds textures nearest, clamped,
 // without mipmaps): a layer holds the 16x16 texture and its mip levels side by side
@@ -136,6 +139,9 @@ void main() {
 #else
     out_albedo = c;
     out_normal = vec4(n * 0.5 + 0.5, glow);
+#ifdef ZCOPY
+    out_depth = vec4(gl_FragCoord.z);
+#endif
 #endif
 #endif
 }

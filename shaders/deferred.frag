@@ -3,7 +3,8 @@
 // shadow map, fog); the opaque layer also closes the shown area's outer wall
 // (include/walls.glsl).
 // Defines: SAMPLES, PER_SAMPLE, SHADOWS, LAYER (peel layer: premultiplied alpha
-// out), COVERED (drawn against the coverage of its G-buffer, cover.frag: only pixels
+// out), COVERED (drawn against the coverage of its G-buffer, cover.frag, or without
+// MSAA against a peel layer's own depth, read from its copy, ZCOPY: only pixels
 // with a surface run; the opaque layer's other pixels are SKY's), SKY (the opaque
 // layer's other pixels, from a camera inside the area: those with no surface (the
 // holes' fill, the outer wall) and those in the fade band, with the sky or the sea
@@ -15,7 +16,8 @@
 #include "include/walls.glsl"
 #endif
 
-//@ sampler gdepth2D g_depth
+//@ sampler gdepth2D g_depth    if !defined(ZCOPY)
+//@ sampler sampler2D g_depth  if ZCOPY  // a one-sample peel layer's copy (its depth is bound)
 //@ sampler gsampler2D g_albedo
 //@ sampler gsampler2D g_normal
 //@ out 0 vec4 out_color

@@ -9,6 +9,7 @@ Order: shadow map -> G-buffer -> transparency geometry (peel layers) -> deferred
 """
 from __future__ import annotations
 
+import operator
 from dataclasses import dataclass
 
 from .device import State
@@ -27,6 +28,7 @@ UNCOVERED = State("lequal", False)  # and where it holds none (SKY)
 # CONST_name). On llvmpipe and lavapipe a shader pays for every branch at every pixel,
 # whatever a uniform says: the sea, clouds or walls switched off cost the whole price.
 FIXED = ("clouds", "cloud_shadows", "sea", "water_fx", "ssr", "walls", "ortho", "starry", "far_water")
+fixed = operator.itemgetter(*FIXED)  # a frame block's values of them (Switches.fixed)
 
 
 @dataclass(frozen=True)
@@ -117,19 +119,22 @@ def build(dev, T, sw: Switches, blocks, vol, walls, sprites=None) -> Graph:
                  accum=T.accum, reveal=T.reveal))
     else:  # no blending, the nearest remaining layer each time
         cov = T.covered  # (targets.py: a layer shaded only where it has a surface)
-        layer = full("deferred.frag", {**d, "LAYER": 1, "COVERED": cov}) if sw.layers else None
+        zc = cov and ms == 1  # (its depth read from its copy: block.frag ZCOPY)
+        layer = full("deferred.frag", {**d, "LAYER": 1, "COVERED": cov, "ZCOPY": zc}) \
+            if sw.layers else None
         peel = T.peel[:sw.layers]
         G.transparency = Peel(
-            [GeometryPass(dev, p.target, [(n, block({**g, **x, "PEEL": i + 1})) for n, x in blend],
+            [GeometryPass(dev, p.target, [(n, block({**g, **x, "PEEL": i + 1, "ZCOPY": zc}))
+                                          for n, x in blend],
                           State("less", True, False), opaque_depth=T.g.depth,
                           prev_depth=T.peel[i - 1].depth if i else T.g.depth,
                           **({"opaque_normal": T.g.normal} if i == 0 else {}), **tex)
              for i, p in enumerate(peel)],
             [Pass(dev, f, layer, COVERED if cov else State(), clear=True, ssr_color=T.opaque,
-                  ssr_front=T.front, **gbuf(p))
+                  ssr_front=T.front, **{**gbuf(p), **({"g_depth": p.zcopy} if zc else {})})
              for f, p in zip(T.layer_zfb if cov else T.layer_fb, peel)],
             [Pass(dev, f, full("cover.frag", {"SAMPLES": ms}), State("less", True), clear=True,
-                  g_depth=p.depth) for f, p in zip(T.cover_fb, peel)] if cov else None)
+                  g_depth=p.depth) for f, p in zip(T.cover_fb, peel)] if cov and not zc else None)
     post = []
     if sw.ssao:
         post += [Pass(dev, T.ao_fb[0], full("ssao.frag"), front=T.front),

@@ -351,7 +351,7 @@ class Renderer:
         T = self._targets(w, h, (layers, ssao, dof, shadows, split))
         sw = graph.Switches(T.samples, s.debug, shadows, layers, ssao, gods, dof, s.smooth_mag,
                             s.msaa_alpha, s.per_sample, s.fog, s.fill_holes, use_oit, models,
-                            tuple(bool(F.values[k]) for k in graph.FIXED), split)
+                            graph.fixed(F.values), split)
         G = self._graphs.get(sw)
         if G is None:
             G = self._graphs[sw] = graph.build(self.dev, T, sw, self.blocks, self.vol.tex,

@@ -20,13 +20,16 @@ COVERED = True  # (tests switch it off: the same frames the long way)
 
 
 class GBuffer:
-    """Depth, albedo, normal (+ glow in alpha): a geometry pass's outputs."""
+    """Depth, albedo, normal (+ glow in alpha): a geometry pass's outputs; with zcopy
+    the depth again in a colour texture (a one-sample peel layer: block.frag ZCOPY)."""
 
-    def __init__(self, dev, size, samples):
+    def __init__(self, dev, size, samples, zcopy: bool = False):
         self.depth = dev.texture(size, "depth", samples=samples)
         self.albedo = dev.texture(size, "rgba8", samples=samples)
         self.normal = dev.texture(size, "rgba8", samples=samples)
-        self.target = dev.target([self.albedo, self.normal], self.depth)
+        self.zcopy = dev.texture(size, "r32f") if zcopy else None
+        self.target = dev.target([self.albedo, self.normal, *([self.zcopy] if zcopy else [])],
+                                 self.depth)
 
     def parts(self):
         return [self.target, self.depth, self.albedo, self.normal]
@@ -46,9 +49,10 @@ class Targets:
         self.out = dev.texture(size, "rgba8")              # the final image
         self.out_fb = dev.target([self.out])
         self.layers, self.layer_fb = [], []               # shaded peel layers (OIT: one)
-        # a peel layer is shaded only where it has a surface: against a one-sample depth
-        # of its coverage (cover.frag; llvmpipe and lavapipe run a fullscreen pass's
-        # whole shader at every pixel, covered or not)
+        # a peel layer is shaded only where it has a surface (llvmpipe and lavapipe run a
+        # fullscreen pass's whole shader at every pixel, covered or not): against its
+        # own depth, read from the copy its geometry pass writes, or with MSAA against a
+        # one-sample depth of its coverage (cover.frag: ~4.5 ms a pass at 1057x618)
         self.covered = COVERED
         self.cover, self.cover_fb, self.layer_zfb = [], [], []
         self.cover_g = self.cover_g_fb = self.shaded_z = None  # the opaque layer's (graph.py)
@@ -68,15 +72,19 @@ class Targets:
             self.cover_g = dev.texture(size, "depth")
             self.cover_g_fb = dev.target([], self.cover_g)
             self.shaded_z = dev.target([self.opaque, self.front], self.cover_g)
+        zcopy = self.covered and self.samples == 1
         while len(self.peel) < layers:
-            self.peel.append(GBuffer(dev, size, self.samples))
+            self.peel.append(GBuffer(dev, size, self.samples, zcopy))
         while len(self.layers) < max(layers, 1 if self.shape.oit else 0):  # OIT: layer 0
             self.layers.append(dev.texture(size, "rgba16f"))
             self.layer_fb.append(dev.target([self.layers[-1]]))
-        while self.covered and len(self.cover) < layers:
-            self.cover.append(dev.texture(size, "depth"))
-            self.cover_fb.append(dev.target([], self.cover[-1]))
-            self.layer_zfb.append(dev.target([self.layers[len(self.cover) - 1]], self.cover[-1]))
+        while self.covered and len(self.layer_zfb) < layers:
+            i = len(self.layer_zfb)
+            if not zcopy:
+                self.cover.append(dev.texture(size, "depth"))
+                self.cover_fb.append(dev.target([], self.cover[-1]))
+            self.layer_zfb.append(dev.target([self.layers[i]],
+                                             self.peel[i].depth if zcopy else self.cover[-1]))
         if ssao and self.ao is None:
             self.ao = [dev.texture(size, "r8"), dev.texture(size, "r8")]
             self.ao_fb = [dev.target([t]) for t in self.ao]
@@ -94,7 +102,7 @@ class Targets:
 
     def _textures(self):
         for x in (self.g, *self.peel):
-            yield from (x.depth, x.albedo, x.normal)
+            yield from (x.depth, x.albedo, x.normal, *([x.zcopy] if x.zcopy else []))
         for x in (self.opaque, self.front, self.comp, self.out, *self.layers, *(self.ao or ()),
                   *(self.blur or ()), *self.cover, self.cover_g, self.shadow, self.accum,
                   self.reveal):

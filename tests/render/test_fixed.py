@@ -9,9 +9,11 @@ import pytest
 
 from voxel_addon.render import Camera, Settings, graph
 
-# (hours, settings): the sea, the walls, clouds and stars each on and off somewhere
+# (hours, settings): the sea, the walls, clouds, stars and the tone curve each on and
+# off somewhere
 CASES = [(12.0, {}), (12.0, {"clouds": False, "walls": False}),
-         (23.0, {"sea": False, "water": False}), (17.5, {"cloud_shadows": False, "ssr": False})]
+         (23.0, {"sea": False, "water": False, "tonemap": False}),
+         (17.5, {"cloud_shadows": False, "ssr": False})]
 SIZE = (96, 54)
 
 

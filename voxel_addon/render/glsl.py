@@ -24,8 +24,9 @@ one, std140's own rule), ints and bools stored as floats, and the body reads it 
 the member's name through a #define (`cam_pos` -> `frame.s4.xyz`). So the layout is
 the same on every backend (Metal packs a struct's vec3 and bool differently from
 std140) and the bodies keep their names. `frame.py` packs the values by `frame_layout`.
-A bool member reads as a constant in a program built with the define `CONST_name`
-(0 or 1): the compiler drops what the constant switches off (render/graph.py FIXED).
+A bool or int member reads as a constant in a program built with the define
+`CONST_name` (a bool's 0 or 1): the compiler drops what the constant switches off
+(render/graph.py FIXED).
 """
 from __future__ import annotations
 
@@ -231,9 +232,11 @@ def frame_layout() -> tuple[dict, int, str]:
         members[name] = (4 * slot + fill, n, k)
         fill += n
         ref = f"{FRAME_NAME}.s{slot}.{comp}"
-        if k == "b":  # a program built for one value of it reads a constant (CONST_name)
-            defines.append(f"#ifdef CONST_{name}\n#define {name} (CONST_{name} != 0)\n#else\n"
-                           f"#define {name} ({ref} != 0.0)\n#endif")
+        if k in "bi" and n == 1:  # a program built for one value reads a constant (CONST_name)
+            const, read = ((f"(CONST_{name} != 0)", f"({ref} != 0.0)") if k == "b" else
+                           (f"(CONST_{name})", f"{typ}({ref})"))
+            defines.append(f"#ifdef CONST_{name}\n#define {name} {const}\n#else\n"
+                           f"#define {name} {read}\n#endif")
             continue
         defines.append(f"#define {name} " + (f"{typ}({ref})" if k == "i" else ref))
     text = (f"struct {FRAME_STRUCT} {{\n" + "\n".join(rows) + "\n};\n")

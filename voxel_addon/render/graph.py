@@ -24,10 +24,12 @@ SHADED = ("none", "culling")  # views with sky, shadows, SSAO and god rays
 DEPTH_LESS = State("less", True, True)
 COVERED = State("greater", False)  # a fullscreen pass (COVERED) where the depth holds a surface
 UNCOVERED = State("lequal", False)  # and where it holds none (SKY)
-# frame switches the shading programs are built for (constants in them: glsl.py's
-# CONST_name). On llvmpipe and lavapipe a shader pays for every branch at every pixel,
-# whatever a uniform says: the sea, clouds or walls switched off cost the whole price.
-FIXED = ("clouds", "cloud_shadows", "sea", "water_fx", "ssr", "walls", "ortho", "starry", "far_water")
+# frame switches (and the display mode) the shading programs are built for
+# (constants in them: glsl.py's CONST_name). On llvmpipe and lavapipe a shader pays
+# for every branch at every pixel, whatever a uniform says: the sea, clouds or walls
+# switched off cost the whole price.
+FIXED = ("clouds", "cloud_shadows", "sea", "water_fx", "ssr", "walls", "ortho", "starry", "far_water",
+         "display")
 fixed = operator.itemgetter(*FIXED)  # a frame block's values of them (Switches.fixed)
 
 

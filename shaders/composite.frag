@@ -58,9 +58,7 @@ void main() {
     // orthographic view shows the sky as seen that far up, not the ground's haze
     vec3 bg = ortho ? vec3(dir.xy, abs(dir.z)) : dir;
     // (not behind surfaces that cover the pixel: the clouds' noise is the dear part)
-    vec3 sky = sea_behind ? sea_c : o.a < 0.999
-        ? background(ro, bg, sun_visible ? distance(gl_FragCoord.xy, sun_px) : 1e9, sun_radius)
-        : vec3(0.0);
+    vec3 sky = sea_behind ? sea_c : o.a < 0.999 ? background_here(ro, bg) : vec3(0.0);
 #endif
 #ifdef SSAO
     o.rgb *= pow(texture(ao, v_uv).r, 2.2);  // a factor on screen, as the light levels

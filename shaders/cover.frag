@@ -1,8 +1,9 @@
-// A peel layer's coverage as a one-sample depth buffer (fullscreen.vert): each pixel's
-// nearest sample of the layer, 1 where none is covered. The layer's shading pass
-// (deferred.frag COVERED) draws on the far plane against it with the test "greater",
-// so only pixels with a surface run its shader: llvmpipe and lavapipe run a fullscreen
-// pass's whole shader at every pixel, covered or not, and a GPU skips them early.
+// A G-buffer's coverage as a one-sample depth buffer (fullscreen.vert): each pixel's
+// nearest sample, 1 where none is covered (an MSAA peel layer's, the opaque layer's
+// for the live view's two lighting passes). A lighting pass draws on the far plane
+// against it, test "greater" (deferred.frag COVERED) or "lequal" (SKY), so only the
+// pixels it is for run its shader: llvmpipe and lavapipe run a fullscreen pass's whole
+// shader at every pixel, covered or not, and a GPU skips them early.
 // FADE (the opaque layer, deferred.frag SKY): a surface in the fade band at the edge of
 // the shown area (include/shade.glsl edge_fade) counts as none: the sky shows through it.
 #include "include/common.glsl"

@@ -8,8 +8,8 @@
 // with a surface run; the opaque layer's other pixels are SKY's), SKY (the opaque
 // layer's other pixels, from a camera inside the area: those with no surface (the
 // holes' fill, the outer wall) and those in the fade band, with the sky or the sea
-// behind them, which the composite then leaves: its SKY_DONE), FOG, FILL_HOLES (T-junction holes), DEBUG (1 albedo, 2 normal, 3 depth,
-// 4 light, 5 aggregation).
+// behind them, which the composite then leaves: its SKY_DONE), FOG, FILL_HOLES
+// (T-junction holes), DEBUG (1 albedo, 2 normal, 3 depth, 4 light, 5 aggregation).
 #include "include/common.glsl"
 #include "include/shade.glsl"
 #ifndef LAYER
@@ -140,8 +140,7 @@ void main() {
     {   // what is behind: the sea, else the sky (composite.frag's, SKY_DONE)
         vec3 dir = ray_dir(v_uv);
         float t = sea_hit(cam_pos, dir);
-        vec3 bg = t > 0.0 ? sea_color(cam_pos, cam_pos + dir * t)
-            : background(cam_pos, dir, sun_visible ? distance(gl_FragCoord.xy, sun_px) : 1e9, sun_radius);
+        vec3 bg = t > 0.0 ? sea_color(cam_pos, cam_pos + dir * t) : background_here(cam_pos, dir);
         acc = vec4(acc.rgb + bg * (1.0 - acc.a), 1.0);
     }
 #endif

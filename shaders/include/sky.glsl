@@ -32,4 +32,9 @@ vec3 background(vec3 ro, vec3 n, float d_px, float size_px) {
     vec4 cl = cloud_layer(ro, n);
     return sky_color(n, d_px, size_px) * (1.0 - cl.a) + cl.rgb;
 }
+
+// background() behind this fragment's pixel (the disc where the frame puts the sun).
+vec3 background_here(vec3 ro, vec3 n) {
+    return background(ro, n, sun_visible ? distance(gl_FragCoord.xy, sun_px) : 1e9, sun_radius);
+}
 #endif

@@ -49,6 +49,14 @@ def bombs():
             "gzip": zlib_bomb(64 * MIB, 31)}
 
 
+def _read_fails(world_path, match: str) -> None:
+    """Chunk (0, 0) of the file reads as a damaged chunk, saying MATCH."""
+    wf = WorldFile(world_path, readonly=True)
+    try:
+        with pytest.raises(CorruptChunk, match=match):
+            wf.read_chunk((0, 0))
+    finally:
+        wf.close()
 
 
 @pytest.mark.parametrize("kind", ["zstd", "zlib", "zstd-undeclared"])
@@ -80,12 +88,7 @@ def test_a_blob_of_another_type_is_a_damaged_chunk(world_path, blob):
     db.execute("UPDATE chunks SET blocks=? WHERE cx=0 AND cy=0", (blob,))
     db.commit()
     db.close()
-    wf = WorldFile(world_path, readonly=True)
-    try:
-        with pytest.raises(CorruptChunk, match="where a blob belongs"):
-            wf.read_chunk((0, 0))
-    finally:
-        wf.close()
+    _read_fails(world_path, "where a blob belongs")
 
 
 @pytest.mark.parametrize("codec", ["zstd", "zlib"])
@@ -183,12 +186,7 @@ def test_block_ids_beyond_the_table_are_a_damaged_chunk(world_path):
                (zlib.compress(ids),))
     db.commit()
     db.close()
-    wf = WorldFile(world_path, readonly=True)
-    try:
-        with pytest.raises(CorruptChunk, match="missing from block_types"):
-            wf.read_chunk((0, 0))
-    finally:
-        wf.close()
+    _read_fails(world_path, "missing from block_types")
 
 
 def test_an_id_whose_name_is_gone_from_the_table_is_a_damaged_chunk(world_path):
@@ -204,12 +202,7 @@ def test_an_id_whose_name_is_gone_from_the_table_is_a_damaged_chunk(world_path):
     db.commit()
     before = db.execute("SELECT blocks FROM chunks WHERE cx=0 AND cy=0").fetchone()
     db.close()
-    wf = WorldFile(world_path, readonly=True)
-    try:
-        with pytest.raises(CorruptChunk, match="missing from block_types"):
-            wf.read_chunk((0, 0))
-    finally:
-        wf.close()
+    _read_fails(world_path, "missing from block_types")
     with World.open(world_path, loader=False) as w:
         with pytest.raises(VoxelError, match="missing from block_types"):
             w.set_block(1, 1, 100, "glass")

@@ -22,8 +22,10 @@ DEBUG_DEFINE = {"none": 0, "albedo": 1, "normal": 2, "depth": 3, "light": 4,
                 "aggregation": 5, "culling": 0}
 SHADED = ("none", "culling")  # views with sky, shadows, SSAO and god rays
 DEPTH_LESS = State("less", True, True)
-COVERED = State("greater", False)  # a fullscreen pass (COVERED) where the depth holds a surface
-UNCOVERED = State("lequal", False)  # and where it holds none (SKY)
+# fullscreen passes drawn on the far plane against a coverage depth (cover.frag, or a
+# one-sample peel layer's own): where it holds a surface (COVERED), where it holds none
+# (SKY); COVER writes that depth
+SURFACE, NO_SURFACE, COVER = State("greater", False), State("lequal", False), State("less", True)
 # frame switches (and the display mode) the shading programs are built for
 # (constants in them: glsl.py's CONST_name). On llvmpipe and lavapipe a shader pays
 # for every branch at every pixel, whatever a uniform says: the sea, clouds or walls
@@ -103,11 +105,11 @@ def build(dev, T, sw: Switches, blocks, vol, walls, sprites=None) -> Graph:
     if sw.sky:  # pixels with a surface, then the others (holes, the wall, the sky, the sea)
         # (llvmpipe and lavapipe run a fullscreen pass's whole shader at every pixel)
         G.shade = Chain([
-            Pass(dev, T.cover_g_fb, full("cover.frag", {"SAMPLES": ms, "FADE": 1}),
-                 State("less", True), clear=True, g_depth=T.g.depth),
-            Pass(dev, T.shaded_z, full("deferred.frag", {**shade, "COVERED": 1}), COVERED,
+            Pass(dev, T.cover_g_fb, full("cover.frag", {"SAMPLES": ms, "FADE": 1}), COVER,
+                 clear=True, g_depth=T.g.depth),
+            Pass(dev, T.shaded_z, full("deferred.frag", {**shade, "COVERED": 1}), SURFACE,
                  clear=True, wall_tops=walls, tex=tex["tex"], **gbuf(T.g)),
-            Pass(dev, T.shaded_z, full("deferred.frag", {**shade, "SKY": 1}), UNCOVERED,
+            Pass(dev, T.shaded_z, full("deferred.frag", {**shade, "SKY": 1}), NO_SURFACE,
                  wall_tops=walls, tex=tex["tex"], **gbuf(T.g))])
     else:
         G.shade = Pass(dev, T.shaded, full("deferred.frag", shade), clear=True, wall_tops=walls,
@@ -132,11 +134,11 @@ def build(dev, T, sw: Switches, blocks, vol, walls, sprites=None) -> Graph:
                           prev_depth=T.peel[i - 1].depth if i else T.g.depth,
                           **({"opaque_normal": T.g.normal} if i == 0 else {}), **tex)
              for i, p in enumerate(peel)],
-            [Pass(dev, f, layer, COVERED if cov else State(), clear=True, ssr_color=T.opaque,
+            [Pass(dev, f, layer, SURFACE if cov else State(), clear=True, ssr_color=T.opaque,
                   ssr_front=T.front, **{**gbuf(p), **({"g_depth": p.zcopy} if zc else {})})
              for f, p in zip(T.layer_zfb if cov else T.layer_fb, peel)],
-            [Pass(dev, f, full("cover.frag", {"SAMPLES": ms}), State("less", True), clear=True,
-                  g_depth=p.depth) for f, p in zip(T.cover_fb, peel)] if cov and not zc else None)
+            [Pass(dev, f, full("cover.frag", {"SAMPLES": ms}), COVER, clear=True, g_depth=p.depth)
+             for f, p in zip(T.cover_fb, peel)] if cov and not zc else None)
     post = []
     if sw.ssao:
         post += [Pass(dev, T.ao_fb[0], full("ssao.frag"), front=T.front),

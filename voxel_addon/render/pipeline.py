@@ -230,13 +230,16 @@ class Renderer:
 
     def _targets(self, w, h, need) -> Targets:
         """The frame's targets at (w, h), with those of the effects in need."""
-        shape = Shape((w, h), max(1, min(self.s.msaa, self.dev.max_samples)),
-                      self.s.shadow_size, self.s.transparency == "oit")
+        shape = Shape((w, h), self._samples(), self.s.shadow_size, self.s.transparency == "oit")
         if self.targets is None or self.targets.shape != shape:
             self._release_targets()
             self.targets = Targets(self.dev, shape)
         self.targets.need(*need)
         return self.targets
+
+    def _samples(self) -> int:
+        """The frame's MSAA samples (the settings' within what the device has)."""
+        return max(1, min(self.s.msaa, self.dev.max_samples))
 
     def _release_targets(self):
         self._graphs.clear()
@@ -349,7 +352,7 @@ class Renderer:
         # a draft frame, the live view's first frames after Show, compiles one lighting
         # program fewer without it: ~0.4 s sooner on screen from a fresh install)
         split = (targets.COVERED and s.debug == "none" and not draw_cam.ortho and not ssao
-                 and not s.far_draft and min(s.msaa, self.dev.max_samples) <= 1
+                 and not s.far_draft and self._samples() == 1
                  and b[0] <= draw_cam.x < b[2] and b[1] <= draw_cam.y < b[3])
         T = self._targets(w, h, (layers, ssao, dof, shadows, split))
         sw = graph.Switches(T.samples, s.debug, shadows, layers, ssao, gods, dof, s.smooth_mag,
